@@ -1,0 +1,52 @@
+// bin_scatter.wgsl — step 3 of the bucket sort: write each facet id into the cells it overlaps.
+// CPU mirror: src/cpu/bin_scatter.rs.
+//
+// Bindings: 0 params, 1 nodes, 2 facets, 3 starts (scanned counts: cell c owns entries
+//           starts[c]..starts[c+1], starts[n_cells] = total), 4 cursor (copy of starts, bumped
+//           atomically), 5 entries (entry_capacity words), 6 status (atomic words, STATUS_*).
+// Dispatch: one invocation per active facet, ITEM_WORKGROUP per workgroup, folded into 2D.
+// Invariants: when the total exceeds entry_capacity nothing is written; STATUS_OVERFLOW is set
+//             and STATUS_NEEDED_ENTRIES holds the total, so the host grows the buffer and runs
+//             the search again. The order within a cell depends on scheduling here; bin_sort
+//             restores facet-id order, which makes the whole sort stable and deterministic.
+
+@group(0) @binding(0) var<uniform> params: SearchParams;
+@group(0) @binding(1) var<storage, read> nodes: array<vec4<f32>>;
+@group(0) @binding(2) var<storage, read> facets: array<vec4<u32>>;
+@group(0) @binding(3) var<storage, read> starts: array<u32>;
+@group(0) @binding(4) var<storage, read_write> cursor: array<atomic<u32>>;
+@group(0) @binding(5) var<storage, read_write> entries: array<u32>;
+@group(0) @binding(6) var<storage, read_write> status: array<atomic<u32>>;
+
+@compute @workgroup_size(64)
+fn bin_scatter(@builtin(workgroup_id) wg: vec3<u32>,
+               @builtin(num_workgroups) nwg: vec3<u32>,
+               @builtin(local_invocation_index) li: u32) {
+    let f = folded_id(wg, nwg, li, ITEM_WORKGROUP);
+    if (f >= params.n_facets) { return; }
+    let total = starts[params.n_cells];
+    if (total > params.entry_capacity) {
+        if (f == 0u) {
+            atomicStore(&status[STATUS_OVERFLOW], 1u);
+            atomicMax(&status[STATUS_NEEDED_ENTRIES], total);
+        }
+        return;
+    }
+    let fac = facets[f];
+    let n = facet_node_count(fac);
+    let x0 = nodes[fac.x].xyz;
+    let x1 = nodes[fac.y].xyz;
+    var x2 = x1;
+    var x3 = x1;
+    if (n >= 3u) { x2 = nodes[fac.z].xyz; }
+    if (n == 4u) { x3 = nodes[fac.w].xyz; }
+    let r = facet_cells(params, x0, x1, x2, x3, n);
+    for (var z = r.lo.z; z <= r.hi.z; z++) {
+        for (var y = r.lo.y; y <= r.hi.y; y++) {
+            for (var x = r.lo.x; x <= r.hi.x; x++) {
+                let slot = atomicAdd(&cursor[cell_index(params, vec3<u32>(x, y, z))], 1u);
+                entries[slot] = f;
+            }
+        }
+    }
+}

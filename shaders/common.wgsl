@@ -1,0 +1,235 @@
+// common.wgsl — prepended to every kernel by src/gpu/shaders.rs.
+// Constants, the structs shared with Rust, dispatch folding and the closest-point geometry.
+// Rust twins: src/search/layout.rs (structs), src/geometry.rs (geometry, same operation order).
+
+const NO_NODE: u32 = 0xffffffffu;
+const NO_FACET: u32 = 0xffffffffu;
+const QUAD_ITERATIONS: u32 = 8u;
+// Invocations per workgroup of the one-item-per-invocation kernels (Rust: ITEM_WORKGROUP).
+const ITEM_WORKGROUP: u32 = 64u;
+
+// Rust twin: SearchParams (src/search/layout.rs), 64 bytes.
+struct SearchParams {
+    cell_size: f32,
+    inv_cell_size: f32,
+    radius: f32,
+    bin_margin: f32,
+    dims_x: u32,
+    dims_y: u32,
+    dims_z: u32,
+    n_cells: u32,
+    n_facets: u32,
+    n_slaves: u32,
+    entry_capacity: u32,
+    dim: u32,
+    _pad0: u32,
+    _pad1: u32,
+    _pad2: u32,
+    _pad3: u32,
+}
+
+// Rust twin: GpuHit (src/search/layout.rs), 64 bytes. One per slave node.
+struct Hit {
+    facet: u32,          // index into the active facet list, NO_FACET when none within the radius
+    node: u32,           // tracked master node (nearest node of that facet), NO_NODE when none
+    candidates: u32,     // facets examined
+    _pad: u32,
+    point_gap: vec4<f32>,   // xyz closest point (grid-local), w signed gap along the normal
+    normal_dist: vec4<f32>, // xyz unit facet normal at the point, w distance
+    weights: vec4<f32>,     // load-transfer weights of the facet's nodes
+}
+
+// Status words (Rust twin: STATUS_* in src/search/layout.rs).
+const STATUS_OVERFLOW: u32 = 0u;       // non-zero: the entry buffer was too small, nothing binned
+const STATUS_NEEDED_ENTRIES: u32 = 1u; // entries the binning needs
+
+// Flat invocation id of a dispatch folded into 2D (x up to 65,535 workgroups, then y).
+fn folded_id(wg: vec3<u32>, nwg: vec3<u32>, local: u32, size: u32) -> u32 {
+    return (wg.y * nwg.x + wg.x) * size + local;
+}
+
+// Number of nodes of a facet (2, 3 or 4) from its padded node list.
+fn facet_node_count(f: vec4<u32>) -> u32 {
+    if (f.z == NO_NODE) { return 2u; }
+    if (f.w == NO_NODE) { return 3u; }
+    return 4u;
+}
+
+// Inclusive cell range covered by a facet's bounding box grown by `margin` (grid-local coords).
+struct CellRange {
+    lo: vec3<u32>,
+    hi: vec3<u32>,
+}
+
+fn cell_coord(x: f32, inv: f32, dims: u32) -> u32 {
+    let c = i32(floor(x * inv));
+    return u32(clamp(c, 0, i32(dims) - 1));
+}
+
+fn facet_cells(p: SearchParams, x0: vec3<f32>, x1: vec3<f32>, x2: vec3<f32>, x3: vec3<f32>, n: u32) -> CellRange {
+    var lo = min(x0, x1);
+    var hi = max(x0, x1);
+    if (n >= 3u) { lo = min(lo, x2); hi = max(hi, x2); }
+    if (n == 4u) { lo = min(lo, x3); hi = max(hi, x3); }
+    lo = lo - vec3<f32>(p.bin_margin);
+    hi = hi + vec3<f32>(p.bin_margin);
+    var r: CellRange;
+    r.lo = vec3<u32>(cell_coord(lo.x, p.inv_cell_size, p.dims_x),
+                     cell_coord(lo.y, p.inv_cell_size, p.dims_y),
+                     cell_coord(lo.z, p.inv_cell_size, p.dims_z));
+    r.hi = vec3<u32>(cell_coord(hi.x, p.inv_cell_size, p.dims_x),
+                     cell_coord(hi.y, p.inv_cell_size, p.dims_y),
+                     cell_coord(hi.z, p.inv_cell_size, p.dims_z));
+    return r;
+}
+
+fn cell_index(p: SearchParams, c: vec3<u32>) -> u32 {
+    return c.x + p.dims_x * (c.y + p.dims_y * c.z);
+}
+
+// ---- geometry (twin of src/geometry.rs) ----
+
+struct Projection {
+    point: vec3<f32>,
+    weights: vec4<f32>,
+    normal: vec3<f32>,
+    dist2: f32,
+}
+
+fn div_or_zero(a: f32, b: f32) -> f32 {
+    if (b != 0.0) { return a / b; }
+    return 0.0;
+}
+
+fn normalize_or_zero(v: vec3<f32>) -> vec3<f32> {
+    let l2 = dot(v, v);
+    if (l2 > 0.0) { return v * (1.0 / sqrt(l2)); }
+    return vec3<f32>(0.0);
+}
+
+fn closest_on_segment(p: vec3<f32>, a: vec3<f32>, b: vec3<f32>) -> Projection {
+    let ab = vec3<f32>(b.x - a.x, b.y - a.y, 0.0);
+    let ap = vec3<f32>(p.x - a.x, p.y - a.y, 0.0);
+    let t = clamp(div_or_zero(dot(ap, ab), dot(ab, ab)), 0.0, 1.0);
+    var r: Projection;
+    r.point = vec3<f32>(a.x + ab.x * t, a.y + ab.y * t, 0.0);
+    r.normal = normalize_or_zero(vec3<f32>(ab.y, -ab.x, 0.0));
+    let d = vec3<f32>(p.x - r.point.x, p.y - r.point.y, 0.0);
+    r.dist2 = dot(d, d);
+    r.weights = vec4<f32>(1.0 - t, t, 0.0, 0.0);
+    return r;
+}
+
+fn closest_on_triangle(p: vec3<f32>, a: vec3<f32>, b: vec3<f32>, c: vec3<f32>) -> Projection {
+    let ab = b - a;
+    let ac = c - a;
+    var r: Projection;
+    r.normal = normalize_or_zero(cross(ab, ac));
+    // Voronoi regions, Ericson §5.1.5
+    let ap = p - a;
+    let d1 = dot(ab, ap);
+    let d2 = dot(ac, ap);
+    let bp = p - b;
+    let d3 = dot(ab, bp);
+    let d4 = dot(ac, bp);
+    let cp = p - c;
+    let d5 = dot(ab, cp);
+    let d6 = dot(ac, cp);
+    let vc = d1 * d4 - d3 * d2;
+    let vb = d5 * d2 - d1 * d6;
+    let va = d3 * d6 - d5 * d4;
+    if (d1 <= 0.0 && d2 <= 0.0) {
+        r.point = a; r.weights = vec4<f32>(1.0, 0.0, 0.0, 0.0);
+    } else if (d3 >= 0.0 && d4 <= d3) {
+        r.point = b; r.weights = vec4<f32>(0.0, 1.0, 0.0, 0.0);
+    } else if (vc <= 0.0 && d1 >= 0.0 && d3 <= 0.0) {
+        let v = div_or_zero(d1, d1 - d3);
+        r.point = a + ab * v; r.weights = vec4<f32>(1.0 - v, v, 0.0, 0.0);
+    } else if (d6 >= 0.0 && d5 <= d6) {
+        r.point = c; r.weights = vec4<f32>(0.0, 0.0, 1.0, 0.0);
+    } else if (vb <= 0.0 && d2 >= 0.0 && d6 <= 0.0) {
+        let w = div_or_zero(d2, d2 - d6);
+        r.point = a + ac * w; r.weights = vec4<f32>(1.0 - w, 0.0, w, 0.0);
+    } else if (va <= 0.0 && (d4 - d3) >= 0.0 && (d5 - d6) >= 0.0) {
+        let w = div_or_zero(d4 - d3, (d4 - d3) + (d5 - d6));
+        r.point = b + (c - b) * w; r.weights = vec4<f32>(0.0, 1.0 - w, w, 0.0);
+    } else {
+        let denom = va + vb + vc;
+        let v = div_or_zero(vb, denom);
+        let w = div_or_zero(vc, denom);
+        r.point = a + ab * v + ac * w; r.weights = vec4<f32>(1.0 - v - w, v, w, 0.0);
+    }
+    let d = p - r.point;
+    r.dist2 = dot(d, d);
+    return r;
+}
+
+fn quad_shape(xi: f32, eta: f32) -> vec4<f32> {
+    let xm = 1.0 - xi;
+    let xp = 1.0 + xi;
+    let em = 1.0 - eta;
+    let ep = 1.0 + eta;
+    return vec4<f32>(0.25 * xm * em, 0.25 * xp * em, 0.25 * xp * ep, 0.25 * xm * ep);
+}
+
+fn closest_on_quad(p: vec3<f32>, x0: vec3<f32>, x1: vec3<f32>, x2: vec3<f32>, x3: vec3<f32>) -> Projection {
+    let c0 = (x0 + x1 + x2 + x3) * 0.25;
+    let cx = (x1 - x0 + x2 - x3) * 0.25;
+    let ce = (x2 + x3 - x0 - x1) * 0.25;
+    let cxe = (x0 - x1 + x2 - x3) * 0.25;
+    var xi = 0.0;
+    var eta = 0.0;
+    for (var k = 0u; k < QUAD_ITERATIONS; k++) {
+        let r = c0 + cx * xi + ce * eta + cxe * (xi * eta) - p;
+        let gx = cx + cxe * eta;
+        let ge = ce + cxe * xi;
+        let a11 = dot(gx, gx);
+        let a12 = dot(gx, ge);
+        let a22 = dot(ge, ge);
+        let b1 = dot(gx, r);
+        let b2 = dot(ge, r);
+        let det = a11 * a22 - a12 * a12;
+        let dxi = div_or_zero(a22 * b1 - a12 * b2, det);
+        let deta = div_or_zero(a11 * b2 - a12 * b1, det);
+        xi = clamp(xi - dxi, -1.0, 1.0);
+        eta = clamp(eta - deta, -1.0, 1.0);
+    }
+    var best_point = c0 + cx * xi + ce * eta + cxe * (xi * eta);
+    var bd = p - best_point;
+    var best_d2 = dot(bd, bd);
+    var best_xi = xi;
+    var best_eta = eta;
+    let xs = array<vec3<f32>, 4>(x0, x1, x2, x3);
+    for (var e = 0u; e < 4u; e++) {
+        let a = xs[e];
+        let b = xs[(e + 1u) % 4u];
+        let ab = b - a;
+        let t = clamp(div_or_zero(dot(p - a, ab), dot(ab, ab)), 0.0, 1.0);
+        let point = a + ab * t;
+        let d = p - point;
+        let d2 = dot(d, d);
+        if (d2 < best_d2) {
+            let s = t + t - 1.0;
+            var exi = -1.0;
+            var eeta = -s;
+            if (e == 0u) { exi = s; eeta = -1.0; }
+            else if (e == 1u) { exi = 1.0; eeta = s; }
+            else if (e == 2u) { exi = -s; eeta = 1.0; }
+            best_point = point;
+            best_d2 = d2;
+            best_xi = exi;
+            best_eta = eeta;
+        }
+    }
+    var r: Projection;
+    let gx = cx + cxe * best_eta;
+    let ge = ce + cxe * best_xi;
+    r.normal = normalize_or_zero(cross(gx, ge));
+    if (dot(r.normal, r.normal) == 0.0) {
+        r.normal = normalize_or_zero(cross(x2 - x0, x3 - x1));
+    }
+    r.point = best_point;
+    r.weights = quad_shape(best_xi, best_eta);
+    r.dist2 = best_d2;
+    return r;
+}

@@ -1,0 +1,91 @@
+// nearest_facet.wgsl — step 5: the globally nearest active facet of each slave node.
+// CPU mirror: src/cpu/nearest_facet.rs.
+//
+// Bindings: 0 params, 1 nodes, 2 facets, 3 slaves (node id per slave), 4 starts, 5 entries,
+//           6 status (read: overflow skips the pass), 7 hits (one Hit per slave).
+// Dispatch: one invocation per slave node, ITEM_WORKGROUP per workgroup, folded into 2D.
+// Invariants: every facet within the radius of a node is binned in the node's cell (bins are
+//             grown by bin_margin ≥ radius), so looking in that one cell is exact. Candidates
+//             come in increasing id order and only a strictly nearer one replaces the best, so
+//             exact ties go to the lowest facet id; the tracked node is the facet node nearest
+//             the slave node, ties to the lowest node id. A node outside the grid, or with no
+//             facet within the radius, gets facet = NO_FACET.
+
+@group(0) @binding(0) var<uniform> params: SearchParams;
+@group(0) @binding(1) var<storage, read> nodes: array<vec4<f32>>;
+@group(0) @binding(2) var<storage, read> facets: array<vec4<u32>>;
+@group(0) @binding(3) var<storage, read> slaves: array<u32>;
+@group(0) @binding(4) var<storage, read> starts: array<u32>;
+@group(0) @binding(5) var<storage, read> entries: array<u32>;
+@group(0) @binding(6) var<storage, read> status: array<u32>;
+@group(0) @binding(7) var<storage, read_write> hits: array<Hit>;
+
+fn project(p: vec3<f32>, fac: vec4<u32>) -> Projection {
+    let n = facet_node_count(fac);
+    let x0 = nodes[fac.x].xyz;
+    let x1 = nodes[fac.y].xyz;
+    if (n == 2u) { return closest_on_segment(p, x0, x1); }
+    let x2 = nodes[fac.z].xyz;
+    if (n == 3u) { return closest_on_triangle(p, x0, x1, x2); }
+    return closest_on_quad(p, x0, x1, x2, nodes[fac.w].xyz);
+}
+
+@compute @workgroup_size(64)
+fn nearest_facet(@builtin(workgroup_id) wg: vec3<u32>,
+                 @builtin(num_workgroups) nwg: vec3<u32>,
+                 @builtin(local_invocation_index) li: u32) {
+    let i = folded_id(wg, nwg, li, ITEM_WORKGROUP);
+    if (i >= params.n_slaves) { return; }
+    if (status[STATUS_OVERFLOW] != 0u) { return; }
+    var hit: Hit;
+    hit.facet = NO_FACET;
+    hit.node = NO_NODE;
+    hit.candidates = 0u;
+    hit._pad = 0u;
+    hit.point_gap = vec4<f32>(0.0);
+    hit.normal_dist = vec4<f32>(0.0);
+    hit.weights = vec4<f32>(0.0);
+    let p = nodes[slaves[i]].xyz;
+    let g = p * params.inv_cell_size;
+    let inside = g.x >= 0.0 && g.y >= 0.0 && g.z >= 0.0
+        && g.x < f32(params.dims_x) && g.y < f32(params.dims_y) && g.z < f32(params.dims_z);
+    if (inside) {
+        let c = cell_index(params, vec3<u32>(u32(g.x), u32(g.y), u32(g.z)));
+        let s = starts[c];
+        let e = starts[c + 1u];
+        hit.candidates = e - s;
+        var best: Projection;
+        var best_f = NO_FACET;
+        var best_d2 = params.radius * params.radius;
+        for (var k = s; k < e; k++) {
+            let f = entries[k];
+            let pr = project(p, facets[f]);
+            if (pr.dist2 < best_d2 || (best_f == NO_FACET && pr.dist2 == best_d2)) {
+                best = pr;
+                best_d2 = pr.dist2;
+                best_f = f;
+            }
+        }
+        if (best_f != NO_FACET) {
+            let fac = facets[best_f];
+            let n = facet_node_count(fac);
+            var best_node = NO_NODE;
+            var best_nd2 = 0.0;
+            for (var j = 0u; j < n; j++) {
+                let node = fac[j];
+                let d = nodes[node].xyz - p;
+                let d2 = dot(d, d);
+                if (best_node == NO_NODE || d2 < best_nd2 || (d2 == best_nd2 && node < best_node)) {
+                    best_node = node;
+                    best_nd2 = d2;
+                }
+            }
+            hit.facet = best_f;
+            hit.node = best_node;
+            hit.point_gap = vec4<f32>(best.point, dot(p - best.point, best.normal));
+            hit.normal_dist = vec4<f32>(best.normal, sqrt(best.dist2));
+            hit.weights = best.weights;
+        }
+    }
+    hits[i] = hit;
+}

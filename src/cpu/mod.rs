@@ -1,0 +1,144 @@
+//! The CPU path: a mirror of every shader (same file name, same loop shape, f32 in grid-local
+//! coordinates) and a brute-force f64 oracle for the tests.
+//!
+//! The mirror runs the kernels' "invocations" one after another, which makes its atomics
+//! sequential; the results equal the GPU's up to f32 round-off (and exactly for the integer
+//! binning). It is also the backend used where no adapter exists.
+
+pub mod bin_count;
+pub mod bin_scatter;
+pub mod bin_sort;
+pub mod brute_force;
+pub mod common;
+pub mod nearest_facet;
+pub mod scan;
+
+use crate::error::Result;
+use crate::search::layout::{
+    GpuHit, ScanLevels, STATUS_NEEDED_ENTRIES, STATUS_OVERFLOW, STATUS_WORDS,
+};
+use crate::search::{Prepared, Step, STEPS};
+
+/// The buffers of one search on the CPU; they only grow.
+#[derive(Clone, Debug, Default)]
+pub struct CpuWorkspace {
+    /// All scan levels; words 0..=n_cells hold counts, then cell starts.
+    pub scan: Vec<u32>,
+    /// Atomic cursors of the scatter.
+    pub cursor: Vec<u32>,
+    /// Bin entries (facet ids grouped by cell).
+    pub entries: Vec<u32>,
+    /// Status words (`STATUS_*`).
+    pub status: [u32; STATUS_WORDS],
+    /// One result per slave node.
+    pub hits: Vec<GpuHit>,
+}
+
+/// The CPU executor of the global search.
+#[derive(Clone, Debug)]
+pub struct CpuSearch {
+    ws: CpuWorkspace,
+    entry_capacity: u32,
+    presize: bool,
+}
+
+impl Default for CpuSearch {
+    fn default() -> Self {
+        Self {
+            ws: CpuWorkspace::default(),
+            entry_capacity: 0,
+            presize: true,
+        }
+    }
+}
+
+impl CpuSearch {
+    /// Sets the entry buffer's size (words) and stops sizing it from the host's estimate, so
+    /// that the overflow path can be tested; it still grows on overflow.
+    pub fn set_entry_capacity(&mut self, words: u32) {
+        self.entry_capacity = words;
+        self.presize = false;
+        self.ws.entries.truncate(words as usize);
+    }
+
+    /// Runs all steps; on overflow grows the entry buffer and runs again.
+    /// Returns the hits, the bin entries written and the number of regrowths.
+    pub fn run(&mut self, prep: &Prepared) -> Result<(Vec<GpuHit>, u32, u32)> {
+        let mut regrowths = 0;
+        if self.presize {
+            self.entry_capacity = presized_capacity(prep, self.entry_capacity);
+        }
+        loop {
+            let mut params = prep.params;
+            params.entry_capacity = self.entry_capacity;
+            let levels = ScanLevels::new(params.n_cells + 1);
+            self.ws.scan.clear();
+            self.ws.scan.resize(levels.words as usize, 0);
+            self.ws.status = [0; STATUS_WORDS];
+            self.ws.entries.resize(self.entry_capacity as usize, 0);
+            self.ws.hits.resize(prep.slaves.len(), GpuHit::miss(0));
+            for step in STEPS {
+                run_step(step, &params, &levels, prep, &mut self.ws);
+            }
+            if self.ws.status[STATUS_OVERFLOW] == 0 {
+                let total = self.ws.scan[params.n_cells as usize];
+                return Ok((self.ws.hits.clone(), total, regrowths));
+            }
+            self.entry_capacity = grown_capacity(self.ws.status[STATUS_NEEDED_ENTRIES]);
+            regrowths += 1;
+        }
+    }
+}
+
+/// Entry capacity for `prep`: the host's estimate with an eighth more for round-off at cell
+/// boundaries, never less than `current` (the workspace only grows).
+pub fn presized_capacity(prep: &Prepared, current: u32) -> u32 {
+    let want = prep.estimated_entries + prep.estimated_entries / 8 + 64;
+    want.clamp(current as u64, u32::MAX as u64) as u32
+}
+
+/// Capacity after an overflow that needed `needed` words: a quarter more, for headroom.
+pub fn grown_capacity(needed: u32) -> u32 {
+    (needed as u64 + needed as u64 / 4 + 64).min(u32::MAX as u64) as u32
+}
+
+/// Runs one step of the search on the CPU workspace (the CPU half of a split run).
+pub fn run_step(
+    step: Step,
+    params: &crate::search::layout::SearchParams,
+    levels: &ScanLevels,
+    prep: &Prepared,
+    ws: &mut CpuWorkspace,
+) {
+    let n_cells = params.n_cells as usize;
+    match step {
+        Step::BinCount => {
+            bin_count::bin_count(params, &prep.nodes, &prep.facets, &mut ws.scan[..=n_cells])
+        }
+        Step::Scan => scan::scan(levels, &mut ws.scan),
+        Step::BinScatter => {
+            ws.cursor.clear();
+            ws.cursor.extend_from_slice(&ws.scan[..=n_cells]);
+            bin_scatter::bin_scatter(
+                params,
+                &prep.nodes,
+                &prep.facets,
+                &ws.scan[..=n_cells],
+                &mut ws.cursor,
+                &mut ws.entries,
+                &mut ws.status,
+            )
+        }
+        Step::BinSort => bin_sort::bin_sort(params, &ws.scan[..=n_cells], &mut ws.entries),
+        Step::NearestFacet => nearest_facet::nearest_facet(
+            params,
+            &prep.nodes,
+            &prep.facets,
+            &prep.slaves,
+            &ws.scan[..=n_cells],
+            &ws.entries,
+            &ws.status,
+            &mut ws.hits,
+        ),
+    }
+}

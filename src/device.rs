@@ -1,0 +1,286 @@
+//! Where abut runs: a GPU adapter chosen in one place, or the CPU path.
+//!
+//! Choice, in order: a discrete, integrated or virtual GPU; then a software adapter (Vulkan
+//! lavapipe before GL llvmpipe); then, for [`Device::auto`], the CPU path with a notice on
+//! stderr. `WGPU_BACKEND` (e.g. `vulkan`, `gl`) restricts the backends, `WGPU_ADAPTER_NAME`
+//! keeps adapters whose name contains it (case-insensitive), and `ABUT_BACKEND=cpu` selects
+//! the CPU path outright.
+
+use std::fmt;
+use std::sync::{Arc, Mutex};
+
+use crate::error::{Error, Result};
+
+/// A wgpu device with the adapter facts abut reports. Shared by every search on it.
+pub struct GpuContext {
+    /// The device.
+    pub device: wgpu::Device,
+    /// Its queue.
+    pub queue: wgpu::Queue,
+    /// Adapter name, driver, backend, type.
+    pub info: wgpu::AdapterInfo,
+    /// The limits the device was created with.
+    pub limits: wgpu::Limits,
+    /// Errors wgpu raised outside an error scope (kept instead of panicking).
+    pub uncaptured: Arc<Mutex<Vec<String>>>,
+}
+
+impl fmt::Debug for GpuContext {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.debug_struct("GpuContext")
+            .field("info", &self.info)
+            .finish()
+    }
+}
+
+/// Which executor a [`Device`] runs.
+#[derive(Clone, Debug)]
+pub enum DeviceKind {
+    /// A wgpu adapter.
+    Gpu(Arc<GpuContext>),
+    /// The CPU mirror of the kernels.
+    Cpu,
+}
+
+/// A place to run contact searches: a GPU adapter or the CPU path. Always printable.
+#[derive(Clone, Debug)]
+pub struct Device {
+    kind: DeviceKind,
+}
+
+impl Device {
+    /// The best available device: a GPU adapter if there is one, else the CPU path (with a
+    /// notice on stderr). `ABUT_BACKEND=cpu` forces the CPU path, `ABUT_BACKEND=gpu` makes a
+    /// missing adapter an error.
+    pub fn auto() -> Result<Self> {
+        match std::env::var("ABUT_BACKEND").as_deref() {
+            Ok("cpu") => return Ok(Self::cpu()),
+            Ok("gpu") => return Self::gpu(),
+            _ => {}
+        }
+        match Self::gpu() {
+            Ok(d) => Ok(d),
+            Err(Error::NoAdapter { detail }) => {
+                eprintln!("abut: no GPU adapter found{detail}; running on the CPU path (slow)");
+                Ok(Self::cpu())
+            }
+            Err(e) => Err(e),
+        }
+    }
+
+    /// The best GPU adapter, or [`Error::NoAdapter`].
+    pub fn gpu() -> Result<Self> {
+        let mut last_err = None;
+        // GL is only probed when no Vulkan/Metal/DX12 adapter exists (probing it is slow and
+        // noisy on headless machines).
+        let mut adapters = ranked_adapters(wgpu::Backends::PRIMARY);
+        if adapters.is_empty() {
+            adapters = ranked_adapters(wgpu::Backends::GL);
+        }
+        for adapter in adapters {
+            match GpuContext::new(adapter) {
+                Ok(ctx) => return Ok(Self::from_context(ctx)),
+                Err(e) => last_err = Some(e),
+            }
+        }
+        Err(last_err.unwrap_or_else(|| Error::NoAdapter {
+            detail: search_detail(),
+        }))
+    }
+
+    /// Every usable GPU adapter, best first (tests run their parity checks on each).
+    pub fn all_gpus() -> Vec<Result<Self>> {
+        ranked_adapters(wgpu::Backends::all())
+            .into_iter()
+            .map(|a| GpuContext::new(a).map(Self::from_context))
+            .collect()
+    }
+
+    /// The CPU path.
+    pub fn cpu() -> Self {
+        Self {
+            kind: DeviceKind::Cpu,
+        }
+    }
+
+    fn from_context(ctx: GpuContext) -> Self {
+        Self {
+            kind: DeviceKind::Gpu(Arc::new(ctx)),
+        }
+    }
+
+    /// The executor behind this device.
+    pub fn kind(&self) -> &DeviceKind {
+        &self.kind
+    }
+
+    /// True for a GPU adapter.
+    pub fn is_gpu(&self) -> bool {
+        matches!(self.kind, DeviceKind::Gpu(_))
+    }
+
+    /// The backend's short name: "vulkan", "gl", "metal", "dx12", or "cpu".
+    pub fn backend_name(&self) -> String {
+        match &self.kind {
+            DeviceKind::Gpu(c) => c.info.backend.to_str().to_string(),
+            DeviceKind::Cpu => "cpu".into(),
+        }
+    }
+}
+
+impl fmt::Display for Device {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match &self.kind {
+            DeviceKind::Gpu(c) => {
+                let i = &c.info;
+                write!(
+                    f,
+                    "{} ({:?}, {} backend, driver {} {})",
+                    i.name,
+                    i.device_type,
+                    i.backend.to_str(),
+                    i.driver,
+                    i.driver_info
+                )
+            }
+            DeviceKind::Cpu => write!(f, "CPU path (abut's CPU mirror of the kernels, f32)"),
+        }
+    }
+}
+
+fn search_detail() -> String {
+    let mut d = Vec::new();
+    if let Ok(b) = std::env::var("WGPU_BACKEND") {
+        d.push(format!("WGPU_BACKEND={b}"));
+    }
+    if let Ok(n) = std::env::var("WGPU_ADAPTER_NAME") {
+        d.push(format!("WGPU_ADAPTER_NAME={n}"));
+    }
+    if d.is_empty() {
+        String::new()
+    } else {
+        format!(": {}", d.join(", "))
+    }
+}
+
+/// Adapters of `backends` that can run compute shaders, filtered by the environment
+/// (`WGPU_BACKEND` narrows `backends` further), best first.
+fn ranked_adapters(backends: wgpu::Backends) -> Vec<wgpu::Adapter> {
+    let backends = wgpu::Backends::from_env().map_or(backends, |env| env & backends);
+    if backends.is_empty() {
+        return Vec::new();
+    }
+    let mut desc = wgpu::InstanceDescriptor::new_without_display_handle();
+    desc.backends = backends;
+    desc.flags = wgpu::InstanceFlags::default().with_env();
+    let instance = wgpu::Instance::new(desc);
+    let mut adapters = pollster::block_on(instance.enumerate_adapters(backends));
+    let name = std::env::var("WGPU_ADAPTER_NAME")
+        .ok()
+        .map(|n| n.to_lowercase());
+    adapters.retain(|a| {
+        let info = a.get_info();
+        let compute = a
+            .get_downlevel_capabilities()
+            .flags
+            .contains(wgpu::DownlevelFlags::COMPUTE_SHADERS);
+        compute
+            && name
+                .as_ref()
+                .is_none_or(|n| info.name.to_lowercase().contains(n))
+    });
+    adapters.sort_by_key(|a| {
+        let info = a.get_info();
+        let ty = match info.device_type {
+            wgpu::DeviceType::DiscreteGpu => 0,
+            wgpu::DeviceType::IntegratedGpu => 1,
+            wgpu::DeviceType::VirtualGpu => 2,
+            wgpu::DeviceType::Other => 3,
+            wgpu::DeviceType::Cpu => 4,
+        };
+        let be = match info.backend {
+            wgpu::Backend::Vulkan | wgpu::Backend::Metal | wgpu::Backend::Dx12 => 0,
+            _ => 1,
+        };
+        (ty, be)
+    });
+    adapters
+}
+
+/// The limits abut asks for: WebGPU's compute defaults, storage bindings as large as the
+/// adapter allows (the workspace grows into them).
+fn required_limits(adapter: &wgpu::Adapter) -> Result<wgpu::Limits> {
+    let have = adapter.limits();
+    let mut need = wgpu::Limits::downlevel_defaults();
+    need.max_storage_buffers_per_shader_stage = 8;
+    need.max_compute_workgroup_size_x = 256;
+    need.max_compute_invocations_per_workgroup = 256;
+    need.max_compute_workgroups_per_dimension = 65_535;
+    need.max_storage_buffer_binding_size = have.max_storage_buffer_binding_size;
+    need.max_buffer_size = have.max_buffer_size;
+    let mut failed = None;
+    need.check_limits_with_fail_fn(&have, true, |name, needed, available| {
+        failed = Some((name, needed, available));
+    });
+    if let Some((limit, needed, available)) = failed {
+        return Err(Error::AdapterLimit {
+            adapter: adapter.get_info().name,
+            limit,
+            available,
+            needed,
+        });
+    }
+    Ok(need)
+}
+
+impl GpuContext {
+    /// Creates a device on `adapter` with [`required_limits`].
+    fn new(adapter: wgpu::Adapter) -> Result<Self> {
+        let info = adapter.get_info();
+        let limits = required_limits(&adapter)?;
+        let desc = wgpu::DeviceDescriptor {
+            label: Some("abut"),
+            required_limits: limits.clone(),
+            ..Default::default()
+        };
+        let (device, queue) =
+            pollster::block_on(adapter.request_device(&desc)).map_err(|source| {
+                Error::RequestDevice {
+                    adapter: info.name.clone(),
+                    source,
+                }
+            })?;
+        let uncaptured = Arc::new(Mutex::new(Vec::new()));
+        let sink = uncaptured.clone();
+        device.on_uncaptured_error(Arc::new(move |e: wgpu::Error| {
+            if let Ok(mut v) = sink.lock() {
+                v.push(e.to_string());
+            }
+        }));
+        Ok(Self {
+            device,
+            queue,
+            info,
+            limits,
+            uncaptured,
+        })
+    }
+
+    /// Takes the errors wgpu raised outside error scopes since the last call, as one error.
+    pub fn take_uncaptured(&self, during: &str) -> Result<()> {
+        let mut v = self.uncaptured.lock().map_err(|_| Error::Gpu {
+            during: during.into(),
+            message: "error log poisoned".into(),
+        })?;
+        if v.is_empty() {
+            Ok(())
+        } else {
+            let message = v.join("; ");
+            v.clear();
+            Err(Error::Gpu {
+                during: during.into(),
+                message,
+            })
+        }
+    }
+}

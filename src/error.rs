@@ -1,0 +1,164 @@
+//! The one error type of the library.
+
+use thiserror::Error;
+
+/// Everything that can go wrong in abut, each variant naming the item at fault.
+#[derive(Debug, Error)]
+pub enum Error {
+    /// A coordinate of a node is NaN or infinite.
+    #[error("node {node}: coordinate {axis} is not finite ({value})")]
+    NonFiniteCoordinate {
+        /// Index of the node (local to the model or to the array passed in).
+        node: usize,
+        /// Axis: 0 = x, 1 = y, 2 = z.
+        axis: usize,
+        /// The offending value.
+        value: f64,
+    },
+    /// A node mass is zero, negative, NaN or infinite.
+    #[error("node {node}: mass {mass} is not a finite positive number")]
+    BadMass {
+        /// Index of the node.
+        node: usize,
+        /// The offending mass.
+        mass: f64,
+    },
+    /// Two arrays that must have one entry per item have different lengths.
+    #[error("{what}: expected {expected} entries, got {got}")]
+    LengthMismatch {
+        /// What the arrays describe.
+        what: &'static str,
+        /// The length required.
+        expected: usize,
+        /// The length passed.
+        got: usize,
+    },
+    /// A set, surface or array that must hold at least one item is empty.
+    #[error("{what} is empty")]
+    Empty {
+        /// What was empty.
+        what: String,
+    },
+    /// An index refers to an item that does not exist.
+    #[error("{what}: index {index} is out of range (there are {len})")]
+    IndexOutOfRange {
+        /// Where the index was found (e.g. "facet 12 of surface 0, node 3").
+        what: String,
+        /// The offending index.
+        index: u64,
+        /// How many items there are.
+        len: usize,
+    },
+    /// A facet names the same node twice.
+    #[error("facet {facet}: node {node} appears more than once")]
+    RepeatedNode {
+        /// Index of the facet within its surface.
+        facet: usize,
+        /// The repeated node.
+        node: u32,
+    },
+    /// A node appears twice in a node set.
+    #[error("node set: node {node} appears more than once")]
+    DuplicateNode {
+        /// The repeated node.
+        node: u32,
+    },
+    /// Every facet of a surface is degenerate, so nothing is left to search.
+    #[error("surface: all {count} facets are degenerate (zero area or zero length)")]
+    AllFacetsDegenerate {
+        /// How many facets the surface had.
+        count: usize,
+    },
+    /// A facet kind that does not belong in the model's dimension (segments are 2D, triangles
+    /// and quads 3D).
+    #[error("facet {facet}: a {kind} does not belong in a {dim}D model")]
+    WrongDimension {
+        /// Index of the facet.
+        facet: usize,
+        /// What kind of facet it is.
+        kind: &'static str,
+        /// The model's dimension.
+        dim: u32,
+    },
+    /// A 2D model was given a node with a non-zero z coordinate.
+    #[error("node {node}: z = {z} in a 2D model (must be 0)")]
+    NonPlanarNode {
+        /// Index of the node.
+        node: usize,
+        /// The offending z.
+        z: f64,
+    },
+    /// A parameter is outside the range it must lie in.
+    #[error("{name} = {value}: {expected}")]
+    BadParameter {
+        /// The parameter's name.
+        name: &'static str,
+        /// Its value, printed.
+        value: String,
+        /// What it must be.
+        expected: &'static str,
+    },
+    /// No GPU adapter is available (and the CPU path was not allowed).
+    #[error("no GPU adapter found{detail}")]
+    NoAdapter {
+        /// What was searched for (backends, name filter), starting with ": " when not empty.
+        detail: String,
+    },
+    /// The adapter cannot provide a limit the search needs.
+    #[error("adapter {adapter}: limit {limit} is {available}, abut needs {needed}")]
+    AdapterLimit {
+        /// The adapter's name.
+        adapter: String,
+        /// The wgpu limit's name.
+        limit: &'static str,
+        /// What the adapter offers.
+        available: u64,
+        /// What abut asks for.
+        needed: u64,
+    },
+    /// A problem is larger than the device's limits allow, even after growing buffers.
+    #[error("{what}: needs {needed} bytes, the device allows {allowed}")]
+    TooLarge {
+        /// What did not fit.
+        what: String,
+        /// Bytes needed.
+        needed: u64,
+        /// Bytes allowed.
+        allowed: u64,
+    },
+    /// The device could not be created.
+    #[error("requesting a device from {adapter} failed: {source}")]
+    RequestDevice {
+        /// The adapter's name.
+        adapter: String,
+        /// wgpu's error.
+        source: wgpu::RequestDeviceError,
+    },
+    /// wgpu reported an error (validation, out of memory, internal) while abut ran a pass.
+    #[error("GPU error during {during}: {message}")]
+    Gpu {
+        /// Which pass or operation.
+        during: String,
+        /// wgpu's message.
+        message: String,
+    },
+    /// The device was lost or a readback failed.
+    #[error("GPU device lost or readback failed during {during}: {message}")]
+    DeviceLost {
+        /// Which pass or operation.
+        during: String,
+        /// What was reported.
+        message: String,
+    },
+    /// A surface, node set or pair id that this model did not hand out.
+    #[error("{what} {id} does not exist in this model")]
+    UnknownId {
+        /// "surface", "node set" or "pair".
+        what: &'static str,
+        /// The id.
+        id: usize,
+    },
+}
+
+/// Result with the library's [`Error`].
+pub type Result<T, E = Error> = std::result::Result<T, E>;

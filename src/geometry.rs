@@ -1,0 +1,379 @@
+//! Closest points on master facets, load-transfer weights and local tangent directions.
+//!
+//! The routines are generic over [`Real`] so that one algorithm serves the f32 CPU mirror of the
+//! shaders (`shaders/common.wgsl` holds the WGSL twin of every function here, same order of
+//! operations) and the f64 reference path used by the oracle and the host passes.
+//!
+//! # Facet conventions
+//!
+//! * **Segment** (2D, nodes a→b): weights `(1−t, t)`; outward normal `(t_y, −t_x)/|t|`, i.e. on the
+//!   right of a→b, which points out of a body whose boundary runs counter-clockwise.
+//! * **Triangle** (nodes a, b, c): weights are the barycentric coordinates of the closest point;
+//!   normal `(b−a)×(c−a)` normalised (outward when the nodes run counter-clockwise seen from
+//!   outside). Closest point by Voronoi regions (Ericson, *Real-Time Collision Detection* §5.1.5),
+//!   exact on edges and vertices.
+//! * **Quad** (bilinear, nodes 0..3 counter-clockwise, ξ, η ∈ [−1, 1]): the facet is the bilinear
+//!   patch `x(ξ,η) = Σ N_i x_i`, which need not be planar. The nearest point is the best of
+//!   (a) a projected Gauss–Newton descent on `|x(ξ,η) − p|²` from the centre, clamped to the
+//!   parameter square, [`QUAD_ITERATIONS`] steps, and (b) the exact nearest points on the four
+//!   straight boundary edges. For a planar quad, (a) converges to the orthogonal projection
+//!   whenever it lies inside and (b) is exact otherwise, so the result is the true nearest point;
+//!   for a warped quad the result is a point on the patch at least as near as every edge and the
+//!   local minimum found from the centre (tested against dense sampling). Weights are the
+//!   bilinear shape functions at (ξ, η); the normal is `x_ξ × x_η` normalised there, or the
+//!   diagonal normal `(x2−x0)×(x3−x1)` where that vanishes (collapsed edge).
+
+use std::fmt::Debug;
+use std::ops::{Add, Div, Mul, Neg, Sub};
+
+/// Projected Gauss–Newton steps used for the interior of a quad (WGSL: `QUAD_ITERATIONS`).
+pub const QUAD_ITERATIONS: u32 = 8;
+
+/// A floating-point scalar the geometry runs in: `f32` (mirrors the GPU) or `f64` (reference).
+pub trait Real:
+    Copy
+    + PartialOrd
+    + Debug
+    + Add<Output = Self>
+    + Sub<Output = Self>
+    + Mul<Output = Self>
+    + Div<Output = Self>
+    + Neg<Output = Self>
+{
+    /// 0.
+    const ZERO: Self;
+    /// 1.
+    const ONE: Self;
+    /// Square root.
+    fn sqrt(self) -> Self;
+    /// Conversion from f64 (rounding for f32).
+    fn from_f64(v: f64) -> Self;
+    /// Conversion to f64 (exact).
+    fn to_f64(self) -> f64;
+    /// The larger of two values (`b` when they compare equal).
+    fn max_of(self, b: Self) -> Self {
+        if self > b {
+            self
+        } else {
+            b
+        }
+    }
+    /// The smaller of two values (`b` when they compare equal).
+    fn min_of(self, b: Self) -> Self {
+        if self < b {
+            self
+        } else {
+            b
+        }
+    }
+    /// `self` clamped to `[lo, hi]`.
+    fn clamp_to(self, lo: Self, hi: Self) -> Self {
+        self.max_of(lo).min_of(hi)
+    }
+}
+
+impl Real for f32 {
+    const ZERO: Self = 0.0;
+    const ONE: Self = 1.0;
+    fn sqrt(self) -> Self {
+        f32::sqrt(self)
+    }
+    fn from_f64(v: f64) -> Self {
+        v as f32
+    }
+    fn to_f64(self) -> f64 {
+        self as f64
+    }
+}
+
+impl Real for f64 {
+    const ZERO: Self = 0.0;
+    const ONE: Self = 1.0;
+    fn sqrt(self) -> Self {
+        f64::sqrt(self)
+    }
+    fn from_f64(v: f64) -> Self {
+        v
+    }
+    fn to_f64(self) -> f64 {
+        self
+    }
+}
+
+/// A 3-vector of [`Real`]; 2D models use z = 0.
+#[derive(Clone, Copy, Debug, PartialEq, Default)]
+pub struct V3<T> {
+    /// x component.
+    pub x: T,
+    /// y component.
+    pub y: T,
+    /// z component.
+    pub z: T,
+}
+
+impl<T: Real> V3<T> {
+    /// A vector from its components.
+    pub fn new(x: T, y: T, z: T) -> Self {
+        Self { x, y, z }
+    }
+    /// The zero vector.
+    pub fn zero() -> Self {
+        Self::new(T::ZERO, T::ZERO, T::ZERO)
+    }
+    /// A vector from an array.
+    pub fn from_array(a: [T; 3]) -> Self {
+        Self::new(a[0], a[1], a[2])
+    }
+    /// The components as an array.
+    pub fn to_array(self) -> [T; 3] {
+        [self.x, self.y, self.z]
+    }
+    /// Dot product.
+    pub fn dot(self, o: Self) -> T {
+        self.x * o.x + self.y * o.y + self.z * o.z
+    }
+    /// Cross product.
+    pub fn cross(self, o: Self) -> Self {
+        Self::new(
+            self.y * o.z - self.z * o.y,
+            self.z * o.x - self.x * o.z,
+            self.x * o.y - self.y * o.x,
+        )
+    }
+    /// Squared length.
+    pub fn length2(self) -> T {
+        self.dot(self)
+    }
+    /// Unit vector, or zero when the length is zero.
+    pub fn normalize_or_zero(self) -> Self {
+        let l2 = self.length2();
+        if l2 > T::ZERO {
+            self * (T::ONE / l2.sqrt())
+        } else {
+            Self::zero()
+        }
+    }
+}
+
+impl<T: Real> Add for V3<T> {
+    type Output = Self;
+    fn add(self, o: Self) -> Self {
+        Self::new(self.x + o.x, self.y + o.y, self.z + o.z)
+    }
+}
+impl<T: Real> Sub for V3<T> {
+    type Output = Self;
+    fn sub(self, o: Self) -> Self {
+        Self::new(self.x - o.x, self.y - o.y, self.z - o.z)
+    }
+}
+impl<T: Real> Mul<T> for V3<T> {
+    type Output = Self;
+    fn mul(self, s: T) -> Self {
+        Self::new(self.x * s, self.y * s, self.z * s)
+    }
+}
+
+/// The nearest point of a facet to a query point.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Projection<T> {
+    /// The nearest point on the facet (same frame as the input).
+    pub point: V3<T>,
+    /// Load-transfer weights of the facet's nodes at `point` (shape functions; unused slots 0).
+    pub weights: [T; 4],
+    /// Unit facet normal at `point` (zero if the facet has collapsed to zero area).
+    pub normal: V3<T>,
+    /// Squared distance from the query point to `point`.
+    pub dist2: T,
+}
+
+impl<T: Real> Projection<T> {
+    /// Signed gap along the facet normal: `(p − point)·normal`; positive outside (open).
+    pub fn gap(&self, p: V3<T>) -> T {
+        (p - self.point).dot(self.normal)
+    }
+}
+
+/// `a / b`, or 0 when `b` is 0 (guards facets that collapse while the model deforms).
+fn div_or_zero<T: Real>(a: T, b: T) -> T {
+    if b != T::ZERO {
+        a / b
+    } else {
+        T::ZERO
+    }
+}
+
+/// Nearest point to `p` on the 2D segment a→b (z ignored and returned as 0).
+pub fn closest_on_segment<T: Real>(p: V3<T>, a: V3<T>, b: V3<T>) -> Projection<T> {
+    let ab = V3::new(b.x - a.x, b.y - a.y, T::ZERO);
+    let ap = V3::new(p.x - a.x, p.y - a.y, T::ZERO);
+    let t = div_or_zero(ap.dot(ab), ab.length2()).clamp_to(T::ZERO, T::ONE);
+    let point = V3::new(a.x + ab.x * t, a.y + ab.y * t, T::ZERO);
+    let normal = V3::new(ab.y, -ab.x, T::ZERO).normalize_or_zero();
+    let d = V3::new(p.x - point.x, p.y - point.y, T::ZERO);
+    Projection {
+        point,
+        weights: [T::ONE - t, t, T::ZERO, T::ZERO],
+        normal,
+        dist2: d.length2(),
+    }
+}
+
+/// Nearest point to `p` on triangle (a, b, c), with barycentric weights.
+pub fn closest_on_triangle<T: Real>(p: V3<T>, a: V3<T>, b: V3<T>, c: V3<T>) -> Projection<T> {
+    let ab = b - a;
+    let ac = c - a;
+    let normal = ab.cross(ac).normalize_or_zero();
+    let (point, w) = triangle_region(p, a, b, c, ab, ac);
+    Projection {
+        point,
+        weights: [w[0], w[1], w[2], T::ZERO],
+        normal,
+        dist2: (p - point).length2(),
+    }
+}
+
+/// Voronoi-region walk of Ericson §5.1.5: nearest point and barycentric weights.
+fn triangle_region<T: Real>(
+    p: V3<T>,
+    a: V3<T>,
+    b: V3<T>,
+    c: V3<T>,
+    ab: V3<T>,
+    ac: V3<T>,
+) -> (V3<T>, [T; 3]) {
+    let (zero, one) = (T::ZERO, T::ONE);
+    let ap = p - a;
+    let d1 = ab.dot(ap);
+    let d2 = ac.dot(ap);
+    if d1 <= zero && d2 <= zero {
+        return (a, [one, zero, zero]);
+    }
+    let bp = p - b;
+    let d3 = ab.dot(bp);
+    let d4 = ac.dot(bp);
+    if d3 >= zero && d4 <= d3 {
+        return (b, [zero, one, zero]);
+    }
+    let vc = d1 * d4 - d3 * d2;
+    if vc <= zero && d1 >= zero && d3 <= zero {
+        let v = div_or_zero(d1, d1 - d3);
+        return (a + ab * v, [one - v, v, zero]);
+    }
+    let cp = p - c;
+    let d5 = ab.dot(cp);
+    let d6 = ac.dot(cp);
+    if d6 >= zero && d5 <= d6 {
+        return (c, [zero, zero, one]);
+    }
+    let vb = d5 * d2 - d1 * d6;
+    if vb <= zero && d2 >= zero && d6 <= zero {
+        let w = div_or_zero(d2, d2 - d6);
+        return (a + ac * w, [one - w, zero, w]);
+    }
+    let va = d3 * d6 - d5 * d4;
+    if va <= zero && (d4 - d3) >= zero && (d5 - d6) >= zero {
+        let w = div_or_zero(d4 - d3, (d4 - d3) + (d5 - d6));
+        return (b + (c - b) * w, [zero, one - w, w]);
+    }
+    let denom = va + vb + vc;
+    let v = div_or_zero(vb, denom);
+    let w = div_or_zero(vc, denom);
+    (a + ab * v + ac * w, [one - v - w, v, w])
+}
+
+/// Bilinear shape functions of a quad at (ξ, η), nodes counter-clockwise from (−1, −1).
+pub fn quad_shape<T: Real>(xi: T, eta: T) -> [T; 4] {
+    let q = T::from_f64(0.25);
+    let (xm, xp, em, ep) = (T::ONE - xi, T::ONE + xi, T::ONE - eta, T::ONE + eta);
+    [q * xm * em, q * xp * em, q * xp * ep, q * xm * ep]
+}
+
+/// Nearest point to `p` on the bilinear quad x0..x3 (see the module docs for the method).
+pub fn closest_on_quad<T: Real>(p: V3<T>, x: [V3<T>; 4]) -> Projection<T> {
+    let q = T::from_f64(0.25);
+    // x(ξ,η) = c0 + cx ξ + ce η + cxe ξη
+    let c0 = (x[0] + x[1] + x[2] + x[3]) * q;
+    let cx = (x[1] - x[0] + x[2] - x[3]) * q;
+    let ce = (x[2] + x[3] - x[0] - x[1]) * q;
+    let cxe = (x[0] - x[1] + x[2] - x[3]) * q;
+    let (one, zero) = (T::ONE, T::ZERO);
+    let mut xi = zero;
+    let mut eta = zero;
+    for _ in 0..QUAD_ITERATIONS {
+        let r = c0 + cx * xi + ce * eta + cxe * (xi * eta) - p;
+        let gx = cx + cxe * eta;
+        let ge = ce + cxe * xi;
+        let a11 = gx.dot(gx);
+        let a12 = gx.dot(ge);
+        let a22 = ge.dot(ge);
+        let b1 = gx.dot(r);
+        let b2 = ge.dot(r);
+        let det = a11 * a22 - a12 * a12;
+        let dxi = div_or_zero(a22 * b1 - a12 * b2, det);
+        let deta = div_or_zero(a11 * b2 - a12 * b1, det);
+        xi = (xi - dxi).clamp_to(-one, one);
+        eta = (eta - deta).clamp_to(-one, one);
+    }
+    let mut best_point = c0 + cx * xi + ce * eta + cxe * (xi * eta);
+    let mut best_d2 = (p - best_point).length2();
+    let mut best_xi = xi;
+    let mut best_eta = eta;
+    // The four straight edges: (start node, end node, ξ at t, η at t) with t ∈ [0, 1].
+    for e in 0..4usize {
+        let a = x[e];
+        let b = x[(e + 1) % 4];
+        let ab = b - a;
+        let t = div_or_zero((p - a).dot(ab), ab.length2()).clamp_to(zero, one);
+        let point = a + ab * t;
+        let d2 = (p - point).length2();
+        if d2 < best_d2 {
+            let s = t + t - one; // runs from −1 to 1 along the edge
+            let (exi, eeta) = match e {
+                0 => (s, -one),
+                1 => (one, s),
+                2 => (-s, one),
+                _ => (-one, -s),
+            };
+            best_point = point;
+            best_d2 = d2;
+            best_xi = exi;
+            best_eta = eeta;
+        }
+    }
+    let gx = cx + cxe * best_eta;
+    let ge = ce + cxe * best_xi;
+    let mut normal = gx.cross(ge).normalize_or_zero();
+    if normal.length2() == zero {
+        normal = (x[2] - x[0]).cross(x[3] - x[1]).normalize_or_zero();
+    }
+    Projection {
+        point: best_point,
+        weights: quad_shape(best_xi, best_eta),
+        normal,
+        dist2: best_d2,
+    }
+}
+
+/// Nearest point on a facet given by 2, 3 or 4 node positions.
+pub fn closest_on_facet<T: Real>(p: V3<T>, x: &[V3<T>]) -> Projection<T> {
+    match x.len() {
+        2 => closest_on_segment(p, x[0], x[1]),
+        3 => closest_on_triangle(p, x[0], x[1], x[2]),
+        _ => closest_on_quad(p, [x[0], x[1], x[2], x[3]]),
+    }
+}
+
+/// Local tangent directions (t1, t2) at a contact point with unit normal `n`, by the standard
+/// convention: t1 is the projection of the global x axis onto the tangent plane, or of the
+/// global z axis when x lies within 0.1° of `n`; t2 = n × t1.
+pub fn tangent_directions(n: V3<f64>) -> (V3<f64>, V3<f64>) {
+    let cos_limit = (0.1f64).to_radians().cos();
+    let axis = if n.x.abs() > cos_limit {
+        V3::new(0.0, 0.0, 1.0)
+    } else {
+        V3::new(1.0, 0.0, 0.0)
+    };
+    let t1 = (axis - n * axis.dot(n)).normalize_or_zero();
+    (t1, n.cross(t1))
+}

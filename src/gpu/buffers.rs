@@ -1,0 +1,119 @@
+//! A storage buffer that only grows, and blocking readback.
+
+use crate::error::{Error, Result};
+
+/// A device buffer with a capacity in bytes; [`GrowBuffer::ensure`] reallocates (larger) only
+/// when asked for more, and says so, so that bind groups are rebuilt only then.
+pub struct GrowBuffer {
+    /// The buffer.
+    pub buffer: wgpu::Buffer,
+    label: &'static str,
+    usage: wgpu::BufferUsages,
+    /// Whether the buffer is bound as storage (and so limited by the binding size).
+    storage: bool,
+}
+
+impl GrowBuffer {
+    /// A buffer of at least `bytes` (at least 256) with `usage`.
+    pub fn new(
+        device: &wgpu::Device,
+        label: &'static str,
+        bytes: u64,
+        usage: wgpu::BufferUsages,
+    ) -> Self {
+        let storage = usage.contains(wgpu::BufferUsages::STORAGE);
+        Self {
+            buffer: create(device, label, bytes, usage),
+            label,
+            usage,
+            storage,
+        }
+    }
+
+    /// Capacity in bytes.
+    pub fn capacity(&self) -> u64 {
+        self.buffer.size()
+    }
+
+    /// Makes room for `bytes`; returns true when the buffer was replaced. Errors when the
+    /// device's binding or buffer size limit is too small.
+    pub fn ensure(
+        &mut self,
+        device: &wgpu::Device,
+        limits: &wgpu::Limits,
+        bytes: u64,
+    ) -> Result<bool> {
+        let allowed = if self.storage {
+            limits
+                .max_storage_buffer_binding_size
+                .min(limits.max_buffer_size)
+        } else {
+            limits.max_buffer_size
+        };
+        if bytes > allowed {
+            return Err(Error::TooLarge {
+                what: format!("GPU buffer '{}'", self.label),
+                needed: bytes,
+                allowed,
+            });
+        }
+        if bytes <= self.capacity() {
+            return Ok(false);
+        }
+        let grown = (bytes + bytes / 4).min(allowed);
+        self.buffer = create(device, self.label, grown, self.usage);
+        Ok(true)
+    }
+}
+
+fn create(
+    device: &wgpu::Device,
+    label: &str,
+    bytes: u64,
+    usage: wgpu::BufferUsages,
+) -> wgpu::Buffer {
+    let size = bytes.max(256).next_multiple_of(16);
+    device.create_buffer(&wgpu::BufferDescriptor {
+        label: Some(label),
+        size,
+        usage,
+        mapped_at_creation: false,
+    })
+}
+
+/// Maps `buffer` (MAP_READ) for `bytes`, waits, copies the bytes out and unmaps.
+pub fn read_back(
+    device: &wgpu::Device,
+    buffer: &wgpu::Buffer,
+    bytes: u64,
+    during: &str,
+) -> Result<Vec<u8>> {
+    let slice = buffer.slice(..bytes);
+    let (tx, rx) = std::sync::mpsc::channel();
+    slice.map_async(wgpu::MapMode::Read, move |r| {
+        let _ = tx.send(r);
+    });
+    device
+        .poll(wgpu::PollType::wait_indefinitely())
+        .map_err(|e| Error::DeviceLost {
+            during: during.into(),
+            message: e.to_string(),
+        })?;
+    let mapped = rx.recv().map_err(|e| Error::DeviceLost {
+        during: during.into(),
+        message: e.to_string(),
+    })?;
+    mapped.map_err(|e| Error::DeviceLost {
+        during: during.into(),
+        message: e.to_string(),
+    })?;
+    let out = slice
+        .get_mapped_range()
+        .map_err(|e| Error::DeviceLost {
+            during: during.into(),
+            message: e.to_string(),
+        })?
+        .to_vec();
+    buffer.unmap();
+    Ok(out)
+}

@@ -1,0 +1,470 @@
+//! The GPU executor of the global search: five kernels in one command encoder and one submit.
+
+use std::sync::Arc;
+
+use super::buffers::{read_back, GrowBuffer};
+use super::shaders;
+use crate::cpu::{grown_capacity, presized_capacity};
+use crate::device::GpuContext;
+use crate::error::{Error, Result};
+use crate::search::layout::{
+    fold_dispatch, GpuHit, ScanLevels, ScanParams, SearchParams, ITEM_WORKGROUP, SCAN_BLOCK,
+    STATUS_NEEDED_ENTRIES, STATUS_OVERFLOW, STATUS_WORDS,
+};
+use crate::search::Prepared;
+use wgpu::BufferUsages as U;
+
+const STATUS_BYTES: u64 = (STATUS_WORDS * 4) as u64;
+/// Readback layout: status words, then the bin total (padded to 16 bytes), then the hits.
+const READBACK_HITS_OFFSET: u64 = STATUS_BYTES + 16;
+/// Uniform offsets must be multiples of this (WebGPU's default alignment).
+const UNIFORM_STRIDE: u64 = 256;
+
+struct Pipelines {
+    bin_count: wgpu::ComputePipeline,
+    scan_blocks: wgpu::ComputePipeline,
+    scan_add: wgpu::ComputePipeline,
+    bin_scatter: wgpu::ComputePipeline,
+    bin_sort: wgpu::ComputePipeline,
+    nearest_facet: wgpu::ComputePipeline,
+}
+
+struct BindGroups {
+    bin_count: wgpu::BindGroup,
+    scan_blocks: Vec<wgpu::BindGroup>,
+    scan_add: Vec<wgpu::BindGroup>,
+    bin_scatter: wgpu::BindGroup,
+    bin_sort: wgpu::BindGroup,
+    nearest_facet: wgpu::BindGroup,
+}
+
+struct Buffers {
+    params: wgpu::Buffer,
+    scan_params: GrowBuffer,
+    nodes: GrowBuffer,
+    facets: GrowBuffer,
+    slaves: GrowBuffer,
+    scan: GrowBuffer,
+    cursor: GrowBuffer,
+    entries: GrowBuffer,
+    status: wgpu::Buffer,
+    hits: GrowBuffer,
+    readback: GrowBuffer,
+}
+
+/// The global search on one GPU device; its buffers grow as needed and are reused.
+pub struct GpuSearch {
+    ctx: Arc<GpuContext>,
+    pipelines: Pipelines,
+    buffers: Buffers,
+    bind_groups: Option<BindGroups>,
+    /// Number of scan levels the bind groups were built for.
+    scan_levels: usize,
+    entry_capacity: u32,
+    presize: bool,
+    /// Workgroups per dispatch dimension before folding into y (the device limit, or lower
+    /// for tests of the folding).
+    max_workgroups_per_dim: u32,
+}
+
+impl GpuSearch {
+    /// Compiles the pipelines and creates the (small) initial workspace on `ctx`.
+    pub fn new(ctx: Arc<GpuContext>) -> Result<Self> {
+        let ctx_limit = ctx.limits.max_compute_workgroups_per_dimension;
+        let device = &ctx.device;
+        let scope = device.push_error_scope(wgpu::ErrorFilter::Validation);
+        let module = |stem: &str| {
+            let src = shaders::source(stem).expect("kernel file listed in shaders::KERNELS");
+            device.create_shader_module(wgpu::ShaderModuleDescriptor {
+                label: Some(stem),
+                source: wgpu::ShaderSource::Wgsl(src.into()),
+            })
+        };
+        let pipeline = |m: &wgpu::ShaderModule, entry: &str| {
+            device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
+                label: Some(entry),
+                layout: None,
+                module: m,
+                entry_point: Some(entry),
+                compilation_options: Default::default(),
+                cache: None,
+            })
+        };
+        let scan = module("scan");
+        let pipelines = Pipelines {
+            bin_count: pipeline(&module("bin_count"), "bin_count"),
+            scan_blocks: pipeline(&scan, "scan_blocks"),
+            scan_add: pipeline(&scan, "scan_add"),
+            bin_scatter: pipeline(&module("bin_scatter"), "bin_scatter"),
+            bin_sort: pipeline(&module("bin_sort"), "bin_sort"),
+            nearest_facet: pipeline(&module("nearest_facet"), "nearest_facet"),
+        };
+        if let Some(e) = pollster::block_on(scope.pop()) {
+            return Err(Error::Gpu {
+                during: "compiling the search pipelines".into(),
+                message: e.to_string(),
+            });
+        }
+        let storage = U::STORAGE | U::COPY_DST;
+        let buffers = Buffers {
+            params: device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some("search params"),
+                size: std::mem::size_of::<SearchParams>() as u64,
+                usage: U::UNIFORM | U::COPY_DST,
+                mapped_at_creation: false,
+            }),
+            scan_params: GrowBuffer::new(
+                device,
+                "scan params",
+                4 * UNIFORM_STRIDE,
+                U::UNIFORM | U::COPY_DST,
+            ),
+            nodes: GrowBuffer::new(device, "nodes", 0, storage),
+            facets: GrowBuffer::new(device, "facets", 0, storage),
+            slaves: GrowBuffer::new(device, "slaves", 0, storage),
+            scan: GrowBuffer::new(device, "cell counts and starts", 0, storage | U::COPY_SRC),
+            cursor: GrowBuffer::new(device, "scatter cursors", 0, storage),
+            entries: GrowBuffer::new(device, "bin entries", 0, storage),
+            status: device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some("status"),
+                size: STATUS_BYTES,
+                usage: storage | U::COPY_SRC,
+                mapped_at_creation: false,
+            }),
+            hits: GrowBuffer::new(device, "hits", 0, U::STORAGE | U::COPY_SRC),
+            readback: GrowBuffer::new(device, "readback", 0, U::MAP_READ | U::COPY_DST),
+        };
+        Ok(Self {
+            ctx,
+            pipelines,
+            buffers,
+            bind_groups: None,
+            scan_levels: 0,
+            entry_capacity: 0,
+            presize: true,
+            max_workgroups_per_dim: ctx_limit,
+        })
+    }
+
+    /// Sets the entry buffer's size (words) and stops sizing it from the host's estimate, so
+    /// that the overflow path can be tested; it still grows on overflow.
+    pub fn set_entry_capacity(&mut self, words: u32) {
+        self.entry_capacity = words;
+        self.presize = false;
+    }
+
+    /// Folds dispatches into 2D beyond `groups` workgroups per dimension (at most the device
+    /// limit), so that tests can exercise the folding with small problems.
+    pub fn set_max_workgroups_per_dim(&mut self, groups: u32) {
+        self.max_workgroups_per_dim =
+            groups.clamp(1, self.ctx.limits.max_compute_workgroups_per_dimension);
+    }
+
+    /// Makes every buffer large enough for `prep`; drops the bind groups if one was replaced.
+    fn ensure_buffers(&mut self, prep: &Prepared, levels: &ScanLevels) -> Result<()> {
+        let (d, l) = (&self.ctx.device, &self.ctx.limits);
+        let b = &mut self.buffers;
+        let hits_bytes = (prep.slaves.len() * std::mem::size_of::<GpuHit>()) as u64;
+        let mut replaced = false;
+        replaced |= b
+            .scan_params
+            .ensure(d, l, levels.levels.len() as u64 * UNIFORM_STRIDE)?;
+        replaced |= b.nodes.ensure(d, l, (prep.nodes.len() * 16) as u64)?;
+        replaced |= b.facets.ensure(d, l, (prep.facets.len() * 16) as u64)?;
+        replaced |= b.slaves.ensure(d, l, (prep.slaves.len() * 4) as u64)?;
+        replaced |= b.scan.ensure(d, l, levels.words as u64 * 4)?;
+        replaced |= b
+            .cursor
+            .ensure(d, l, (prep.params.n_cells as u64 + 1) * 4)?;
+        replaced |= b.entries.ensure(d, l, self.entry_capacity as u64 * 4)?;
+        replaced |= b.hits.ensure(d, l, hits_bytes)?;
+        b.readback.ensure(d, l, READBACK_HITS_OFFSET + hits_bytes)?;
+        if replaced || self.scan_levels != levels.levels.len() {
+            self.bind_groups = None;
+        }
+        Ok(())
+    }
+
+    fn bind_groups(&self, levels: &ScanLevels) -> BindGroups {
+        let d = &self.ctx.device;
+        let b = &self.buffers;
+        let p = &self.pipelines;
+        let group = |pipe: &wgpu::ComputePipeline, bufs: &[wgpu::BindingResource]| {
+            let entries: Vec<wgpu::BindGroupEntry> = bufs
+                .iter()
+                .enumerate()
+                .map(|(i, r)| wgpu::BindGroupEntry {
+                    binding: i as u32,
+                    resource: r.clone(),
+                })
+                .collect();
+            d.create_bind_group(&wgpu::BindGroupDescriptor {
+                label: None,
+                layout: &pipe.get_bind_group_layout(0),
+                entries: &entries,
+            })
+        };
+        let params = b.params.as_entire_binding();
+        let scan_level = |i: usize| {
+            wgpu::BindingResource::Buffer(wgpu::BufferBinding {
+                buffer: &b.scan_params.buffer,
+                offset: i as u64 * UNIFORM_STRIDE,
+                size: wgpu::BufferSize::new(std::mem::size_of::<ScanParams>() as u64),
+            })
+        };
+        let n_levels = levels.levels.len();
+        BindGroups {
+            bin_count: group(
+                &p.bin_count,
+                &[
+                    params.clone(),
+                    b.nodes.buffer.as_entire_binding(),
+                    b.facets.buffer.as_entire_binding(),
+                    b.scan.buffer.as_entire_binding(),
+                ],
+            ),
+            scan_blocks: (0..n_levels)
+                .map(|i| {
+                    group(
+                        &p.scan_blocks,
+                        &[scan_level(i), b.scan.buffer.as_entire_binding()],
+                    )
+                })
+                .collect(),
+            scan_add: (0..n_levels)
+                .map(|i| {
+                    group(
+                        &p.scan_add,
+                        &[scan_level(i), b.scan.buffer.as_entire_binding()],
+                    )
+                })
+                .collect(),
+            bin_scatter: group(
+                &p.bin_scatter,
+                &[
+                    params.clone(),
+                    b.nodes.buffer.as_entire_binding(),
+                    b.facets.buffer.as_entire_binding(),
+                    b.scan.buffer.as_entire_binding(),
+                    b.cursor.buffer.as_entire_binding(),
+                    b.entries.buffer.as_entire_binding(),
+                    b.status.as_entire_binding(),
+                ],
+            ),
+            bin_sort: group(
+                &p.bin_sort,
+                &[
+                    params.clone(),
+                    b.scan.buffer.as_entire_binding(),
+                    b.entries.buffer.as_entire_binding(),
+                ],
+            ),
+            nearest_facet: group(
+                &p.nearest_facet,
+                &[
+                    params,
+                    b.nodes.buffer.as_entire_binding(),
+                    b.facets.buffer.as_entire_binding(),
+                    b.slaves.buffer.as_entire_binding(),
+                    b.scan.buffer.as_entire_binding(),
+                    b.entries.buffer.as_entire_binding(),
+                    b.status.as_entire_binding(),
+                    b.hits.buffer.as_entire_binding(),
+                ],
+            ),
+        }
+    }
+
+    /// Runs the search; on overflow grows the entry buffer and runs again.
+    /// Returns the hits, the bin entries written and the number of regrowths.
+    pub fn run(&mut self, prep: &Prepared) -> Result<(Vec<GpuHit>, u32, u32)> {
+        if self.presize {
+            self.entry_capacity = presized_capacity(prep, self.entry_capacity);
+        }
+        let levels = ScanLevels::new(prep.params.n_cells + 1);
+        self.ensure_buffers(prep, &levels)?;
+        let q = &self.ctx.queue;
+        q.write_buffer(
+            &self.buffers.nodes.buffer,
+            0,
+            bytemuck::cast_slice(&prep.nodes),
+        );
+        q.write_buffer(
+            &self.buffers.facets.buffer,
+            0,
+            bytemuck::cast_slice(&prep.facets),
+        );
+        q.write_buffer(
+            &self.buffers.slaves.buffer,
+            0,
+            bytemuck::cast_slice(&prep.slaves),
+        );
+        for i in 0..levels.levels.len() {
+            let sp = levels.params(i);
+            q.write_buffer(
+                &self.buffers.scan_params.buffer,
+                i as u64 * UNIFORM_STRIDE,
+                bytemuck::bytes_of(&sp),
+            );
+        }
+        let mut regrowths = 0;
+        loop {
+            if self.bind_groups.is_none() {
+                self.bind_groups = Some(self.bind_groups(&levels));
+                self.scan_levels = levels.levels.len();
+            }
+            let mut params = prep.params;
+            params.entry_capacity = self.entry_capacity;
+            self.ctx
+                .queue
+                .write_buffer(&self.buffers.params, 0, bytemuck::bytes_of(&params));
+            let (status, total, hits) = self.submit(&params, &levels, prep.slaves.len())?;
+            if status[STATUS_OVERFLOW] == 0 {
+                return Ok((hits, total, regrowths));
+            }
+            self.entry_capacity = grown_capacity(status[STATUS_NEEDED_ENTRIES]);
+            if self.buffers.entries.ensure(
+                &self.ctx.device,
+                &self.ctx.limits,
+                self.entry_capacity as u64 * 4,
+            )? {
+                self.bind_groups = None;
+            }
+            regrowths += 1;
+        }
+    }
+
+    /// Encodes the five steps, submits once and reads back status, bin total and hits.
+    fn submit(
+        &self,
+        params: &SearchParams,
+        levels: &ScanLevels,
+        n_slaves: usize,
+    ) -> Result<([u32; STATUS_WORDS], u32, Vec<GpuHit>)> {
+        let (device, b, p) = (&self.ctx.device, &self.buffers, &self.pipelines);
+        let bg = self
+            .bind_groups
+            .as_ref()
+            .expect("bind groups built before submit");
+        let max_dim = self.max_workgroups_per_dim;
+        let scope = device.push_error_scope(wgpu::ErrorFilter::Validation);
+        let mut enc = device.create_command_encoder(&wgpu::CommandEncoderDescriptor {
+            label: Some("global search"),
+        });
+        enc.clear_buffer(&b.scan.buffer, 0, Some(levels.words as u64 * 4));
+        enc.clear_buffer(&b.status, 0, None);
+        let items = |pass: &mut wgpu::ComputePass,
+                     pipe: &wgpu::ComputePipeline,
+                     group: &wgpu::BindGroup,
+                     n: u32,
+                     per: u32| {
+            let (x, y) = fold_dispatch(n, per, max_dim);
+            pass.set_pipeline(pipe);
+            pass.set_bind_group(0, group, &[]);
+            pass.dispatch_workgroups(x, y, 1);
+        };
+        {
+            let mut pass = enc.begin_compute_pass(&wgpu::ComputePassDescriptor {
+                label: Some("bin count + scan"),
+                timestamp_writes: None,
+            });
+            items(
+                &mut pass,
+                &p.bin_count,
+                &bg.bin_count,
+                params.n_facets,
+                ITEM_WORKGROUP,
+            );
+            for i in 0..levels.levels.len() {
+                items(
+                    &mut pass,
+                    &p.scan_blocks,
+                    &bg.scan_blocks[i],
+                    levels.levels[i].1,
+                    SCAN_BLOCK,
+                );
+            }
+            for i in (0..levels.levels.len().saturating_sub(1)).rev() {
+                items(
+                    &mut pass,
+                    &p.scan_add,
+                    &bg.scan_add[i],
+                    levels.levels[i].1,
+                    SCAN_BLOCK,
+                );
+            }
+        }
+        enc.copy_buffer_to_buffer(
+            &b.scan.buffer,
+            0,
+            &b.cursor.buffer,
+            0,
+            (params.n_cells as u64 + 1) * 4,
+        );
+        {
+            let mut pass = enc.begin_compute_pass(&wgpu::ComputePassDescriptor {
+                label: Some("scatter, sort, nearest"),
+                timestamp_writes: None,
+            });
+            items(
+                &mut pass,
+                &p.bin_scatter,
+                &bg.bin_scatter,
+                params.n_facets,
+                ITEM_WORKGROUP,
+            );
+            items(
+                &mut pass,
+                &p.bin_sort,
+                &bg.bin_sort,
+                params.n_cells,
+                ITEM_WORKGROUP,
+            );
+            items(
+                &mut pass,
+                &p.nearest_facet,
+                &bg.nearest_facet,
+                params.n_slaves,
+                ITEM_WORKGROUP,
+            );
+        }
+        let hits_bytes = (n_slaves * std::mem::size_of::<GpuHit>()) as u64;
+        enc.copy_buffer_to_buffer(&b.status, 0, &b.readback.buffer, 0, STATUS_BYTES);
+        enc.copy_buffer_to_buffer(
+            &b.scan.buffer,
+            params.n_cells as u64 * 4,
+            &b.readback.buffer,
+            STATUS_BYTES,
+            4,
+        );
+        if hits_bytes > 0 {
+            enc.copy_buffer_to_buffer(
+                &b.hits.buffer,
+                0,
+                &b.readback.buffer,
+                READBACK_HITS_OFFSET,
+                hits_bytes,
+            );
+        }
+        self.ctx.queue.submit([enc.finish()]);
+        if let Some(e) = pollster::block_on(scope.pop()) {
+            return Err(Error::Gpu {
+                during: "global search".into(),
+                message: e.to_string(),
+            });
+        }
+        let bytes = read_back(
+            device,
+            &b.readback.buffer,
+            READBACK_HITS_OFFSET + hits_bytes,
+            "global search readback",
+        )?;
+        self.ctx.take_uncaptured("global search")?;
+        let status: [u32; STATUS_WORDS] =
+            bytemuck::pod_read_unaligned(&bytes[..STATUS_BYTES as usize]);
+        let total: u32 =
+            bytemuck::pod_read_unaligned(&bytes[STATUS_BYTES as usize..STATUS_BYTES as usize + 4]);
+        let hits = bytemuck::pod_collect_to_vec(&bytes[READBACK_HITS_OFFSET as usize..]);
+        Ok((status, total, hits))
+    }
+}

@@ -1,0 +1,243 @@
+//! What a user describes: nodes, master surfaces, slave node sets and contact pairs.
+//!
+//! Ids handed out here are local to the model (plan for a model that is one subdomain of a
+//! larger one: nothing assumes the model is the world).
+
+mod pair;
+mod surface;
+
+pub use pair::Pair;
+pub use surface::{DegenerateFacet, Facet, MasterSurface, Surface, NO_NODE};
+
+use crate::error::{Error, Result};
+
+/// Id of a master surface within its [`Model`].
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub struct SurfaceId(pub usize);
+
+/// Id of a slave node set within its [`Model`].
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub struct NodeSetId(pub usize);
+
+/// Id of a contact pair within its [`Model`].
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub struct PairId(pub usize);
+
+/// A contiguous range of node indices returned by [`Model::add_nodes`].
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct NodeRange {
+    /// First node index.
+    pub start: u32,
+    /// One past the last node index.
+    pub end: u32,
+}
+
+impl NodeRange {
+    /// The node indices as a vector.
+    pub fn to_vec(&self) -> Vec<u32> {
+        (self.start..self.end).collect()
+    }
+    /// Number of nodes.
+    pub fn len(&self) -> usize {
+        (self.end - self.start) as usize
+    }
+    /// True when the range holds no node.
+    pub fn is_empty(&self) -> bool {
+        self.end == self.start
+    }
+}
+
+/// The contact model: nodes (positions in model units, masses), master surfaces, slave node sets
+/// and contact pairs. Every `add_*` validates its input and names the offending item.
+#[derive(Clone, Debug)]
+pub struct Model {
+    dim: u32,
+    positions: Vec<[f64; 3]>,
+    masses: Vec<f64>,
+    surfaces: Vec<MasterSurface>,
+    node_sets: Vec<Vec<u32>>,
+    pairs: Vec<Pair>,
+}
+
+impl Model {
+    /// An empty three-dimensional model (triangle and quad facets).
+    pub fn new_3d() -> Self {
+        Self::new(3)
+    }
+
+    /// An empty two-dimensional model (segment facets; every z is 0).
+    pub fn new_2d() -> Self {
+        Self::new(2)
+    }
+
+    fn new(dim: u32) -> Self {
+        Self {
+            dim,
+            positions: Vec::new(),
+            masses: Vec::new(),
+            surfaces: Vec::new(),
+            node_sets: Vec::new(),
+            pairs: Vec::new(),
+        }
+    }
+
+    /// Spatial dimension: 2 or 3.
+    pub fn dim(&self) -> u32 {
+        self.dim
+    }
+
+    /// Appends nodes with positions (model units) and lumped masses (model mass units).
+    ///
+    /// Errors: mismatched lengths, an empty list, a non-finite coordinate, a mass that is not
+    /// finite and positive, a non-zero z in a 2D model. Nothing is added on error.
+    pub fn add_nodes(&mut self, positions: &[[f64; 3]], masses: &[f64]) -> Result<NodeRange> {
+        if positions.is_empty() {
+            return Err(Error::Empty {
+                what: "node list".into(),
+            });
+        }
+        if masses.len() != positions.len() {
+            return Err(Error::LengthMismatch {
+                what: "masses (one per node)",
+                expected: positions.len(),
+                got: masses.len(),
+            });
+        }
+        let base = self.positions.len();
+        validate_positions(positions, base, self.dim)?;
+        for (i, &m) in masses.iter().enumerate() {
+            if !(m.is_finite() && m > 0.0) {
+                return Err(Error::BadMass {
+                    node: base + i,
+                    mass: m,
+                });
+            }
+        }
+        if base + positions.len() > (u32::MAX - 1) as usize {
+            return Err(Error::BadParameter {
+                name: "node count",
+                value: (base + positions.len()).to_string(),
+                expected: "below 2^32 - 1",
+            });
+        }
+        self.positions.extend_from_slice(positions);
+        self.masses.extend_from_slice(masses);
+        Ok(NodeRange {
+            start: base as u32,
+            end: self.positions.len() as u32,
+        })
+    }
+
+    /// Appends 2D nodes (x, y); z is set to 0.
+    pub fn add_nodes_2d(&mut self, positions: &[[f64; 2]], masses: &[f64]) -> Result<NodeRange> {
+        let p: Vec<[f64; 3]> = positions.iter().map(|p| [p[0], p[1], 0.0]).collect();
+        self.add_nodes(&p, masses)
+    }
+
+    /// Validates and adds a master surface. Degenerate facets (zero area or length) are
+    /// excluded from the search and listed in [`MasterSurface::degenerate`].
+    pub fn add_surface(&mut self, surface: Surface) -> Result<SurfaceId> {
+        let built = MasterSurface::build(&surface, &self.positions, self.dim)?;
+        self.surfaces.push(built);
+        Ok(SurfaceId(self.surfaces.len() - 1))
+    }
+
+    /// Validates and adds a slave node set. Errors: empty, out-of-range or repeated nodes.
+    pub fn add_node_set(&mut self, nodes: &[u32]) -> Result<NodeSetId> {
+        if nodes.is_empty() {
+            return Err(Error::Empty {
+                what: "node set".into(),
+            });
+        }
+        let mut seen = vec![false; self.positions.len()];
+        for (k, &n) in nodes.iter().enumerate() {
+            let Some(s) = seen.get_mut(n as usize) else {
+                return Err(Error::IndexOutOfRange {
+                    what: format!("node set entry {k}"),
+                    index: n as u64,
+                    len: self.positions.len(),
+                });
+            };
+            if *s {
+                return Err(Error::DuplicateNode { node: n });
+            }
+            *s = true;
+        }
+        self.node_sets.push(nodes.to_vec());
+        Ok(NodeSetId(self.node_sets.len() - 1))
+    }
+
+    /// Adds a contact pair after checking that its slave set and master surface exist and its
+    /// parameters are in range.
+    pub fn add_pair(&mut self, pair: Pair) -> Result<PairId> {
+        self.node_set(pair.slave)?;
+        self.surface(pair.master)?;
+        pair.validate()?;
+        self.pairs.push(pair);
+        Ok(PairId(self.pairs.len() - 1))
+    }
+
+    /// Node positions, model units.
+    pub fn positions(&self) -> &[[f64; 3]] {
+        &self.positions
+    }
+
+    /// Lumped nodal masses.
+    pub fn masses(&self) -> &[f64] {
+        &self.masses
+    }
+
+    /// The master surface `id`.
+    pub fn surface(&self, id: SurfaceId) -> Result<&MasterSurface> {
+        self.surfaces.get(id.0).ok_or(Error::UnknownId {
+            what: "surface",
+            id: id.0,
+        })
+    }
+
+    /// The slave node set `id`.
+    pub fn node_set(&self, id: NodeSetId) -> Result<&[u32]> {
+        self.node_sets
+            .get(id.0)
+            .map(|v| v.as_slice())
+            .ok_or(Error::UnknownId {
+                what: "node set",
+                id: id.0,
+            })
+    }
+
+    /// The contact pair `id`.
+    pub fn pair(&self, id: PairId) -> Result<&Pair> {
+        self.pairs.get(id.0).ok_or(Error::UnknownId {
+            what: "pair",
+            id: id.0,
+        })
+    }
+
+    /// All contact pairs, in the order added.
+    pub fn pairs(&self) -> &[Pair] {
+        &self.pairs
+    }
+}
+
+/// Checks a position array: finite coordinates, z = 0 in 2D. `base` offsets the reported index.
+pub(crate) fn validate_positions(positions: &[[f64; 3]], base: usize, dim: u32) -> Result<()> {
+    for (i, p) in positions.iter().enumerate() {
+        for (axis, &v) in p.iter().enumerate() {
+            if !v.is_finite() {
+                return Err(Error::NonFiniteCoordinate {
+                    node: base + i,
+                    axis,
+                    value: v,
+                });
+            }
+        }
+        if dim == 2 && p[2] != 0.0 {
+            return Err(Error::NonPlanarNode {
+                node: base + i,
+                z: p[2],
+            });
+        }
+    }
+    Ok(())
+}

@@ -1,0 +1,163 @@
+//! Structs and constants shared with the WGSL kernels (twins in `shaders/common.wgsl` and
+//! `shaders/scan.wgsl`). Each is `#[repr(C)]`, `Pod`, explicitly padded, size-asserted.
+
+use bytemuck::{Pod, Zeroable};
+
+/// Invocations per workgroup of the one-item-per-invocation kernels (WGSL: `ITEM_WORKGROUP`).
+pub const ITEM_WORKGROUP: u32 = 64;
+/// Words scanned per workgroup by `scan.wgsl` (WGSL: `SCAN_BLOCK`).
+pub const SCAN_BLOCK: u32 = 1024;
+/// "No facet" in a hit (WGSL: `NO_FACET`).
+pub const NO_FACET: u32 = u32::MAX;
+/// Status word: non-zero when the entry buffer overflowed (WGSL: `STATUS_OVERFLOW`).
+pub const STATUS_OVERFLOW: usize = 0;
+/// Status word: the number of bin entries the pass needed (WGSL: `STATUS_NEEDED_ENTRIES`).
+pub const STATUS_NEEDED_ENTRIES: usize = 1;
+/// Number of status words.
+pub const STATUS_WORDS: usize = 4;
+
+/// Uniform parameters of the search kernels. WGSL twin: `SearchParams` in common.wgsl.
+///
+/// Coordinates are grid-local: model coordinates minus the grid origin, in f32.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, PartialEq, Pod, Zeroable)]
+pub struct SearchParams {
+    /// Edge length of a cubic grid cell.
+    pub cell_size: f32,
+    /// 1 / cell_size.
+    pub inv_cell_size: f32,
+    /// Search radius: facets farther than this from a slave node are not its partner.
+    pub radius: f32,
+    /// Growth of each facet's bounding box when binning (the radius plus a round-off margin).
+    pub bin_margin: f32,
+    /// Cells along x.
+    pub dims_x: u32,
+    /// Cells along y.
+    pub dims_y: u32,
+    /// Cells along z (1 in 2D).
+    pub dims_z: u32,
+    /// dims_x · dims_y · dims_z.
+    pub n_cells: u32,
+    /// Active master facets.
+    pub n_facets: u32,
+    /// Slave nodes.
+    pub n_slaves: u32,
+    /// Words in the bin entry buffer.
+    pub entry_capacity: u32,
+    /// Spatial dimension (2 or 3).
+    pub dim: u32,
+    /// Padding to 64 bytes.
+    pub _pad: [u32; 4],
+}
+const _: () = assert!(std::mem::size_of::<SearchParams>() == 64);
+
+/// Parameters of one scan level. WGSL twin: `ScanParams` in scan.wgsl.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Pod, Zeroable)]
+pub struct ScanParams {
+    /// Words to scan.
+    pub n: u32,
+    /// Offset of the first word in the scan buffer.
+    pub in_offset: u32,
+    /// Offset where the block totals go.
+    pub sums_offset: u32,
+    /// Padding.
+    pub _pad: u32,
+}
+const _: () = assert!(std::mem::size_of::<ScanParams>() == 16);
+
+/// The raw search result of one slave node, grid-local f32. WGSL twin: `Hit` in common.wgsl.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, PartialEq, Pod, Zeroable)]
+pub struct GpuHit {
+    /// Index into the active facet list, [`NO_FACET`] when none lies within the radius.
+    pub facet: u32,
+    /// Tracked master node (model node id), `u32::MAX` when none.
+    pub node: u32,
+    /// Facets examined for this node.
+    pub candidates: u32,
+    /// Padding.
+    pub _pad: u32,
+    /// Closest point (xyz, grid-local) and signed gap along the normal (w).
+    pub point_gap: [f32; 4],
+    /// Unit facet normal at the closest point (xyz) and distance (w).
+    pub normal_dist: [f32; 4],
+    /// Load-transfer weights of the facet's nodes (shape functions at the closest point).
+    pub weights: [f32; 4],
+}
+const _: () = assert!(std::mem::size_of::<GpuHit>() == 64);
+
+impl GpuHit {
+    /// A hit meaning "no facet within the radius".
+    pub fn miss(candidates: u32) -> Self {
+        Self {
+            facet: NO_FACET,
+            node: u32::MAX,
+            candidates,
+            ..Self::zeroed()
+        }
+    }
+}
+
+/// The levels of the blocked scan over `n0` words: (offset, length) of each level in one
+/// buffer; the last level has one block and its total lands at the returned `total_offset`.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct ScanLevels {
+    /// (offset, words) of each level; level 0 is the data itself at offset 0.
+    pub levels: Vec<(u32, u32)>,
+    /// Offset of the grand total.
+    pub total_offset: u32,
+    /// Words the whole buffer needs.
+    pub words: u32,
+}
+
+impl ScanLevels {
+    /// Lays out the levels for `n0` words.
+    pub fn new(n0: u32) -> Self {
+        let mut levels = vec![(0u32, n0)];
+        let mut offset = n0;
+        let mut n = n0;
+        loop {
+            let blocks = n.div_ceil(SCAN_BLOCK).max(1);
+            if blocks == 1 {
+                break;
+            }
+            levels.push((offset, blocks));
+            offset += blocks;
+            n = blocks;
+        }
+        Self {
+            levels,
+            total_offset: offset,
+            words: offset + 1,
+        }
+    }
+
+    /// The [`ScanParams`] of level `i` (its block totals go to level i+1, or to the total).
+    pub fn params(&self, i: usize) -> ScanParams {
+        let (in_offset, n) = self.levels[i];
+        let sums_offset = self
+            .levels
+            .get(i + 1)
+            .map(|l| l.0)
+            .unwrap_or(self.total_offset);
+        ScanParams {
+            n,
+            in_offset,
+            sums_offset,
+            _pad: 0,
+        }
+    }
+}
+
+/// Workgroup counts (x, y) for `items` items at `per_group` per workgroup, folded so that x
+/// stays within `max_per_dim` (65,535 by default).
+pub fn fold_dispatch(items: u32, per_group: u32, max_per_dim: u32) -> (u32, u32) {
+    let groups = items.div_ceil(per_group).max(1);
+    if groups <= max_per_dim {
+        (groups, 1)
+    } else {
+        let y = groups.div_ceil(max_per_dim);
+        (groups.div_ceil(y), y)
+    }
+}

@@ -1,0 +1,308 @@
+//! The global contact search of a contact pair: for each slave node, the globally nearest
+//! master facet within the search radius (seed: "Global contact searches").
+//!
+//! One search is an ordered list of [`Step`]s, run by either executor: the GPU kernels
+//! (`shaders/*.wgsl`, driven by [`crate::gpu`]) or their CPU mirrors ([`crate::cpu`]). Both
+//! work in grid-local f32 coordinates; [`GlobalSearch::run`] converts the result back to model
+//! coordinates in f64.
+
+pub mod grid;
+pub mod layout;
+
+use crate::cpu::CpuSearch;
+use crate::device::{Device, DeviceKind};
+use crate::error::{Error, Result};
+use crate::gpu::GpuSearch;
+use crate::model::{validate_positions, MasterSurface, Model, PairId};
+use grid::Grid;
+use layout::{GpuHit, SearchParams, NO_FACET};
+
+/// The steps of one global search, in order (shader and CPU mirror of the same name).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Step {
+    /// Count the facets overlapping each cell (`bin_count`).
+    BinCount,
+    /// Exclusive prefix sum of the counts (`scan`).
+    Scan,
+    /// Write facet ids into their cells (`bin_scatter`); detects overflow.
+    BinScatter,
+    /// Order each cell's facets by id (`bin_sort`).
+    BinSort,
+    /// Nearest facet per slave node (`nearest_facet`).
+    NearestFacet,
+}
+
+/// All steps of a global search, in order.
+pub const STEPS: [Step; 5] = [
+    Step::BinCount,
+    Step::Scan,
+    Step::BinScatter,
+    Step::BinSort,
+    Step::NearestFacet,
+];
+
+/// The contact partner found for one slave node, in model coordinates.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ContactPoint {
+    /// Master facet id (index into the surface's facets).
+    pub facet: u32,
+    /// Tracked master node: the node of that facet nearest the slave node (ties: lowest id).
+    pub tracked_node: u32,
+    /// Nearest point on the facet, model units.
+    pub point: [f64; 3],
+    /// Unit facet normal at that point.
+    pub normal: [f64; 3],
+    /// Signed gap along the normal, `(x_slave − point)·normal`; negative means penetration.
+    pub gap: f64,
+    /// Distance from the slave node to the point (≥ |gap|).
+    pub distance: f64,
+    /// Load-transfer weights of the facet's nodes at the point (sum to 1; unused slots 0).
+    pub weights: [f64; 4],
+}
+
+/// What one search did, for diagnostics and benchmarks.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct SearchStats {
+    /// The grid used.
+    pub grid: Grid,
+    /// Bin entries ((facet, cell) pairs) written.
+    pub entries: u32,
+    /// Facet–node distance evaluations in the nearest-facet step.
+    pub candidates: u64,
+    /// Times the entry buffer overflowed, was grown and the search run again.
+    pub regrowths: u32,
+}
+
+/// The result of a global search: one entry per slave node, in node-set order.
+#[derive(Clone, Debug)]
+pub struct SearchResult {
+    /// The slave nodes (model node ids), in the order of `contacts`.
+    pub slaves: Vec<u32>,
+    /// The partner of each slave node, `None` when no facet lies within the search radius.
+    pub contacts: Vec<Option<ContactPoint>>,
+    /// The raw grid-local f32 results the kernels wrote (for parity checks).
+    pub raw: Vec<GpuHit>,
+    /// What the search did.
+    pub stats: SearchStats,
+}
+
+/// Input of one search in the kernels' layout: grid-local f32 nodes, active facets, slaves.
+#[derive(Clone, Debug)]
+pub struct Prepared {
+    /// Uniform parameters (entry_capacity is filled in by the executor).
+    pub params: SearchParams,
+    /// The grid (its origin is the local frame).
+    pub grid: Grid,
+    /// Every model node, grid-local, w = 0.
+    pub nodes: Vec<[f32; 4]>,
+    /// Active facets, padded node ids.
+    pub facets: Vec<[u32; 4]>,
+    /// Slave node ids.
+    pub slaves: Vec<u32>,
+    /// Bin entries the host expects (from f64 bounding boxes); executors size the entry
+    /// buffer from it, and the kernels' overflow check catches any shortfall.
+    pub estimated_entries: u64,
+}
+
+/// A global search bound to one contact pair and one device; reusable every increment.
+pub struct GlobalSearch {
+    executor: Executor,
+    master: MasterSurface,
+    slaves: Vec<u32>,
+    radius: f64,
+    dim: u32,
+    n_nodes: usize,
+}
+
+enum Executor {
+    Gpu(Box<GpuSearch>),
+    Cpu(CpuSearch),
+}
+
+impl GlobalSearch {
+    /// Prepares the search of contact pair `pair` of `model` on `device` (pipelines compiled,
+    /// nothing searched yet).
+    pub fn new(device: &Device, model: &Model, pair: PairId) -> Result<Self> {
+        let p = model.pair(pair)?;
+        let master = model.surface(p.master)?.clone();
+        let slaves = model.node_set(p.slave)?.to_vec();
+        let radius = p.search_radius.unwrap_or_else(|| master.mean_facet_size());
+        let executor = match device.kind() {
+            DeviceKind::Gpu(ctx) => Executor::Gpu(Box::new(GpuSearch::new(ctx.clone())?)),
+            DeviceKind::Cpu => Executor::Cpu(CpuSearch::default()),
+        };
+        Ok(Self {
+            executor,
+            master,
+            slaves,
+            radius,
+            dim: model.dim(),
+            n_nodes: model.positions().len(),
+        })
+    }
+
+    /// The search radius in use, model units.
+    pub fn radius(&self) -> f64 {
+        self.radius
+    }
+
+    /// Caps the bin entry buffer's starting size (words); the search grows it on overflow.
+    /// Meant for tests of the overflow path.
+    pub fn set_entry_capacity(&mut self, words: u32) {
+        match &mut self.executor {
+            Executor::Gpu(g) => g.set_entry_capacity(words),
+            Executor::Cpu(c) => c.set_entry_capacity(words),
+        }
+    }
+
+    /// Folds GPU dispatches into 2D beyond `groups` workgroups per dimension (no effect on the
+    /// CPU path). Meant for tests of the folding, which otherwise needs millions of items.
+    pub fn set_max_workgroups_per_dim(&mut self, groups: u32) {
+        if let Executor::Gpu(g) = &mut self.executor {
+            g.set_max_workgroups_per_dim(groups);
+        }
+    }
+
+    /// Runs the global search at node positions `positions` (one per model node, model units).
+    pub fn run(&mut self, positions: &[[f64; 3]]) -> Result<SearchResult> {
+        let prepared = self.prepare(positions)?;
+        let (raw, entries, regrowths) = match &mut self.executor {
+            Executor::Gpu(g) => g.run(&prepared)?,
+            Executor::Cpu(c) => c.run(&prepared)?,
+        };
+        let o = prepared.grid.origin;
+        let mut candidates = 0u64;
+        let contacts = raw
+            .iter()
+            .map(|h| {
+                candidates += h.candidates as u64;
+                (h.facet != NO_FACET).then(|| ContactPoint {
+                    facet: self.master.active[h.facet as usize],
+                    tracked_node: h.node,
+                    point: [
+                        o[0] + h.point_gap[0] as f64,
+                        o[1] + h.point_gap[1] as f64,
+                        o[2] + h.point_gap[2] as f64,
+                    ],
+                    normal: [
+                        h.normal_dist[0] as f64,
+                        h.normal_dist[1] as f64,
+                        h.normal_dist[2] as f64,
+                    ],
+                    gap: h.point_gap[3] as f64,
+                    distance: h.normal_dist[3] as f64,
+                    weights: h.weights.map(|w| w as f64),
+                })
+            })
+            .collect();
+        Ok(SearchResult {
+            slaves: self.slaves.clone(),
+            contacts,
+            raw,
+            stats: SearchStats {
+                grid: prepared.grid,
+                entries,
+                candidates,
+                regrowths,
+            },
+        })
+    }
+
+    /// Builds the kernels' input: validates positions, fits the grid, converts to local f32.
+    pub fn prepare(&self, positions: &[[f64; 3]]) -> Result<Prepared> {
+        if positions.len() != self.n_nodes {
+            return Err(Error::LengthMismatch {
+                what: "positions (one per model node)",
+                expected: self.n_nodes,
+                got: positions.len(),
+            });
+        }
+        validate_positions(positions, 0, self.dim)?;
+        let mut lo = [f64::INFINITY; 3];
+        let mut hi = [f64::NEG_INFINITY; 3];
+        let mut extent_sum = 0.0;
+        let mut facets = Vec::with_capacity(self.master.active.len());
+        let mut boxes = Vec::with_capacity(self.master.active.len());
+        for &f in &self.master.active {
+            let facet = &self.master.facets[f as usize];
+            let mut flo = [f64::INFINITY; 3];
+            let mut fhi = [f64::NEG_INFINITY; 3];
+            for &n in facet.nodes() {
+                let x = positions[n as usize];
+                for a in 0..3 {
+                    flo[a] = flo[a].min(x[a]);
+                    fhi[a] = fhi[a].max(x[a]);
+                }
+            }
+            for a in 0..3 {
+                lo[a] = lo[a].min(flo[a]);
+                hi[a] = hi[a].max(fhi[a]);
+            }
+            extent_sum += (0..3).map(|a| fhi[a] - flo[a]).fold(0.0, f64::max);
+            facets.push(facet.padded());
+            boxes.push((flo, fhi));
+        }
+        let n_facets = facets.len();
+        let grid = Grid::fit(
+            lo,
+            hi,
+            self.radius,
+            extent_sum / n_facets as f64,
+            n_facets,
+            self.dim,
+        )?;
+        let o = grid.origin;
+        let nodes = positions
+            .iter()
+            .map(|x| {
+                [
+                    (x[0] - o[0]) as f32,
+                    (x[1] - o[1]) as f32,
+                    (x[2] - o[2]) as f32,
+                    0.0,
+                ]
+            })
+            .collect();
+        let max_extent = (0..3)
+            .map(|a| grid.dims[a] as f64 * grid.cell_size)
+            .fold(0.0, f64::max);
+        let params = SearchParams {
+            cell_size: grid.cell_size as f32,
+            inv_cell_size: (1.0 / grid.cell_size) as f32,
+            radius: self.radius as f32,
+            bin_margin: (self.radius * 1.0001 + 8.0 * f32::EPSILON as f64 * max_extent) as f32,
+            dims_x: grid.dims[0],
+            dims_y: grid.dims[1],
+            dims_z: grid.dims[2],
+            n_cells: grid.n_cells(),
+            n_facets: n_facets as u32,
+            n_slaves: self.slaves.len() as u32,
+            entry_capacity: 0,
+            dim: self.dim,
+            _pad: [0; 4],
+        };
+        let margin = params.bin_margin as f64;
+        let estimated_entries = boxes
+            .iter()
+            .map(|(flo, fhi)| {
+                (0..3)
+                    .map(|a| {
+                        let cell = |x: f64| {
+                            (((x - o[a]) / grid.cell_size).floor())
+                                .clamp(0.0, grid.dims[a] as f64 - 1.0)
+                        };
+                        (cell(fhi[a] + margin) - cell(flo[a] - margin) + 1.0) as u64
+                    })
+                    .product::<u64>()
+            })
+            .sum();
+        Ok(Prepared {
+            params,
+            grid,
+            nodes,
+            facets,
+            slaves: self.slaves.clone(),
+            estimated_entries,
+        })
+    }
+}
