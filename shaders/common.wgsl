@@ -5,6 +5,7 @@
 const NO_NODE: u32 = 0xffffffffu;
 const NO_FACET: u32 = 0xffffffffu;
 const QUAD_ITERATIONS: u32 = 8u;
+const QUAD_CONVERGED: f32 = 1e-4;   // Rust: geometry::QUAD_CONVERGED
 // Invocations per workgroup of the one-item-per-invocation kernels (Rust: ITEM_WORKGROUP).
 const ITEM_WORKGROUP: u32 = 64u;
 
@@ -173,52 +174,69 @@ fn quad_shape(xi: f32, eta: f32) -> vec4<f32> {
 }
 
 fn closest_on_quad(p: vec3<f32>, x0: vec3<f32>, x1: vec3<f32>, x2: vec3<f32>, x3: vec3<f32>) -> Projection {
-    let c0 = (x0 + x1 + x2 + x3) * 0.25;
-    let cx = (x1 - x0 + x2 - x3) * 0.25;
-    let ce = (x2 + x3 - x0 - x1) * 0.25;
-    let cxe = (x0 - x1 + x2 - x3) * 0.25;
+    // relative to node 0, as in src/geometry.rs
+    let y = array<vec3<f32>, 4>(vec3<f32>(0.0), x1 - x0, x2 - x0, x3 - x0);
+    let pl = p - x0;
+    let c0 = (y[1] + y[2] + y[3]) * 0.25;
+    let cx = (y[1] + y[2] - y[3]) * 0.25;
+    let ce = (y[2] + y[3] - y[1]) * 0.25;
+    let cxe = (y[2] - y[1] - y[3]) * 0.25;
     var xi = 0.0;
     var eta = 0.0;
+    var step = 1.0;
     for (var k = 0u; k < QUAD_ITERATIONS; k++) {
-        let r = c0 + cx * xi + ce * eta + cxe * (xi * eta) - p;
+        let r = c0 + cx * xi + ce * eta + cxe * (xi * eta) - pl;
         let gx = cx + cxe * eta;
         let ge = ce + cxe * xi;
         let a11 = dot(gx, gx);
-        let a12 = dot(gx, ge);
         let a22 = dot(ge, ge);
         let b1 = dot(gx, r);
         let b2 = dot(ge, r);
-        let det = a11 * a22 - a12 * a12;
+        // Newton; Gauss–Newton where the Hessian is not positive definite
+        var a12 = dot(gx, ge) + dot(r, cxe);
+        var det = a11 * a22 - a12 * a12;
+        if (!(det > 0.0)) {
+            a12 = dot(gx, ge);
+            det = a11 * a22 - a12 * a12;
+        }
         let dxi = div_or_zero(a22 * b1 - a12 * b2, det);
         let deta = div_or_zero(a11 * b2 - a12 * b1, det);
-        xi = clamp(xi - dxi, -1.0, 1.0);
-        eta = clamp(eta - deta, -1.0, 1.0);
+        let nxi = clamp(xi - dxi, -1.0, 1.0);
+        let neta = clamp(eta - deta, -1.0, 1.0);
+        step = max(abs(nxi - xi), abs(neta - eta));
+        xi = nxi;
+        eta = neta;
     }
     var best_point = c0 + cx * xi + ce * eta + cxe * (xi * eta);
-    var bd = p - best_point;
+    var bd = pl - best_point;
     var best_d2 = dot(bd, bd);
     var best_xi = xi;
     var best_eta = eta;
-    let xs = array<vec3<f32>, 4>(x0, x1, x2, x3);
-    for (var e = 0u; e < 4u; e++) {
-        let a = xs[e];
-        let b = xs[(e + 1u) % 4u];
-        let ab = b - a;
-        let t = clamp(div_or_zero(dot(p - a, ab), dot(ab, ab)), 0.0, 1.0);
-        let point = a + ab * t;
-        let d = p - point;
-        let d2 = dot(d, d);
-        if (d2 < best_d2) {
-            let s = t + t - 1.0;
-            var exi = -1.0;
-            var eeta = -s;
-            if (e == 0u) { exi = s; eeta = -1.0; }
-            else if (e == 1u) { exi = 1.0; eeta = s; }
-            else if (e == 2u) { exi = -s; eeta = 1.0; }
-            best_point = point;
-            best_d2 = d2;
-            best_xi = exi;
-            best_eta = eeta;
+    let strictly_inside = abs(xi) < 1.0 && abs(eta) < 1.0;
+    if (!(strictly_inside && step < QUAD_CONVERGED)) {
+        // a clamped end point lies on an edge: only an unconverged interior one stays a candidate
+        var have = strictly_inside;
+        for (var e = 0u; e < 4u; e++) {
+            let a = y[e];
+            let b = y[(e + 1u) % 4u];
+            let ab = b - a;
+            let t = clamp(div_or_zero(dot(pl - a, ab), dot(ab, ab)), 0.0, 1.0);
+            let point = a + ab * t;
+            let d = pl - point;
+            let d2 = dot(d, d);
+            if (!have || d2 < best_d2) {
+                have = true;
+                let s = t + t - 1.0;
+                var exi = -1.0;
+                var eeta = -s;
+                if (e == 0u) { exi = s; eeta = -1.0; }
+                else if (e == 1u) { exi = 1.0; eeta = s; }
+                else if (e == 2u) { exi = -s; eeta = 1.0; }
+                best_point = point;
+                best_d2 = d2;
+                best_xi = exi;
+                best_eta = eeta;
+            }
         }
     }
     var r: Projection;
@@ -226,9 +244,9 @@ fn closest_on_quad(p: vec3<f32>, x0: vec3<f32>, x1: vec3<f32>, x2: vec3<f32>, x3
     let ge = ce + cxe * best_xi;
     r.normal = normalize_or_zero(cross(gx, ge));
     if (dot(r.normal, r.normal) == 0.0) {
-        r.normal = normalize_or_zero(cross(x2 - x0, x3 - x1));
+        r.normal = normalize_or_zero(cross(y[2], y[3] - y[1]));
     }
-    r.point = best_point;
+    r.point = best_point + x0;
     r.weights = quad_shape(best_xi, best_eta);
     r.dist2 = best_d2;
     return r;

@@ -13,20 +13,25 @@
 //!   outside). Closest point by Voronoi regions (Ericson, *Real-Time Collision Detection* §5.1.5),
 //!   exact on edges and vertices.
 //! * **Quad** (bilinear, nodes 0..3 counter-clockwise, ξ, η ∈ [−1, 1]): the facet is the bilinear
-//!   patch `x(ξ,η) = Σ N_i x_i`, which need not be planar. The nearest point is the best of
-//!   (a) a projected Gauss–Newton descent on `|x(ξ,η) − p|²` from the centre, clamped to the
-//!   parameter square, [`QUAD_ITERATIONS`] steps, and (b) the exact nearest points on the four
-//!   straight boundary edges. For a planar quad, (a) converges to the orthogonal projection
-//!   whenever it lies inside and (b) is exact otherwise, so the result is the true nearest point;
-//!   for a warped quad the result is a point on the patch at least as near as every edge and the
-//!   local minimum found from the centre (tested against dense sampling). Weights are the
+//!   patch `x(ξ,η) = Σ N_i x_i`, which need not be planar. Computed relative to node 0:
+//!   (a) a Newton descent on `|x(ξ,η) − p|²` from the centre (Gauss–Newton where the Hessian
+//!   is not positive definite), clamped to the parameter square, [`QUAD_ITERATIONS`] steps;
+//!   if it converges strictly inside the square, that stationary point is the answer;
+//!   otherwise (b) the exact nearest points on the four straight edges (and the unconverged
+//!   end point, if it is inside). For a planar quad this is the true nearest point (the orthogonal
+//!   projection when it lies inside, an edge point otherwise); for a mildly warped quad the
+//!   interior stationary point is the nearest point (tested against dense sampling); a
+//!   severely warped quad may have a nearer edge point than its interior stationary point,
+//!   which this method does not look for. Taking the converged interior point without
+//!   comparing distances keeps the answer a continuous function of round-off: comparing
+//!   nearly equal f32 distances would pick points up to √(2·d·δ) apart. Weights are the
 //!   bilinear shape functions at (ξ, η); the normal is `x_ξ × x_η` normalised there, or the
 //!   diagonal normal `(x2−x0)×(x3−x1)` where that vanishes (collapsed edge).
 
 use std::fmt::Debug;
 use std::ops::{Add, Div, Mul, Neg, Sub};
 
-/// Projected Gauss–Newton steps used for the interior of a quad (WGSL: `QUAD_ITERATIONS`).
+/// Newton steps used for the interior of a quad (WGSL: `QUAD_ITERATIONS`).
 pub const QUAD_ITERATIONS: u32 = 8;
 
 /// A floating-point scalar the geometry runs in: `f32` (mirrors the GPU) or `f64` (reference).
@@ -56,6 +61,14 @@ pub trait Real:
             self
         } else {
             b
+        }
+    }
+    /// Absolute value.
+    fn abs_of(self) -> Self {
+        if self < Self::ZERO {
+            -self
+        } else {
+            self
         }
     }
     /// The smaller of two values (`b` when they compare equal).
@@ -289,66 +302,90 @@ pub fn quad_shape<T: Real>(xi: T, eta: T) -> [T; 4] {
     [q * xm * em, q * xp * em, q * xp * ep, q * xm * ep]
 }
 
+/// Newton steps smaller than this (in ξ, η) count as converged (WGSL: `QUAD_CONVERGED`).
+pub const QUAD_CONVERGED: f64 = 1e-4;
+
 /// Nearest point to `p` on the bilinear quad x0..x3 (see the module docs for the method).
 pub fn closest_on_quad<T: Real>(p: V3<T>, x: [V3<T>; 4]) -> Projection<T> {
     let q = T::from_f64(0.25);
-    // x(ξ,η) = c0 + cx ξ + ce η + cxe ξη
-    let c0 = (x[0] + x[1] + x[2] + x[3]) * q;
-    let cx = (x[1] - x[0] + x[2] - x[3]) * q;
-    let ce = (x[2] + x[3] - x[0] - x[1]) * q;
-    let cxe = (x[0] - x[1] + x[2] - x[3]) * q;
     let (one, zero) = (T::ONE, T::ZERO);
+    // Work relative to node 0: round-off then scales with the facet, not the frame.
+    let y = [V3::zero(), x[1] - x[0], x[2] - x[0], x[3] - x[0]];
+    let pl = p - x[0];
+    // y(ξ,η) = c0 + cx ξ + ce η + cxe ξη
+    let c0 = (y[1] + y[2] + y[3]) * q;
+    let cx = (y[1] + y[2] - y[3]) * q;
+    let ce = (y[2] + y[3] - y[1]) * q;
+    let cxe = (y[2] - y[1] - y[3]) * q;
     let mut xi = zero;
     let mut eta = zero;
+    let mut step = one;
     for _ in 0..QUAD_ITERATIONS {
-        let r = c0 + cx * xi + ce * eta + cxe * (xi * eta) - p;
+        let r = c0 + cx * xi + ce * eta + cxe * (xi * eta) - pl;
         let gx = cx + cxe * eta;
         let ge = ce + cxe * xi;
         let a11 = gx.dot(gx);
-        let a12 = gx.dot(ge);
         let a22 = ge.dot(ge);
         let b1 = gx.dot(r);
         let b2 = ge.dot(r);
-        let det = a11 * a22 - a12 * a12;
+        // Newton on |y − p|²/2 (y_ξη = cxe gives the off-diagonal term r·cxe); where that
+        // Hessian is not positive definite, the Gauss–Newton one.
+        let mut a12 = gx.dot(ge) + r.dot(cxe);
+        let mut det = a11 * a22 - a12 * a12;
+        if !(det > zero) {
+            a12 = gx.dot(ge);
+            det = a11 * a22 - a12 * a12;
+        }
         let dxi = div_or_zero(a22 * b1 - a12 * b2, det);
         let deta = div_or_zero(a11 * b2 - a12 * b1, det);
-        xi = (xi - dxi).clamp_to(-one, one);
-        eta = (eta - deta).clamp_to(-one, one);
+        let nxi = (xi - dxi).clamp_to(-one, one);
+        let neta = (eta - deta).clamp_to(-one, one);
+        step = (nxi - xi).abs_of().max_of((neta - eta).abs_of());
+        xi = nxi;
+        eta = neta;
     }
     let mut best_point = c0 + cx * xi + ce * eta + cxe * (xi * eta);
-    let mut best_d2 = (p - best_point).length2();
+    let mut best_d2 = (pl - best_point).length2();
     let mut best_xi = xi;
     let mut best_eta = eta;
-    // The four straight edges: (start node, end node, ξ at t, η at t) with t ∈ [0, 1].
-    for e in 0..4usize {
-        let a = x[e];
-        let b = x[(e + 1) % 4];
-        let ab = b - a;
-        let t = div_or_zero((p - a).dot(ab), ab.length2()).clamp_to(zero, one);
-        let point = a + ab * t;
-        let d2 = (p - point).length2();
-        if d2 < best_d2 {
-            let s = t + t - one; // runs from −1 to 1 along the edge
-            let (exi, eeta) = match e {
-                0 => (s, -one),
-                1 => (one, s),
-                2 => (-s, one),
-                _ => (-one, -s),
-            };
-            best_point = point;
-            best_d2 = d2;
-            best_xi = exi;
-            best_eta = eeta;
+    // A converged stationary point strictly inside is the answer; otherwise the minimum lies
+    // on the boundary: compare with the exact nearest points of the four straight edges.
+    let strictly_inside = xi.abs_of() < one && eta.abs_of() < one;
+    if !(strictly_inside && step < T::from_f64(QUAD_CONVERGED)) {
+        // A clamped end point lies on an edge, where that edge's exact nearest point is at
+        // least as near: only an unconverged interior end point stays a candidate.
+        let mut have = strictly_inside;
+        for e in 0..4usize {
+            let a = y[e];
+            let b = y[(e + 1) % 4];
+            let ab = b - a;
+            let t = div_or_zero((pl - a).dot(ab), ab.length2()).clamp_to(zero, one);
+            let point = a + ab * t;
+            let d2 = (pl - point).length2();
+            if !have || d2 < best_d2 {
+                have = true;
+                let s = t + t - one; // runs from −1 to 1 along the edge
+                let (exi, eeta) = match e {
+                    0 => (s, -one),
+                    1 => (one, s),
+                    2 => (-s, one),
+                    _ => (-one, -s),
+                };
+                best_point = point;
+                best_d2 = d2;
+                best_xi = exi;
+                best_eta = eeta;
+            }
         }
     }
     let gx = cx + cxe * best_eta;
     let ge = ce + cxe * best_xi;
     let mut normal = gx.cross(ge).normalize_or_zero();
     if normal.length2() == zero {
-        normal = (x[2] - x[0]).cross(x[3] - x[1]).normalize_or_zero();
+        normal = y[2].cross(y[3] - y[1]).normalize_or_zero();
     }
     Projection {
-        point: best_point,
+        point: best_point + x[0],
         weights: quad_shape(best_xi, best_eta),
         normal,
         dist2: best_d2,

@@ -1,0 +1,180 @@
+//! Shared test helpers: the GPU devices to test on, scene builders and result comparison.
+#![allow(dead_code)]
+
+use std::sync::OnceLock;
+
+use abut::cpu::brute_force::{brute_force, OracleHit};
+use abut::geometry::{closest_on_facet, V3};
+use abut::model::MasterSurface;
+use abut::{Device, GlobalSearch, Model, Pair, PairId, SearchResult};
+
+/// Every GPU adapter to run parity tests on (all backends, narrowed by `WGPU_BACKEND`).
+///
+/// With `ABUT_REQUIRE_ADAPTER=1` a missing adapter fails the test; with
+/// `ABUT_REQUIRE_BACKENDS=vulkan,gl` each named backend must be among them. Without these,
+/// a missing adapter is reported loudly and the GPU half of the test is skipped.
+pub fn gpus() -> &'static [Device] {
+    static DEVICES: OnceLock<Vec<Device>> = OnceLock::new();
+    DEVICES.get_or_init(|| {
+        let mut found = Vec::new();
+        for d in Device::all_gpus() {
+            match d {
+                Ok(d) => found.push(d),
+                Err(e) => eprintln!("note: an adapter could not be used: {e}"),
+            }
+        }
+        let require = std::env::var("ABUT_REQUIRE_ADAPTER").is_ok_and(|v| v == "1");
+        if found.is_empty() {
+            if require {
+                panic!("ABUT_REQUIRE_ADAPTER=1 but no GPU adapter was found");
+            }
+            eprintln!("\n*** SKIPPED: no GPU adapter found; GPU halves of the tests did not run ***\n");
+        }
+        if let Ok(list) = std::env::var("ABUT_REQUIRE_BACKENDS") {
+            for want in list.split(',').map(str::trim).filter(|s| !s.is_empty()) {
+                assert!(
+                    found.iter().any(|d| d.backend_name() == want),
+                    "ABUT_REQUIRE_BACKENDS names '{want}' but no adapter of that backend was found (found: {:?})",
+                    found.iter().map(|d| d.to_string()).collect::<Vec<_>>()
+                );
+            }
+        }
+        for d in &found {
+            eprintln!("testing on adapter: {d}");
+        }
+        found
+    })
+}
+
+/// Round-off tolerance of the f32 search in grid-local coordinates: 32 ε_f32 times the size
+/// of the local frame (grid extent plus radius). Points, gaps and distances are compared with it.
+pub fn tolerance(r: &SearchResult, radius: f64) -> f64 {
+    let g = &r.stats.grid;
+    let extent = (0..3).map(|a| g.dims[a] as f64 * g.cell_size).fold(0.0, f64::max);
+    32.0 * f32::EPSILON as f64 * (extent + radius)
+}
+
+/// f64 distance from model node `node` to facet `facet`.
+pub fn facet_distance(master: &MasterSurface, positions: &[[f64; 3]], node: u32, facet: u32) -> f64 {
+    let p = V3::from_array(positions[node as usize]);
+    let x: Vec<V3<f64>> = master.facets[facet as usize]
+        .nodes()
+        .iter()
+        .map(|&n| V3::from_array(positions[n as usize]))
+        .collect();
+    closest_on_facet(p, &x).dist2.sqrt()
+}
+
+/// Counts of what a comparison met.
+#[derive(Debug, Default)]
+pub struct Compared {
+    pub checked: usize,
+    pub found: usize,
+    pub ties: usize,
+    pub radius_edge: usize,
+}
+
+/// Compares two searches of the same scene (e.g. GPU against the CPU mirror): the same facet
+/// for every query that is not a tie (two facets within `tol` in f64), points, gaps, distances
+/// and normals within `tol`, weights within `tol / facet size`.
+pub fn assert_same_search(a: &SearchResult, b: &SearchResult, master: &MasterSurface, positions: &[[f64; 3]], radius: f64, tol: f64, what: &str) -> Compared {
+    assert_eq!(a.slaves, b.slaves);
+    let mut c = Compared::default();
+    for (i, (x, y)) in a.contacts.iter().zip(&b.contacts).enumerate() {
+        let node = a.slaves[i];
+        c.checked += 1;
+        match (x, y) {
+            (None, None) => {}
+            (Some(h), None) | (None, Some(h)) => {
+                assert!(
+                    (h.distance - radius).abs() <= tol,
+                    "{what}: slave {i} (node {node}) found by one side only, at distance {} (radius {radius})",
+                    h.distance
+                );
+                c.radius_edge += 1;
+            }
+            (Some(h), Some(k)) => {
+                c.found += 1;
+                assert!((h.distance - k.distance).abs() <= tol, "{what}: slave {i}: distance {} vs {}", h.distance, k.distance);
+                if h.facet != k.facet {
+                    let dh = facet_distance(master, positions, node, h.facet);
+                    let dk = facet_distance(master, positions, node, k.facet);
+                    assert!((dh - dk).abs() <= tol, "{what}: slave {i} (node {node}): facet {} ({dh}) vs {} ({dk}) is not a tie", h.facet, k.facet);
+                    c.ties += 1;
+                    continue;
+                }
+                let size = master.facet_size[h.facet as usize];
+                for a in 0..3 {
+                    assert!((h.point[a] - k.point[a]).abs() <= tol, "{what}: slave {i}: point {:?} vs {:?}", h.point, k.point);
+                }
+                assert!((h.gap - k.gap).abs() <= tol, "{what}: slave {i}: gap {} vs {}", h.gap, k.gap);
+                for w in 0..4 {
+                    assert!((h.weights[w] - k.weights[w]).abs() <= 4.0 * tol / size, "{what}: slave {i}: weights {:?} vs {:?}", h.weights, k.weights);
+                }
+                if h.distance > 1e3 * tol {
+                    // the normal of a quad varies over the facet: compare where the point is well defined
+                    for a in 0..3 {
+                        assert!((h.normal[a] - k.normal[a]).abs() <= 1e-3, "{what}: slave {i}: normal {:?} vs {:?}", h.normal, k.normal);
+                    }
+                }
+                assert_eq!(h.tracked_node, k.tracked_node, "{what}: slave {i}: tracked node");
+            }
+        }
+    }
+    c
+}
+
+/// Compares a search with the brute-force f64 oracle on the slaves `which` (indices into the
+/// node set): ties (second-nearest facet within `tol`) may pick either facet.
+pub fn assert_matches_oracle(r: &SearchResult, master: &MasterSurface, positions: &[[f64; 3]], radius: f64, tol: f64, which: &[usize], what: &str) -> Compared {
+    let nodes: Vec<u32> = which.iter().map(|&i| r.slaves[i]).collect();
+    let oracle: Vec<Option<OracleHit>> = brute_force(master, positions, &nodes, radius);
+    let mut c = Compared::default();
+    for (k, &i) in which.iter().enumerate() {
+        c.checked += 1;
+        match (&r.contacts[i], &oracle[k]) {
+            (None, None) => {}
+            (Some(h), None) => {
+                assert!((h.distance - radius).abs() <= tol, "{what}: slave {i} found at {} but the oracle finds nothing within {radius}", h.distance);
+                c.radius_edge += 1;
+            }
+            (None, Some(o)) => {
+                assert!((o.contact.distance - radius).abs() <= tol, "{what}: slave {i} missed; the oracle finds facet {} at {}", o.contact.facet, o.contact.distance);
+                c.radius_edge += 1;
+            }
+            (Some(h), Some(o)) => {
+                c.found += 1;
+                let oc = &o.contact;
+                assert!((h.distance - oc.distance).abs() <= tol, "{what}: slave {i}: distance {} vs oracle {}", h.distance, oc.distance);
+                if h.facet != oc.facet {
+                    assert!(o.second_distance - oc.distance <= 2.0 * tol, "{what}: slave {i}: facet {} but the oracle's {} is nearer by {}", h.facet, oc.facet, o.second_distance - oc.distance);
+                    c.ties += 1;
+                    continue;
+                }
+                for a in 0..3 {
+                    assert!((h.point[a] - oc.point[a]).abs() <= tol, "{what}: slave {i}: point {:?} vs oracle {:?}", h.point, oc.point);
+                }
+                assert!((h.gap - oc.gap).abs() <= tol, "{what}: slave {i}: gap {} vs oracle {}", h.gap, oc.gap);
+                assert_eq!(h.tracked_node, oc.tracked_node, "{what}: slave {i}: tracked node");
+            }
+        }
+    }
+    c
+}
+
+/// A model with one pair: `master` facets over `positions`, and `slaves` as extra nodes.
+pub fn scene(dim: u32, positions: &[[f64; 3]], surface: abut::Surface, slaves: &[[f64; 3]], radius: f64) -> (Model, PairId) {
+    let mut m = if dim == 2 { Model::new_2d() } else { Model::new_3d() };
+    m.add_nodes(positions, &vec![1.0; positions.len()]).unwrap();
+    let s = m.add_surface(surface).unwrap();
+    let r = m.add_nodes(slaves, &vec![1.0; slaves.len()]).unwrap();
+    let set = m.add_node_set(&r.to_vec()).unwrap();
+    let p = m.add_pair(Pair::new(set, s).search_radius(radius)).unwrap();
+    (m, p)
+}
+
+/// Runs the search of `pair` on `device`.
+pub fn run(device: &Device, model: &Model, pair: PairId) -> SearchResult {
+    let mut s = GlobalSearch::new(device, model, pair).unwrap();
+    s.run(model.positions()).unwrap()
+}

@@ -1,0 +1,253 @@
+//! Global search: GPU against the CPU mirror against the f64 brute-force oracle, on structured
+//! and irregular meshes in 2D and 3D; ties, far from the origin, determinism, overflow and
+//! dispatch folding.
+
+mod common;
+
+use abut::mesh::{plate_quads, plate_triangles, point_cloud, polyline, sphere_triangles};
+use abut::{Device, Error, Facet, GlobalSearch, Model, PairId, Surface};
+use common::*;
+
+/// Every `stride`-th slave index.
+fn every(n: usize, stride: usize) -> Vec<usize> {
+    (0..n).step_by(stride.max(1)).collect()
+}
+
+/// CPU mirror against the oracle (on `oracle_stride`-spaced slaves), then each GPU against
+/// the CPU mirror on every slave. Returns the CPU result.
+fn check_scene(model: &Model, pair: PairId, oracle_stride: usize, what: &str) -> abut::SearchResult {
+    let p = model.pair(pair).unwrap();
+    let master = model.surface(p.master).unwrap();
+    let radius = p.search_radius.unwrap();
+    let cpu = run(&Device::cpu(), model, pair);
+    let tol = tolerance(&cpu, radius);
+    let n = cpu.contacts.len();
+    let c = assert_matches_oracle(&cpu, master, model.positions(), radius, tol, &every(n, oracle_stride), &format!("{what}: CPU vs oracle"));
+    assert!(c.found > c.checked / 10, "{what}: too few contacts to be a test: {c:?}");
+    eprintln!("{what}: CPU vs oracle {c:?}, tol {tol:.2e}");
+    for gpu in gpus() {
+        let g = run(gpu, model, pair);
+        assert_eq!(g.stats.entries, cpu.stats.entries, "{what}: bin entries on {gpu}");
+        let c = assert_same_search(&g, &cpu, master, model.positions(), radius, tol, &format!("{what}: {} vs CPU", gpu.backend_name()));
+        eprintln!("{what}: {} vs CPU {c:?}", gpu.backend_name());
+    }
+    cpu
+}
+
+#[test]
+fn quads_3d_structured_100k_slaves() {
+    let wave = |x: f64, y: f64| 0.05 * (6.0 * x).sin() * (4.0 * y).cos();
+    let plate = plate_quads(200, 200, 1.0, 1.0, 0.0, 1, &wave);
+    let slaves = point_cloud(100_000, [0.0, 0.0, -0.06], [1.0, 1.0, 0.06], 7);
+    let (m, p) = scene(3, &plate.positions, Surface::quads(&plate.facets), &slaves, 0.01);
+    check_scene(&m, p, 50, "structured quads");
+}
+
+#[test]
+fn triangles_3d_irregular() {
+    let wave = |x: f64, y: f64| 0.1 * (3.0 * x + 2.0 * y).sin();
+    let plate = plate_triangles(60, 50, 1.2, 1.0, 0.3, 3, &wave);
+    let slaves = point_cloud(20_000, [-0.1, -0.1, -0.15], [1.3, 1.1, 0.15], 8);
+    let (m, p) = scene(3, &plate.positions, Surface::triangles(&plate.facets), &slaves, 0.04);
+    check_scene(&m, p, 10, "irregular triangles");
+}
+
+#[test]
+fn warped_and_irregular_quads() {
+    // random heights make every quad non-planar
+    let mut rng = abut::mesh::SplitMix64::new(11);
+    let mut plate = plate_quads(40, 40, 1.0, 1.0, 0.25, 5, &|_, _| 0.0);
+    for x in &mut plate.positions {
+        x[2] = rng.range(-0.01, 0.01);
+    }
+    let slaves = point_cloud(20_000, [0.0, 0.0, -0.05], [1.0, 1.0, 0.05], 9);
+    let (m, p) = scene(3, &plate.positions, Surface::quads(&plate.facets), &slaves, 0.05);
+    check_scene(&m, p, 10, "warped quads");
+}
+
+#[test]
+fn sphere_surface() {
+    let s = sphere_triangles(24, 48, 1.0, [0.5, -0.25, 2.0]);
+    let slaves = point_cloud(20_000, [-0.8, -1.55, 0.7], [1.8, 1.05, 3.3], 10);
+    let (m, p) = scene(3, &s.positions, Surface::triangles(&s.facets), &slaves, 0.2);
+    check_scene(&m, p, 10, "sphere");
+}
+
+#[test]
+fn mixed_triangles_and_quads() {
+    let plate = plate_quads(30, 30, 1.0, 1.0, 0.2, 4, &|x, y| 0.05 * (5.0 * x * y).cos());
+    let facets: Vec<Facet> = plate
+        .facets
+        .iter()
+        .enumerate()
+        .flat_map(|(k, q)| {
+            if k % 3 == 0 {
+                vec![Facet::Triangle([q[0], q[1], q[2]]), Facet::Triangle([q[0], q[2], q[3]])]
+            } else {
+                vec![Facet::Quad(*q)]
+            }
+        })
+        .collect();
+    let slaves = point_cloud(10_000, [0.0, 0.0, -0.1], [1.0, 1.0, 0.1], 12);
+    let (m, p) = scene(3, &plate.positions, Surface::from_facets(facets), &slaves, 0.05);
+    check_scene(&m, p, 5, "mixed triangles and quads");
+}
+
+#[test]
+fn polylines_2d_structured_and_irregular() {
+    for (jitter, what) in [(0.0, "2D structured"), (0.35, "2D irregular")] {
+        let line = polyline(2000, 2.0, jitter, 13, &|x| 0.1 * (4.0 * x).sin());
+        let slaves = point_cloud(30_000, [-0.05, -0.15, 0.0], [2.05, 0.15, 0.0], 14);
+        let (m, p) = scene(2, &line.positions, Surface::segments(&line.facets), &slaves, 0.03);
+        check_scene(&m, p, 10, what);
+    }
+}
+
+/// Slave nodes exactly on shared vertices and edges of a dyadic grid (all arithmetic exact):
+/// every backend must pick the lowest facet id, as the oracle does; and ±ε off an edge the
+/// facet on that side, not a tie.
+#[test]
+fn ties_on_shared_edges_and_vertices() {
+    for tri in [false, true] {
+        let (positions, surface) = if tri {
+            let m = plate_triangles(8, 8, 1.0, 1.0, 0.0, 0, &|_, _| 0.0);
+            (m.positions, Surface::triangles(&m.facets))
+        } else {
+            let m = plate_quads(8, 8, 1.0, 1.0, 0.0, 0, &|_, _| 0.0);
+            (m.positions, Surface::quads(&m.facets))
+        };
+        let h = 0.125;
+        let mut slaves = Vec::new();
+        for j in 1..8 {
+            for i in 1..8 {
+                let (x, y) = (i as f64 * h, j as f64 * h);
+                for z in [0.0, 0.25, -0.0625] {
+                    slaves.push([x, y, z]); // interior vertex (4–6 facets)
+                    slaves.push([x + 0.5 * h, y, z]); // shared edge midpoint
+                    slaves.push([x, y + 0.25 * h, z]); // on an edge, off-centre
+                }
+            }
+        }
+        let exact = slaves.len();
+        let eps = 1e-4 * h;
+        for j in 1..8 {
+            for i in 1..7 {
+                let (x, y) = (i as f64 * h + 0.5 * h, j as f64 * h);
+                slaves.push([x, y + eps, 0.0]);
+                slaves.push([x, y - eps, 0.0]);
+            }
+        }
+        let (m, p) = scene(3, &positions, surface, &slaves, 0.3);
+        let master = m.surface(m.pair(p).unwrap().master).unwrap();
+        let nodes: Vec<u32> = (0..slaves.len() as u32).map(|i| i + positions.len() as u32).collect();
+        let oracle = abut::cpu::brute_force::brute_force(master, m.positions(), &nodes, 0.3);
+        let mut devices = vec![Device::cpu()];
+        devices.extend(gpus().iter().cloned());
+        for d in &devices {
+            let r = run(d, &m, p);
+            for (i, (h, o)) in r.contacts.iter().zip(&oracle).enumerate() {
+                let (h, o) = (h.expect("within radius"), o.expect("within radius"));
+                assert_eq!(h.facet, o.contact.facet, "{d} tri={tri}: slave {i} at {:?}: facet", slaves[i]);
+                assert_eq!(h.tracked_node, o.contact.tracked_node, "{d} tri={tri}: slave {i}: tracked node");
+                if i < exact {
+                    assert!((h.distance - slaves[i][2].abs()).abs() < 1e-6, "{d}: slave {i}: distance {}", h.distance);
+                } else {
+                    assert!(o.second_distance - o.contact.distance > 1e-6, "±ε case is not a tie");
+                }
+            }
+        }
+    }
+}
+
+/// A 1 mm mesh 10 km from the origin: the f32 path (grid-local coordinates) agrees with the f64
+/// oracle to well below the mesh size.
+#[test]
+fn far_from_origin() {
+    let shift = [1.0e4, -1.0e4, 1.0e4];
+    let mut plate = plate_triangles(20, 20, 0.02, 0.02, 0.2, 21, &|x, y| 0.002 * (300.0 * x).sin() * (200.0 * y).cos());
+    for x in &mut plate.positions {
+        for a in 0..3 {
+            x[a] += shift[a];
+        }
+    }
+    let mut slaves = point_cloud(5_000, [0.0, 0.0, -0.004], [0.02, 0.02, 0.004], 22);
+    for x in &mut slaves {
+        for a in 0..3 {
+            x[a] += shift[a];
+        }
+    }
+    let (m, p) = scene(3, &plate.positions, Surface::triangles(&plate.facets), &slaves, 0.003);
+    let cpu = check_scene(&m, p, 1, "far from origin");
+    // the stated tolerance is relative to the 2 cm local frame, not to 10 km
+    assert!(tolerance(&cpu, 0.003) < 1e-6, "tolerance {}", tolerance(&cpu, 0.003));
+}
+
+#[test]
+fn gpu_runs_are_bitwise_identical() {
+    let s = sphere_triangles(16, 32, 1.0, [0.0; 3]);
+    let slaves = point_cloud(20_000, [-1.3; 3], [1.3; 3], 31);
+    let (m, p) = scene(3, &s.positions, Surface::triangles(&s.facets), &slaves, 0.3);
+    let mut devices = vec![Device::cpu()];
+    devices.extend(gpus().iter().cloned());
+    for d in &devices {
+        let mut search = GlobalSearch::new(d, &m, p).unwrap();
+        let a = search.run(m.positions()).unwrap();
+        let b = search.run(m.positions()).unwrap();
+        let c = GlobalSearch::new(d, &m, p).unwrap().run(m.positions()).unwrap();
+        assert!(bytemuck::cast_slice::<_, u8>(&a.raw) == bytemuck::cast_slice::<_, u8>(&b.raw), "{d}: runs differ");
+        assert!(bytemuck::cast_slice::<_, u8>(&a.raw) == bytemuck::cast_slice::<_, u8>(&c.raw), "{d}: instances differ");
+    }
+}
+
+/// An entry buffer far too small: the overflow is detected, the buffer grown, the search run
+/// again, and the result is the same as without overflow. Dispatches folded into 2D by a low
+/// per-dimension cap give the same bytes as well.
+#[test]
+fn overflow_regrowth_and_dispatch_folding() {
+    let plate = plate_quads(40, 40, 1.0, 1.0, 0.2, 41, &|x, _| 0.1 * x);
+    let slaves = point_cloud(10_000, [0.0, 0.0, -0.1], [1.0, 1.0, 0.2], 42);
+    let (m, p) = scene(3, &plate.positions, Surface::quads(&plate.facets), &slaves, 0.05);
+    let mut devices = vec![Device::cpu()];
+    devices.extend(gpus().iter().cloned());
+    for d in &devices {
+        let reference = run(d, &m, p);
+        assert_eq!(reference.stats.regrowths, 0, "{d}: the host estimate should size the buffer");
+        let mut small = GlobalSearch::new(d, &m, p).unwrap();
+        small.set_entry_capacity(16);
+        let r = small.run(m.positions()).unwrap();
+        assert!(r.stats.regrowths >= 1, "{d}: no overflow was detected");
+        assert_eq!(r.raw, reference.raw, "{d}: result after regrowth differs");
+        let again = small.run(m.positions()).unwrap();
+        assert_eq!(again.stats.regrowths, 0, "{d}: the grown buffer is kept");
+        let mut folded = GlobalSearch::new(d, &m, p).unwrap();
+        folded.set_max_workgroups_per_dim(3);
+        let f = folded.run(m.positions()).unwrap();
+        assert_eq!(f.raw, reference.raw, "{d}: folded dispatch differs");
+    }
+}
+
+#[test]
+fn nothing_within_the_radius() {
+    let plate = plate_quads(10, 10, 1.0, 1.0, 0.0, 0, &|_, _| 0.0);
+    let slaves = point_cloud(1000, [-5.0, -5.0, 1.0], [5.0, 5.0, 5.0], 51);
+    let (m, p) = scene(3, &plate.positions, Surface::quads(&plate.facets), &slaves, 0.5);
+    let mut devices = vec![Device::cpu()];
+    devices.extend(gpus().iter().cloned());
+    for d in &devices {
+        let r = run(d, &m, p);
+        assert!(r.contacts.iter().all(Option::is_none), "{d}");
+    }
+}
+
+#[test]
+fn bad_positions_at_run_time_are_errors() {
+    let plate = plate_quads(4, 4, 1.0, 1.0, 0.0, 0, &|_, _| 0.0);
+    let (m, p) = scene(3, &plate.positions, Surface::quads(&plate.facets), &[[0.5, 0.5, 0.1]], 0.5);
+    let mut s = GlobalSearch::new(&Device::cpu(), &m, p).unwrap();
+    let mut pos = m.positions().to_vec();
+    assert!(matches!(s.run(&pos[1..]), Err(Error::LengthMismatch { .. })));
+    pos[7][1] = f64::NAN;
+    let e = s.run(&pos).unwrap_err();
+    assert!(matches!(e, Error::NonFiniteCoordinate { node: 7, axis: 1, .. }), "{e}");
+    assert!(e.to_string().contains("node 7"), "{e}");
+}
