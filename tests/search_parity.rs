@@ -15,20 +15,47 @@ fn every(n: usize, stride: usize) -> Vec<usize> {
 
 /// CPU mirror against the oracle (on `oracle_stride`-spaced slaves), then each GPU against
 /// the CPU mirror on every slave. Returns the CPU result.
-fn check_scene(model: &Model, pair: PairId, oracle_stride: usize, what: &str) -> abut::SearchResult {
+fn check_scene(
+    model: &Model,
+    pair: PairId,
+    oracle_stride: usize,
+    what: &str,
+) -> abut::SearchResult {
     let p = model.pair(pair).unwrap();
     let master = model.surface(p.master).unwrap();
     let radius = p.search_radius.unwrap();
     let cpu = run(&Device::cpu(), model, pair);
     let tol = tolerance(&cpu, radius);
     let n = cpu.contacts.len();
-    let c = assert_matches_oracle(&cpu, master, model.positions(), radius, tol, &every(n, oracle_stride), &format!("{what}: CPU vs oracle"));
-    assert!(c.found > c.checked / 10, "{what}: too few contacts to be a test: {c:?}");
+    let c = assert_matches_oracle(
+        &cpu,
+        master,
+        model.positions(),
+        radius,
+        tol,
+        &every(n, oracle_stride),
+        &format!("{what}: CPU vs oracle"),
+    );
+    assert!(
+        c.found > c.checked / 10,
+        "{what}: too few contacts to be a test: {c:?}"
+    );
     eprintln!("{what}: CPU vs oracle {c:?}, tol {tol:.2e}");
     for gpu in gpus() {
         let g = run(gpu, model, pair);
-        assert_eq!(g.stats.entries, cpu.stats.entries, "{what}: bin entries on {gpu}");
-        let c = assert_same_search(&g, &cpu, master, model.positions(), radius, tol, &format!("{what}: {} vs CPU", gpu.backend_name()));
+        assert_eq!(
+            g.stats.entries, cpu.stats.entries,
+            "{what}: bin entries on {gpu}"
+        );
+        let c = assert_same_search(
+            &g,
+            &cpu,
+            master,
+            model.positions(),
+            radius,
+            tol,
+            &format!("{what}: {} vs CPU", gpu.backend_name()),
+        );
         eprintln!("{what}: {} vs CPU {c:?}", gpu.backend_name());
     }
     cpu
@@ -39,7 +66,13 @@ fn quads_3d_structured_100k_slaves() {
     let wave = |x: f64, y: f64| 0.05 * (6.0 * x).sin() * (4.0 * y).cos();
     let plate = plate_quads(200, 200, 1.0, 1.0, 0.0, 1, &wave);
     let slaves = point_cloud(100_000, [0.0, 0.0, -0.06], [1.0, 1.0, 0.06], 7);
-    let (m, p) = scene(3, &plate.positions, Surface::quads(&plate.facets), &slaves, 0.01);
+    let (m, p) = scene(
+        3,
+        &plate.positions,
+        Surface::quads(&plate.facets),
+        &slaves,
+        0.01,
+    );
     check_scene(&m, p, 50, "structured quads");
 }
 
@@ -48,7 +81,13 @@ fn triangles_3d_irregular() {
     let wave = |x: f64, y: f64| 0.1 * (3.0 * x + 2.0 * y).sin();
     let plate = plate_triangles(60, 50, 1.2, 1.0, 0.3, 3, &wave);
     let slaves = point_cloud(20_000, [-0.1, -0.1, -0.15], [1.3, 1.1, 0.15], 8);
-    let (m, p) = scene(3, &plate.positions, Surface::triangles(&plate.facets), &slaves, 0.04);
+    let (m, p) = scene(
+        3,
+        &plate.positions,
+        Surface::triangles(&plate.facets),
+        &slaves,
+        0.04,
+    );
     check_scene(&m, p, 10, "irregular triangles");
 }
 
@@ -61,7 +100,13 @@ fn warped_and_irregular_quads() {
         x[2] = rng.range(-0.01, 0.01);
     }
     let slaves = point_cloud(20_000, [0.0, 0.0, -0.05], [1.0, 1.0, 0.05], 9);
-    let (m, p) = scene(3, &plate.positions, Surface::quads(&plate.facets), &slaves, 0.05);
+    let (m, p) = scene(
+        3,
+        &plate.positions,
+        Surface::quads(&plate.facets),
+        &slaves,
+        0.05,
+    );
     check_scene(&m, p, 10, "warped quads");
 }
 
@@ -82,14 +127,23 @@ fn mixed_triangles_and_quads() {
         .enumerate()
         .flat_map(|(k, q)| {
             if k % 3 == 0 {
-                vec![Facet::Triangle([q[0], q[1], q[2]]), Facet::Triangle([q[0], q[2], q[3]])]
+                vec![
+                    Facet::Triangle([q[0], q[1], q[2]]),
+                    Facet::Triangle([q[0], q[2], q[3]]),
+                ]
             } else {
                 vec![Facet::Quad(*q)]
             }
         })
         .collect();
     let slaves = point_cloud(10_000, [0.0, 0.0, -0.1], [1.0, 1.0, 0.1], 12);
-    let (m, p) = scene(3, &plate.positions, Surface::from_facets(facets), &slaves, 0.05);
+    let (m, p) = scene(
+        3,
+        &plate.positions,
+        Surface::from_facets(facets),
+        &slaves,
+        0.05,
+    );
     check_scene(&m, p, 5, "mixed triangles and quads");
 }
 
@@ -98,7 +152,13 @@ fn polylines_2d_structured_and_irregular() {
     for (jitter, what) in [(0.0, "2D structured"), (0.35, "2D irregular")] {
         let line = polyline(2000, 2.0, jitter, 13, &|x| 0.1 * (4.0 * x).sin());
         let slaves = point_cloud(30_000, [-0.05, -0.15, 0.0], [2.05, 0.15, 0.0], 14);
-        let (m, p) = scene(2, &line.positions, Surface::segments(&line.facets), &slaves, 0.03);
+        let (m, p) = scene(
+            2,
+            &line.positions,
+            Surface::segments(&line.facets),
+            &slaves,
+            0.03,
+        );
         check_scene(&m, p, 10, what);
     }
 }
@@ -139,7 +199,9 @@ fn ties_on_shared_edges_and_vertices() {
         }
         let (m, p) = scene(3, &positions, surface, &slaves, 0.3);
         let master = m.surface(m.pair(p).unwrap().master).unwrap();
-        let nodes: Vec<u32> = (0..slaves.len() as u32).map(|i| i + positions.len() as u32).collect();
+        let nodes: Vec<u32> = (0..slaves.len() as u32)
+            .map(|i| i + positions.len() as u32)
+            .collect();
         let oracle = abut::cpu::brute_force::brute_force(master, m.positions(), &nodes, 0.3);
         let mut devices = vec![Device::cpu()];
         devices.extend(gpus().iter().cloned());
@@ -147,12 +209,26 @@ fn ties_on_shared_edges_and_vertices() {
             let r = run(d, &m, p);
             for (i, (h, o)) in r.contacts.iter().zip(&oracle).enumerate() {
                 let (h, o) = (h.expect("within radius"), o.expect("within radius"));
-                assert_eq!(h.facet, o.contact.facet, "{d} tri={tri}: slave {i} at {:?}: facet", slaves[i]);
-                assert_eq!(h.tracked_node, o.contact.tracked_node, "{d} tri={tri}: slave {i}: tracked node");
+                assert_eq!(
+                    h.facet, o.contact.facet,
+                    "{d} tri={tri}: slave {i} at {:?}: facet",
+                    slaves[i]
+                );
+                assert_eq!(
+                    h.tracked_node, o.contact.tracked_node,
+                    "{d} tri={tri}: slave {i}: tracked node"
+                );
                 if i < exact {
-                    assert!((h.distance - slaves[i][2].abs()).abs() < 1e-6, "{d}: slave {i}: distance {}", h.distance);
+                    assert!(
+                        (h.distance - slaves[i][2].abs()).abs() < 1e-6,
+                        "{d}: slave {i}: distance {}",
+                        h.distance
+                    );
                 } else {
-                    assert!(o.second_distance - o.contact.distance > 1e-6, "±ε case is not a tie");
+                    assert!(
+                        o.second_distance - o.contact.distance > 1e-6,
+                        "±ε case is not a tie"
+                    );
                 }
             }
         }
@@ -164,7 +240,9 @@ fn ties_on_shared_edges_and_vertices() {
 #[test]
 fn far_from_origin() {
     let shift = [1.0e4, -1.0e4, 1.0e4];
-    let mut plate = plate_triangles(20, 20, 0.02, 0.02, 0.2, 21, &|x, y| 0.002 * (300.0 * x).sin() * (200.0 * y).cos());
+    let mut plate = plate_triangles(20, 20, 0.02, 0.02, 0.2, 21, &|x, y| {
+        0.002 * (300.0 * x).sin() * (200.0 * y).cos()
+    });
     for x in &mut plate.positions {
         for a in 0..3 {
             x[a] += shift[a];
@@ -176,10 +254,20 @@ fn far_from_origin() {
             x[a] += shift[a];
         }
     }
-    let (m, p) = scene(3, &plate.positions, Surface::triangles(&plate.facets), &slaves, 0.003);
+    let (m, p) = scene(
+        3,
+        &plate.positions,
+        Surface::triangles(&plate.facets),
+        &slaves,
+        0.003,
+    );
     let cpu = check_scene(&m, p, 1, "far from origin");
     // the stated tolerance is relative to the 2 cm local frame, not to 10 km
-    assert!(tolerance(&cpu, 0.003) < 1e-6, "tolerance {}", tolerance(&cpu, 0.003));
+    assert!(
+        tolerance(&cpu, 0.003) < 1e-6,
+        "tolerance {}",
+        tolerance(&cpu, 0.003)
+    );
 }
 
 #[test]
@@ -193,9 +281,18 @@ fn gpu_runs_are_bitwise_identical() {
         let mut search = GlobalSearch::new(d, &m, p).unwrap();
         let a = search.run(m.positions()).unwrap();
         let b = search.run(m.positions()).unwrap();
-        let c = GlobalSearch::new(d, &m, p).unwrap().run(m.positions()).unwrap();
-        assert!(bytemuck::cast_slice::<_, u8>(&a.raw) == bytemuck::cast_slice::<_, u8>(&b.raw), "{d}: runs differ");
-        assert!(bytemuck::cast_slice::<_, u8>(&a.raw) == bytemuck::cast_slice::<_, u8>(&c.raw), "{d}: instances differ");
+        let c = GlobalSearch::new(d, &m, p)
+            .unwrap()
+            .run(m.positions())
+            .unwrap();
+        assert!(
+            bytemuck::cast_slice::<_, u8>(&a.raw) == bytemuck::cast_slice::<_, u8>(&b.raw),
+            "{d}: runs differ"
+        );
+        assert!(
+            bytemuck::cast_slice::<_, u8>(&a.raw) == bytemuck::cast_slice::<_, u8>(&c.raw),
+            "{d}: instances differ"
+        );
     }
 }
 
@@ -206,12 +303,21 @@ fn gpu_runs_are_bitwise_identical() {
 fn overflow_regrowth_and_dispatch_folding() {
     let plate = plate_quads(40, 40, 1.0, 1.0, 0.2, 41, &|x, _| 0.1 * x);
     let slaves = point_cloud(10_000, [0.0, 0.0, -0.1], [1.0, 1.0, 0.2], 42);
-    let (m, p) = scene(3, &plate.positions, Surface::quads(&plate.facets), &slaves, 0.05);
+    let (m, p) = scene(
+        3,
+        &plate.positions,
+        Surface::quads(&plate.facets),
+        &slaves,
+        0.05,
+    );
     let mut devices = vec![Device::cpu()];
     devices.extend(gpus().iter().cloned());
     for d in &devices {
         let reference = run(d, &m, p);
-        assert_eq!(reference.stats.regrowths, 0, "{d}: the host estimate should size the buffer");
+        assert_eq!(
+            reference.stats.regrowths, 0,
+            "{d}: the host estimate should size the buffer"
+        );
         let mut small = GlobalSearch::new(d, &m, p).unwrap();
         small.set_entry_capacity(16);
         let r = small.run(m.positions()).unwrap();
@@ -230,7 +336,13 @@ fn overflow_regrowth_and_dispatch_folding() {
 fn nothing_within_the_radius() {
     let plate = plate_quads(10, 10, 1.0, 1.0, 0.0, 0, &|_, _| 0.0);
     let slaves = point_cloud(1000, [-5.0, -5.0, 1.0], [5.0, 5.0, 5.0], 51);
-    let (m, p) = scene(3, &plate.positions, Surface::quads(&plate.facets), &slaves, 0.5);
+    let (m, p) = scene(
+        3,
+        &plate.positions,
+        Surface::quads(&plate.facets),
+        &slaves,
+        0.5,
+    );
     let mut devices = vec![Device::cpu()];
     devices.extend(gpus().iter().cloned());
     for d in &devices {
@@ -242,12 +354,31 @@ fn nothing_within_the_radius() {
 #[test]
 fn bad_positions_at_run_time_are_errors() {
     let plate = plate_quads(4, 4, 1.0, 1.0, 0.0, 0, &|_, _| 0.0);
-    let (m, p) = scene(3, &plate.positions, Surface::quads(&plate.facets), &[[0.5, 0.5, 0.1]], 0.5);
+    let (m, p) = scene(
+        3,
+        &plate.positions,
+        Surface::quads(&plate.facets),
+        &[[0.5, 0.5, 0.1]],
+        0.5,
+    );
     let mut s = GlobalSearch::new(&Device::cpu(), &m, p).unwrap();
     let mut pos = m.positions().to_vec();
-    assert!(matches!(s.run(&pos[1..]), Err(Error::LengthMismatch { .. })));
+    assert!(matches!(
+        s.run(&pos[1..]),
+        Err(Error::LengthMismatch { .. })
+    ));
     pos[7][1] = f64::NAN;
     let e = s.run(&pos).unwrap_err();
-    assert!(matches!(e, Error::NonFiniteCoordinate { node: 7, axis: 1, .. }), "{e}");
+    assert!(
+        matches!(
+            e,
+            Error::NonFiniteCoordinate {
+                node: 7,
+                axis: 1,
+                ..
+            }
+        ),
+        "{e}"
+    );
     assert!(e.to_string().contains("node 7"), "{e}");
 }

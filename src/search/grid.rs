@@ -45,7 +45,9 @@ impl Grid {
         // The origin is snapped down to a multiple of a power of two q (about 1/16 of the
         // extent), so that coordinates with few significant bits (structured meshes, nodes
         // exactly on edges) stay exact in the local frame and exact ties stay ties.
-        let span = (0..axes).map(|a| hi[a] - lo[a] + 2.0 * radius).fold(0.0, f64::max);
+        let span = (0..axes)
+            .map(|a| hi[a] - lo[a] + 2.0 * radius)
+            .fold(0.0, f64::max);
         let q = 2f64.powi((span / 16.0).log2().floor() as i32);
         let mut origin = [0.0; 3];
         let mut extent = [0.0; 3];

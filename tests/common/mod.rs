@@ -50,12 +50,19 @@ pub fn gpus() -> &'static [Device] {
 /// of the local frame (grid extent plus radius). Points, gaps and distances are compared with it.
 pub fn tolerance(r: &SearchResult, radius: f64) -> f64 {
     let g = &r.stats.grid;
-    let extent = (0..3).map(|a| g.dims[a] as f64 * g.cell_size).fold(0.0, f64::max);
+    let extent = (0..3)
+        .map(|a| g.dims[a] as f64 * g.cell_size)
+        .fold(0.0, f64::max);
     32.0 * f32::EPSILON as f64 * (extent + radius)
 }
 
 /// f64 distance from model node `node` to facet `facet`.
-pub fn facet_distance(master: &MasterSurface, positions: &[[f64; 3]], node: u32, facet: u32) -> f64 {
+pub fn facet_distance(
+    master: &MasterSurface,
+    positions: &[[f64; 3]],
+    node: u32,
+    facet: u32,
+) -> f64 {
     let p = V3::from_array(positions[node as usize]);
     let x: Vec<V3<f64>> = master.facets[facet as usize]
         .nodes()
@@ -77,7 +84,15 @@ pub struct Compared {
 /// Compares two searches of the same scene (e.g. GPU against the CPU mirror): the same facet
 /// for every query that is not a tie (two facets within `tol` in f64), points, gaps, distances
 /// and normals within `tol`, weights within `tol / facet size`.
-pub fn assert_same_search(a: &SearchResult, b: &SearchResult, master: &MasterSurface, positions: &[[f64; 3]], radius: f64, tol: f64, what: &str) -> Compared {
+pub fn assert_same_search(
+    a: &SearchResult,
+    b: &SearchResult,
+    master: &MasterSurface,
+    positions: &[[f64; 3]],
+    radius: f64,
+    tol: f64,
+    what: &str,
+) -> Compared {
     assert_eq!(a.slaves, b.slaves);
     let mut c = Compared::default();
     for (i, (x, y)) in a.contacts.iter().zip(&b.contacts).enumerate() {
@@ -95,7 +110,12 @@ pub fn assert_same_search(a: &SearchResult, b: &SearchResult, master: &MasterSur
             }
             (Some(h), Some(k)) => {
                 c.found += 1;
-                assert!((h.distance - k.distance).abs() <= tol, "{what}: slave {i}: distance {} vs {}", h.distance, k.distance);
+                assert!(
+                    (h.distance - k.distance).abs() <= tol,
+                    "{what}: slave {i}: distance {} vs {}",
+                    h.distance,
+                    k.distance
+                );
                 if h.facet != k.facet {
                     let dh = facet_distance(master, positions, node, h.facet);
                     let dk = facet_distance(master, positions, node, k.facet);
@@ -105,19 +125,42 @@ pub fn assert_same_search(a: &SearchResult, b: &SearchResult, master: &MasterSur
                 }
                 let size = master.facet_size[h.facet as usize];
                 for a in 0..3 {
-                    assert!((h.point[a] - k.point[a]).abs() <= tol, "{what}: slave {i}: point {:?} vs {:?}", h.point, k.point);
+                    assert!(
+                        (h.point[a] - k.point[a]).abs() <= tol,
+                        "{what}: slave {i}: point {:?} vs {:?}",
+                        h.point,
+                        k.point
+                    );
                 }
-                assert!((h.gap - k.gap).abs() <= tol, "{what}: slave {i}: gap {} vs {}", h.gap, k.gap);
+                assert!(
+                    (h.gap - k.gap).abs() <= tol,
+                    "{what}: slave {i}: gap {} vs {}",
+                    h.gap,
+                    k.gap
+                );
                 for w in 0..4 {
-                    assert!((h.weights[w] - k.weights[w]).abs() <= 4.0 * tol / size, "{what}: slave {i}: weights {:?} vs {:?}", h.weights, k.weights);
+                    assert!(
+                        (h.weights[w] - k.weights[w]).abs() <= 4.0 * tol / size,
+                        "{what}: slave {i}: weights {:?} vs {:?}",
+                        h.weights,
+                        k.weights
+                    );
                 }
                 if h.distance > 1e3 * tol {
                     // the normal of a quad varies over the facet: compare where the point is well defined
                     for a in 0..3 {
-                        assert!((h.normal[a] - k.normal[a]).abs() <= 1e-3, "{what}: slave {i}: normal {:?} vs {:?}", h.normal, k.normal);
+                        assert!(
+                            (h.normal[a] - k.normal[a]).abs() <= 1e-3,
+                            "{what}: slave {i}: normal {:?} vs {:?}",
+                            h.normal,
+                            k.normal
+                        );
                     }
                 }
-                assert_eq!(h.tracked_node, k.tracked_node, "{what}: slave {i}: tracked node");
+                assert_eq!(
+                    h.tracked_node, k.tracked_node,
+                    "{what}: slave {i}: tracked node"
+                );
             }
         }
     }
@@ -126,7 +169,15 @@ pub fn assert_same_search(a: &SearchResult, b: &SearchResult, master: &MasterSur
 
 /// Compares a search with the brute-force f64 oracle on the slaves `which` (indices into the
 /// node set): ties (second-nearest facet within `tol`) may pick either facet.
-pub fn assert_matches_oracle(r: &SearchResult, master: &MasterSurface, positions: &[[f64; 3]], radius: f64, tol: f64, which: &[usize], what: &str) -> Compared {
+pub fn assert_matches_oracle(
+    r: &SearchResult,
+    master: &MasterSurface,
+    positions: &[[f64; 3]],
+    radius: f64,
+    tol: f64,
+    which: &[usize],
+    what: &str,
+) -> Compared {
     let nodes: Vec<u32> = which.iter().map(|&i| r.slaves[i]).collect();
     let oracle: Vec<Option<OracleHit>> = brute_force(master, positions, &nodes, radius);
     let mut c = Compared::default();
@@ -135,27 +186,60 @@ pub fn assert_matches_oracle(r: &SearchResult, master: &MasterSurface, positions
         match (&r.contacts[i], &oracle[k]) {
             (None, None) => {}
             (Some(h), None) => {
-                assert!((h.distance - radius).abs() <= tol, "{what}: slave {i} found at {} but the oracle finds nothing within {radius}", h.distance);
+                assert!(
+                    (h.distance - radius).abs() <= tol,
+                    "{what}: slave {i} found at {} but the oracle finds nothing within {radius}",
+                    h.distance
+                );
                 c.radius_edge += 1;
             }
             (None, Some(o)) => {
-                assert!((o.contact.distance - radius).abs() <= tol, "{what}: slave {i} missed; the oracle finds facet {} at {}", o.contact.facet, o.contact.distance);
+                assert!(
+                    (o.contact.distance - radius).abs() <= tol,
+                    "{what}: slave {i} missed; the oracle finds facet {} at {}",
+                    o.contact.facet,
+                    o.contact.distance
+                );
                 c.radius_edge += 1;
             }
             (Some(h), Some(o)) => {
                 c.found += 1;
                 let oc = &o.contact;
-                assert!((h.distance - oc.distance).abs() <= tol, "{what}: slave {i}: distance {} vs oracle {}", h.distance, oc.distance);
+                assert!(
+                    (h.distance - oc.distance).abs() <= tol,
+                    "{what}: slave {i}: distance {} vs oracle {}",
+                    h.distance,
+                    oc.distance
+                );
                 if h.facet != oc.facet {
-                    assert!(o.second_distance - oc.distance <= 2.0 * tol, "{what}: slave {i}: facet {} but the oracle's {} is nearer by {}", h.facet, oc.facet, o.second_distance - oc.distance);
+                    assert!(
+                        o.second_distance - oc.distance <= 2.0 * tol,
+                        "{what}: slave {i}: facet {} but the oracle's {} is nearer by {}",
+                        h.facet,
+                        oc.facet,
+                        o.second_distance - oc.distance
+                    );
                     c.ties += 1;
                     continue;
                 }
                 for a in 0..3 {
-                    assert!((h.point[a] - oc.point[a]).abs() <= tol, "{what}: slave {i}: point {:?} vs oracle {:?}", h.point, oc.point);
+                    assert!(
+                        (h.point[a] - oc.point[a]).abs() <= tol,
+                        "{what}: slave {i}: point {:?} vs oracle {:?}",
+                        h.point,
+                        oc.point
+                    );
                 }
-                assert!((h.gap - oc.gap).abs() <= tol, "{what}: slave {i}: gap {} vs oracle {}", h.gap, oc.gap);
-                assert_eq!(h.tracked_node, oc.tracked_node, "{what}: slave {i}: tracked node");
+                assert!(
+                    (h.gap - oc.gap).abs() <= tol,
+                    "{what}: slave {i}: gap {} vs oracle {}",
+                    h.gap,
+                    oc.gap
+                );
+                assert_eq!(
+                    h.tracked_node, oc.tracked_node,
+                    "{what}: slave {i}: tracked node"
+                );
             }
         }
     }
@@ -163,8 +247,18 @@ pub fn assert_matches_oracle(r: &SearchResult, master: &MasterSurface, positions
 }
 
 /// A model with one pair: `master` facets over `positions`, and `slaves` as extra nodes.
-pub fn scene(dim: u32, positions: &[[f64; 3]], surface: abut::Surface, slaves: &[[f64; 3]], radius: f64) -> (Model, PairId) {
-    let mut m = if dim == 2 { Model::new_2d() } else { Model::new_3d() };
+pub fn scene(
+    dim: u32,
+    positions: &[[f64; 3]],
+    surface: abut::Surface,
+    slaves: &[[f64; 3]],
+    radius: f64,
+) -> (Model, PairId) {
+    let mut m = if dim == 2 {
+        Model::new_2d()
+    } else {
+        Model::new_3d()
+    };
     m.add_nodes(positions, &vec![1.0; positions.len()]).unwrap();
     let s = m.add_surface(surface).unwrap();
     let r = m.add_nodes(slaves, &vec![1.0; slaves.len()]).unwrap();

@@ -1,0 +1,136 @@
+//! Every shader parses and validates with naga against core WGSL (no optional capabilities),
+//! has its CPU mirror, and agrees with its Rust twins on constants and struct sizes. Runs
+//! without an adapter, so a shader error fails CI on any machine.
+
+use abut::gpu::shaders::{source, COMMON, KERNELS};
+use abut::search::layout::{
+    GpuHit, ScanParams, SearchParams, ITEM_WORKGROUP, NO_FACET, SCAN_BLOCK, STATUS_NEEDED_ENTRIES,
+    STATUS_OVERFLOW,
+};
+
+fn parse(stem: &str) -> naga::Module {
+    let src = source(stem).unwrap();
+    let module = naga::front::wgsl::parse_str(&src)
+        .unwrap_or_else(|e| panic!("{stem}.wgsl: {}", e.emit_to_string(&src)));
+    naga::valid::Validator::new(
+        naga::valid::ValidationFlags::all(),
+        naga::valid::Capabilities::empty(),
+    )
+    .validate(&module)
+    .unwrap_or_else(|e| panic!("{stem}.wgsl does not validate as core WGSL: {e:?}"));
+    module
+}
+
+#[test]
+fn every_kernel_validates_as_core_wgsl() {
+    for (stem, _) in KERNELS {
+        let m = parse(stem);
+        assert!(!m.entry_points.is_empty(), "{stem}.wgsl has no entry point");
+        for ep in &m.entry_points {
+            let [x, y, z] = ep.workgroup_size;
+            assert!(
+                x * y * z <= 256,
+                "{stem}::{}: workgroup of {} invocations exceeds the default limit",
+                ep.name,
+                x * y * z
+            );
+        }
+        let storage = m
+            .global_variables
+            .iter()
+            .filter(|(_, v)| matches!(v.space, naga::AddressSpace::Storage { .. }))
+            .count();
+        assert!(
+            storage <= 8,
+            "{stem}.wgsl binds {storage} storage buffers (default limit 8)"
+        );
+    }
+}
+
+#[test]
+fn every_shader_file_is_embedded_and_mirrored() {
+    let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR"));
+    for entry in std::fs::read_dir(dir.join("shaders")).unwrap() {
+        let path = entry.unwrap().path();
+        let stem = path.file_stem().unwrap().to_str().unwrap().to_string();
+        if stem == "common" {
+            continue;
+        }
+        assert!(
+            KERNELS.iter().any(|(s, _)| *s == stem),
+            "shaders/{stem}.wgsl is not in gpu::shaders::KERNELS"
+        );
+        assert!(
+            dir.join("src/cpu").join(format!("{stem}.rs")).exists(),
+            "shaders/{stem}.wgsl has no CPU mirror src/cpu/{stem}.rs"
+        );
+        let text = std::fs::read_to_string(&path).unwrap();
+        assert!(
+            text.contains("Bindings:")
+                && text.contains("Dispatch:")
+                && text.contains("Invariants:"),
+            "shaders/{stem}.wgsl lacks its header"
+        );
+    }
+}
+
+fn constant_u32(m: &naga::Module, name: &str) -> u32 {
+    let (_, c) = m
+        .constants
+        .iter()
+        .find(|(_, c)| c.name.as_deref() == Some(name))
+        .unwrap_or_else(|| panic!("no WGSL constant {name}"));
+    match m.global_expressions[c.init] {
+        naga::Expression::Literal(naga::Literal::U32(v)) => v,
+        ref e => panic!("{name} is {e:?}"),
+    }
+}
+
+fn struct_size(m: &naga::Module, name: &str) -> u32 {
+    let mut layouter = naga::proc::Layouter::default();
+    layouter.update(m.to_ctx()).unwrap();
+    let (h, _) = m
+        .types
+        .iter()
+        .find(|(_, t)| t.name.as_deref() == Some(name))
+        .unwrap_or_else(|| panic!("no WGSL struct {name}"));
+    layouter[h].size
+}
+
+#[test]
+fn wgsl_twins_match_rust() {
+    let m = parse("nearest_facet");
+    assert_eq!(constant_u32(&m, "ITEM_WORKGROUP"), ITEM_WORKGROUP);
+    assert_eq!(constant_u32(&m, "NO_FACET"), NO_FACET);
+    assert_eq!(constant_u32(&m, "NO_NODE"), abut::model::NO_NODE);
+    assert_eq!(
+        constant_u32(&m, "QUAD_ITERATIONS"),
+        abut::geometry::QUAD_ITERATIONS
+    );
+    assert_eq!(
+        constant_u32(&m, "STATUS_OVERFLOW") as usize,
+        STATUS_OVERFLOW
+    );
+    assert_eq!(
+        constant_u32(&m, "STATUS_NEEDED_ENTRIES") as usize,
+        STATUS_NEEDED_ENTRIES
+    );
+    assert_eq!(
+        struct_size(&m, "SearchParams") as usize,
+        std::mem::size_of::<SearchParams>()
+    );
+    assert_eq!(
+        struct_size(&m, "Hit") as usize,
+        std::mem::size_of::<GpuHit>()
+    );
+    let s = parse("scan");
+    assert_eq!(constant_u32(&s, "SCAN_BLOCK"), SCAN_BLOCK);
+    assert_eq!(
+        struct_size(&s, "ScanParams") as usize,
+        std::mem::size_of::<ScanParams>()
+    );
+    assert!(COMMON.contains(&format!(
+        "QUAD_CONVERGED: f32 = {:e}",
+        abut::geometry::QUAD_CONVERGED
+    )));
+}
