@@ -45,10 +45,18 @@ fn ms(d: Duration) -> String {
 fn build(case: &Case) -> (Model, PairId, f64, Vec<[f64; 3]>, Vec<[u32; 3]>) {
     let n = ((case.facets as f64 / 2.0).sqrt().round() as usize).max(1);
     let h = 1.0 / n as f64;
-    let plate = plate_triangles(n, n, 1.0, 1.0, 0.2, 1, &|x, y| 0.05 * (6.0 * x).sin() * (4.0 * y).cos());
-    let slaves = point_cloud(case.slaves, [0.0, 0.0, -0.05 - 2.0 * h], [1.0, 1.0, 0.05 + 2.0 * h], 2);
+    let plate = plate_triangles(n, n, 1.0, 1.0, 0.2, 1, &|x, y| {
+        0.05 * (6.0 * x).sin() * (4.0 * y).cos()
+    });
+    let slaves = point_cloud(
+        case.slaves,
+        [0.0, 0.0, -0.05 - 2.0 * h],
+        [1.0, 1.0, 0.05 + 2.0 * h],
+        2,
+    );
     let mut m = Model::new_3d();
-    m.add_nodes(&plate.positions, &vec![1.0; plate.positions.len()]).unwrap();
+    m.add_nodes(&plate.positions, &vec![1.0; plate.positions.len()])
+        .unwrap();
     let s = m.add_surface(Surface::triangles(&plate.facets)).unwrap();
     let r = m.add_nodes(&slaves, &vec![1.0; slaves.len()]).unwrap();
     let set = m.add_node_set(&r.to_vec()).unwrap();
@@ -57,7 +65,12 @@ fn build(case: &Case) -> (Model, PairId, f64, Vec<[f64; 3]>, Vec<[u32; 3]>) {
 }
 
 /// (setup, first, steady median, result) of `reps` searches on `device`.
-fn time_search(device: &Device, m: &Model, p: PairId, reps: usize) -> (Duration, Duration, Duration, SearchResult) {
+fn time_search(
+    device: &Device,
+    m: &Model,
+    p: PairId,
+    reps: usize,
+) -> (Duration, Duration, Duration, SearchResult) {
     let t = Instant::now();
     let mut s = GlobalSearch::new(device, m, p).unwrap();
     let setup = t.elapsed();
@@ -77,16 +90,31 @@ fn time_search(device: &Device, m: &Model, p: PairId, reps: usize) -> (Duration,
 fn machine() -> String {
     let cpu = std::fs::read_to_string("/proc/cpuinfo")
         .ok()
-        .and_then(|c| c.lines().find(|l| l.starts_with("model name")).map(|l| l.split(':').nth(1).unwrap_or("").trim().to_string()))
+        .and_then(|c| {
+            c.lines()
+                .find(|l| l.starts_with("model name"))
+                .map(|l| l.split(':').nth(1).unwrap_or("").trim().to_string())
+        })
         .unwrap_or_else(|| "unknown CPU".into());
-    let cores = std::thread::available_parallelism().map(|n| n.get()).unwrap_or(1);
+    let cores = std::thread::available_parallelism()
+        .map(|n| n.get())
+        .unwrap_or(1);
     format!("{cpu}, {cores} cores")
 }
 
 fn main() {
     let quick = std::env::args().any(|a| a == "--quick");
     let cases: Vec<Case> = if quick {
-        vec![Case { slaves: 1_000, facets: 1_000 }, Case { slaves: 10_000, facets: 10_000 }]
+        vec![
+            Case {
+                slaves: 1_000,
+                facets: 1_000,
+            },
+            Case {
+                slaves: 10_000,
+                facets: 10_000,
+            },
+        ]
     } else {
         let mut v = Vec::new();
         for facets in [1_000, 100_000, 1_000_000] {
@@ -94,38 +122,74 @@ fn main() {
                 v.push(Case { slaves, facets });
             }
         }
-        v.insert(4, Case { slaves: 10_000, facets: 10_000 });
+        v.insert(
+            4,
+            Case {
+                slaves: 10_000,
+                facets: 10_000,
+            },
+        );
         v
     };
-    let gpus: Vec<Device> = Device::all_gpus().into_iter().filter_map(Result::ok).collect();
+    let gpus: Vec<Device> = Device::all_gpus()
+        .into_iter()
+        .filter_map(Result::ok)
+        .collect();
     let mut out = String::new();
-    writeln!(out, "Machine: {}. abut {}, {}.", machine(), env!("CARGO_PKG_VERSION"), if quick { "quick run" } else { "full run" }).unwrap();
+    writeln!(
+        out,
+        "Machine: {}. abut {}, {}.",
+        machine(),
+        env!("CARGO_PKG_VERSION"),
+        if quick { "quick run" } else { "full run" }
+    )
+    .unwrap();
     for g in &gpus {
         writeln!(out, "- GPU: {g}").unwrap();
     }
     if gpus.is_empty() {
         writeln!(out, "- GPU: none found (only the CPU rows ran)").unwrap();
     }
-    writeln!(out, "- CPU mirror: abut's f32 mirror of the kernels, one thread").unwrap();
-    writeln!(out, "- parry3d 0.31 `TriMesh::project_local_point_with_max_dist` (BVH), one thread, f32").unwrap();
+    writeln!(
+        out,
+        "- CPU mirror: abut's f32 mirror of the kernels, one thread"
+    )
+    .unwrap();
+    writeln!(
+        out,
+        "- parry3d 0.31 `TriMesh::project_local_point_with_max_dist` (BVH), one thread, f32"
+    )
+    .unwrap();
     writeln!(out).unwrap();
     let mut header = String::from("| slaves | facets | found |");
     let mut rule = String::from("|---:|---:|---:|");
     for g in &gpus {
-        header += &format!(" {} first ms | {} steady ms | ns/slave |", g.backend_name(), g.backend_name());
+        header += &format!(
+            " {} first ms | {} steady ms | ns/slave |",
+            g.backend_name(),
+            g.backend_name()
+        );
         rule += "---:|---:|---:|";
     }
     header += " CPU mirror ms | brute force ms | parry build ms | parry query ms | parry agrees |";
     rule += "---:|---:|---:|---:|---:|";
     if let Some(g) = gpus.first() {
-        header += &format!(" {} vs CPU mirror | {} vs parry build+query |", g.backend_name(), g.backend_name());
+        header += &format!(
+            " {} vs CPU mirror | {} vs parry build+query |",
+            g.backend_name(),
+            g.backend_name()
+        );
         rule += "---:|---:|";
     }
     writeln!(out, "{header}\n{rule}").unwrap();
     print!("{out}");
     for case in &cases {
         let (m, p, h, verts, tris) = build(case);
-        let reps = if case.slaves >= 1_000_000 || case.facets >= 1_000_000 { 3 } else { 7 };
+        let reps = if case.slaves >= 1_000_000 || case.facets >= 1_000_000 {
+            3
+        } else {
+            7
+        };
         let mut row = String::new();
         let mut gpu_steady = None;
         let mut found = 0;
@@ -134,10 +198,20 @@ fn main() {
             let (_setup, first, steady, r) = time_search(g, &m, p, reps);
             gpu_steady.get_or_insert(steady);
             found = r.contacts.iter().flatten().count();
-            row += &format!(" {} | {} | {:.0} |", ms(first), ms(steady), steady.as_secs_f64() * 1e9 / case.slaves as f64);
+            row += &format!(
+                " {} | {} | {:.0} |",
+                ms(first),
+                ms(steady),
+                steady.as_secs_f64() * 1e9 / case.slaves as f64
+            );
             first_result.get_or_insert(r);
         }
-        let (_, _, cpu_steady, cpu_r) = time_search(&Device::cpu(), &m, p, if case.slaves >= 100_000 { 2 } else { 5 });
+        let (_, _, cpu_steady, cpu_r) = time_search(
+            &Device::cpu(),
+            &m,
+            p,
+            if case.slaves >= 100_000 { 2 } else { 5 },
+        );
         found = found.max(cpu_r.contacts.iter().flatten().count());
         let reference = first_result.unwrap_or(cpu_r);
         let master = m.surface(m.pair(p).unwrap().master).unwrap();
@@ -150,17 +224,27 @@ fn main() {
         };
         // parry3d on the same triangles and queries
         let t = Instant::now();
-        let pv: Vec<PVec> = verts.iter().map(|x| PVec::new(x[0] as f32, x[1] as f32, x[2] as f32)).collect();
+        let pv: Vec<PVec> = verts
+            .iter()
+            .map(|x| PVec::new(x[0] as f32, x[1] as f32, x[2] as f32))
+            .collect();
         let mesh = TriMesh::new(pv, tris.clone()).unwrap();
         let parry_build = t.elapsed();
-        let queries: Vec<PVec> = reference.slaves.iter().map(|&s| {
-            let x = m.positions()[s as usize];
-            PVec::new(x[0] as f32, x[1] as f32, x[2] as f32)
-        }).collect();
+        let queries: Vec<PVec> = reference
+            .slaves
+            .iter()
+            .map(|&s| {
+                let x = m.positions()[s as usize];
+                PVec::new(x[0] as f32, x[1] as f32, x[2] as f32)
+            })
+            .collect();
         let t = Instant::now();
         let proj: Vec<Option<f32>> = queries
             .iter()
-            .map(|&q| mesh.project_local_point_with_max_dist(q, false, h as f32).map(|pp| (pp.point - q).length()))
+            .map(|&q| {
+                mesh.project_local_point_with_max_dist(q, false, h as f32)
+                    .map(|pp| (pp.point - q).length())
+            })
             .collect();
         let parry_query = t.elapsed();
         let tol = 1e-5;

@@ -382,3 +382,58 @@ fn bad_positions_at_run_time_are_errors() {
     );
     assert!(e.to_string().contains("node 7"), "{e}");
 }
+
+/// The binning steps give the same integers on every executor (counts, starts, sorted entries),
+/// and a split run — the CPU mirror up to step k, the GPU from there — gives the CPU's result
+/// for every k: each kernel is checked on its own against its mirror.
+#[test]
+fn each_step_matches_its_mirror_in_split_runs() {
+    let plate = plate_triangles(30, 30, 1.0, 1.0, 0.3, 61, &|x, y| {
+        0.05 * (5.0 * x + y).sin()
+    });
+    let slaves = point_cloud(5_000, [0.0, 0.0, -0.1], [1.0, 1.0, 0.1], 62);
+    let (m, p) = scene(
+        3,
+        &plate.positions,
+        Surface::triangles(&plate.facets),
+        &slaves,
+        0.05,
+    );
+    let master = m.surface(m.pair(p).unwrap().master).unwrap();
+    let mut cpu_search = GlobalSearch::new(&Device::cpu(), &m, p).unwrap();
+    let cpu = cpu_search.run(m.positions()).unwrap();
+    let cpu_bins = cpu_search.bins().unwrap();
+    assert_eq!(cpu_bins.entries.len() as u32, cpu.stats.entries);
+    for c in 0..cpu_bins.starts.len() - 1 {
+        let cell = &cpu_bins.entries[cpu_bins.starts[c] as usize..cpu_bins.starts[c + 1] as usize];
+        assert!(
+            cell.windows(2).all(|w| w[0] < w[1]),
+            "cell {c} not sorted: {cell:?}"
+        );
+    }
+    let tol = tolerance(&cpu, 0.05);
+    for gpu in gpus() {
+        let mut search = GlobalSearch::new(gpu, &m, p).unwrap();
+        search.run(m.positions()).unwrap();
+        assert!(
+            search.bins().unwrap() == cpu_bins,
+            "{gpu}: bins differ from the CPU mirror's"
+        );
+        for k in 0..=abut::search::STEPS.len() {
+            let r = search.run_split(m.positions(), k).unwrap();
+            assert_same_search(
+                &r,
+                &cpu,
+                master,
+                m.positions(),
+                0.05,
+                tol,
+                &format!("{gpu}: CPU steps before {k}, GPU after"),
+            );
+            assert!(
+                search.bins().unwrap() == cpu_bins,
+                "{gpu}: split at {k}: bins differ"
+            );
+        }
+    }
+}

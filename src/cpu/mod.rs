@@ -17,7 +17,7 @@ use crate::error::Result;
 use crate::search::layout::{
     GpuHit, ScanLevels, STATUS_NEEDED_ENTRIES, STATUS_OVERFLOW, STATUS_WORDS,
 };
-use crate::search::{Prepared, Step, STEPS};
+use crate::search::{Bins, Prepared, Step, STEPS};
 
 /// The buffers of one search on the CPU; they only grow.
 #[derive(Clone, Debug, Default)]
@@ -40,6 +40,8 @@ pub struct CpuSearch {
     ws: CpuWorkspace,
     entry_capacity: u32,
     presize: bool,
+    /// Cells of the last search.
+    n_cells: u32,
 }
 
 impl Default for CpuSearch {
@@ -48,6 +50,7 @@ impl Default for CpuSearch {
             ws: CpuWorkspace::default(),
             entry_capacity: 0,
             presize: true,
+            n_cells: 0,
         }
     }
 }
@@ -59,6 +62,32 @@ impl CpuSearch {
         self.entry_capacity = words;
         self.presize = false;
         self.ws.entries.truncate(words as usize);
+    }
+
+    /// Runs a full search (which settles the entry capacity), then only `STEPS[..first]`
+    /// again, and returns the workspace as those steps leave it: the CPU half of a split run.
+    pub fn run_prefix(&mut self, prep: &Prepared, first: usize) -> Result<&CpuWorkspace> {
+        self.run(prep)?;
+        let mut params = prep.params;
+        params.entry_capacity = self.entry_capacity;
+        let levels = ScanLevels::new(params.n_cells + 1);
+        self.ws.scan.iter_mut().for_each(|w| *w = 0);
+        self.ws.entries.iter_mut().for_each(|w| *w = 0);
+        self.ws.status = [0; STATUS_WORDS];
+        for step in &STEPS[..first] {
+            run_step(*step, &params, &levels, prep, &mut self.ws);
+        }
+        Ok(&self.ws)
+    }
+
+    /// The bins of the last search: cell starts and sorted entries.
+    pub fn bins(&self) -> Bins {
+        let n = self.n_cells as usize;
+        let total = self.ws.scan.get(n).copied().unwrap_or(0) as usize;
+        Bins {
+            starts: self.ws.scan[..=n].to_vec(),
+            entries: self.ws.entries[..total].to_vec(),
+        }
     }
 
     /// Runs all steps; on overflow grows the entry buffer and runs again.
@@ -80,6 +109,7 @@ impl CpuSearch {
             for step in STEPS {
                 run_step(step, &params, &levels, prep, &mut self.ws);
             }
+            self.n_cells = params.n_cells;
             if self.ws.status[STATUS_OVERFLOW] == 0 {
                 let total = self.ws.scan[params.n_cells as usize];
                 return Ok((self.ws.hits.clone(), total, regrowths));

@@ -4,6 +4,7 @@ use std::sync::Arc;
 
 use super::buffers::{read_back, GrowBuffer};
 use super::shaders;
+use crate::cpu::CpuWorkspace;
 use crate::cpu::{grown_capacity, presized_capacity};
 use crate::device::GpuContext;
 use crate::error::{Error, Result};
@@ -11,7 +12,7 @@ use crate::search::layout::{
     fold_dispatch, GpuHit, ScanLevels, ScanParams, SearchParams, ITEM_WORKGROUP, SCAN_BLOCK,
     STATUS_NEEDED_ENTRIES, STATUS_OVERFLOW, STATUS_WORDS,
 };
-use crate::search::Prepared;
+use crate::search::{Bins, Prepared, Step, STEPS};
 use wgpu::BufferUsages as U;
 
 const STATUS_BYTES: u64 = (STATUS_WORDS * 4) as u64;
@@ -65,6 +66,8 @@ pub struct GpuSearch {
     /// Workgroups per dispatch dimension before folding into y (the device limit, or lower
     /// for tests of the folding).
     max_workgroups_per_dim: u32,
+    /// (scan words, cells, bin entries) of the last successful search, for [`GpuSearch::bins`].
+    last: Option<(u32, u32, u32)>,
 }
 
 impl GpuSearch {
@@ -124,7 +127,7 @@ impl GpuSearch {
             slaves: GrowBuffer::new(device, "slaves", 0, storage),
             scan: GrowBuffer::new(device, "cell counts and starts", 0, storage | U::COPY_SRC),
             cursor: GrowBuffer::new(device, "scatter cursors", 0, storage),
-            entries: GrowBuffer::new(device, "bin entries", 0, storage),
+            entries: GrowBuffer::new(device, "bin entries", 0, storage | U::COPY_SRC),
             status: device.create_buffer(&wgpu::BufferDescriptor {
                 label: Some("status"),
                 size: STATUS_BYTES,
@@ -143,6 +146,7 @@ impl GpuSearch {
             entry_capacity: 0,
             presize: true,
             max_workgroups_per_dim: ctx_limit,
+            last: None,
         })
     }
 
@@ -281,6 +285,28 @@ impl GpuSearch {
         if self.presize {
             self.entry_capacity = presized_capacity(prep, self.entry_capacity);
         }
+        self.run_from(prep, 0, None)
+    }
+
+    /// Runs the steps `STEPS[first..]` on the GPU, starting from the CPU mirror's state after
+    /// `STEPS[..first]` (`preload`, required when `first > 0`): the GPU half of a split run,
+    /// which finds the first step where the two executors diverge.
+    pub fn run_split(
+        &mut self,
+        prep: &Prepared,
+        first: usize,
+        preload: &CpuWorkspace,
+    ) -> Result<(Vec<GpuHit>, u32, u32)> {
+        self.entry_capacity = self.entry_capacity.max(preload.entries.len() as u32);
+        self.run_from(prep, first, Some(preload))
+    }
+
+    fn run_from(
+        &mut self,
+        prep: &Prepared,
+        first: usize,
+        preload: Option<&CpuWorkspace>,
+    ) -> Result<(Vec<GpuHit>, u32, u32)> {
         let levels = ScanLevels::new(prep.params.n_cells + 1);
         self.ensure_buffers(prep, &levels)?;
         let q = &self.ctx.queue;
@@ -307,6 +333,15 @@ impl GpuSearch {
                 bytemuck::bytes_of(&sp),
             );
         }
+        if let Some(ws) = preload {
+            q.write_buffer(&self.buffers.scan.buffer, 0, bytemuck::cast_slice(&ws.scan));
+            q.write_buffer(
+                &self.buffers.entries.buffer,
+                0,
+                bytemuck::cast_slice(&ws.entries),
+            );
+            q.write_buffer(&self.buffers.status, 0, bytemuck::cast_slice(&ws.status));
+        }
         let mut regrowths = 0;
         loop {
             if self.bind_groups.is_none() {
@@ -318,9 +353,21 @@ impl GpuSearch {
             self.ctx
                 .queue
                 .write_buffer(&self.buffers.params, 0, bytemuck::bytes_of(&params));
-            let (status, total, hits) = self.submit(&params, &levels, prep.slaves.len())?;
+            let (status, total, hits) = self.submit(&params, &levels, prep.slaves.len(), first)?;
             if status[STATUS_OVERFLOW] == 0 {
+                self.last = Some((levels.words, params.n_cells, total));
                 return Ok((hits, total, regrowths));
+            }
+            if first
+                > STEPS
+                    .iter()
+                    .position(|s| *s == Step::BinScatter)
+                    .unwrap_or(0)
+            {
+                return Err(Error::Gpu {
+                    during: "split global search".into(),
+                    message: "the CPU half overflowed its entry buffer".into(),
+                });
             }
             self.entry_capacity = grown_capacity(status[STATUS_NEEDED_ENTRIES]);
             if self.buffers.entries.ensure(
@@ -334,12 +381,60 @@ impl GpuSearch {
         }
     }
 
-    /// Encodes the five steps, submits once and reads back status, bin total and hits.
+    /// Reads back the bins of the last search: cell starts (n_cells + 1 words) and the sorted
+    /// entries. A debugging and testing aid (it allocates and waits).
+    pub fn bins(&self) -> Result<Bins> {
+        let Some((_, n_cells, total)) = self.last else {
+            return Err(Error::Gpu {
+                during: "reading bins".into(),
+                message: "no search has run".into(),
+            });
+        };
+        let d = &self.ctx.device;
+        let scope = d.push_error_scope(wgpu::ErrorFilter::Validation);
+        let starts_bytes = (n_cells as u64 + 1) * 4;
+        let entries_bytes = total as u64 * 4;
+        let staging = d.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("bins readback"),
+            size: (starts_bytes + entries_bytes).next_multiple_of(16).max(16),
+            usage: U::MAP_READ | U::COPY_DST,
+            mapped_at_creation: false,
+        });
+        let mut enc = d.create_command_encoder(&wgpu::CommandEncoderDescriptor {
+            label: Some("bins readback"),
+        });
+        enc.copy_buffer_to_buffer(&self.buffers.scan.buffer, 0, &staging, 0, starts_bytes);
+        if entries_bytes > 0 {
+            enc.copy_buffer_to_buffer(
+                &self.buffers.entries.buffer,
+                0,
+                &staging,
+                starts_bytes,
+                entries_bytes,
+            );
+        }
+        self.ctx.queue.submit([enc.finish()]);
+        if let Some(e) = pollster::block_on(scope.pop()) {
+            return Err(Error::Gpu {
+                during: "reading bins".into(),
+                message: e.to_string(),
+            });
+        }
+        let bytes = read_back(d, &staging, starts_bytes + entries_bytes, "bins readback")?;
+        Ok(Bins {
+            starts: bytemuck::pod_collect_to_vec(&bytes[..starts_bytes as usize]),
+            entries: bytemuck::pod_collect_to_vec(&bytes[starts_bytes as usize..]),
+        })
+    }
+
+    /// Encodes the steps `STEPS[first..]`, submits once and reads back status, bin total and
+    /// hits.
     fn submit(
         &self,
         params: &SearchParams,
         levels: &ScanLevels,
         n_slaves: usize,
+        first: usize,
     ) -> Result<([u32; STATUS_WORDS], u32, Vec<GpuHit>)> {
         let (device, b, p) = (&self.ctx.device, &self.buffers, &self.pipelines);
         let bg = self
@@ -351,82 +446,82 @@ impl GpuSearch {
         let mut enc = device.create_command_encoder(&wgpu::CommandEncoderDescriptor {
             label: Some("global search"),
         });
-        enc.clear_buffer(&b.scan.buffer, 0, Some(levels.words as u64 * 4));
-        enc.clear_buffer(&b.status, 0, None);
-        let items = |pass: &mut wgpu::ComputePass,
-                     pipe: &wgpu::ComputePipeline,
-                     group: &wgpu::BindGroup,
-                     n: u32,
-                     per: u32| {
-            let (x, y) = fold_dispatch(n, per, max_dim);
-            pass.set_pipeline(pipe);
-            pass.set_bind_group(0, group, &[]);
-            pass.dispatch_workgroups(x, y, 1);
-        };
-        {
-            let mut pass = enc.begin_compute_pass(&wgpu::ComputePassDescriptor {
-                label: Some("bin count + scan"),
-                timestamp_writes: None,
-            });
-            items(
-                &mut pass,
-                &p.bin_count,
-                &bg.bin_count,
-                params.n_facets,
-                ITEM_WORKGROUP,
-            );
-            for i in 0..levels.levels.len() {
-                items(
-                    &mut pass,
-                    &p.scan_blocks,
-                    &bg.scan_blocks[i],
-                    levels.levels[i].1,
-                    SCAN_BLOCK,
-                );
-            }
-            for i in (0..levels.levels.len().saturating_sub(1)).rev() {
-                items(
-                    &mut pass,
-                    &p.scan_add,
-                    &bg.scan_add[i],
-                    levels.levels[i].1,
-                    SCAN_BLOCK,
-                );
-            }
+        if first == 0 {
+            enc.clear_buffer(&b.scan.buffer, 0, Some(levels.words as u64 * 4));
+            enc.clear_buffer(&b.status, 0, None);
         }
-        enc.copy_buffer_to_buffer(
-            &b.scan.buffer,
-            0,
-            &b.cursor.buffer,
-            0,
-            (params.n_cells as u64 + 1) * 4,
-        );
-        {
-            let mut pass = enc.begin_compute_pass(&wgpu::ComputePassDescriptor {
-                label: Some("scatter, sort, nearest"),
-                timestamp_writes: None,
-            });
-            items(
-                &mut pass,
-                &p.bin_scatter,
-                &bg.bin_scatter,
-                params.n_facets,
-                ITEM_WORKGROUP,
-            );
-            items(
-                &mut pass,
-                &p.bin_sort,
-                &bg.bin_sort,
-                params.n_cells,
-                ITEM_WORKGROUP,
-            );
-            items(
-                &mut pass,
-                &p.nearest_facet,
-                &bg.nearest_facet,
-                params.n_slaves,
-                ITEM_WORKGROUP,
-            );
+        let dispatch =
+            |enc: &mut wgpu::CommandEncoder,
+             label: &str,
+             work: &[(&wgpu::ComputePipeline, &wgpu::BindGroup, u32, u32)]| {
+                let mut pass = enc.begin_compute_pass(&wgpu::ComputePassDescriptor {
+                    label: Some(label),
+                    timestamp_writes: None,
+                });
+                for &(pipe, group, n, per) in work {
+                    let (x, y) = fold_dispatch(n, per, max_dim);
+                    pass.set_pipeline(pipe);
+                    pass.set_bind_group(0, group, &[]);
+                    pass.dispatch_workgroups(x, y, 1);
+                }
+            };
+        for step in &STEPS[first..] {
+            match step {
+                Step::BinCount => dispatch(
+                    &mut enc,
+                    "bin_count",
+                    &[(&p.bin_count, &bg.bin_count, params.n_facets, ITEM_WORKGROUP)],
+                ),
+                Step::Scan => {
+                    let mut work = Vec::new();
+                    for i in 0..levels.levels.len() {
+                        work.push((
+                            &p.scan_blocks,
+                            &bg.scan_blocks[i],
+                            levels.levels[i].1,
+                            SCAN_BLOCK,
+                        ));
+                    }
+                    for i in (0..levels.levels.len().saturating_sub(1)).rev() {
+                        work.push((&p.scan_add, &bg.scan_add[i], levels.levels[i].1, SCAN_BLOCK));
+                    }
+                    dispatch(&mut enc, "scan", &work);
+                }
+                Step::BinScatter => {
+                    enc.copy_buffer_to_buffer(
+                        &b.scan.buffer,
+                        0,
+                        &b.cursor.buffer,
+                        0,
+                        (params.n_cells as u64 + 1) * 4,
+                    );
+                    dispatch(
+                        &mut enc,
+                        "bin_scatter",
+                        &[(
+                            &p.bin_scatter,
+                            &bg.bin_scatter,
+                            params.n_facets,
+                            ITEM_WORKGROUP,
+                        )],
+                    );
+                }
+                Step::BinSort => dispatch(
+                    &mut enc,
+                    "bin_sort",
+                    &[(&p.bin_sort, &bg.bin_sort, params.n_cells, ITEM_WORKGROUP)],
+                ),
+                Step::NearestFacet => dispatch(
+                    &mut enc,
+                    "nearest_facet",
+                    &[(
+                        &p.nearest_facet,
+                        &bg.nearest_facet,
+                        params.n_slaves,
+                        ITEM_WORKGROUP,
+                    )],
+                ),
+            }
         }
         let hits_bytes = (n_slaves * std::mem::size_of::<GpuHit>()) as u64;
         enc.copy_buffer_to_buffer(&b.status, 0, &b.readback.buffer, 0, STATUS_BYTES);

@@ -86,6 +86,16 @@ pub struct SearchResult {
     pub stats: SearchStats,
 }
 
+/// The bins of a search: cell `c` holds facets `entries[starts[c]..starts[c + 1]]` (active
+/// facet indices, increasing).
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct Bins {
+    /// Start of each cell's entries; n_cells + 1 words, the last is the total.
+    pub starts: Vec<u32>,
+    /// Facet indices grouped by cell.
+    pub entries: Vec<u32>,
+}
+
 /// Input of one search in the kernels' layout: grid-local f32 nodes, active facets, slaves.
 #[derive(Clone, Debug)]
 pub struct Prepared {
@@ -170,6 +180,46 @@ impl GlobalSearch {
             Executor::Gpu(g) => g.run(&prepared)?,
             Executor::Cpu(c) => c.run(&prepared)?,
         };
+        Ok(self.finish(&prepared, raw, entries, regrowths))
+    }
+
+    /// Runs `STEPS[..first_gpu_step]` on the CPU mirror and the rest on this search's GPU,
+    /// handing the intermediate buffers over: when GPU and CPU disagree, the first split that
+    /// reproduces the CPU result names the step that diverges. On the CPU path it is `run`.
+    pub fn run_split(
+        &mut self,
+        positions: &[[f64; 3]],
+        first_gpu_step: usize,
+    ) -> Result<SearchResult> {
+        let prepared = self.prepare(positions)?;
+        let first = first_gpu_step.min(STEPS.len());
+        let (raw, entries, regrowths) = match &mut self.executor {
+            Executor::Gpu(g) => {
+                let mut cpu = CpuSearch::default();
+                let ws = cpu.run_prefix(&prepared, first)?;
+                g.run_split(&prepared, first, ws)?
+            }
+            Executor::Cpu(c) => c.run(&prepared)?,
+        };
+        Ok(self.finish(&prepared, raw, entries, regrowths))
+    }
+
+    /// The bins of the last search (read back from the GPU on a GPU device): for tests of the
+    /// binning steps and for debugging.
+    pub fn bins(&self) -> Result<Bins> {
+        match &self.executor {
+            Executor::Gpu(g) => g.bins(),
+            Executor::Cpu(c) => Ok(c.bins()),
+        }
+    }
+
+    fn finish(
+        &self,
+        prepared: &Prepared,
+        raw: Vec<GpuHit>,
+        entries: u32,
+        regrowths: u32,
+    ) -> SearchResult {
         let o = prepared.grid.origin;
         let mut candidates = 0u64;
         let contacts = raw
@@ -195,7 +245,7 @@ impl GlobalSearch {
                 })
             })
             .collect();
-        Ok(SearchResult {
+        SearchResult {
             slaves: self.slaves.clone(),
             contacts,
             raw,
@@ -205,7 +255,7 @@ impl GlobalSearch {
                 candidates,
                 regrowths,
             },
-        })
+        }
     }
 
     /// Builds the kernels' input: validates positions, fits the grid, converts to local f32.
