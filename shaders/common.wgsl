@@ -6,6 +6,7 @@ const NO_NODE: u32 = 0xffffffffu;
 const NO_FACET: u32 = 0xffffffffu;
 const QUAD_ITERATIONS: u32 = 8u;
 const QUAD_CONVERGED: f32 = 1e-4;   // Rust: geometry::QUAD_CONVERGED
+const COS_TENTH_DEGREE: f32 = 0.99999845; // Rust: geometry::COS_TENTH_DEGREE as f32
 // Invocations per workgroup of the one-item-per-invocation kernels (Rust: ITEM_WORKGROUP).
 const ITEM_WORKGROUP: u32 = 64u;
 
@@ -34,7 +35,7 @@ struct Hit {
     facet: u32,          // index into the active facet list, NO_FACET when none within the radius
     node: u32,           // tracked master node (nearest node of that facet), NO_NODE when none
     candidates: u32,     // facets examined
-    _pad: u32,
+    slave: u32,          // the slave node (model node id)
     point_gap: vec4<f32>,   // xyz closest point (grid-local), w signed gap along the normal
     normal_dist: vec4<f32>, // xyz unit facet normal at the point, w distance
     weights: vec4<f32>,     // load-transfer weights of the facet's nodes
@@ -43,6 +44,10 @@ struct Hit {
 // Status words (Rust twin: STATUS_* in src/search/layout.rs).
 const STATUS_OVERFLOW: u32 = 0u;       // non-zero: the entry buffer was too small, nothing binned
 const STATUS_NEEDED_ENTRIES: u32 = 1u; // entries the binning needs
+const STATUS_DT_STABLE: u32 = 4u;      // bits of the smallest stable increment (positive f32)
+const STATUS_DT_APPROACH: u32 = 5u;    // bits of the smallest approach limit (positive f32)
+const STATUS_ACTIVE: u32 = 6u;         // slave nodes in contact
+const STATUS_SLIPPING: u32 = 7u;       // of which slipping
 
 // Flat invocation id of a dispatch folded into 2D (x up to 65,535 workgroups, then y).
 fn folded_id(wg: vec3<u32>, nwg: vec3<u32>, local: u32, size: u32) -> u32 {

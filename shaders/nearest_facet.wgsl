@@ -41,7 +41,7 @@ fn nearest_facet(@builtin(workgroup_id) wg: vec3<u32>,
     hit.facet = NO_FACET;
     hit.node = NO_NODE;
     hit.candidates = 0u;
-    hit._pad = 0u;
+    hit.slave = slaves[i];
     hit.point_gap = vec4<f32>(0.0);
     hit.normal_dist = vec4<f32>(0.0);
     hit.weights = vec4<f32>(0.0);

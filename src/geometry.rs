@@ -401,15 +401,19 @@ pub fn closest_on_facet<T: Real>(p: V3<T>, x: &[V3<T>]) -> Projection<T> {
     }
 }
 
+/// cos(0.1°): a normal closer than this to the global x axis takes t1 from the z axis
+/// (WGSL: `COS_TENTH_DEGREE`, the same value rounded to f32).
+pub const COS_TENTH_DEGREE: f64 = 0.999_998_476_913_287_3;
+
 /// Local tangent directions (t1, t2) at a contact point with unit normal `n`, by the standard
 /// convention: t1 is the projection of the global x axis onto the tangent plane, or of the
 /// global z axis when x lies within 0.1° of `n`; t2 = n × t1.
-pub fn tangent_directions(n: V3<f64>) -> (V3<f64>, V3<f64>) {
-    let cos_limit = (0.1f64).to_radians().cos();
-    let axis = if n.x.abs() > cos_limit {
-        V3::new(0.0, 0.0, 1.0)
+pub fn tangent_directions<T: Real>(n: V3<T>) -> (V3<T>, V3<T>) {
+    let (zero, one) = (T::ZERO, T::ONE);
+    let axis = if n.x.abs_of() > T::from_f64(COS_TENTH_DEGREE) {
+        V3::new(zero, zero, one)
     } else {
-        V3::new(1.0, 0.0, 0.0)
+        V3::new(one, zero, zero)
     };
     let t1 = (axis - n * axis.dot(n)).normalize_or_zero();
     (t1, n.cross(t1))

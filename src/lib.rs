@@ -1,6 +1,7 @@
 #![doc = include_str!("../README.md")]
 #![warn(missing_docs)]
 
+pub mod contact;
 pub mod cpu;
 pub mod device;
 pub mod error;
@@ -8,9 +9,14 @@ pub mod geometry;
 pub mod gpu;
 pub mod mesh;
 pub mod model;
+pub mod penalty;
 pub mod search;
 
+pub use contact::{Contact, ContactStatus, PairOutput, StepReport};
 pub use device::Device;
 pub use error::{Error, Result};
-pub use model::{Facet, Model, NodeRange, NodeSetId, Pair, PairId, Surface, SurfaceId};
+pub use model::{
+    Enforce, Facet, Friction, Model, NodeRange, NodeSetId, Pair, PairId, Penalty,
+    PressureOverclosure, Stiffness, Surface, SurfaceId,
+};
 pub use search::{ContactPoint, GlobalSearch, SearchResult, SearchStats};

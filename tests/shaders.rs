@@ -23,7 +23,7 @@ fn parse(stem: &str) -> naga::Module {
 
 #[test]
 fn every_kernel_validates_as_core_wgsl() {
-    for (stem, _) in KERNELS {
+    for (stem, _, _) in KERNELS {
         let m = parse(stem);
         assert!(!m.entry_points.is_empty(), "{stem}.wgsl has no entry point");
         for ep in &m.entry_points {

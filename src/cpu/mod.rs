@@ -10,7 +10,11 @@ pub mod bin_scatter;
 pub mod bin_sort;
 pub mod brute_force;
 pub mod common;
+pub mod contact_sort;
+pub mod gather;
 pub mod nearest_facet;
+pub mod nodal_normals;
+pub mod penalty;
 pub mod scan;
 
 use crate::error::Result;
@@ -105,7 +109,7 @@ impl CpuSearch {
             self.ws.scan.resize(levels.words as usize, 0);
             self.ws.status = [0; STATUS_WORDS];
             self.ws.entries.resize(self.entry_capacity as usize, 0);
-            self.ws.hits.resize(prep.slaves.len(), GpuHit::miss(0));
+            self.ws.hits.resize(prep.slaves.len(), GpuHit::miss(0, 0));
             for step in STEPS {
                 run_step(step, &params, &levels, prep, &mut self.ws);
             }
@@ -170,5 +174,110 @@ pub fn run_step(
             &ws.status,
             &mut ws.hits,
         ),
+    }
+}
+
+/// The CPU executor of the penalty passes of one pair; its state persists between increments.
+#[derive(Clone, Debug)]
+pub struct CpuPenalty {
+    /// Friction force and area per slave.
+    pub state: Vec<crate::penalty::layout::SlaveState>,
+    /// Smoothed normal per model node.
+    pub normals: Vec<[f32; 4]>,
+    /// Result per slave.
+    pub out: Vec<crate::penalty::layout::ContactOut>,
+    /// Facet counts, then starts (all scan levels).
+    pub counts: Vec<u32>,
+    /// Scatter cursors.
+    pub cursor: Vec<u32>,
+    /// Slaves grouped by facet.
+    pub facet_slaves: Vec<u32>,
+    /// Force per pair node.
+    pub forces: Vec<[f32; 4]>,
+}
+
+impl CpuPenalty {
+    /// A fresh executor for `setup` in a model of `n_nodes` nodes.
+    pub fn new(setup: &crate::penalty::PenaltySetup, n_nodes: usize) -> Self {
+        Self {
+            state: setup.initial_state(),
+            normals: vec![[0.0; 4]; n_nodes],
+            out: Vec::new(),
+            counts: Vec::new(),
+            cursor: Vec::new(),
+            facet_slaves: Vec::new(),
+            forces: Vec::new(),
+        }
+    }
+
+    /// Runs nodal_normals, penalty, contact_sort (with the scan) and gather.
+    pub fn run(
+        &mut self,
+        setup: &crate::penalty::PenaltySetup,
+        pp: &crate::penalty::layout::PenaltyParams,
+        prep: &Prepared,
+        vel: &[[f32; 4]],
+        hits: &[GpuHit],
+        status: &mut [u32; STATUS_WORDS],
+    ) {
+        use crate::penalty::layout::NO_LIMIT;
+        use crate::search::layout::{
+            STATUS_ACTIVE, STATUS_DT_APPROACH, STATUS_DT_STABLE, STATUS_SLIPPING,
+        };
+        status[STATUS_DT_STABLE] = NO_LIMIT.to_bits();
+        status[STATUS_DT_APPROACH] = NO_LIMIT.to_bits();
+        status[STATUS_ACTIVE] = 0;
+        status[STATUS_SLIPPING] = 0;
+        let n_slaves = pp.n_slaves as usize;
+        let n_facets = pp.n_facets as usize;
+        nodal_normals::nodal_normals(
+            pp,
+            &prep.nodes,
+            &prep.facets,
+            &setup.pair_nodes,
+            &setup.adjacency,
+            &mut self.normals,
+        );
+        self.out.resize(n_slaves, bytemuck::Zeroable::zeroed());
+        penalty::penalty(
+            pp,
+            setup.friction,
+            &prep.nodes,
+            vel,
+            &prep.facets,
+            hits,
+            &self.normals,
+            &mut self.state,
+            &mut self.out,
+            status,
+        );
+        let levels = ScanLevels::new(pp.n_facets + 1);
+        self.counts.clear();
+        self.counts.resize(levels.words as usize, 0);
+        contact_sort::count_by_facet(pp, hits, &self.out, &mut self.counts);
+        scan::scan(&levels, &mut self.counts);
+        self.cursor.clear();
+        self.cursor.extend_from_slice(&self.counts[..=n_facets]);
+        self.facet_slaves.resize(n_slaves.max(1), 0);
+        contact_sort::scatter_by_facet(
+            pp,
+            hits,
+            &self.out,
+            &mut self.cursor,
+            &mut self.facet_slaves,
+        );
+        contact_sort::sort_by_facet(pp, &self.counts[..=n_facets], &mut self.facet_slaves);
+        self.forces.resize(setup.pair_nodes.len(), [0.0; 4]);
+        gather::gather(
+            pp,
+            &setup.pair_nodes,
+            &setup.adjacency,
+            &prep.facets,
+            &self.counts[..=n_facets],
+            &self.facet_slaves,
+            hits,
+            &self.out,
+            &mut self.forces,
+        );
     }
 }

@@ -44,7 +44,7 @@ pub fn nearest_facet(
         let dims = [params.dims_x, params.dims_y, params.dims_z];
         let inside = (0..3).all(|a| g[a] >= 0.0 && g[a] < dims[a] as f32);
         if !inside {
-            hits[i] = GpuHit::miss(0);
+            hits[i] = GpuHit::miss(slaves[i], 0);
             continue;
         }
         let c = super::common::cell_index(params, [g[0] as u32, g[1] as u32, g[2] as u32]) as usize;
@@ -62,7 +62,7 @@ pub fn nearest_facet(
             }
         }
         let Some(best) = best else {
-            hits[i] = GpuHit::miss(e - s);
+            hits[i] = GpuHit::miss(slaves[i], e - s);
             continue;
         };
         let fac = facets[best_f as usize];
@@ -80,7 +80,7 @@ pub fn nearest_facet(
             facet: best_f,
             node: best_node,
             candidates: e - s,
-            _pad: 0,
+            slave: slaves[i],
             point_gap: [q.x, q.y, q.z, (p - q).dot(best.normal)],
             normal_dist: [
                 best.normal.x,

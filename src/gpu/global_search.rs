@@ -16,6 +16,31 @@ use crate::search::{Bins, Prepared, Step, STEPS};
 use wgpu::BufferUsages as U;
 
 const STATUS_BYTES: u64 = (STATUS_WORDS * 4) as u64;
+/// The status words the search owns and clears (the rest belong to later passes).
+const SEARCH_STATUS_BYTES: u64 = 16;
+
+/// The search's buffers that later passes of the same increment bind.
+pub struct SharedBuffers<'a> {
+    /// Grid-local node positions (w: mass).
+    pub nodes: &'a wgpu::Buffer,
+    /// Active facets.
+    pub facets: &'a wgpu::Buffer,
+    /// One hit per slave.
+    pub hits: &'a wgpu::Buffer,
+    /// Status words.
+    pub status: &'a wgpu::Buffer,
+}
+
+/// Passes that run after the search in the same command encoder (the penalty passes).
+pub trait AfterSearch {
+    /// Makes buffers and bind groups ready; `generation` changes whenever the search's
+    /// buffers were replaced, so bind groups on them must be rebuilt.
+    fn prepare(&mut self, search: &SharedBuffers<'_>, generation: u64) -> Result<()>;
+    /// Encodes the passes and the copies of what they read back into their own staging.
+    fn encode(&self, enc: &mut wgpu::CommandEncoder, max_workgroups_per_dim: u32);
+    /// Maps the staging and keeps what it holds (called after the submit, unless overflowed).
+    fn read(&mut self, ctx: &GpuContext) -> Result<()>;
+}
 /// Readback layout: status words, then the bin total (padded to 16 bytes), then the hits.
 const READBACK_HITS_OFFSET: u64 = STATUS_BYTES + 16;
 /// Uniform offsets must be multiples of this (WebGPU's default alignment).
@@ -68,6 +93,8 @@ pub struct GpuSearch {
     max_workgroups_per_dim: u32,
     /// (scan words, cells, bin entries) of the last successful search, for [`GpuSearch::bins`].
     last: Option<(u32, u32, u32)>,
+    /// Bumped whenever the bind groups (and so possibly the buffers) are rebuilt.
+    generation: u64,
 }
 
 impl GpuSearch {
@@ -147,6 +174,7 @@ impl GpuSearch {
             presize: true,
             max_workgroups_per_dim: ctx_limit,
             last: None,
+            generation: 0,
         })
     }
 
@@ -288,6 +316,19 @@ impl GpuSearch {
         self.run_from(prep, 0, None)
     }
 
+    /// Runs the search followed by the passes of `after` (one submit); presizes like `run`.
+    pub(crate) fn run_after(
+        &mut self,
+        prep: &Prepared,
+        after: &mut (dyn AfterSearch + 'static),
+        read_hits: bool,
+    ) -> Result<(Vec<GpuHit>, u32, u32, [u32; STATUS_WORDS])> {
+        if self.presize {
+            self.entry_capacity = presized_capacity(prep, self.entry_capacity);
+        }
+        self.run_with(prep, 0, None, Some(after), read_hits)
+    }
+
     /// Runs the steps `STEPS[first..]` on the GPU, starting from the CPU mirror's state after
     /// `STEPS[..first]` (`preload`, required when `first > 0`): the GPU half of a split run,
     /// which finds the first step where the two executors diverge.
@@ -307,6 +348,22 @@ impl GpuSearch {
         first: usize,
         preload: Option<&CpuWorkspace>,
     ) -> Result<(Vec<GpuHit>, u32, u32)> {
+        let (hits, total, regrowths, _) = self.run_with(prep, first, preload, None, true)?;
+        Ok((hits, total, regrowths))
+    }
+
+    /// Runs the search steps `STEPS[first..]` and then the passes of `after` in the same
+    /// command encoder and submit, reading back once; on overflow grows the entry buffer and
+    /// runs the whole again. Returns the hits (empty unless `read_hits`), the bin entries, the
+    /// regrowths and the status words.
+    pub(crate) fn run_with(
+        &mut self,
+        prep: &Prepared,
+        first: usize,
+        preload: Option<&CpuWorkspace>,
+        mut after: Option<&mut (dyn AfterSearch + 'static)>,
+        read_hits: bool,
+    ) -> Result<(Vec<GpuHit>, u32, u32, [u32; STATUS_WORDS])> {
         let levels = ScanLevels::new(prep.params.n_cells + 1);
         self.ensure_buffers(prep, &levels)?;
         let q = &self.ctx.queue;
@@ -347,16 +404,27 @@ impl GpuSearch {
             if self.bind_groups.is_none() {
                 self.bind_groups = Some(self.bind_groups(&levels));
                 self.scan_levels = levels.levels.len();
+                self.generation += 1;
+            }
+            if let Some(a) = after.as_deref_mut() {
+                a.prepare(&self.shared(), self.generation)?;
             }
             let mut params = prep.params;
             params.entry_capacity = self.entry_capacity;
             self.ctx
                 .queue
                 .write_buffer(&self.buffers.params, 0, bytemuck::bytes_of(&params));
-            let (status, total, hits) = self.submit(&params, &levels, prep.slaves.len(), first)?;
+            let (status, total, hits) = self.submit(
+                &params,
+                &levels,
+                prep.slaves.len(),
+                first,
+                after.as_deref_mut(),
+                read_hits,
+            )?;
             if status[STATUS_OVERFLOW] == 0 {
                 self.last = Some((levels.words, params.n_cells, total));
-                return Ok((hits, total, regrowths));
+                return Ok((hits, total, regrowths, status));
             }
             if first
                 > STEPS
@@ -378,6 +446,16 @@ impl GpuSearch {
                 self.bind_groups = None;
             }
             regrowths += 1;
+        }
+    }
+
+    /// The search buffers later passes bind.
+    fn shared(&self) -> SharedBuffers<'_> {
+        SharedBuffers {
+            nodes: &self.buffers.nodes.buffer,
+            facets: &self.buffers.facets.buffer,
+            hits: &self.buffers.hits.buffer,
+            status: &self.buffers.status,
         }
     }
 
@@ -435,6 +513,8 @@ impl GpuSearch {
         levels: &ScanLevels,
         n_slaves: usize,
         first: usize,
+        mut after: Option<&mut (dyn AfterSearch + 'static)>,
+        read_hits: bool,
     ) -> Result<([u32; STATUS_WORDS], u32, Vec<GpuHit>)> {
         let (device, b, p) = (&self.ctx.device, &self.buffers, &self.pipelines);
         let bg = self
@@ -448,7 +528,7 @@ impl GpuSearch {
         });
         if first == 0 {
             enc.clear_buffer(&b.scan.buffer, 0, Some(levels.words as u64 * 4));
-            enc.clear_buffer(&b.status, 0, None);
+            enc.clear_buffer(&b.status, 0, Some(SEARCH_STATUS_BYTES));
         }
         let dispatch =
             |enc: &mut wgpu::CommandEncoder,
@@ -523,7 +603,14 @@ impl GpuSearch {
                 ),
             }
         }
-        let hits_bytes = (n_slaves * std::mem::size_of::<GpuHit>()) as u64;
+        if let Some(a) = after.as_deref_mut() {
+            a.encode(&mut enc, max_dim);
+        }
+        let hits_bytes = if read_hits {
+            (n_slaves * std::mem::size_of::<GpuHit>()) as u64
+        } else {
+            0
+        };
         enc.copy_buffer_to_buffer(&b.status, 0, &b.readback.buffer, 0, STATUS_BYTES);
         enc.copy_buffer_to_buffer(
             &b.scan.buffer,
@@ -544,7 +631,7 @@ impl GpuSearch {
         self.ctx.queue.submit([enc.finish()]);
         if let Some(e) = pollster::block_on(scope.pop()) {
             return Err(Error::Gpu {
-                during: "global search".into(),
+                during: "contact increment".into(),
                 message: e.to_string(),
             });
         }
@@ -554,12 +641,17 @@ impl GpuSearch {
             READBACK_HITS_OFFSET + hits_bytes,
             "global search readback",
         )?;
-        self.ctx.take_uncaptured("global search")?;
         let status: [u32; STATUS_WORDS] =
             bytemuck::pod_read_unaligned(&bytes[..STATUS_BYTES as usize]);
         let total: u32 =
             bytemuck::pod_read_unaligned(&bytes[STATUS_BYTES as usize..STATUS_BYTES as usize + 4]);
         let hits = bytemuck::pod_collect_to_vec(&bytes[READBACK_HITS_OFFSET as usize..]);
+        if status[STATUS_OVERFLOW] == 0 {
+            if let Some(a) = after {
+                a.read(&self.ctx)?;
+            }
+        }
+        self.ctx.take_uncaptured("contact increment")?;
         Ok((status, total, hits))
     }
 }

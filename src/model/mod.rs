@@ -6,7 +6,9 @@
 mod pair;
 mod surface;
 
-pub use pair::Pair;
+pub use pair::{
+    Enforce, Friction, Pair, Penalty, PressureOverclosure, Stiffness, MAX_TABLE_POINTS,
+};
 pub use surface::{DegenerateFacet, Facet, MasterSurface, Surface, NO_NODE};
 
 use crate::error::{Error, Result};
@@ -56,6 +58,7 @@ pub struct Model {
     masses: Vec<f64>,
     surfaces: Vec<MasterSurface>,
     node_sets: Vec<Vec<u32>>,
+    node_set_areas: Vec<Option<Vec<f64>>>,
     pairs: Vec<Pair>,
 }
 
@@ -77,6 +80,7 @@ impl Model {
             masses: Vec::new(),
             surfaces: Vec::new(),
             node_sets: Vec::new(),
+            node_set_areas: Vec::new(),
             pairs: Vec::new(),
         }
     }
@@ -164,7 +168,37 @@ impl Model {
             *s = true;
         }
         self.node_sets.push(nodes.to_vec());
+        self.node_set_areas.push(None);
         Ok(NodeSetId(self.node_sets.len() - 1))
+    }
+
+    /// Adds a slave node set with the tributary area of each node (model area units; length
+    /// in 2D, per unit thickness), used for contact pressures and the modulus stiffness rule.
+    /// Without areas a node's area is the mean master facet area (length in 2D).
+    pub fn add_node_set_with_areas(&mut self, nodes: &[u32], areas: &[f64]) -> Result<NodeSetId> {
+        if areas.len() != nodes.len() {
+            return Err(Error::LengthMismatch {
+                what: "tributary areas (one per node of the set)",
+                expected: nodes.len(),
+                got: areas.len(),
+            });
+        }
+        if let Some(k) = areas.iter().position(|a| !(a.is_finite() && *a > 0.0)) {
+            return Err(Error::BadParameter {
+                name: "tributary area",
+                value: format!("{} (node set entry {k})", areas[k]),
+                expected: "must be finite and positive",
+            });
+        }
+        let id = self.add_node_set(nodes)?;
+        self.node_set_areas[id.0] = Some(areas.to_vec());
+        Ok(id)
+    }
+
+    /// Tributary areas of a node set, if given.
+    pub fn node_set_areas(&self, id: NodeSetId) -> Result<Option<&[f64]>> {
+        self.node_set(id)?;
+        Ok(self.node_set_areas[id.0].as_deref())
     }
 
     /// Adds a contact pair after checking that its slave set and master surface exist and its

@@ -1,4 +1,4 @@
-//! Contact pairs: a slave node set against a master surface.
+//! Contact pairs: a slave node set against a master surface, and how contact is enforced.
 
 use super::{NodeSetId, SurfaceId};
 use crate::error::{Error, Result};
@@ -13,15 +13,140 @@ pub struct Pair {
     /// Search radius (model units): a slave node farther than this from every master facet has
     /// no contact partner. `None` takes one mean facet size of the master surface.
     pub search_radius: Option<f64>,
+    /// How contact is enforced.
+    pub enforce: Enforce,
+    /// Tangential behaviour.
+    pub friction: Friction,
+}
+
+/// Contact constraint enforcement ("Contact constraint enforcement methods" in the seed).
+#[derive(Clone, Debug, PartialEq)]
+pub enum Enforce {
+    /// Penalty springs between slave nodes and master facets, computed on the GPU.
+    Penalty(Penalty),
+}
+
+impl Default for Enforce {
+    fn default() -> Self {
+        Enforce::Penalty(Penalty::default())
+    }
+}
+
+/// Penalty enforcement settings.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Penalty {
+    /// Normal stiffness rule.
+    pub stiffness: Stiffness,
+    /// Pressure–overclosure law.
+    pub law: PressureOverclosure,
+    /// Viscous contact damping as a fraction of critical damping of each contact spring
+    /// (0 = none); included in the stable-increment bound.
+    pub damping: f64,
+}
+
+impl Default for Penalty {
+    fn default() -> Self {
+        Self {
+            stiffness: Stiffness::Auto { scale: 1.0 },
+            law: PressureOverclosure::Linear,
+            damping: 0.0,
+        }
+    }
+}
+
+/// How the linear penalty stiffness (force per length, per slave node) is chosen.
+///
+/// The automatic rule is the mass-and-increment form of LS-DYNA's `SOFT=1` contact,
+/// `k = ½·SOFSCL·m*/Δt²`, with m* the effective two-body mass of the contact
+/// (`1/m* = 1/m_s + Σ N_i²/m_i`, slave mass and the master nodes' masses weighted by the
+/// load-transfer weights) and Δt the reference increment (the first increment's, unless set).
+/// abut's `½·SOFSCL` is 0.25·scale: each contact spring then has ω·Δt = 0.5·√scale, and alone
+/// allows an increment of 4·Δt/√scale, so it never dictates the stable increment at scale 1.
+/// The modulus rule is the element form of LS-DYNA's `SOFT=0` (`k = SLSFAC·K·A²/V`, here
+/// `scale·E·A_s/h_m` with A_s the slave node's tributary area and h_m the master facet's size)
+/// and needs the underlying material's modulus.
+#[derive(Clone, Debug, PartialEq)]
+pub enum Stiffness {
+    /// `k = 0.25·scale·m*/Δt_ref²` (see above).
+    Auto {
+        /// Factor on the automatic stiffness (Abaqus' "penalty scale factor").
+        scale: f64,
+    },
+    /// `k = scale·E·A_s/h_m`.
+    Modulus {
+        /// Young's modulus of the underlying elements, model stress units.
+        modulus: f64,
+        /// Factor (LS-DYNA's SLSFAC, default 0.1).
+        scale: f64,
+    },
+    /// A fixed stiffness, force per length, for every slave node.
+    Absolute(f64),
+}
+
+/// Pressure as a function of overclosure h = −gap (positive when penetrating).
+#[derive(Clone, Debug, PartialEq)]
+pub enum PressureOverclosure {
+    /// Force `k·h` for h > 0 (k from [`Stiffness`]).
+    Linear,
+    /// Abaqus' exponential law: contact from clearance `c0`, pressure
+    /// `p = p0/(e−1)·(h/c0 + 1)·(exp(h/c0 + 1) − 1)` for h > −c0, so p(0) = p0.
+    Exponential {
+        /// Clearance at which contact starts (> 0), model length units.
+        clearance: f64,
+        /// Pressure at zero clearance (> 0), model stress units.
+        pressure: f64,
+    },
+    /// Piecewise-linear pressure through (overclosure, pressure) points with increasing
+    /// overclosure, the first at pressure 0 (a negative first overclosure is a clearance);
+    /// extrapolated with the last slope. At most [`MAX_TABLE_POINTS`] points.
+    Tabular(Vec<(f64, f64)>),
+}
+
+/// Points a tabular pressure–overclosure law may have (WGSL: `MAX_TABLE_POINTS`).
+pub const MAX_TABLE_POINTS: usize = 16;
+
+/// Tangential behaviour.
+#[derive(Clone, Debug, PartialEq)]
+pub enum Friction {
+    /// No friction (no friction work is dispatched).
+    Frictionless,
+    /// Coulomb friction with elastic stick (tangential penalty of `stick_stiffness` × the
+    /// normal stiffness). With `mu_kinetic` < `mu` the coefficient decays with slip rate:
+    /// `μ = μ_k + (μ − μ_k)·exp(−decay·|v_slip|)` (Abaqus' exponential decay).
+    Coulomb {
+        /// Static friction coefficient.
+        mu: f64,
+        /// Kinetic coefficient (equal to `mu` for plain Coulomb).
+        mu_kinetic: f64,
+        /// Decay coefficient, time per length.
+        decay: f64,
+        /// Tangential stiffness as a fraction of the normal stiffness.
+        stick_stiffness: f64,
+    },
+}
+
+impl Friction {
+    /// Plain Coulomb friction with coefficient `mu` and stick stiffness equal to the normal one.
+    pub fn coulomb(mu: f64) -> Self {
+        Friction::Coulomb {
+            mu,
+            mu_kinetic: mu,
+            decay: 0.0,
+            stick_stiffness: 1.0,
+        }
+    }
 }
 
 impl Pair {
-    /// A pair of `slave` nodes against the `master` surface, default settings.
+    /// A pair of `slave` nodes against the `master` surface: penalty enforcement with the
+    /// automatic stiffness, frictionless.
     pub fn new(slave: NodeSetId, master: SurfaceId) -> Self {
         Self {
             slave,
             master,
             search_radius: None,
+            enforce: Enforce::default(),
+            friction: Friction::Frictionless,
         }
     }
 
@@ -31,13 +156,102 @@ impl Pair {
         self
     }
 
+    /// Sets the enforcement method.
+    pub fn enforce(mut self, enforce: Enforce) -> Self {
+        self.enforce = enforce;
+        self
+    }
+
+    /// Sets the tangential behaviour.
+    pub fn friction(mut self, friction: Friction) -> Self {
+        self.friction = friction;
+        self
+    }
+
     pub(crate) fn validate(&self) -> Result<()> {
-        if let Some(r) = self.search_radius {
-            if !(r.is_finite() && r > 0.0) {
-                return Err(Error::BadParameter {
-                    name: "search_radius",
-                    value: r.to_string(),
+        let positive = |name: &'static str, v: f64| {
+            if v.is_finite() && v > 0.0 {
+                Ok(())
+            } else {
+                Err(Error::BadParameter {
+                    name,
+                    value: v.to_string(),
                     expected: "must be finite and positive",
+                })
+            }
+        };
+        let non_negative = |name: &'static str, v: f64| {
+            if v.is_finite() && v >= 0.0 {
+                Ok(())
+            } else {
+                Err(Error::BadParameter {
+                    name,
+                    value: v.to_string(),
+                    expected: "must be finite and not negative",
+                })
+            }
+        };
+        if let Some(r) = self.search_radius {
+            positive("search_radius", r)?;
+        }
+        let Enforce::Penalty(p) = &self.enforce;
+        match p.stiffness {
+            Stiffness::Auto { scale } => positive("penalty scale", scale)?,
+            Stiffness::Modulus { modulus, scale } => {
+                positive("penalty modulus", modulus)?;
+                positive("penalty scale", scale)?;
+            }
+            Stiffness::Absolute(k) => positive("penalty stiffness", k)?,
+        }
+        non_negative("penalty damping", p.damping)?;
+        match &p.law {
+            PressureOverclosure::Linear => {}
+            PressureOverclosure::Exponential {
+                clearance,
+                pressure,
+            } => {
+                positive("exponential clearance", *clearance)?;
+                positive("exponential pressure", *pressure)?;
+            }
+            PressureOverclosure::Tabular(t) => {
+                if t.len() < 2 || t.len() > MAX_TABLE_POINTS {
+                    return Err(Error::BadParameter {
+                        name: "pressure-overclosure table",
+                        value: format!("{} points", t.len()),
+                        expected: "needs 2 to 16 points",
+                    });
+                }
+                let ok = t
+                    .iter()
+                    .all(|(h, p)| h.is_finite() && p.is_finite() && *p >= 0.0)
+                    && t.windows(2).all(|w| w[1].0 > w[0].0 && w[1].1 >= w[0].1)
+                    && t[0].1 == 0.0;
+                if !ok {
+                    return Err(Error::BadParameter {
+                        name: "pressure-overclosure table",
+                        value: format!("{t:?}"),
+                        expected:
+                            "needs increasing overclosures, non-decreasing pressures, the first 0",
+                    });
+                }
+            }
+        }
+        if let Friction::Coulomb {
+            mu,
+            mu_kinetic,
+            decay,
+            stick_stiffness,
+        } = self.friction
+        {
+            non_negative("friction coefficient", mu)?;
+            non_negative("kinetic friction coefficient", mu_kinetic)?;
+            non_negative("friction decay", decay)?;
+            positive("stick stiffness", stick_stiffness)?;
+            if mu_kinetic > mu {
+                return Err(Error::BadParameter {
+                    name: "kinetic friction coefficient",
+                    value: mu_kinetic.to_string(),
+                    expected: "must not exceed the static coefficient",
                 });
             }
         }

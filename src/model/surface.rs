@@ -105,6 +105,8 @@ pub struct MasterSurface {
     pub nodal_normals: Vec<[f64; 3]>,
     /// Characteristic length of each facet (longest edge), model units.
     pub facet_size: Vec<f64>,
+    /// Area of each facet (length in 2D) at validation, model units.
+    pub facet_area: Vec<f64>,
 }
 
 impl MasterSurface {
@@ -122,6 +124,7 @@ impl MasterSurface {
         let mut degenerate = Vec::new();
         let mut active = Vec::new();
         let mut facet_size = Vec::with_capacity(surface.facets.len());
+        let mut facet_area = Vec::with_capacity(surface.facets.len());
         let mut facet_normals = Vec::with_capacity(surface.facets.len());
         for (f, facet) in surface.facets.iter().enumerate() {
             let is_2d = matches!(facet, Facet::Segment(_));
@@ -172,6 +175,7 @@ impl MasterSurface {
             let scale = if dim == 2 { size } else { size * size };
             let is_degenerate = !(measure > 1e-6 * scale) || size == 0.0;
             facet_size.push(size);
+            facet_area.push(measure);
             if is_degenerate {
                 degenerate.push(DegenerateFacet {
                     facet: f as u32,
@@ -221,14 +225,41 @@ impl MasterSurface {
             node_facets,
             nodal_normals,
             facet_size,
+            facet_area,
         })
     }
 
-    /// The active facets of node `n` (increasing ids).
+    /// The active facets of node `n` (increasing ids; empty for nodes on none, including
+    /// nodes added to the model after the surface).
     pub fn facets_of_node(&self, n: u32) -> &[u32] {
+        if n as usize + 1 >= self.node_facet_start.len() {
+            return &[];
+        }
         let s = self.node_facet_start[n as usize] as usize;
         let e = self.node_facet_start[n as usize + 1] as usize;
         &self.node_facets[s..e]
+    }
+
+    /// Mean area (length in 2D) of the active facets, model units.
+    pub fn mean_facet_area(&self) -> f64 {
+        let sum: f64 = self
+            .active
+            .iter()
+            .map(|&f| self.facet_area[f as usize])
+            .sum();
+        sum / self.active.len() as f64
+    }
+
+    /// Nodes of the active facets, increasing.
+    pub fn nodes(&self) -> Vec<u32> {
+        let mut v: Vec<u32> = self
+            .active
+            .iter()
+            .flat_map(|&f| self.facets[f as usize].nodes().to_vec())
+            .collect();
+        v.sort_unstable();
+        v.dedup();
+        v
     }
 
     /// Mean characteristic length of the active facets, model units.

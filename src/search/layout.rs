@@ -13,8 +13,16 @@ pub const NO_FACET: u32 = u32::MAX;
 pub const STATUS_OVERFLOW: usize = 0;
 /// Status word: the number of bin entries the pass needed (WGSL: `STATUS_NEEDED_ENTRIES`).
 pub const STATUS_NEEDED_ENTRIES: usize = 1;
+/// Status word: bits of the smallest stable increment, a positive f32 (WGSL: `STATUS_DT_STABLE`).
+pub const STATUS_DT_STABLE: usize = 4;
+/// Status word: bits of the smallest approach limit, a positive f32 (WGSL: `STATUS_DT_APPROACH`).
+pub const STATUS_DT_APPROACH: usize = 5;
+/// Status word: slave nodes in contact (WGSL: `STATUS_ACTIVE`).
+pub const STATUS_ACTIVE: usize = 6;
+/// Status word: slave nodes slipping (WGSL: `STATUS_SLIPPING`).
+pub const STATUS_SLIPPING: usize = 7;
 /// Number of status words.
-pub const STATUS_WORDS: usize = 4;
+pub const STATUS_WORDS: usize = 8;
 
 /// Uniform parameters of the search kernels. WGSL twin: `SearchParams` in common.wgsl.
 ///
@@ -76,8 +84,8 @@ pub struct GpuHit {
     pub node: u32,
     /// Facets examined for this node.
     pub candidates: u32,
-    /// Padding.
-    pub _pad: u32,
+    /// The slave node (model node id).
+    pub slave: u32,
     /// Closest point (xyz, grid-local) and signed gap along the normal (w).
     pub point_gap: [f32; 4],
     /// Unit facet normal at the closest point (xyz) and distance (w).
@@ -88,12 +96,13 @@ pub struct GpuHit {
 const _: () = assert!(std::mem::size_of::<GpuHit>() == 64);
 
 impl GpuHit {
-    /// A hit meaning "no facet within the radius".
-    pub fn miss(candidates: u32) -> Self {
+    /// A hit of slave node `slave` meaning "no facet within the radius".
+    pub fn miss(slave: u32, candidates: u32) -> Self {
         Self {
             facet: NO_FACET,
             node: u32::MAX,
             candidates,
+            slave,
             ..Self::zeroed()
         }
     }

@@ -9,11 +9,14 @@
 pub mod grid;
 pub mod layout;
 
+use crate::contact::PenaltyExec;
 use crate::cpu::CpuSearch;
 use crate::device::{Device, DeviceKind};
 use crate::error::{Error, Result};
 use crate::gpu::GpuSearch;
 use crate::model::{validate_positions, MasterSurface, Model, PairId};
+use crate::penalty::layout::PenaltyParams;
+use crate::penalty::PenaltySetup;
 use grid::Grid;
 use layout::{GpuHit, SearchParams, NO_FACET};
 
@@ -103,7 +106,7 @@ pub struct Prepared {
     pub params: SearchParams,
     /// The grid (its origin is the local frame).
     pub grid: Grid,
-    /// Every model node, grid-local, w = 0.
+    /// Every model node, grid-local, w = its mass.
     pub nodes: Vec<[f32; 4]>,
     /// Active facets, padded node ids.
     pub facets: Vec<[u32; 4]>,
@@ -121,7 +124,7 @@ pub struct GlobalSearch {
     slaves: Vec<u32>,
     radius: f64,
     dim: u32,
-    n_nodes: usize,
+    masses: Vec<f32>,
 }
 
 enum Executor {
@@ -147,7 +150,7 @@ impl GlobalSearch {
             slaves,
             radius,
             dim: model.dim(),
-            n_nodes: model.positions().len(),
+            masses: model.masses().iter().map(|&m| m as f32).collect(),
         })
     }
 
@@ -202,6 +205,45 @@ impl GlobalSearch {
             Executor::Cpu(c) => c.run(&prepared)?,
         };
         Ok(self.finish(&prepared, raw, entries, regrowths))
+    }
+
+    /// Runs the search and then the penalty passes of `pen` in the same increment (one
+    /// submit on the GPU). Returns the search result (with contacts only when `outputs`, on
+    /// the GPU) and the status words.
+    pub(crate) fn run_with_penalty(
+        &mut self,
+        positions: &[[f64; 3]],
+        pen: &mut PenaltyExec,
+        setup: &PenaltySetup,
+        pp: &PenaltyParams,
+        velocities: &[[f32; 4]],
+        outputs: bool,
+    ) -> Result<(SearchResult, [u32; layout::STATUS_WORDS])> {
+        let prepared = self.prepare(positions)?;
+        let (raw, entries, regrowths, status) = match (&mut self.executor, pen) {
+            (Executor::Gpu(g), PenaltyExec::Gpu(p)) => {
+                p.set_inputs(pp, velocities, outputs)?;
+                g.run_after(&prepared, p.as_mut(), outputs)?
+            }
+            (Executor::Cpu(c), PenaltyExec::Cpu(p)) => {
+                let (hits, entries, regrowths) = c.run(&prepared)?;
+                let mut status = [0u32; layout::STATUS_WORDS];
+                p.run(setup, pp, &prepared, velocities, &hits, &mut status);
+                (hits, entries, regrowths, status)
+            }
+            _ => {
+                return Err(Error::Gpu {
+                    during: "penalty step".into(),
+                    message: "search and penalty executors run on different devices".into(),
+                })
+            }
+        };
+        Ok((self.finish(&prepared, raw, entries, regrowths), status))
+    }
+
+    /// The master surface searched.
+    pub fn master(&self) -> &MasterSurface {
+        &self.master
     }
 
     /// The bins of the last search (read back from the GPU on a GPU device): for tests of the
@@ -260,10 +302,10 @@ impl GlobalSearch {
 
     /// Builds the kernels' input: validates positions, fits the grid, converts to local f32.
     pub fn prepare(&self, positions: &[[f64; 3]]) -> Result<Prepared> {
-        if positions.len() != self.n_nodes {
+        if positions.len() != self.masses.len() {
             return Err(Error::LengthMismatch {
                 what: "positions (one per model node)",
-                expected: self.n_nodes,
+                expected: self.masses.len(),
                 got: positions.len(),
             });
         }
@@ -304,12 +346,13 @@ impl GlobalSearch {
         let o = grid.origin;
         let nodes = positions
             .iter()
-            .map(|x| {
+            .zip(&self.masses)
+            .map(|(x, &m)| {
                 [
                     (x[0] - o[0]) as f32,
                     (x[1] - o[1]) as f32,
                     (x[2] - o[2]) as f32,
-                    0.0,
+                    m,
                 ]
             })
             .collect();

@@ -1,0 +1,197 @@
+// penalty.wgsl — penalty contact force, friction and outputs of each slave node.
+// CPU mirror: src/cpu/penalty.rs.
+//
+// Bindings: 0 pp (uniform PenaltyParams), 1 nodes (grid-local xyz, w mass), 2 vel (xyz),
+//           3 facets, 4 hits (the search's results), 5 normals (smoothed nodal normals, per
+//           model node, from nodal_normals), 6 state (SlaveState per slave, read-write),
+//           7 out (ContactOut per slave), 8 status (atomic words: overflow read, increments
+//           and counts reduced).
+// Dispatch: one invocation per slave node, ITEM_WORKGROUP per workgroup, folded into 2D.
+// Invariants: the contact normal N is the smoothed normal interpolated with the load-transfer
+//             weights (continuous across facet edges) and the gap is measured along it; the
+//             force on the slave is F_n·N + F_t and the master nodes get −w_j times it (gather),
+//             so momentum is conserved to round-off. The override FRICTION = false removes all
+//             friction work. Nothing runs when the search overflowed (it will run again).
+//             Increments are positive f32, reduced with atomicMin on their bits (order-
+//             preserving for positive floats), so the result is deterministic.
+
+override FRICTION: bool = true;
+
+@group(0) @binding(0) var<uniform> pp: PenaltyParams;
+@group(0) @binding(1) var<storage, read> nodes: array<vec4<f32>>;
+@group(0) @binding(2) var<storage, read> vel: array<vec4<f32>>;
+@group(0) @binding(3) var<storage, read> facets: array<vec4<u32>>;
+@group(0) @binding(4) var<storage, read> hits: array<Hit>;
+@group(0) @binding(5) var<storage, read> normals: array<vec4<f32>>;
+@group(0) @binding(6) var<storage, read_write> state: array<SlaveState>;
+@group(0) @binding(7) var<storage, read_write> out: array<ContactOut>;
+@group(0) @binding(8) var<storage, read_write> status: array<atomic<u32>>;
+
+const E_MINUS_1: f32 = 1.7182818;
+
+// Force, tangent stiffness and stored energy of the pressure–overclosure law at overclosure h.
+struct LawValue {
+    force: f32,
+    stiffness: f32,
+    energy: f32,
+}
+
+fn table_point(k: u32) -> vec2<f32> {
+    let v = pp.table[k / 2u];
+    if (k % 2u == 0u) { return v.xy; }
+    return v.zw;
+}
+
+fn law(h: f32, k: f32, area: f32) -> LawValue {
+    var r = LawValue(0.0, 0.0, 0.0);
+    if (pp.law == LAW_LINEAR) {
+        r.stiffness = k;
+        if (h > 0.0) {
+            r.force = k * h;
+            r.energy = 0.5 * k * h * h;
+        }
+    } else if (pp.law == LAW_EXPONENTIAL) {
+        let x = min(max(h, 0.0) / pp.clearance + 1.0, 60.0);
+        let ex = exp(x);
+        r.stiffness = area * pp.pressure / (E_MINUS_1 * pp.clearance) * ((ex - 1.0) + x * ex);
+        let xh = h / pp.clearance + 1.0;
+        if (xh > 0.0) {
+            let xc = min(xh, 60.0);
+            let e2 = exp(xc);
+            r.force = area * pp.pressure / E_MINUS_1 * xc * (e2 - 1.0);
+            r.energy = area * pp.pressure * pp.clearance / E_MINUS_1 * ((xc - 1.0) * e2 + 1.0 - 0.5 * xc * xc);
+        }
+    } else {
+        // tabular: slope of the segment holding max(h, h0); force and energy where h > h0
+        let n = pp.table_len;
+        let h_eval = max(h, table_point(0u).x);
+        var energy = 0.0;
+        var force = 0.0;
+        var slope = 0.0;
+        for (var s = 0u; s + 1u < n; s++) {
+            let a = table_point(s);
+            let b = table_point(s + 1u);
+            let sl = (b.y - a.y) / (b.x - a.x);
+            let last = s + 2u == n;
+            if (h_eval >= a.x && (h_eval < b.x || last)) {
+                slope = sl;
+            }
+            if (h > a.x) {
+                let top = select(min(h, b.x), h, last);
+                let p_top = a.y + sl * (top - a.x);
+                energy += 0.5 * (a.y + p_top) * (top - a.x);
+                force = p_top;
+            }
+        }
+        r.stiffness = area * slope;
+        r.force = area * force;
+        r.energy = area * energy;
+    }
+    return r;
+}
+
+// First local tangent direction by the standard convention (twin of geometry::tangent_directions).
+fn tangent_t1(n: vec3<f32>) -> vec3<f32> {
+    var axis = vec3<f32>(1.0, 0.0, 0.0);
+    if (abs(n.x) > COS_TENTH_DEGREE) { axis = vec3<f32>(0.0, 0.0, 1.0); }
+    return normalize_or_zero(axis - n * dot(axis, n));
+}
+
+@compute @workgroup_size(64)
+fn penalty(@builtin(workgroup_id) wg: vec3<u32>,
+           @builtin(num_workgroups) nwg: vec3<u32>,
+           @builtin(local_invocation_index) li: u32) {
+    let i = folded_id(wg, nwg, li, ITEM_WORKGROUP);
+    if (i >= pp.n_slaves) { return; }
+    if (atomicLoad(&status[STATUS_OVERFLOW]) != 0u) { return; }
+    let hit = hits[i];
+    var o: ContactOut;
+    o.force = vec4<f32>(0.0);
+    o.tangential = vec4<f32>(0.0);
+    o.normal_gap = vec4<f32>(0.0);
+    o.status = CSTATUS_OPEN;
+    o.dissipation = 0.0;
+    o.dt_stable = NO_LIMIT;
+    o.dt_approach = NO_LIMIT;
+    let area = state[i].tangential_area.w;
+    o.dissipation = state[i].history.x;
+    if (hit.facet == NO_FACET) {
+        state[i].tangential_area = vec4<f32>(0.0, 0.0, 0.0, area);
+        out[i] = o;
+        return;
+    }
+    let s = hit.slave;
+    let fac = facets[hit.facet];
+    let n = facet_node_count(fac);
+    var nsum = vec3<f32>(0.0);
+    var vm = vec3<f32>(0.0);
+    var inv_mm = 0.0;
+    var h_facet = 0.0;
+    for (var j = 0u; j < n; j++) {
+        let w = hit.weights[j];
+        let node = fac[j];
+        nsum += w * normals[node].xyz;
+        vm += w * vel[node].xyz;
+        inv_mm += w * w / nodes[node].w;
+        h_facet = max(h_facet, length(nodes[fac[(j + 1u) % n]].xyz - nodes[node].xyz));
+    }
+    var nrm = normalize_or_zero(nsum);
+    if (dot(nrm, nrm) == 0.0) { nrm = hit.normal_dist.xyz; }
+    let p = nodes[s].xyz;
+    let gap = dot(p - hit.point_gap.xyz, nrm);
+    let m_eff = 1.0 / (1.0 / nodes[s].w + inv_mm);
+    var k = pp.stiffness;
+    if (pp.stiffness_mode == STIFFNESS_AUTO) {
+        k = 0.25 * pp.stiffness * m_eff / (pp.dt_ref * pp.dt_ref);
+    } else if (pp.stiffness_mode == STIFFNESS_MODULUS) {
+        k = pp.stiffness * pp.modulus * area / h_facet;
+    }
+    let lv = law(-gap, k, area);
+    let v_rel = vel[s].xyz - vm;
+    let v_close = -dot(v_rel, nrm);
+    // stable increment of this spring (with damping), and the approach limit
+    let omega = sqrt(lv.stiffness / m_eff);
+    let z = pp.damping;
+    if (omega > 0.0) {
+        o.dt_stable = 2.0 / omega * (sqrt(1.0 + z * z) - z);
+    }
+    if (gap > 0.0 && v_close > 0.0) {
+        o.dt_approach = 0.5 * gap / v_close;
+    }
+    o.normal_gap = vec4<f32>(nrm, gap);
+    var f_t = vec3<f32>(0.0);
+    if (lv.force > 0.0) {
+        let c = 2.0 * z * sqrt(lv.stiffness * m_eff);
+        let f_n = max(0.0, lv.force + c * v_close);
+        o.status = CSTATUS_SLIP;
+        if (FRICTION) {
+            // carried friction force, rotated into the current tangent plane
+            var t_prev = state[i].tangential_area.xyz;
+            let mag = length(t_prev);
+            t_prev = normalize_or_zero(t_prev - nrm * dot(t_prev, nrm)) * mag;
+            let v_t = v_rel - nrm * dot(v_rel, nrm);
+            let k_t = pp.stick_stiffness * lv.stiffness;
+            let trial = t_prev - k_t * pp.dt * v_t;
+            let mu = pp.mu_kinetic + (pp.mu - pp.mu_kinetic) * exp(-pp.decay * length(v_t));
+            let limit = mu * f_n;
+            let t_len = length(trial);
+            if (t_len <= limit) {
+                f_t = trial;
+                o.status = CSTATUS_STICK;
+            } else {
+                f_t = trial * (limit / t_len);
+                if (k_t > 0.0) { o.dissipation += limit * (t_len - limit) / k_t; }
+            }
+            if (k_t > 0.0) { o.tangential.w = 0.5 * dot(f_t, f_t) / k_t; }
+        }
+        o.force = vec4<f32>(f_n * nrm + f_t, f_n);
+        o.tangential = vec4<f32>(f_t, o.tangential.w + lv.energy);
+        atomicAdd(&status[STATUS_ACTIVE], 1u);
+        if (o.status == CSTATUS_SLIP) { atomicAdd(&status[STATUS_SLIPPING], 1u); }
+    }
+    state[i].tangential_area = vec4<f32>(f_t, area);
+    state[i].history = vec4<f32>(o.dissipation, 0.0, 0.0, 0.0);
+    atomicMin(&status[STATUS_DT_STABLE], bitcast<u32>(o.dt_stable));
+    atomicMin(&status[STATUS_DT_APPROACH], bitcast<u32>(o.dt_approach));
+    out[i] = o;
+}

@@ -1,0 +1,56 @@
+// penalty_common.wgsl — shared by the penalty kernels (prepended after common.wgsl).
+// Rust twins: src/penalty/layout.rs.
+
+const NO_SLAVE: u32 = 0xffffffffu;
+const CSTATUS_OPEN: u32 = 0u;
+const CSTATUS_STICK: u32 = 1u;
+const CSTATUS_SLIP: u32 = 2u;
+const LAW_LINEAR: u32 = 0u;
+const LAW_EXPONENTIAL: u32 = 1u;
+const LAW_TABULAR: u32 = 2u;
+const STIFFNESS_AUTO: u32 = 0u;
+const STIFFNESS_MODULUS: u32 = 1u;
+const STIFFNESS_ABSOLUTE: u32 = 2u;
+const NO_LIMIT: f32 = 3.40282347e38;
+
+// Rust twin: PenaltyParams, 208 bytes.
+struct PenaltyParams {
+    n_slaves: u32,
+    n_pair_nodes: u32,
+    n_facets: u32,
+    law: u32,
+    stiffness_mode: u32,
+    table_len: u32,
+    _pad0: u32,
+    _pad0b: u32,
+    stiffness: f32,
+    modulus: f32,
+    dt: f32,
+    dt_ref: f32,
+    damping: f32,
+    mu: f32,
+    mu_kinetic: f32,
+    decay: f32,
+    stick_stiffness: f32,
+    clearance: f32,
+    pressure: f32,
+    _pad1: f32,
+    table: array<vec4<f32>, 8>,
+}
+
+// Rust twin: SlaveState, 32 bytes.
+struct SlaveState {
+    tangential_area: vec4<f32>,   // carried friction force (xyz), tributary area (w)
+    history: vec4<f32>,           // accumulated frictional dissipation (x)
+}
+
+// Rust twin: ContactOut, 64 bytes.
+struct ContactOut {
+    force: vec4<f32>,
+    tangential: vec4<f32>,
+    normal_gap: vec4<f32>,
+    status: u32,
+    dissipation: f32,
+    dt_stable: f32,
+    dt_approach: f32,
+}

@@ -1,0 +1,221 @@
+//! CPU mirror of `shaders/penalty.wgsl`: penalty force, friction and outputs of each slave.
+
+use super::common::{facet_node_count, node};
+use crate::geometry::{tangent_directions, V3};
+use crate::penalty::layout::*;
+use crate::search::layout::{
+    GpuHit, NO_FACET, STATUS_ACTIVE, STATUS_DT_APPROACH, STATUS_DT_STABLE, STATUS_OVERFLOW,
+    STATUS_SLIPPING,
+};
+
+const E_MINUS_1: f32 = 1.718_281_8;
+
+/// Force, tangent stiffness and stored energy of the law at overclosure h (WGSL: `LawValue`).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct LawValue {
+    /// Normal force.
+    pub force: f32,
+    /// Tangent stiffness (at max(h, start of contact)).
+    pub stiffness: f32,
+    /// Stored elastic energy.
+    pub energy: f32,
+}
+
+fn table_point(pp: &PenaltyParams, k: u32) -> (f32, f32) {
+    let v = pp.table[(k / 2) as usize];
+    if k % 2 == 0 {
+        (v[0], v[1])
+    } else {
+        (v[2], v[3])
+    }
+}
+
+/// The pressure–overclosure law (WGSL: `law`).
+pub fn law(pp: &PenaltyParams, h: f32, k: f32, area: f32) -> LawValue {
+    let mut r = LawValue {
+        force: 0.0,
+        stiffness: 0.0,
+        energy: 0.0,
+    };
+    if pp.law == LAW_LINEAR {
+        r.stiffness = k;
+        if h > 0.0 {
+            r.force = k * h;
+            r.energy = 0.5 * k * h * h;
+        }
+    } else if pp.law == LAW_EXPONENTIAL {
+        let x = (h.max(0.0) / pp.clearance + 1.0).min(60.0);
+        let ex = x.exp();
+        r.stiffness = area * pp.pressure / (E_MINUS_1 * pp.clearance) * ((ex - 1.0) + x * ex);
+        let xh = h / pp.clearance + 1.0;
+        if xh > 0.0 {
+            let xc = xh.min(60.0);
+            let e2 = xc.exp();
+            r.force = area * pp.pressure / E_MINUS_1 * xc * (e2 - 1.0);
+            r.energy = area * pp.pressure * pp.clearance / E_MINUS_1
+                * ((xc - 1.0) * e2 + 1.0 - 0.5 * xc * xc);
+        }
+    } else {
+        let n = pp.table_len;
+        let h_eval = h.max(table_point(pp, 0).0);
+        let (mut energy, mut force, mut slope) = (0.0f32, 0.0f32, 0.0f32);
+        let mut s = 0;
+        while s + 1 < n {
+            let a = table_point(pp, s);
+            let b = table_point(pp, s + 1);
+            let sl = (b.1 - a.1) / (b.0 - a.0);
+            let last = s + 2 == n;
+            if h_eval >= a.0 && (h_eval < b.0 || last) {
+                slope = sl;
+            }
+            if h > a.0 {
+                let top = if last { h } else { h.min(b.0) };
+                let p_top = a.1 + sl * (top - a.0);
+                energy += 0.5 * (a.1 + p_top) * (top - a.0);
+                force = p_top;
+            }
+            s += 1;
+        }
+        r.stiffness = area * slope;
+        r.force = area * force;
+        r.energy = area * energy;
+    }
+    r
+}
+
+fn min_bits(word: &mut u32, v: f32) {
+    *word = (*word).min(v.to_bits());
+}
+
+/// One "invocation" per slave node (WGSL: `penalty`); `friction` is the FRICTION override.
+#[allow(clippy::too_many_arguments)]
+pub fn penalty(
+    pp: &PenaltyParams,
+    friction: bool,
+    nodes: &[[f32; 4]],
+    vel: &[[f32; 4]],
+    facets: &[[u32; 4]],
+    hits: &[GpuHit],
+    normals: &[[f32; 4]],
+    state: &mut [SlaveState],
+    out: &mut [ContactOut],
+    status: &mut [u32],
+) {
+    if status[STATUS_OVERFLOW] != 0 {
+        return;
+    }
+    for i in 0..pp.n_slaves as usize {
+        let hit = hits[i];
+        let mut o = ContactOut {
+            force: [0.0; 4],
+            tangential: [0.0; 4],
+            normal_gap: [0.0; 4],
+            status: CSTATUS_OPEN,
+            dissipation: 0.0,
+            dt_stable: NO_LIMIT,
+            dt_approach: NO_LIMIT,
+        };
+        let area = state[i].tangential_area[3];
+        o.dissipation = state[i].history[0];
+        if hit.facet == NO_FACET {
+            state[i].tangential_area = [0.0, 0.0, 0.0, area];
+            out[i] = o;
+            continue;
+        }
+        let s = hit.slave;
+        let fac = facets[hit.facet as usize];
+        let n = facet_node_count(fac);
+        let (mut nsum, mut vm) = (V3::<f32>::zero(), V3::<f32>::zero());
+        let (mut inv_mm, mut h_facet) = (0.0f32, 0.0f32);
+        for j in 0..n {
+            let w = hit.weights[j];
+            let id = fac[j];
+            let nn = normals[id as usize];
+            nsum = nsum + V3::new(nn[0], nn[1], nn[2]) * w;
+            let v = vel[id as usize];
+            vm = vm + V3::new(v[0], v[1], v[2]) * w;
+            inv_mm += w * w / nodes[id as usize][3];
+            h_facet = h_facet.max(
+                (node(nodes, fac[(j + 1) % n]) - node(nodes, id))
+                    .length2()
+                    .sqrt(),
+            );
+        }
+        let mut nrm = nsum.normalize_or_zero();
+        if nrm.length2() == 0.0 {
+            nrm = V3::new(hit.normal_dist[0], hit.normal_dist[1], hit.normal_dist[2]);
+        }
+        let p = node(nodes, s);
+        let c = V3::new(hit.point_gap[0], hit.point_gap[1], hit.point_gap[2]);
+        let gap = (p - c).dot(nrm);
+        let m_eff = 1.0 / (1.0 / nodes[s as usize][3] + inv_mm);
+        let mut k = pp.stiffness;
+        if pp.stiffness_mode == STIFFNESS_AUTO {
+            k = 0.25 * pp.stiffness * m_eff / (pp.dt_ref * pp.dt_ref);
+        } else if pp.stiffness_mode == STIFFNESS_MODULUS {
+            k = pp.stiffness * pp.modulus * area / h_facet;
+        }
+        let lv = law(pp, -gap, k, area);
+        let vs = vel[s as usize];
+        let v_rel = V3::new(vs[0], vs[1], vs[2]) - vm;
+        let v_close = -v_rel.dot(nrm);
+        let omega = (lv.stiffness / m_eff).sqrt();
+        let z = pp.damping;
+        if omega > 0.0 {
+            o.dt_stable = 2.0 / omega * ((1.0 + z * z).sqrt() - z);
+        }
+        if gap > 0.0 && v_close > 0.0 {
+            o.dt_approach = 0.5 * gap / v_close;
+        }
+        o.normal_gap = [nrm.x, nrm.y, nrm.z, gap];
+        let mut f_t = V3::<f32>::zero();
+        if lv.force > 0.0 {
+            let cdamp = 2.0 * z * (lv.stiffness * m_eff).sqrt();
+            let f_n = (lv.force + cdamp * v_close).max(0.0);
+            o.status = CSTATUS_SLIP;
+            if friction {
+                let st = state[i].tangential_area;
+                let mut t_prev = V3::new(st[0], st[1], st[2]);
+                let mag = t_prev.length2().sqrt();
+                t_prev = (t_prev - nrm * t_prev.dot(nrm)).normalize_or_zero() * mag;
+                let v_t = v_rel - nrm * v_rel.dot(nrm);
+                let k_t = pp.stick_stiffness * lv.stiffness;
+                let trial = t_prev - v_t * (k_t * pp.dt);
+                let mu = pp.mu_kinetic
+                    + (pp.mu - pp.mu_kinetic) * (-pp.decay * v_t.length2().sqrt()).exp();
+                let limit = mu * f_n;
+                let t_len = trial.length2().sqrt();
+                if t_len <= limit {
+                    f_t = trial;
+                    o.status = CSTATUS_STICK;
+                } else {
+                    f_t = trial * (limit / t_len);
+                    if k_t > 0.0 {
+                        o.dissipation += limit * (t_len - limit) / k_t;
+                    }
+                }
+                if k_t > 0.0 {
+                    o.tangential[3] = 0.5 * f_t.dot(f_t) / k_t;
+                }
+            }
+            let f = nrm * f_n + f_t;
+            o.force = [f.x, f.y, f.z, f_n];
+            o.tangential = [f_t.x, f_t.y, f_t.z, o.tangential[3] + lv.energy];
+            status[STATUS_ACTIVE] += 1;
+            if o.status == CSTATUS_SLIP {
+                status[STATUS_SLIPPING] += 1;
+            }
+        }
+        state[i].tangential_area = [f_t.x, f_t.y, f_t.z, area];
+        state[i].history = [o.dissipation, 0.0, 0.0, 0.0];
+        min_bits(&mut status[STATUS_DT_STABLE], o.dt_stable);
+        min_bits(&mut status[STATUS_DT_APPROACH], o.dt_approach);
+        out[i] = o;
+    }
+}
+
+/// Local tangent directions of a contact normal in f32 (the kernel's convention), for outputs.
+pub fn tangents(n: [f32; 3]) -> ([f32; 3], [f32; 3]) {
+    let (t1, t2) = tangent_directions(V3::new(n[0], n[1], n[2]));
+    (t1.to_array(), t2.to_array())
+}

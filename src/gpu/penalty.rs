@@ -1,0 +1,514 @@
+//! The GPU executor of the penalty passes of one pair, run after the search in the same
+//! command encoder: nodal_normals, penalty, contact_sort (with scan) and gather.
+
+use std::sync::Arc;
+
+use super::buffers::{read_back, GrowBuffer};
+use super::global_search::{AfterSearch, SharedBuffers};
+use super::shaders;
+use crate::device::GpuContext;
+use crate::error::{Error, Result};
+use crate::penalty::layout::{ContactOut, PenaltyParams, NO_LIMIT};
+use crate::penalty::PenaltySetup;
+use crate::search::layout::{fold_dispatch, ScanLevels, ScanParams, ITEM_WORKGROUP, SCAN_BLOCK};
+use wgpu::BufferUsages as U;
+
+const UNIFORM_STRIDE: u64 = 256;
+
+struct Pipelines {
+    nodal_normals: wgpu::ComputePipeline,
+    penalty: wgpu::ComputePipeline,
+    count: wgpu::ComputePipeline,
+    scatter: wgpu::ComputePipeline,
+    sort: wgpu::ComputePipeline,
+    scan_blocks: wgpu::ComputePipeline,
+    scan_add: wgpu::ComputePipeline,
+    gather: wgpu::ComputePipeline,
+}
+
+struct Groups {
+    nodal_normals: wgpu::BindGroup,
+    penalty: wgpu::BindGroup,
+    count: wgpu::BindGroup,
+    scatter: wgpu::BindGroup,
+    sort: wgpu::BindGroup,
+    scan_blocks: Vec<wgpu::BindGroup>,
+    scan_add: Vec<wgpu::BindGroup>,
+    gather: wgpu::BindGroup,
+}
+
+/// Penalty passes of one pair on one GPU device; buffers persist (friction state) and grow.
+pub struct GpuPenalty {
+    ctx: Arc<GpuContext>,
+    pipelines: Pipelines,
+    params: wgpu::Buffer,
+    status_init: wgpu::Buffer,
+    scan_params: wgpu::Buffer,
+    vel: GrowBuffer,
+    normals: GrowBuffer,
+    pair_nodes: wgpu::Buffer,
+    adjacency: wgpu::Buffer,
+    state: wgpu::Buffer,
+    out: wgpu::Buffer,
+    counts: wgpu::Buffer,
+    cursor: wgpu::Buffer,
+    facet_slaves: wgpu::Buffer,
+    forces: wgpu::Buffer,
+    staging: wgpu::Buffer,
+    levels: ScanLevels,
+    groups: Option<(u64, Groups)>,
+    /// The search's status buffer (bound at prepare), whose words 4..8 these passes own.
+    status: Option<wgpu::Buffer>,
+    n_slaves: u32,
+    n_pair_nodes: u32,
+    n_facets: u32,
+    read_outputs: bool,
+    /// Force per pair node after the last increment.
+    pub forces_out: Vec<[f32; 4]>,
+    /// Per-slave results after the last increment (when outputs were asked for).
+    pub outputs: Vec<ContactOut>,
+}
+
+fn storage(
+    device: &wgpu::Device,
+    label: &str,
+    bytes: u64,
+    extra: wgpu::BufferUsages,
+) -> wgpu::Buffer {
+    device.create_buffer(&wgpu::BufferDescriptor {
+        label: Some(label),
+        size: bytes.max(16).next_multiple_of(16),
+        usage: U::STORAGE | U::COPY_DST | extra,
+        mapped_at_creation: false,
+    })
+}
+
+impl GpuPenalty {
+    /// Compiles the pipelines (friction compiled in or out) and creates the pair's buffers.
+    pub fn new(ctx: Arc<GpuContext>, setup: &PenaltySetup, n_nodes: usize) -> Result<Self> {
+        let d = &ctx.device;
+        let limits = &ctx.limits;
+        let scope = d.push_error_scope(wgpu::ErrorFilter::Validation);
+        let module = |stem: &str| {
+            d.create_shader_module(wgpu::ShaderModuleDescriptor {
+                label: Some(stem),
+                source: wgpu::ShaderSource::Wgsl(
+                    shaders::source(stem).expect("listed kernel").into(),
+                ),
+            })
+        };
+        let friction = [("FRICTION", if setup.friction { 1.0 } else { 0.0 })];
+        let pipeline = |m: &wgpu::ShaderModule, entry: &str, constants: &[(&str, f64)]| {
+            d.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
+                label: Some(entry),
+                layout: None,
+                module: m,
+                entry_point: Some(entry),
+                compilation_options: wgpu::PipelineCompilationOptions {
+                    constants,
+                    ..Default::default()
+                },
+                cache: None,
+            })
+        };
+        let sort = module("contact_sort");
+        let scan = module("scan");
+        let pipelines = Pipelines {
+            nodal_normals: pipeline(&module("nodal_normals"), "nodal_normals", &[]),
+            penalty: pipeline(&module("penalty"), "penalty", &friction),
+            count: pipeline(&sort, "count_by_facet", &[]),
+            scatter: pipeline(&sort, "scatter_by_facet", &[]),
+            sort: pipeline(&sort, "sort_by_facet", &[]),
+            scan_blocks: pipeline(&scan, "scan_blocks", &[]),
+            scan_add: pipeline(&scan, "scan_add", &[]),
+            gather: pipeline(&module("gather"), "gather", &[]),
+        };
+        if let Some(e) = pollster::block_on(scope.pop()) {
+            return Err(Error::Gpu {
+                during: "compiling the penalty pipelines".into(),
+                message: e.to_string(),
+            });
+        }
+        let n_slaves = setup.areas.len() as u32;
+        let n_pair_nodes = setup.pair_nodes.len() as u32;
+        let n_facets = setup.params.n_facets;
+        let levels = ScanLevels::new(n_facets + 1);
+        let check = |what: &str, bytes: u64| -> Result<u64> {
+            let allowed = limits
+                .max_storage_buffer_binding_size
+                .min(limits.max_buffer_size);
+            if bytes > allowed {
+                return Err(Error::TooLarge {
+                    what: format!("GPU buffer '{what}'"),
+                    needed: bytes,
+                    allowed,
+                });
+            }
+            Ok(bytes)
+        };
+        let out_bytes = check("contact outputs", n_slaves as u64 * 64)?;
+        let q = &ctx.queue;
+        let pair_nodes = storage(
+            d,
+            "pair nodes",
+            check("pair nodes", n_pair_nodes as u64 * 16)?,
+            U::empty(),
+        );
+        q.write_buffer(&pair_nodes, 0, bytemuck::cast_slice(&setup.pair_nodes));
+        let adjacency = storage(
+            d,
+            "adjacency",
+            check("adjacency", setup.adjacency.len() as u64 * 4)?,
+            U::empty(),
+        );
+        q.write_buffer(&adjacency, 0, bytemuck::cast_slice(&setup.adjacency));
+        let state = storage(d, "slave state", n_slaves as u64 * 32, U::empty());
+        q.write_buffer(&state, 0, bytemuck::cast_slice(&setup.initial_state()));
+        let status_init = d.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("status init"),
+            size: 16,
+            usage: U::COPY_SRC | U::COPY_DST,
+            mapped_at_creation: false,
+        });
+        q.write_buffer(
+            &status_init,
+            0,
+            bytemuck::cast_slice(&[NO_LIMIT.to_bits(), NO_LIMIT.to_bits(), 0u32, 0u32]),
+        );
+        let scan_params = d.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("facet scan params"),
+            size: levels.levels.len() as u64 * UNIFORM_STRIDE,
+            usage: U::UNIFORM | U::COPY_DST,
+            mapped_at_creation: false,
+        });
+        for i in 0..levels.levels.len() {
+            q.write_buffer(
+                &scan_params,
+                i as u64 * UNIFORM_STRIDE,
+                bytemuck::bytes_of(&levels.params(i)),
+            );
+        }
+        Ok(Self {
+            params: d.create_buffer(&wgpu::BufferDescriptor {
+                label: Some("penalty params"),
+                size: std::mem::size_of::<PenaltyParams>() as u64,
+                usage: U::UNIFORM | U::COPY_DST,
+                mapped_at_creation: false,
+            }),
+            status_init,
+            scan_params,
+            vel: GrowBuffer::new(
+                d,
+                "velocities",
+                n_nodes as u64 * 16,
+                U::STORAGE | U::COPY_DST,
+            ),
+            normals: GrowBuffer::new(
+                d,
+                "nodal normals",
+                n_nodes as u64 * 16,
+                U::STORAGE | U::COPY_DST,
+            ),
+            pair_nodes,
+            adjacency,
+            state,
+            out: storage(d, "contact outputs", out_bytes, U::COPY_SRC),
+            counts: storage(d, "facet counts", levels.words as u64 * 4, U::COPY_SRC),
+            cursor: storage(d, "facet cursors", (n_facets as u64 + 1) * 4, U::empty()),
+            facet_slaves: storage(d, "facet slaves", n_slaves as u64 * 4, U::empty()),
+            forces: storage(d, "pair forces", n_pair_nodes as u64 * 16, U::COPY_SRC),
+            staging: d.create_buffer(&wgpu::BufferDescriptor {
+                label: Some("penalty readback"),
+                size: (n_pair_nodes as u64 * 16 + out_bytes).max(16),
+                usage: U::MAP_READ | U::COPY_DST,
+                mapped_at_creation: false,
+            }),
+            pipelines,
+            levels,
+            groups: None,
+            status: None,
+            n_slaves,
+            n_pair_nodes,
+            n_facets,
+            read_outputs: false,
+            forces_out: Vec::new(),
+            outputs: Vec::new(),
+            ctx,
+        })
+    }
+
+    /// Uploads this increment's parameters and velocities (f32, one per model node); `outputs`
+    /// asks for the per-slave results to be read back too.
+    pub fn set_inputs(
+        &mut self,
+        params: &PenaltyParams,
+        velocities: &[[f32; 4]],
+        outputs: bool,
+    ) -> Result<()> {
+        let q = &self.ctx.queue;
+        q.write_buffer(&self.params, 0, bytemuck::bytes_of(params));
+        if self.vel.ensure(
+            &self.ctx.device,
+            &self.ctx.limits,
+            velocities.len() as u64 * 16,
+        )? {
+            self.groups = None;
+        }
+        if self.normals.ensure(
+            &self.ctx.device,
+            &self.ctx.limits,
+            velocities.len() as u64 * 16,
+        )? {
+            self.groups = None;
+        }
+        q.write_buffer(&self.vel.buffer, 0, bytemuck::cast_slice(velocities));
+        self.read_outputs = outputs;
+        Ok(())
+    }
+
+    fn build_groups(&self, s: &SharedBuffers<'_>) -> Groups {
+        let d = &self.ctx.device;
+        // bindings numbered in order, except where an entry point leaves some out (contact_sort)
+        let group_at = |pipe: &wgpu::ComputePipeline, bufs: &[(u32, wgpu::BindingResource)]| {
+            let entries: Vec<wgpu::BindGroupEntry> = bufs
+                .iter()
+                .map(|(i, r)| wgpu::BindGroupEntry {
+                    binding: *i,
+                    resource: r.clone(),
+                })
+                .collect();
+            d.create_bind_group(&wgpu::BindGroupDescriptor {
+                label: None,
+                layout: &pipe.get_bind_group_layout(0),
+                entries: &entries,
+            })
+        };
+        let group = |pipe: &wgpu::ComputePipeline, bufs: &[wgpu::BindingResource]| {
+            let entries: Vec<wgpu::BindGroupEntry> = bufs
+                .iter()
+                .enumerate()
+                .map(|(i, r)| wgpu::BindGroupEntry {
+                    binding: i as u32,
+                    resource: r.clone(),
+                })
+                .collect();
+            d.create_bind_group(&wgpu::BindGroupDescriptor {
+                label: None,
+                layout: &pipe.get_bind_group_layout(0),
+                entries: &entries,
+            })
+        };
+        let p = &self.pipelines;
+        let pp = self.params.as_entire_binding();
+        let level = |i: usize| {
+            wgpu::BindingResource::Buffer(wgpu::BufferBinding {
+                buffer: &self.scan_params,
+                offset: i as u64 * UNIFORM_STRIDE,
+                size: wgpu::BufferSize::new(std::mem::size_of::<ScanParams>() as u64),
+            })
+        };
+        let n = self.levels.levels.len();
+        Groups {
+            nodal_normals: group(
+                &p.nodal_normals,
+                &[
+                    pp.clone(),
+                    s.nodes.as_entire_binding(),
+                    s.facets.as_entire_binding(),
+                    self.pair_nodes.as_entire_binding(),
+                    self.adjacency.as_entire_binding(),
+                    self.normals.buffer.as_entire_binding(),
+                ],
+            ),
+            penalty: group(
+                &p.penalty,
+                &[
+                    pp.clone(),
+                    s.nodes.as_entire_binding(),
+                    self.vel.buffer.as_entire_binding(),
+                    s.facets.as_entire_binding(),
+                    s.hits.as_entire_binding(),
+                    self.normals.buffer.as_entire_binding(),
+                    self.state.as_entire_binding(),
+                    self.out.as_entire_binding(),
+                    s.status.as_entire_binding(),
+                ],
+            ),
+            count: group(
+                &p.count,
+                &[
+                    pp.clone(),
+                    s.hits.as_entire_binding(),
+                    self.out.as_entire_binding(),
+                    self.counts.as_entire_binding(),
+                ],
+            ),
+            scatter: group_at(
+                &p.scatter,
+                &[
+                    (0, pp.clone()),
+                    (1, s.hits.as_entire_binding()),
+                    (2, self.out.as_entire_binding()),
+                    (4, self.cursor.as_entire_binding()),
+                    (5, self.facet_slaves.as_entire_binding()),
+                ],
+            ),
+            sort: group_at(
+                &p.sort,
+                &[
+                    (0, pp.clone()),
+                    (3, self.counts.as_entire_binding()),
+                    (5, self.facet_slaves.as_entire_binding()),
+                ],
+            ),
+            scan_blocks: (0..n)
+                .map(|i| group(&p.scan_blocks, &[level(i), self.counts.as_entire_binding()]))
+                .collect(),
+            scan_add: (0..n)
+                .map(|i| group(&p.scan_add, &[level(i), self.counts.as_entire_binding()]))
+                .collect(),
+            gather: group(
+                &p.gather,
+                &[
+                    pp,
+                    self.pair_nodes.as_entire_binding(),
+                    self.adjacency.as_entire_binding(),
+                    s.facets.as_entire_binding(),
+                    self.counts.as_entire_binding(),
+                    self.facet_slaves.as_entire_binding(),
+                    s.hits.as_entire_binding(),
+                    self.out.as_entire_binding(),
+                    self.forces.as_entire_binding(),
+                ],
+            ),
+        }
+    }
+
+    fn pair_bytes(&self) -> u64 {
+        self.n_pair_nodes as u64 * 16
+    }
+}
+
+impl AfterSearch for GpuPenalty {
+    fn prepare(&mut self, search: &SharedBuffers<'_>, generation: u64) -> Result<()> {
+        if self.groups.as_ref().is_none_or(|(g, _)| *g != generation) {
+            let scope = self
+                .ctx
+                .device
+                .push_error_scope(wgpu::ErrorFilter::Validation);
+            let groups = self.build_groups(search);
+            if let Some(e) = pollster::block_on(scope.pop()) {
+                return Err(Error::Gpu {
+                    during: "binding the penalty buffers".into(),
+                    message: e.to_string(),
+                });
+            }
+            self.groups = Some((generation, groups));
+            self.status = Some(search.status.clone());
+        }
+        Ok(())
+    }
+
+    fn encode(&self, enc: &mut wgpu::CommandEncoder, max_dim: u32) {
+        let (_, g) = self.groups.as_ref().expect("prepared before encoding");
+        let p = &self.pipelines;
+        // status words 4..8: increments start at "no limit", counts at 0
+        let status = self.status.as_ref().expect("prepared before encoding");
+        enc.copy_buffer_to_buffer(&self.status_init, 0, status, 16, 16);
+        let run =
+            |enc: &mut wgpu::CommandEncoder,
+             label: &str,
+             work: &[(&wgpu::ComputePipeline, &wgpu::BindGroup, u32, u32)]| {
+                let mut pass = enc.begin_compute_pass(&wgpu::ComputePassDescriptor {
+                    label: Some(label),
+                    timestamp_writes: None,
+                });
+                for &(pipe, group, n, per) in work {
+                    let (x, y) = fold_dispatch(n, per, max_dim);
+                    pass.set_pipeline(pipe);
+                    pass.set_bind_group(0, group, &[]);
+                    pass.dispatch_workgroups(x, y, 1);
+                }
+            };
+        run(
+            enc,
+            "nodal_normals + penalty",
+            &[
+                (
+                    &p.nodal_normals,
+                    &g.nodal_normals,
+                    self.n_pair_nodes,
+                    ITEM_WORKGROUP,
+                ),
+                (&p.penalty, &g.penalty, self.n_slaves, ITEM_WORKGROUP),
+            ],
+        );
+        enc.clear_buffer(&self.counts, 0, Some(self.levels.words as u64 * 4));
+        let mut work = vec![(&p.count, &g.count, self.n_slaves, ITEM_WORKGROUP)];
+        for i in 0..self.levels.levels.len() {
+            work.push((
+                &p.scan_blocks,
+                &g.scan_blocks[i],
+                self.levels.levels[i].1,
+                SCAN_BLOCK,
+            ));
+        }
+        for i in (0..self.levels.levels.len().saturating_sub(1)).rev() {
+            work.push((
+                &p.scan_add,
+                &g.scan_add[i],
+                self.levels.levels[i].1,
+                SCAN_BLOCK,
+            ));
+        }
+        run(enc, "count + scan", &work);
+        enc.copy_buffer_to_buffer(
+            &self.counts,
+            0,
+            &self.cursor,
+            0,
+            (self.n_facets as u64 + 1) * 4,
+        );
+        run(
+            enc,
+            "scatter, sort, gather",
+            &[
+                (&p.scatter, &g.scatter, self.n_slaves, ITEM_WORKGROUP),
+                (&p.sort, &g.sort, self.n_facets, ITEM_WORKGROUP),
+                (&p.gather, &g.gather, self.n_pair_nodes, ITEM_WORKGROUP),
+            ],
+        );
+        enc.copy_buffer_to_buffer(&self.forces, 0, &self.staging, 0, self.pair_bytes());
+        if self.read_outputs && self.n_slaves > 0 {
+            enc.copy_buffer_to_buffer(
+                &self.out,
+                0,
+                &self.staging,
+                self.pair_bytes(),
+                self.n_slaves as u64 * 64,
+            );
+        }
+    }
+
+    fn read(&mut self, ctx: &GpuContext) -> Result<()> {
+        let out_bytes = if self.read_outputs {
+            self.n_slaves as u64 * 64
+        } else {
+            0
+        };
+        let bytes = read_back(
+            &ctx.device,
+            &self.staging,
+            (self.pair_bytes() + out_bytes).max(16),
+            "penalty readback",
+        )?;
+        let pb = self.pair_bytes() as usize;
+        self.forces_out = bytemuck::pod_collect_to_vec(&bytes[..pb]);
+        self.outputs = if self.read_outputs {
+            bytemuck::pod_collect_to_vec(&bytes[pb..pb + out_bytes as usize])
+        } else {
+            Vec::new()
+        };
+        Ok(())
+    }
+}

@@ -1,0 +1,120 @@
+//! Structs shared with the penalty kernels (twins in `shaders/penalty_common.wgsl`).
+
+use bytemuck::{Pod, Zeroable};
+
+/// No slave index (WGSL: `NO_SLAVE`).
+pub const NO_SLAVE: u32 = u32::MAX;
+/// Contact status: open (WGSL: `CSTATUS_OPEN`).
+pub const CSTATUS_OPEN: u32 = 0;
+/// Contact status: closed and sticking (WGSL: `CSTATUS_STICK`).
+pub const CSTATUS_STICK: u32 = 1;
+/// Contact status: closed and slipping (frictionless contact is always slipping)
+/// (WGSL: `CSTATUS_SLIP`).
+pub const CSTATUS_SLIP: u32 = 2;
+/// Linear law (WGSL: `LAW_LINEAR`).
+pub const LAW_LINEAR: u32 = 0;
+/// Exponential law (WGSL: `LAW_EXPONENTIAL`).
+pub const LAW_EXPONENTIAL: u32 = 1;
+/// Tabular law (WGSL: `LAW_TABULAR`).
+pub const LAW_TABULAR: u32 = 2;
+/// Automatic mass-and-increment stiffness (WGSL: `STIFFNESS_AUTO`).
+pub const STIFFNESS_AUTO: u32 = 0;
+/// Modulus-based stiffness (WGSL: `STIFFNESS_MODULUS`).
+pub const STIFFNESS_MODULUS: u32 = 1;
+/// Absolute stiffness (WGSL: `STIFFNESS_ABSOLUTE`).
+pub const STIFFNESS_ABSOLUTE: u32 = 2;
+/// "No limit" for increments (largest finite f32; WGSL: `NO_LIMIT`).
+pub const NO_LIMIT: f32 = f32::MAX;
+
+/// Uniform parameters of the penalty kernels. WGSL twin: `PenaltyParams`.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, PartialEq, Pod, Zeroable)]
+pub struct PenaltyParams {
+    /// Slave nodes.
+    pub n_slaves: u32,
+    /// Nodes of the pair (slave ∪ master), the gather's items.
+    pub n_pair_nodes: u32,
+    /// Active master facets.
+    pub n_facets: u32,
+    /// `LAW_*`.
+    pub law: u32,
+    /// `STIFFNESS_*`.
+    pub stiffness_mode: u32,
+    /// Points in `table`.
+    pub table_len: u32,
+    /// Padding.
+    pub _pad0: [u32; 2],
+    /// Auto: scale; modulus: scale; absolute: k (force per length).
+    pub stiffness: f32,
+    /// Young's modulus for the modulus rule.
+    pub modulus: f32,
+    /// This increment.
+    pub dt: f32,
+    /// Reference increment of the automatic stiffness.
+    pub dt_ref: f32,
+    /// Damping as a fraction of critical.
+    pub damping: f32,
+    /// Static friction coefficient (0: frictionless).
+    pub mu: f32,
+    /// Kinetic friction coefficient.
+    pub mu_kinetic: f32,
+    /// Friction decay coefficient.
+    pub decay: f32,
+    /// Tangential stiffness / normal stiffness.
+    pub stick_stiffness: f32,
+    /// Exponential law: clearance c0.
+    pub clearance: f32,
+    /// Exponential law: pressure p0 at zero clearance.
+    pub pressure: f32,
+    /// Padding.
+    pub _pad1: f32,
+    /// Tabular law: (overclosure, pressure) points, two per vec4.
+    pub table: [[f32; 4]; 8],
+}
+const _: () = assert!(std::mem::size_of::<PenaltyParams>() == 208);
+
+/// Per-slave state kept between increments. WGSL twin: `SlaveState`.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, PartialEq, Pod, Zeroable)]
+pub struct SlaveState {
+    /// Friction force carried over (xyz) and the node's tributary area (w).
+    pub tangential_area: [f32; 4],
+    /// Frictional dissipation accumulated since the start (x); y, z, w unused.
+    pub history: [f32; 4],
+}
+const _: () = assert!(std::mem::size_of::<SlaveState>() == 32);
+
+/// Per-slave result of the penalty kernel. WGSL twin: `ContactOut`.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, PartialEq, Pod, Zeroable)]
+pub struct ContactOut {
+    /// Total contact force on the slave node (xyz) and the normal force magnitude (w).
+    pub force: [f32; 4],
+    /// Friction force (xyz) and the elastic energy stored in the contact springs (w).
+    pub tangential: [f32; 4],
+    /// Contact normal used (xyz, smoothed) and the signed gap along it, COPEN (w).
+    pub normal_gap: [f32; 4],
+    /// `CSTATUS_*`.
+    pub status: u32,
+    /// Frictional dissipation of this slave since the start.
+    pub dissipation: f32,
+    /// Stable increment of this contact spring (NO_LIMIT when none).
+    pub dt_stable: f32,
+    /// Half the gap over the closing speed for an open approaching node (NO_LIMIT otherwise).
+    pub dt_approach: f32,
+}
+const _: () = assert!(std::mem::size_of::<ContactOut>() == 64);
+
+/// A node of a pair for the normals and the gather. WGSL twin: `vec4<u32>` in `pair_nodes`.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Pod, Zeroable)]
+pub struct PairNode {
+    /// Model node id.
+    pub node: u32,
+    /// Index in the slave set, or [`NO_SLAVE`].
+    pub slave: u32,
+    /// Start of its adjacent active facets in the adjacency list.
+    pub adj_start: u32,
+    /// End of its adjacent active facets.
+    pub adj_end: u32,
+}

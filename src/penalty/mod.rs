@@ -1,0 +1,173 @@
+//! Penalty enforcement of a contact pair: the static data its kernels need, and the
+//! parameters of one increment. The kernels are `shaders/{nodal_normals,penalty,contact_sort,
+//! gather}.wgsl` (GPU, [`crate::gpu::GpuPenalty`]) and their mirrors in [`crate::cpu`].
+
+pub mod layout;
+
+use crate::error::Result;
+use crate::model::{
+    Friction, MasterSurface, Model, Pair, PairId, Penalty, PressureOverclosure, Stiffness,
+};
+use layout::*;
+
+/// The static description of a penalty pair in the kernels' layout.
+#[derive(Clone, Debug)]
+pub struct PenaltySetup {
+    /// Slave nodes then master nodes not already listed (a node in both appears once).
+    pub pair_nodes: Vec<PairNode>,
+    /// Active facet indices adjacent to each pair node, increasing.
+    pub adjacency: Vec<u32>,
+    /// Tributary area of each slave node (length in 2D).
+    pub areas: Vec<f32>,
+    /// Whether friction work is compiled in.
+    pub friction: bool,
+    /// Parameters except the increment and the reference increment.
+    pub params: PenaltyParams,
+}
+
+impl PenaltySetup {
+    /// Builds the setup of pair `id` whose master surface is `master` and slaves `slaves`.
+    pub fn new(model: &Model, id: PairId, master: &MasterSurface, slaves: &[u32]) -> Result<Self> {
+        let pair: &Pair = model.pair(id)?;
+        let crate::model::Enforce::Penalty(pen) = &pair.enforce;
+        let areas: Vec<f32> = match model.node_set_areas(pair.slave)? {
+            Some(a) => a.iter().map(|&x| x as f32).collect(),
+            None => vec![master.mean_facet_area() as f32; slaves.len()],
+        };
+        // active index of each surface facet
+        let mut active_index = vec![u32::MAX; master.facets.len()];
+        for (k, &f) in master.active.iter().enumerate() {
+            active_index[f as usize] = k as u32;
+        }
+        let mut pair_nodes = Vec::new();
+        let mut adjacency = Vec::new();
+        let mut slave_of = std::collections::HashMap::new();
+        for (i, &s) in slaves.iter().enumerate() {
+            slave_of.insert(s, i as u32);
+        }
+        let mut push = |node: u32, slave: u32, adjacency: &mut Vec<u32>| {
+            let start = adjacency.len() as u32;
+            adjacency.extend(
+                master
+                    .facets_of_node(node)
+                    .iter()
+                    .map(|&f| active_index[f as usize]),
+            );
+            pair_nodes.push(PairNode {
+                node,
+                slave,
+                adj_start: start,
+                adj_end: adjacency.len() as u32,
+            });
+        };
+        for (i, &s) in slaves.iter().enumerate() {
+            push(s, i as u32, &mut adjacency);
+        }
+        for n in master.nodes() {
+            if !slave_of.contains_key(&n) {
+                push(n, NO_SLAVE, &mut adjacency);
+            }
+        }
+        Ok(Self {
+            pair_nodes,
+            adjacency,
+            areas,
+            friction: !matches!(pair.friction, Friction::Frictionless),
+            params: base_params(pen, &pair.friction, slaves.len(), master.active.len()),
+        })
+    }
+
+    /// The parameters of one increment `dt` with reference increment `dt_ref`.
+    pub fn params(&self, dt: f64, dt_ref: f64) -> PenaltyParams {
+        let mut p = self.params;
+        p.n_pair_nodes = self.pair_nodes.len() as u32;
+        p.dt = dt as f32;
+        p.dt_ref = dt_ref as f32;
+        p
+    }
+
+    /// The initial per-slave state: no friction force, the tributary area.
+    pub fn initial_state(&self) -> Vec<SlaveState> {
+        self.areas
+            .iter()
+            .map(|&a| SlaveState {
+                tangential_area: [0.0, 0.0, 0.0, a],
+                history: [0.0; 4],
+            })
+            .collect()
+    }
+}
+
+fn base_params(
+    pen: &Penalty,
+    friction: &Friction,
+    n_slaves: usize,
+    n_facets: usize,
+) -> PenaltyParams {
+    let mut p = PenaltyParams {
+        n_slaves: n_slaves as u32,
+        n_pair_nodes: 0,
+        n_facets: n_facets as u32,
+        law: LAW_LINEAR,
+        stiffness_mode: STIFFNESS_AUTO,
+        table_len: 0,
+        _pad0: [0; 2],
+        stiffness: 1.0,
+        modulus: 0.0,
+        dt: 0.0,
+        dt_ref: 0.0,
+        damping: pen.damping as f32,
+        mu: 0.0,
+        mu_kinetic: 0.0,
+        decay: 0.0,
+        stick_stiffness: 1.0,
+        clearance: 0.0,
+        pressure: 0.0,
+        _pad1: 0.0,
+        table: [[0.0; 4]; 8],
+    };
+    match pen.stiffness {
+        Stiffness::Auto { scale } => p.stiffness = scale as f32,
+        Stiffness::Modulus { modulus, scale } => {
+            p.stiffness_mode = STIFFNESS_MODULUS;
+            p.stiffness = scale as f32;
+            p.modulus = modulus as f32;
+        }
+        Stiffness::Absolute(k) => {
+            p.stiffness_mode = STIFFNESS_ABSOLUTE;
+            p.stiffness = k as f32;
+        }
+    }
+    match &pen.law {
+        PressureOverclosure::Linear => {}
+        PressureOverclosure::Exponential {
+            clearance,
+            pressure,
+        } => {
+            p.law = LAW_EXPONENTIAL;
+            p.clearance = *clearance as f32;
+            p.pressure = *pressure as f32;
+        }
+        PressureOverclosure::Tabular(t) => {
+            p.law = LAW_TABULAR;
+            p.table_len = t.len() as u32;
+            for (k, (h, pr)) in t.iter().enumerate() {
+                p.table[k / 2][2 * (k % 2)] = *h as f32;
+                p.table[k / 2][2 * (k % 2) + 1] = *pr as f32;
+            }
+        }
+    }
+    if let Friction::Coulomb {
+        mu,
+        mu_kinetic,
+        decay,
+        stick_stiffness,
+    } = *friction
+    {
+        p.mu = mu as f32;
+        p.mu_kinetic = mu_kinetic as f32;
+        p.decay = decay as f32;
+        p.stick_stiffness = stick_stiffness as f32;
+    }
+    p
+}
