@@ -149,18 +149,18 @@ fn collapsed_quad_edge_has_a_normal_and_no_nan() {
 
 #[test]
 fn tangent_directions_follow_the_convention() {
-    let n = V3::new(0.0, 0.0, 1.0);
+    let n = V3::<f64>::new(0.0, 0.0, 1.0);
     let (t1, t2) = tangent_directions(n);
     assert!((t1.x - 1.0).abs() < 1e-15 && (t2.y - 1.0).abs() < 1e-15);
     // normal along x: t1 from the z axis
-    let (t1, t2) = tangent_directions(V3::new(1.0, 0.0, 0.0));
-    assert_eq!(t1, V3::new(0.0, 0.0, 1.0));
-    assert_eq!(t2, V3::new(0.0, -1.0, 0.0));
+    let (t1, t2) = tangent_directions(V3::<f64>::new(1.0, 0.0, 0.0));
+    assert_eq!(t1, V3::<f64>::new(0.0, 0.0, 1.0));
+    assert_eq!(t2, V3::<f64>::new(0.0, -1.0, 0.0));
     // just outside 0.1° of x: still the x axis
     let a = 0.2f64.to_radians();
-    let (t1, _) = tangent_directions(V3::new(a.cos(), a.sin(), 0.0));
+    let (t1, _) = tangent_directions(V3::<f64>::new(a.cos(), a.sin(), 0.0));
     assert!(t1.x.abs() > 0.0 && t1.z == 0.0);
-    for n in [V3::new(0.3, -0.4, 0.866), V3::new(-0.6, 0.0, 0.8)] {
+    for n in [V3::<f64>::new(0.3, -0.4, 0.866), V3::<f64>::new(-0.6, 0.0, 0.8)] {
         let n = n.normalize_or_zero();
         let (t1, t2) = tangent_directions(n);
         assert!(t1.dot(n).abs() < 1e-12 && t2.dot(n).abs() < 1e-12 && t1.dot(t2).abs() < 1e-12);

@@ -53,11 +53,11 @@ fn every_shader_file_is_embedded_and_mirrored() {
     for entry in std::fs::read_dir(dir.join("shaders")).unwrap() {
         let path = entry.unwrap().path();
         let stem = path.file_stem().unwrap().to_str().unwrap().to_string();
-        if stem == "common" {
+        if stem.ends_with("common") {
             continue;
         }
         assert!(
-            KERNELS.iter().any(|(s, _)| *s == stem),
+            KERNELS.iter().any(|(s, _, _)| *s == stem),
             "shaders/{stem}.wgsl is not in gpu::shaders::KERNELS"
         );
         assert!(
@@ -133,4 +133,37 @@ fn wgsl_twins_match_rust() {
         "QUAD_CONVERGED: f32 = {:e}",
         abut::geometry::QUAD_CONVERGED
     )));
+}
+
+#[test]
+fn penalty_twins_match_rust() {
+    use abut::penalty::layout::*;
+    let m = parse("penalty");
+    assert_eq!(struct_size(&m, "PenaltyParams") as usize, std::mem::size_of::<PenaltyParams>());
+    assert_eq!(struct_size(&m, "SlaveState") as usize, std::mem::size_of::<SlaveState>());
+    assert_eq!(struct_size(&m, "ContactOut") as usize, std::mem::size_of::<ContactOut>());
+    for (name, v) in [
+        ("NO_SLAVE", NO_SLAVE),
+        ("CSTATUS_OPEN", CSTATUS_OPEN),
+        ("CSTATUS_STICK", CSTATUS_STICK),
+        ("CSTATUS_SLIP", CSTATUS_SLIP),
+        ("LAW_LINEAR", LAW_LINEAR),
+        ("LAW_EXPONENTIAL", LAW_EXPONENTIAL),
+        ("LAW_TABULAR", LAW_TABULAR),
+        ("STIFFNESS_AUTO", STIFFNESS_AUTO),
+        ("STIFFNESS_MODULUS", STIFFNESS_MODULUS),
+        ("STIFFNESS_ABSOLUTE", STIFFNESS_ABSOLUTE),
+        ("STATUS_DT_STABLE", abut::search::layout::STATUS_DT_STABLE as u32),
+        ("STATUS_DT_APPROACH", abut::search::layout::STATUS_DT_APPROACH as u32),
+        ("STATUS_ACTIVE", abut::search::layout::STATUS_ACTIVE as u32),
+        ("STATUS_SLIPPING", abut::search::layout::STATUS_SLIPPING as u32),
+    ] {
+        assert_eq!(constant_u32(&m, name), v, "{name}");
+    }
+    let (_, c) = m.constants.iter().find(|(_, c)| c.name.as_deref() == Some("NO_LIMIT")).unwrap();
+    match m.global_expressions[c.init] {
+        naga::Expression::Literal(naga::Literal::F32(v)) => assert_eq!(v, NO_LIMIT),
+        ref e => panic!("NO_LIMIT is {e:?}"),
+    }
+    assert_eq!(m.overrides.iter().filter(|(_, o)| o.name.as_deref() == Some("FRICTION")).count(), 1);
 }
