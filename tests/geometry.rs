@@ -160,7 +160,10 @@ fn tangent_directions_follow_the_convention() {
     let a = 0.2f64.to_radians();
     let (t1, _) = tangent_directions(V3::<f64>::new(a.cos(), a.sin(), 0.0));
     assert!(t1.x.abs() > 0.0 && t1.z == 0.0);
-    for n in [V3::<f64>::new(0.3, -0.4, 0.866), V3::<f64>::new(-0.6, 0.0, 0.8)] {
+    for n in [
+        V3::<f64>::new(0.3, -0.4, 0.866),
+        V3::<f64>::new(-0.6, 0.0, 0.8),
+    ] {
         let n = n.normalize_or_zero();
         let (t1, t2) = tangent_directions(n);
         assert!(t1.dot(n).abs() < 1e-12 && t2.dot(n).abs() < 1e-12 && t1.dot(t2).abs() < 1e-12);

@@ -139,9 +139,18 @@ fn wgsl_twins_match_rust() {
 fn penalty_twins_match_rust() {
     use abut::penalty::layout::*;
     let m = parse("penalty");
-    assert_eq!(struct_size(&m, "PenaltyParams") as usize, std::mem::size_of::<PenaltyParams>());
-    assert_eq!(struct_size(&m, "SlaveState") as usize, std::mem::size_of::<SlaveState>());
-    assert_eq!(struct_size(&m, "ContactOut") as usize, std::mem::size_of::<ContactOut>());
+    assert_eq!(
+        struct_size(&m, "PenaltyParams") as usize,
+        std::mem::size_of::<PenaltyParams>()
+    );
+    assert_eq!(
+        struct_size(&m, "SlaveState") as usize,
+        std::mem::size_of::<SlaveState>()
+    );
+    assert_eq!(
+        struct_size(&m, "ContactOut") as usize,
+        std::mem::size_of::<ContactOut>()
+    );
     for (name, v) in [
         ("NO_SLAVE", NO_SLAVE),
         ("CSTATUS_OPEN", CSTATUS_OPEN),
@@ -153,17 +162,36 @@ fn penalty_twins_match_rust() {
         ("STIFFNESS_AUTO", STIFFNESS_AUTO),
         ("STIFFNESS_MODULUS", STIFFNESS_MODULUS),
         ("STIFFNESS_ABSOLUTE", STIFFNESS_ABSOLUTE),
-        ("STATUS_DT_STABLE", abut::search::layout::STATUS_DT_STABLE as u32),
-        ("STATUS_DT_APPROACH", abut::search::layout::STATUS_DT_APPROACH as u32),
+        (
+            "STATUS_DT_STABLE",
+            abut::search::layout::STATUS_DT_STABLE as u32,
+        ),
+        (
+            "STATUS_DT_APPROACH",
+            abut::search::layout::STATUS_DT_APPROACH as u32,
+        ),
         ("STATUS_ACTIVE", abut::search::layout::STATUS_ACTIVE as u32),
-        ("STATUS_SLIPPING", abut::search::layout::STATUS_SLIPPING as u32),
+        (
+            "STATUS_SLIPPING",
+            abut::search::layout::STATUS_SLIPPING as u32,
+        ),
     ] {
         assert_eq!(constant_u32(&m, name), v, "{name}");
     }
-    let (_, c) = m.constants.iter().find(|(_, c)| c.name.as_deref() == Some("NO_LIMIT")).unwrap();
+    let (_, c) = m
+        .constants
+        .iter()
+        .find(|(_, c)| c.name.as_deref() == Some("NO_LIMIT"))
+        .unwrap();
     match m.global_expressions[c.init] {
         naga::Expression::Literal(naga::Literal::F32(v)) => assert_eq!(v, NO_LIMIT),
         ref e => panic!("NO_LIMIT is {e:?}"),
     }
-    assert_eq!(m.overrides.iter().filter(|(_, o)| o.name.as_deref() == Some("FRICTION")).count(), 1);
+    assert_eq!(
+        m.overrides
+            .iter()
+            .filter(|(_, o)| o.name.as_deref() == Some("FRICTION"))
+            .count(),
+        1
+    );
 }
