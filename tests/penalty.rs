@@ -140,9 +140,17 @@ fn gpu_matches_cpu_forces_and_outputs_and_conserves_momentum() {
             for (step, ((rc, oc), (rg, og))) in cpu.iter().zip(&gpu).enumerate() {
                 let (sum, mag) = momentum(&rg.forces);
                 for a in 0..3 {
-                    assert!(sum[a].abs() <= 1e-5 * mag, "{what} {g}: momentum {sum:?} of {mag}");
+                    assert!(
+                        sum[a].abs() <= 1e-5 * mag,
+                        "{what} {g}: momentum {sum:?} of {mag}"
+                    );
                 }
-                let worst = rc.forces.iter().zip(&rg.forces).map(|(a, b)| (0..3).map(|k| (a[k] - b[k]).abs()).fold(0.0, f64::max)).fold(0.0, f64::max);
+                let worst = rc
+                    .forces
+                    .iter()
+                    .zip(&rg.forces)
+                    .map(|(a, b)| (0..3).map(|k| (a[k] - b[k]).abs()).fold(0.0, f64::max))
+                    .fold(0.0, f64::max);
                 eprintln!("{what} {g} step {step}: largest force difference {worst:.3e}");
                 let scale = rc
                     .forces
