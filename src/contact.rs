@@ -3,8 +3,11 @@
 use crate::cpu::CpuPenalty;
 use crate::device::{Device, DeviceKind};
 use crate::error::{Error, Result};
+use crate::geometry::{closest_on_facet, V3};
 use crate::gpu::GpuPenalty;
+use crate::kinematic::{facets_from, meshed_pass, rigid_pass, BodyState, SlaveCorrection, PASSES};
 use crate::model::{validate_positions, Model, PairId};
+use crate::model::{BodyId, Enforce, MasterSurface, PressureOverclosure, RigidBody, RigidPairId};
 use crate::penalty::layout::{ContactOut, CSTATUS_OPEN, CSTATUS_SLIP, CSTATUS_STICK, NO_LIMIT};
 use crate::penalty::PenaltySetup;
 use crate::search::layout::{STATUS_ACTIVE, STATUS_DT_APPROACH, STATUS_DT_STABLE, STATUS_SLIPPING};
@@ -84,9 +87,66 @@ struct PairRun {
     output: PairOutput,
 }
 
-/// Search and penalty enforcement of every pair of a model, once per increment.
+/// A kinematic pair against a meshed master (pure or balanced).
+struct KinematicRun {
+    id: PairId,
+    search: GlobalSearch,
+    /// Balanced: the master-on-slave search, its slave surface, and the weight of pass one.
+    back: Option<(GlobalSearch, MasterSurface, f64)>,
+    master: MasterSurface,
+    slaves: Vec<u32>,
+    areas: Vec<f64>,
+    law: Option<PressureOverclosure>,
+    output: PairOutput,
+}
+
+/// A kinematic pair against a rigid body's analytical surface.
+struct RigidRun {
+    id: RigidPairId,
+    body: BodyId,
+    spec: RigidBody,
+    slaves: Vec<u32>,
+    areas: Vec<f64>,
+    law: Option<PressureOverclosure>,
+    output: PairOutput,
+}
+
+/// What one kinematic increment did.
+#[derive(Clone, Debug, Default)]
+pub struct KinematicReport {
+    /// Slave nodes corrected (over all kinematic and rigid pairs, first pass).
+    pub active: usize,
+    /// Largest overclosure before the correction.
+    pub max_overclosure: f64,
+    /// Largest overclosure left after it, measured again on the corrected positions (hard
+    /// contact: round-off; softened: the law's equilibrium overclosure).
+    pub max_overclosure_after: f64,
+    /// Change of kinetic energy made by the corrections (negative: the energy kinematic contact
+    /// dissipates at impact).
+    pub kinetic_energy_change: f64,
+    /// Sum over slaves of the resisting force magnitudes (first pass).
+    pub total_force: f64,
+}
+
+/// The strain-free adjustment of initially overclosed slave nodes.
+#[derive(Clone, Debug, Default)]
+pub struct OverclosureReport {
+    /// (node, distance moved) of every node moved.
+    pub moved: Vec<(u32, f64)>,
+    /// Largest distance moved.
+    pub max_distance: f64,
+    /// Kinetic energy the first kinematic increment would have injected had the overclosure
+    /// been resolved then, Σ ½·m·(h/dt)²: the cost the adjustment avoids.
+    pub energy_avoided: f64,
+}
+
+/// Search and enforcement of every pair of a model, once per increment.
 pub struct Contact {
     pairs: Vec<PairRun>,
+    kinematic: Vec<KinematicRun>,
+    rigid: Vec<RigidRun>,
+    masses: Vec<f64>,
+    kin_report: KinematicReport,
     dim: u32,
     n_nodes: usize,
     dt_ref: Option<f64>,
@@ -98,29 +158,93 @@ impl Contact {
     /// Builds the passes every pair of `model` needs on `device` (pipelines compiled, buffers
     /// made; a frictionless pair compiles no friction work).
     pub fn new(device: &Device, model: &Model) -> Result<Self> {
-        if model.pairs().is_empty() {
+        if model.pairs().is_empty() && model.rigid_pairs().is_empty() {
             return Err(Error::Empty {
                 what: "the model's contact pairs".into(),
             });
         }
         let n_nodes = model.positions().len();
         let mut pairs = Vec::new();
+        let mut kinematic = Vec::new();
         for k in 0..model.pairs().len() {
             let id = PairId(k);
+            let pair = model.pair(id)?;
             let search = GlobalSearch::new(device, model, id)?;
-            let slaves = model.node_set(model.pair(id)?.slave)?.to_vec();
-            let setup = PenaltySetup::new(model, id, search.master(), &slaves)?;
-            let exec = match device.kind() {
-                DeviceKind::Gpu(ctx) => {
-                    PenaltyExec::Gpu(Box::new(GpuPenalty::new(ctx.clone(), &setup, n_nodes)?))
+            let slaves = model.node_set(pair.slave)?.to_vec();
+            match &pair.enforce {
+                Enforce::Penalty(_) => {
+                    let setup = PenaltySetup::new(model, id, search.master(), &slaves)?;
+                    let exec = match device.kind() {
+                        DeviceKind::Gpu(ctx) => PenaltyExec::Gpu(Box::new(GpuPenalty::new(
+                            ctx.clone(),
+                            &setup,
+                            n_nodes,
+                        )?)),
+                        DeviceKind::Cpu => PenaltyExec::Cpu(CpuPenalty::new(&setup, n_nodes)),
+                    };
+                    pairs.push(PairRun {
+                        id,
+                        search,
+                        setup,
+                        exec,
+                        output: PairOutput {
+                            slaves,
+                            ..Default::default()
+                        },
+                    });
                 }
-                DeviceKind::Cpu => PenaltyExec::Cpu(CpuPenalty::new(&setup, n_nodes)),
+                Enforce::Kinematic(kin) => {
+                    let master = search.master().clone();
+                    let areas = slave_areas(model, pair.slave, &master)?;
+                    let back = match pair.balanced {
+                        Some((surface, w)) => {
+                            let slave_surface = model.surface(surface)?.clone();
+                            let nodes = master.nodes();
+                            let radius = search.radius();
+                            Some((
+                                GlobalSearch::from_parts(
+                                    device,
+                                    model,
+                                    slave_surface.clone(),
+                                    nodes,
+                                    radius,
+                                )?,
+                                slave_surface,
+                                w,
+                            ))
+                        }
+                        None => None,
+                    };
+                    kinematic.push(KinematicRun {
+                        id,
+                        search,
+                        back,
+                        master,
+                        slaves: slaves.clone(),
+                        areas,
+                        law: kin.softened.clone(),
+                        output: PairOutput {
+                            slaves,
+                            ..Default::default()
+                        },
+                    });
+                }
+            }
+        }
+        let mut rigid = Vec::new();
+        for (k, rp) in model.rigid_pairs().iter().enumerate() {
+            let slaves = model.node_set(rp.slave)?.to_vec();
+            let areas = match model.node_set_areas(rp.slave)? {
+                Some(a) => a.to_vec(),
+                None => vec![1.0; slaves.len()],
             };
-            pairs.push(PairRun {
-                id,
-                search,
-                setup,
-                exec,
+            rigid.push(RigidRun {
+                id: RigidPairId(k),
+                body: rp.body,
+                spec: model.body(rp.body)?.clone(),
+                slaves: slaves.clone(),
+                areas,
+                law: rp.softened.clone(),
                 output: PairOutput {
                     slaves,
                     ..Default::default()
@@ -129,6 +253,10 @@ impl Contact {
         }
         Ok(Self {
             pairs,
+            kinematic,
+            rigid,
+            masses: model.masses().to_vec(),
+            kin_report: KinematicReport::default(),
             dim: model.dim(),
             n_nodes,
             dt_ref: None,
@@ -234,16 +362,341 @@ impl Contact {
         Ok(&self.report)
     }
 
-    /// The contact outputs of each pair after the last increment (empty before the first, or
-    /// when not requested).
+    /// The contact outputs of each penalty and kinematic pair after its last increment (empty
+    /// before the first; penalty outputs only when requested).
     pub fn outputs(&self) -> Vec<(PairId, &PairOutput)> {
-        self.pairs.iter().map(|p| (p.id, &p.output)).collect()
+        let mut v: Vec<(PairId, &PairOutput)> =
+            self.pairs.iter().map(|p| (p.id, &p.output)).collect();
+        v.extend(self.kinematic.iter().map(|p| (p.id, &p.output)));
+        v.sort_by_key(|(id, _)| id.0);
+        v
     }
 
-    /// The report of the last increment.
-    pub fn report(&self) -> &StepReport {
-        &self.report
+    /// The contact outputs of each rigid pair after the last kinematic increment.
+    pub fn rigid_outputs(&self) -> Vec<(RigidPairId, &PairOutput)> {
+        self.rigid.iter().map(|p| (p.id, &p.output)).collect()
     }
+
+    /// One kinematic increment (seed: "Kinematic contact algorithm"): `x` are the positions
+    /// the host predicted for the end of the increment without contact and `v` the velocities
+    /// that took it there (mid-increment, central differences); `bodies` the predicted states
+    /// of the model's rigid bodies (index = [`BodyId`]). Every kinematic pair is searched at
+    /// `x` and its penetrating slave nodes corrected (and the masters with them); `x`, `v` and
+    /// `bodies` are corrected in place. Pairs are corrected in the order they were added.
+    pub fn kinematic_step(
+        &mut self,
+        x: &mut [[f64; 3]],
+        v: &mut [[f64; 3]],
+        bodies: &mut [BodyState],
+        dt: f64,
+    ) -> Result<&KinematicReport> {
+        positive_dt(dt)?;
+        for (what, a) in [
+            ("positions (one per model node)", x.len()),
+            ("velocities (one per model node)", v.len()),
+        ] {
+            if a != self.n_nodes {
+                return Err(Error::LengthMismatch {
+                    what,
+                    expected: self.n_nodes,
+                    got: a,
+                });
+            }
+        }
+        validate_positions(x, 0, 3)?;
+        if let Some(r) = self.rigid.iter().find(|r| r.body.0 >= bodies.len()) {
+            return Err(Error::IndexOutOfRange {
+                what: "rigid body states".into(),
+                index: r.body.0 as u64,
+                len: bodies.len(),
+            });
+        }
+        let ke = |v: &[[f64; 3]], masses: &[f64]| -> f64 {
+            v.iter()
+                .zip(masses)
+                .map(|(v, m)| 0.5 * m * (v[0] * v[0] + v[1] * v[1] + v[2] * v[2]))
+                .sum()
+        };
+        let ke_body = |b: &[BodyState], spec: &[(BodyId, RigidBody)]| -> f64 {
+            spec.iter()
+                .map(|(id, s)| {
+                    let st = &b[id.0];
+                    0.5 * s.mass * st.velocity.iter().map(|c| c * c).sum::<f64>()
+                })
+                .sum()
+        };
+        let specs: Vec<(BodyId, RigidBody)> = self
+            .rigid
+            .iter()
+            .map(|r| (r.body, r.spec.clone()))
+            .collect();
+        let before = ke(v, &self.masses) + ke_body(bodies, &specs);
+        let mut report = KinematicReport::default();
+        let masses = &self.masses;
+        for kr in &mut self.kinematic {
+            let result = kr.search.run(x)?;
+            let facets = facets_from(&result);
+            let back = match &mut kr.back {
+                Some((search, surface, w)) => {
+                    let r = search.run(x)?;
+                    Some((
+                        facets_from(&r),
+                        surface.clone(),
+                        *w,
+                        search.slaves().to_vec(),
+                    ))
+                }
+                None => None,
+            };
+            let mut first: Option<Vec<SlaveCorrection>> = None;
+            for _ in 0..PASSES {
+                let mut dx = vec![[0.0; 3]; x.len()];
+                let c = match &back {
+                    None => meshed_pass(
+                        &kr.master,
+                        masses,
+                        x,
+                        &kr.slaves,
+                        &facets,
+                        &kr.areas,
+                        kr.law.as_ref(),
+                        dt,
+                        &mut dx,
+                    ),
+                    Some((bf, surface, w, nodes)) => {
+                        let mut dx_a = vec![[0.0; 3]; x.len()];
+                        let c = meshed_pass(
+                            &kr.master,
+                            masses,
+                            x,
+                            &kr.slaves,
+                            &facets,
+                            &kr.areas,
+                            kr.law.as_ref(),
+                            dt,
+                            &mut dx_a,
+                        );
+                        let mut dx_b = vec![[0.0; 3]; x.len()];
+                        let areas_b = vec![surface.mean_facet_area(); nodes.len()];
+                        meshed_pass(
+                            surface,
+                            masses,
+                            x,
+                            nodes,
+                            bf,
+                            &areas_b,
+                            kr.law.as_ref(),
+                            dt,
+                            &mut dx_b,
+                        );
+                        for i in 0..x.len() {
+                            for a in 0..3 {
+                                dx[i][a] = w * dx_a[i][a] + (1.0 - w) * dx_b[i][a];
+                            }
+                        }
+                        c
+                    }
+                };
+                for i in 0..x.len() {
+                    for a in 0..3 {
+                        x[i][a] += dx[i][a];
+                        v[i][a] += dx[i][a] / dt;
+                    }
+                }
+                first.get_or_insert(c);
+            }
+            let c = first.unwrap_or_default();
+            // what is left, measured on the corrected positions
+            let mut probe = vec![[0.0; 3]; x.len()];
+            let after = meshed_pass(
+                &kr.master, masses, x, &kr.slaves, &facets, &kr.areas, None, dt, &mut probe,
+            );
+            let left = after.iter().map(|a| a.overclosure).fold(0.0f64, f64::max);
+            report.max_overclosure_after = report.max_overclosure_after.max(left);
+            tally(&mut report, &c);
+            fill_kinematic_output(&mut kr.output, &c, &kr.areas, Some(result));
+        }
+        for rr in &mut self.rigid {
+            let body = &mut bodies[rr.body.0];
+            let mut first: Option<Vec<SlaveCorrection>> = None;
+            for _ in 0..PASSES {
+                let c = rigid_pass(
+                    &rr.spec.surface,
+                    rr.spec.mass,
+                    &rr.spec.inertia,
+                    body,
+                    masses,
+                    x,
+                    v,
+                    &rr.slaves,
+                    &rr.areas,
+                    rr.law.as_ref(),
+                    dt,
+                )?;
+                first.get_or_insert(c);
+            }
+            let c = first.unwrap_or_default();
+            let mut xs = x.to_vec();
+            let mut vs = v.to_vec();
+            let mut probe = *body;
+            let after = rigid_pass(
+                &rr.spec.surface,
+                rr.spec.mass,
+                &rr.spec.inertia,
+                &mut probe,
+                masses,
+                &mut xs,
+                &mut vs,
+                &rr.slaves,
+                &rr.areas,
+                None,
+                dt,
+            )?;
+            let left = after.iter().map(|a| a.overclosure).fold(0.0f64, f64::max);
+            report.max_overclosure_after = report.max_overclosure_after.max(left);
+            tally(&mut report, &c);
+            fill_kinematic_output(&mut rr.output, &c, &rr.areas, None);
+        }
+        report.kinetic_energy_change = ke(v, &self.masses) + ke_body(bodies, &specs) - before;
+        self.kin_report = report;
+        Ok(&self.kin_report)
+    }
+
+    /// Moves every initially overclosed slave node of every pair (penalty, kinematic, rigid)
+    /// onto its master, strain-free, as Abaqus adjusts initial positions: call once with the
+    /// initial positions (and the first increment, for the energy report). Velocities are
+    /// untouched.
+    pub fn adjust_initial_overclosure(
+        &mut self,
+        x: &mut [[f64; 3]],
+        bodies: &[BodyState],
+        dt: f64,
+    ) -> Result<OverclosureReport> {
+        positive_dt(dt)?;
+        if x.len() != self.n_nodes {
+            return Err(Error::LengthMismatch {
+                what: "positions (one per model node)",
+                expected: self.n_nodes,
+                got: x.len(),
+            });
+        }
+        validate_positions(x, 0, 3)?;
+        let mut rep = OverclosureReport::default();
+        let mut searches: Vec<&mut GlobalSearch> =
+            self.pairs.iter_mut().map(|p| &mut p.search).collect();
+        searches.extend(self.kinematic.iter_mut().map(|k| &mut k.search));
+        let masses = &self.masses;
+        let record = |rep: &mut OverclosureReport, node: u32, h: f64| {
+            rep.moved.push((node, h));
+            rep.max_distance = rep.max_distance.max(h);
+            rep.energy_avoided += 0.5 * masses[node as usize] * (h / dt) * (h / dt);
+        };
+        for search in searches {
+            let result = search.run(x)?;
+            let master = search.master();
+            for (&s, c) in result.slaves.iter().zip(&result.contacts) {
+                let Some(c) = c else { continue };
+                let nodes = master.facets[c.facet as usize].nodes();
+                let xs: Vec<V3<f64>> = nodes
+                    .iter()
+                    .map(|&n| V3::from_array(x[n as usize]))
+                    .collect();
+                let p = V3::from_array(x[s as usize]);
+                let pr = closest_on_facet(p, &xs);
+                let gap = pr.gap(p);
+                if gap < 0.0 {
+                    let moved = p - pr.normal * gap;
+                    x[s as usize] = moved.to_array();
+                    record(&mut rep, s, -gap);
+                }
+            }
+        }
+        for rr in &self.rigid {
+            let Some(b) = bodies.get(rr.body.0) else {
+                return Err(Error::IndexOutOfRange {
+                    what: "rigid body states".into(),
+                    index: rr.body.0 as u64,
+                    len: bodies.len(),
+                });
+            };
+            let xb = V3::from_array(b.position);
+            for &s in &rr.slaves {
+                let p = V3::from_array(x[s as usize]);
+                let local = crate::kinematic::to_body(&b.rotation, p - xb);
+                let (gap, nb) = rr.spec.surface.gap(local);
+                if gap < 0.0 {
+                    let n = crate::kinematic::to_model(&b.rotation, nb);
+                    x[s as usize] = (p - n * gap).to_array();
+                    record(&mut rep, s, -gap);
+                }
+            }
+        }
+        Ok(rep)
+    }
+}
+
+fn slave_areas(
+    model: &Model,
+    set: crate::model::NodeSetId,
+    master: &MasterSurface,
+) -> Result<Vec<f64>> {
+    Ok(match model.node_set_areas(set)? {
+        Some(a) => a.to_vec(),
+        None => vec![master.mean_facet_area(); model.node_set(set)?.len()],
+    })
+}
+
+fn tally(report: &mut KinematicReport, c: &[SlaveCorrection]) {
+    for s in c {
+        if s.force > 0.0 {
+            report.active += 1;
+            report.total_force += s.force;
+            report.max_overclosure = report.max_overclosure.max(s.overclosure);
+        }
+    }
+}
+
+fn fill_kinematic_output(
+    o: &mut PairOutput,
+    c: &[SlaveCorrection],
+    areas: &[f64],
+    search: Option<SearchResult>,
+) {
+    o.cstatus = c
+        .iter()
+        .map(|s| {
+            Some(if s.force > 0.0 {
+                ContactStatus::Slip
+            } else {
+                ContactStatus::Open
+            })
+        })
+        .collect();
+    o.copen = c
+        .iter()
+        .map(|s| if s.force > 0.0 { -s.target } else { f64::NAN })
+        .collect();
+    let applied_normal =
+        |s: &SlaveCorrection| (0..3).map(|a| s.applied[a] * s.normal[a]).sum::<f64>();
+    o.cpress = c
+        .iter()
+        .zip(areas)
+        .map(|(s, a)| applied_normal(s) / a)
+        .collect();
+    o.cshear1 = vec![0.0; c.len()];
+    o.cshear2 = vec![0.0; c.len()];
+    o.normal = c.iter().map(|s| s.normal).collect();
+    o.force = c.iter().map(|s| s.applied).collect();
+    o.cfn = [0.0; 3];
+    for f in &o.force {
+        for a in 0..3 {
+            o.cfn[a] += f[a];
+        }
+    }
+    o.cfs = [0.0; 3];
+    o.contact_energy = c.iter().map(|s| s.energy).sum();
+    o.frictional_dissipation = 0.0;
+    o.search = search;
 }
 
 fn positive_dt(dt: f64) -> Result<()> {

@@ -7,16 +7,21 @@ pub mod device;
 pub mod error;
 pub mod geometry;
 pub mod gpu;
+pub mod kinematic;
 pub mod mesh;
 pub mod model;
 pub mod penalty;
 pub mod search;
 
-pub use contact::{Contact, ContactStatus, PairOutput, StepReport};
+pub use contact::{
+    Contact, ContactStatus, KinematicReport, OverclosureReport, PairOutput, StepReport,
+};
 pub use device::Device;
 pub use error::{Error, Result};
+pub use kinematic::BodyState;
 pub use model::{
-    Enforce, Facet, Friction, Model, NodeRange, NodeSetId, Pair, PairId, Penalty,
-    PressureOverclosure, Stiffness, Surface, SurfaceId,
+    Analytical, BodyId, Enforce, Facet, Friction, Kinematic, Model, NodeRange, NodeSetId, Pair,
+    PairId, Penalty, PressureOverclosure, RigidBody, RigidPair, RigidPairId, Stiffness, Surface,
+    SurfaceId,
 };
 pub use search::{ContactPoint, GlobalSearch, SearchResult, SearchStats};

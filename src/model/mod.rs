@@ -4,11 +4,13 @@
 //! larger one: nothing assumes the model is the world).
 
 mod pair;
+mod rigid;
 mod surface;
 
 pub use pair::{
-    Enforce, Friction, Pair, Penalty, PressureOverclosure, Stiffness, MAX_TABLE_POINTS,
+    Enforce, Friction, Kinematic, Pair, Penalty, PressureOverclosure, Stiffness, MAX_TABLE_POINTS,
 };
+pub use rigid::{Analytical, BodyId, RigidBody, RigidPair, RigidPairId};
 pub use surface::{DegenerateFacet, Facet, MasterSurface, Surface, NO_NODE};
 
 use crate::error::{Error, Result};
@@ -60,6 +62,8 @@ pub struct Model {
     node_sets: Vec<Vec<u32>>,
     node_set_areas: Vec<Option<Vec<f64>>>,
     pairs: Vec<Pair>,
+    bodies: Vec<RigidBody>,
+    rigid_pairs: Vec<RigidPair>,
 }
 
 impl Model {
@@ -82,6 +86,8 @@ impl Model {
             node_sets: Vec::new(),
             node_set_areas: Vec::new(),
             pairs: Vec::new(),
+            bodies: Vec::new(),
+            rigid_pairs: Vec::new(),
         }
     }
 
@@ -206,9 +212,49 @@ impl Model {
     pub fn add_pair(&mut self, pair: Pair) -> Result<PairId> {
         self.node_set(pair.slave)?;
         self.surface(pair.master)?;
+        if let Some((s, _)) = pair.balanced {
+            self.surface(s)?;
+        }
         pair.validate()?;
         self.pairs.push(pair);
         Ok(PairId(self.pairs.len() - 1))
+    }
+
+    /// Adds a rigid body carrying an analytical surface (validated: finite positive mass,
+    /// symmetric positive-definite inertia, surface parameters).
+    pub fn add_rigid_body(&mut self, body: RigidBody) -> Result<BodyId> {
+        body.validate(self.dim)?;
+        self.bodies.push(body);
+        Ok(BodyId(self.bodies.len() - 1))
+    }
+
+    /// Adds a kinematic contact pair of slave nodes against a rigid body's analytical surface.
+    pub fn add_rigid_pair(&mut self, pair: RigidPair) -> Result<RigidPairId> {
+        self.node_set(pair.slave)?;
+        self.body(pair.body)?;
+        if let Some(law) = &pair.softened {
+            law.validate()?;
+        }
+        self.rigid_pairs.push(pair);
+        Ok(RigidPairId(self.rigid_pairs.len() - 1))
+    }
+
+    /// The rigid body `id`.
+    pub fn body(&self, id: BodyId) -> Result<&RigidBody> {
+        self.bodies.get(id.0).ok_or(Error::UnknownId {
+            what: "rigid body",
+            id: id.0,
+        })
+    }
+
+    /// All rigid bodies, in the order added.
+    pub fn bodies(&self) -> &[RigidBody] {
+        &self.bodies
+    }
+
+    /// All rigid pairs, in the order added.
+    pub fn rigid_pairs(&self) -> &[RigidPair] {
+        &self.rigid_pairs
     }
 
     /// Node positions, model units.

@@ -17,6 +17,10 @@ pub struct Pair {
     pub enforce: Enforce,
     /// Tangential behaviour.
     pub friction: Friction,
+    /// Balanced master–slave: the slave nodes' own surface and the weight of the
+    /// slave-on-master pass (the master-on-slave pass gets 1 − weight). `None`: pure
+    /// master–slave.
+    pub balanced: Option<(SurfaceId, f64)>,
 }
 
 /// Contact constraint enforcement ("Contact constraint enforcement methods" in the seed).
@@ -24,6 +28,17 @@ pub struct Pair {
 pub enum Enforce {
     /// Penalty springs between slave nodes and master facets, computed on the GPU.
     Penalty(Penalty),
+    /// The kinematic predictor/corrector, run on the host from the search's results.
+    Kinematic(Kinematic),
+}
+
+/// Kinematic enforcement settings.
+#[derive(Clone, Debug, PartialEq, Default)]
+pub struct Kinematic {
+    /// `None`: hard contact (no penetration after the correction). `Some(law)`: softened
+    /// contact, the correction leaves each slave node at the overclosure where the law's
+    /// force balances the resisting force.
+    pub softened: Option<PressureOverclosure>,
 }
 
 impl Default for Enforce {
@@ -102,6 +117,98 @@ pub enum PressureOverclosure {
     Tabular(Vec<(f64, f64)>),
 }
 
+impl PressureOverclosure {
+    /// Checks the law's parameters.
+    pub fn validate(&self) -> Result<()> {
+        let positive = |name: &'static str, v: f64| {
+            if v.is_finite() && v > 0.0 {
+                Ok(())
+            } else {
+                Err(Error::BadParameter {
+                    name,
+                    value: v.to_string(),
+                    expected: "must be finite and positive",
+                })
+            }
+        };
+        match self {
+            Self::Linear => {}
+            Self::Exponential {
+                clearance,
+                pressure,
+            } => {
+                positive("exponential clearance", *clearance)?;
+                positive("exponential pressure", *pressure)?;
+            }
+            Self::Tabular(t) => {
+                if t.len() < 2 || t.len() > MAX_TABLE_POINTS {
+                    return Err(Error::BadParameter {
+                        name: "pressure-overclosure table",
+                        value: format!("{} points", t.len()),
+                        expected: "needs 2 to 16 points",
+                    });
+                }
+                let ok = t
+                    .iter()
+                    .all(|(h, p)| h.is_finite() && p.is_finite() && *p >= 0.0)
+                    && t.windows(2).all(|w| w[1].0 > w[0].0 && w[1].1 >= w[0].1)
+                    && t[0].1 == 0.0;
+                if !ok {
+                    return Err(Error::BadParameter {
+                        name: "pressure-overclosure table",
+                        value: format!("{t:?}"),
+                        expected:
+                            "needs increasing overclosures, non-decreasing pressures, the first 0",
+                    });
+                }
+            }
+        }
+        Ok(())
+    }
+
+    /// Pressure (force per area) and its derivative at overclosure `h` (f64 reference; the
+    /// linear law has no pressure form and gives 0).
+    pub fn pressure(&self, h: f64) -> (f64, f64) {
+        match self {
+            Self::Linear => (0.0, 0.0),
+            Self::Exponential {
+                clearance,
+                pressure,
+            } => {
+                let x = h / clearance + 1.0;
+                if x <= 0.0 {
+                    return (0.0, 0.0);
+                }
+                let e1 = std::f64::consts::E - 1.0;
+                let ex = x.min(60.0).exp();
+                (
+                    pressure / e1 * x * (ex - 1.0),
+                    pressure / (e1 * clearance) * ((ex - 1.0) + x * ex),
+                )
+            }
+            Self::Tabular(t) => {
+                if h <= t[0].0 {
+                    return (0.0, 0.0);
+                }
+                let n = t.len();
+                let k = (0..n - 1).find(|&k| h < t[k + 1].0).unwrap_or(n - 2);
+                let slope = (t[k + 1].1 - t[k].1) / (t[k + 1].0 - t[k].0);
+                (t[k].1 + slope * (h - t[k].0), slope)
+            }
+        }
+    }
+
+    /// Overclosure at which the law starts to push (0 for linear, −clearance for exponential,
+    /// the first table point for tabular).
+    pub fn start(&self) -> f64 {
+        match self {
+            Self::Linear => 0.0,
+            Self::Exponential { clearance, .. } => -clearance,
+            Self::Tabular(t) => t[0].0,
+        }
+    }
+}
+
 /// Points a tabular pressure–overclosure law may have (WGSL: `MAX_TABLE_POINTS`).
 pub const MAX_TABLE_POINTS: usize = 16;
 
@@ -147,7 +254,16 @@ impl Pair {
             search_radius: None,
             enforce: Enforce::default(),
             friction: Friction::Frictionless,
+            balanced: None,
         }
+    }
+
+    /// Makes the pair balanced: `slave_surface` is the surface the slave nodes lie on, and
+    /// the two passes are weighted `weight` (slave on master) and `1 − weight` (master on
+    /// slave); ½ is the usual choice. Kinematic pairs only.
+    pub fn balanced(mut self, slave_surface: SurfaceId, weight: f64) -> Self {
+        self.balanced = Some((slave_surface, weight));
+        self
     }
 
     /// Sets the search radius (model units, finite and positive).
@@ -194,46 +310,54 @@ impl Pair {
         if let Some(r) = self.search_radius {
             positive("search_radius", r)?;
         }
-        let Enforce::Penalty(p) = &self.enforce;
-        match p.stiffness {
-            Stiffness::Auto { scale } => positive("penalty scale", scale)?,
-            Stiffness::Modulus { modulus, scale } => {
-                positive("penalty modulus", modulus)?;
-                positive("penalty scale", scale)?;
+        match &self.enforce {
+            Enforce::Penalty(p) => {
+                match p.stiffness {
+                    Stiffness::Auto { scale } => positive("penalty scale", scale)?,
+                    Stiffness::Modulus { modulus, scale } => {
+                        positive("penalty modulus", modulus)?;
+                        positive("penalty scale", scale)?;
+                    }
+                    Stiffness::Absolute(k) => positive("penalty stiffness", k)?,
+                }
+                non_negative("penalty damping", p.damping)?;
+                p.law.validate()?;
+                if self.balanced.is_some() {
+                    return Err(Error::BadParameter {
+                        name: "balanced",
+                        value: "penalty pair".into(),
+                        expected: "balanced pairs are supported with kinematic enforcement",
+                    });
+                }
             }
-            Stiffness::Absolute(k) => positive("penalty stiffness", k)?,
+            Enforce::Kinematic(k) => {
+                if let Some(law) = &k.softened {
+                    law.validate()?;
+                    if matches!(law, PressureOverclosure::Linear) {
+                        return Err(Error::BadParameter {
+                            name: "softened law",
+                            value: "Linear".into(),
+                            expected:
+                                "softened kinematic contact needs an exponential or tabular law",
+                        });
+                    }
+                }
+                if !matches!(self.friction, Friction::Frictionless) {
+                    return Err(Error::BadParameter {
+                        name: "friction",
+                        value: format!("{:?}", self.friction),
+                        expected: "kinematic pairs are frictionless in this version; use penalty enforcement for friction",
+                    });
+                }
+            }
         }
-        non_negative("penalty damping", p.damping)?;
-        match &p.law {
-            PressureOverclosure::Linear => {}
-            PressureOverclosure::Exponential {
-                clearance,
-                pressure,
-            } => {
-                positive("exponential clearance", *clearance)?;
-                positive("exponential pressure", *pressure)?;
-            }
-            PressureOverclosure::Tabular(t) => {
-                if t.len() < 2 || t.len() > MAX_TABLE_POINTS {
-                    return Err(Error::BadParameter {
-                        name: "pressure-overclosure table",
-                        value: format!("{} points", t.len()),
-                        expected: "needs 2 to 16 points",
-                    });
-                }
-                let ok = t
-                    .iter()
-                    .all(|(h, p)| h.is_finite() && p.is_finite() && *p >= 0.0)
-                    && t.windows(2).all(|w| w[1].0 > w[0].0 && w[1].1 >= w[0].1)
-                    && t[0].1 == 0.0;
-                if !ok {
-                    return Err(Error::BadParameter {
-                        name: "pressure-overclosure table",
-                        value: format!("{t:?}"),
-                        expected:
-                            "needs increasing overclosures, non-decreasing pressures, the first 0",
-                    });
-                }
+        if let Some((_, w)) = self.balanced {
+            if !(w.is_finite() && (0.0..=1.0).contains(&w)) {
+                return Err(Error::BadParameter {
+                    name: "balanced weight",
+                    value: w.to_string(),
+                    expected: "must lie in [0, 1]",
+                });
             }
         }
         if let Friction::Coulomb {

@@ -29,7 +29,13 @@ impl PenaltySetup {
     /// Builds the setup of pair `id` whose master surface is `master` and slaves `slaves`.
     pub fn new(model: &Model, id: PairId, master: &MasterSurface, slaves: &[u32]) -> Result<Self> {
         let pair: &Pair = model.pair(id)?;
-        let crate::model::Enforce::Penalty(pen) = &pair.enforce;
+        let crate::model::Enforce::Penalty(pen) = &pair.enforce else {
+            return Err(crate::error::Error::BadParameter {
+                name: "enforce",
+                value: format!("pair {}", id.0),
+                expected: "a penalty pair",
+            });
+        };
         let areas: Vec<f32> = match model.node_set_areas(pair.slave)? {
             Some(a) => a.iter().map(|&x| x as f32).collect(),
             None => vec![master.mean_facet_area() as f32; slaves.len()],

@@ -140,6 +140,33 @@ impl GlobalSearch {
         let master = model.surface(p.master)?.clone();
         let slaves = model.node_set(p.slave)?.to_vec();
         let radius = p.search_radius.unwrap_or_else(|| master.mean_facet_size());
+        Self::from_parts(device, model, master, slaves, radius)
+    }
+
+    /// A search of the nodes `slaves` against `master` (a surface of `model`) within `radius`
+    /// (e.g. the master-on-slave pass of a balanced pair).
+    pub fn from_parts(
+        device: &Device,
+        model: &Model,
+        master: MasterSurface,
+        slaves: Vec<u32>,
+        radius: f64,
+    ) -> Result<Self> {
+        if slaves.is_empty() {
+            return Err(Error::Empty {
+                what: "slave node list".into(),
+            });
+        }
+        if let Some(&bad) = slaves
+            .iter()
+            .find(|&&s| s as usize >= model.positions().len())
+        {
+            return Err(Error::IndexOutOfRange {
+                what: "slave node".into(),
+                index: bad as u64,
+                len: model.positions().len(),
+            });
+        }
         let executor = match device.kind() {
             DeviceKind::Gpu(ctx) => Executor::Gpu(Box::new(GpuSearch::new(ctx.clone())?)),
             DeviceKind::Cpu => Executor::Cpu(CpuSearch::default()),
@@ -239,6 +266,11 @@ impl GlobalSearch {
             }
         };
         Ok((self.finish(&prepared, raw, entries, regrowths), status))
+    }
+
+    /// The slave nodes searched, in order.
+    pub fn slaves(&self) -> &[u32] {
+        &self.slaves
     }
 
     /// The master surface searched.

@@ -1,0 +1,389 @@
+//! Kinematic contact on the host: the predictor/corrector of the seed ("Kinematic contact
+//! algorithm"), hard or softened, against meshed masters (pure or balanced) and against the
+//! analytical surfaces of rigid bodies. Runs in f64 on the search's facet choices.
+//!
+//! For each penetrating slave node s (overclosure h along the master normal n, at load-transfer
+//! weights w_j), the resisting force that closes it over the increment is
+//! `f_s = m_s·(h − h_s)/dt²` with h_s = 0 (hard) or the overclosure at which the softened law
+//! balances it. Forces `−w_j·f_s·n` and masses `w_j·m_s` go to the master nodes, whose
+//! acceleration correction is `Δa_j = F_j/(m_j + Σ w_j m_s)`; the slave moves by
+//! `(h − h_s)·n + Σ_j w_j·Δa_j·dt²`, so it ends on the corrected master (to first order in the
+//! facet's rotation; the correction is repeated on the corrected geometry, [`PASSES`] times in
+//! all) and the momentum of slave and masters is unchanged. Positions and velocities are
+//! corrected together, `Δv = Δx/dt`. The method does not restrict the stable increment.
+//!
+//! Known behaviour (seed, Figure 38.2.3–1): only slave nodes are kept out of the master; with a
+//! coarse slave mesh, master nodes can still penetrate between slave nodes. Balanced pairs run
+//! the correction both ways and weight the two.
+
+use crate::error::{Error, Result};
+use crate::geometry::{closest_on_facet, V3};
+use crate::model::{Analytical, MasterSurface, PressureOverclosure};
+use crate::search::SearchResult;
+
+/// Correction passes of a meshed pair per increment (the first from the search, the others
+/// re-projecting onto the same facets at the corrected positions).
+pub const PASSES: usize = 3;
+
+/// The host's state of a rigid body: predicted on entry to `kinematic_step`, corrected on exit.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct BodyState {
+    /// Position of the reference point.
+    pub position: [f64; 3],
+    /// Rotation from the body frame to the model frame (rows).
+    pub rotation: [[f64; 3]; 3],
+    /// Velocity of the reference point.
+    pub velocity: [f64; 3],
+    /// Angular velocity (model frame).
+    pub angular_velocity: [f64; 3],
+}
+
+impl BodyState {
+    /// A body at `position`, not rotated, at rest.
+    pub fn at(position: [f64; 3]) -> Self {
+        Self {
+            position,
+            rotation: [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]],
+            velocity: [0.0; 3],
+            angular_velocity: [0.0; 3],
+        }
+    }
+}
+
+/// What one slave node's correction was.
+#[derive(Clone, Copy, Debug, PartialEq, Default)]
+pub struct SlaveCorrection {
+    /// Overclosure before the correction (model length; positive = penetrating).
+    pub overclosure: f64,
+    /// The overclosure the correction aimed at (0 for hard contact).
+    pub target: f64,
+    /// Resisting force `m·(h − h_s)/dt²` along the normal.
+    pub force: f64,
+    /// Normal used.
+    pub normal: [f64; 3],
+    /// Elastic energy of a softened law at the target overclosure (0 for hard contact).
+    pub energy: f64,
+    /// Force the correction actually applied to the slave, `m·Δx/dt²` (model frame): the
+    /// resisting force less what the master's motion took up.
+    pub applied: [f64; 3],
+}
+
+/// Overclosure that balances a softened law: the h' in [start, h] with
+/// `m·(h − h')/dt² = p(h')·A` (bisection; the left side falls and the right side rises with h').
+pub fn softened_target(law: &PressureOverclosure, h: f64, mass: f64, area: f64, dt: f64) -> f64 {
+    let start = law.start();
+    if h <= start {
+        return h;
+    }
+    let (mut lo, mut hi) = (start, h);
+    for _ in 0..100 {
+        let mid = 0.5 * (lo + hi);
+        let g = mass * (h - mid) / (dt * dt) - law.pressure(mid).0 * area;
+        if g > 0.0 {
+            lo = mid;
+        } else {
+            hi = mid;
+        }
+    }
+    0.5 * (lo + hi)
+}
+
+/// Elastic energy per area of a law up to overclosure h (trapezoids on a fine partition for
+/// the exponential law, exact for tabular).
+pub fn law_energy(law: &PressureOverclosure, h: f64) -> f64 {
+    let start = law.start();
+    if h <= start {
+        return 0.0;
+    }
+    let n = 200;
+    let dh = (h - start) / n as f64;
+    (0..n)
+        .map(|k| {
+            let a = start + k as f64 * dh;
+            0.5 * (law.pressure(a).0 + law.pressure(a + dh).0) * dh
+        })
+        .sum()
+}
+
+/// One pass of a meshed pair: slaves `slaves` against the facets `facet_of` (None: no
+/// partner) of `master`, at positions `x`. Adds the corrections to `dx` (dense, per node) and
+/// returns the per-slave corrections.
+#[allow(clippy::too_many_arguments)]
+pub fn meshed_pass(
+    master: &MasterSurface,
+    masses: &[f64],
+    x: &[[f64; 3]],
+    slaves: &[u32],
+    facet_of: &[Option<u32>],
+    areas: &[f64],
+    law: Option<&PressureOverclosure>,
+    dt: f64,
+    dx: &mut [[f64; 3]],
+) -> Vec<SlaveCorrection> {
+    let mut force = std::collections::BTreeMap::<u32, (V3<f64>, f64)>::new();
+    let mut out = vec![SlaveCorrection::default(); slaves.len()];
+    let mut geo = Vec::with_capacity(slaves.len());
+    for (k, (&s, f)) in slaves.iter().zip(facet_of).enumerate() {
+        let Some(f) = *f else {
+            geo.push(None);
+            continue;
+        };
+        let nodes = master.facets[f as usize].nodes();
+        let xs: Vec<V3<f64>> = nodes
+            .iter()
+            .map(|&n| V3::from_array(x[n as usize]))
+            .collect();
+        let p = V3::from_array(x[s as usize]);
+        let pr = closest_on_facet(p, &xs);
+        let h = -pr.gap(p);
+        let target = match law {
+            None => 0.0,
+            Some(l) => softened_target(l, h, masses[s as usize], areas[k], dt),
+        };
+        let needs_push = match law {
+            None => h > 0.0,
+            Some(_) => h > target,
+        };
+        if !needs_push {
+            geo.push(None);
+            continue;
+        }
+        let ms = masses[s as usize];
+        let fs = ms * (h - target) / (dt * dt);
+        for (j, &n) in nodes.iter().enumerate() {
+            let e = force.entry(n).or_insert((V3::zero(), 0.0));
+            e.0 = e.0 - pr.normal * (pr.weights[j] * fs);
+            e.1 += pr.weights[j] * ms;
+        }
+        out[k] = SlaveCorrection {
+            overclosure: h,
+            target,
+            force: fs,
+            normal: pr.normal.to_array(),
+            energy: law.map_or(0.0, |l| law_energy(l, target) * areas[k]),
+        };
+        geo.push(Some((pr.normal, pr.weights, h - target, nodes)));
+    }
+    // master corrections
+    let mut da = std::collections::BTreeMap::new();
+    for (n, (f, madd)) in &force {
+        let a = *f * (1.0 / (masses[*n as usize] + madd));
+        da.insert(*n, a);
+        let d = a * (dt * dt);
+        for c in 0..3 {
+            dx[*n as usize][c] += d.to_array()[c];
+        }
+    }
+    // slave corrections: onto the corrected master
+    for (k, &s) in slaves.iter().enumerate() {
+        if let Some((n, w, push, nodes)) = &geo[k] {
+            let mut d = *n * *push;
+            for (j, node) in nodes.iter().enumerate() {
+                d = d + da[node] * (w[j] * dt * dt);
+            }
+            for c in 0..3 {
+                dx[s as usize][c] += d.to_array()[c];
+            }
+            out[k].applied = (d * (masses[s as usize] / (dt * dt))).to_array();
+        }
+    }
+    out
+}
+
+/// The facet of each slave from a search result.
+pub fn facets_from(search: &SearchResult) -> Vec<Option<u32>> {
+    search.contacts.iter().map(|c| c.map(|c| c.facet)).collect()
+}
+
+/// Rotates a body-frame vector into the model frame.
+pub fn to_model(r: &[[f64; 3]; 3], v: V3<f64>) -> V3<f64> {
+    V3::new(
+        r[0][0] * v.x + r[0][1] * v.y + r[0][2] * v.z,
+        r[1][0] * v.x + r[1][1] * v.y + r[1][2] * v.z,
+        r[2][0] * v.x + r[2][1] * v.y + r[2][2] * v.z,
+    )
+}
+
+/// Rotates a model-frame vector into the body frame.
+pub fn to_body(r: &[[f64; 3]; 3], v: V3<f64>) -> V3<f64> {
+    V3::new(
+        r[0][0] * v.x + r[1][0] * v.y + r[2][0] * v.z,
+        r[0][1] * v.x + r[1][1] * v.y + r[2][1] * v.z,
+        r[0][2] * v.x + r[1][2] * v.y + r[2][2] * v.z,
+    )
+}
+
+/// Solves the 6×6 system `a·u = b` by Gaussian elimination with partial pivoting.
+fn solve6(mut a: [[f64; 6]; 6], mut b: [f64; 6]) -> Result<[f64; 6]> {
+    for col in 0..6 {
+        let piv = (col..6)
+            .max_by(|&i, &j| a[i][col].abs().total_cmp(&a[j][col].abs()))
+            .unwrap_or(col);
+        if a[piv][col].abs() == 0.0 {
+            return Err(Error::BadParameter {
+                name: "rigid body inertia",
+                value: "singular".into(),
+                expected: "a solvable generalized mass",
+            });
+        }
+        a.swap(col, piv);
+        b.swap(col, piv);
+        for r in col + 1..6 {
+            let f = a[r][col] / a[col][col];
+            for c in col..6 {
+                a[r][c] -= f * a[col][c];
+            }
+            b[r] -= f * b[col];
+        }
+    }
+    let mut u = [0.0; 6];
+    for r in (0..6).rev() {
+        let mut s = b[r];
+        for c in r + 1..6 {
+            s -= a[r][c] * u[c];
+        }
+        u[r] = s / a[r][r];
+    }
+    Ok(u)
+}
+
+/// The kinematic correction of slaves against a rigid body's analytical surface. Corrects
+/// `x`, `v` (slaves) and `body` in place and returns the per-slave corrections.
+#[allow(clippy::too_many_arguments)]
+pub fn rigid_pass(
+    surface: &Analytical,
+    mass: f64,
+    inertia: &[[f64; 3]; 3],
+    body: &mut BodyState,
+    masses: &[f64],
+    x: &mut [[f64; 3]],
+    v: &mut [[f64; 3]],
+    slaves: &[u32],
+    areas: &[f64],
+    law: Option<&PressureOverclosure>,
+    dt: f64,
+) -> Result<Vec<SlaveCorrection>> {
+    let xb = V3::from_array(body.position);
+    let r = body.rotation;
+    let mut out = vec![SlaveCorrection::default(); slaves.len()];
+    let (mut f, mut m) = (V3::zero(), V3::zero());
+    let mut m_add = 0.0;
+    let mut s1 = V3::zero(); // Σ m r
+    let mut i_add = [[0.0; 3]; 3];
+    let mut active = Vec::new();
+    for (k, &s) in slaves.iter().enumerate() {
+        let p = V3::from_array(x[s as usize]);
+        let (gap, nb) = surface.gap(to_body(&r, p - xb));
+        let h = -gap;
+        let ms = masses[s as usize];
+        let target = match law {
+            None => 0.0,
+            Some(l) => softened_target(l, h, ms, areas[k], dt),
+        };
+        let needs_push = match law {
+            None => h > 0.0,
+            Some(_) => h > target,
+        };
+        if !needs_push {
+            continue;
+        }
+        let n = to_model(&r, nb);
+        let fs = ms * (h - target) / (dt * dt);
+        let rs = p - xb;
+        f = f + n * fs;
+        m = m + rs.cross(n * fs);
+        m_add += ms;
+        s1 = s1 + rs * ms;
+        let r2 = rs.length2();
+        let ra = rs.to_array();
+        for a in 0..3 {
+            for b in 0..3 {
+                i_add[a][b] += ms * (if a == b { r2 } else { 0.0 } - ra[a] * ra[b]);
+            }
+        }
+        out[k] = SlaveCorrection {
+            overclosure: h,
+            target,
+            force: fs,
+            normal: n.to_array(),
+            energy: law.map_or(0.0, |l| law_energy(l, target) * areas[k]),
+        };
+        active.push((k, s, n, h - target, rs));
+    }
+    if active.is_empty() {
+        return Ok(out);
+    }
+    // generalized mass of the body with the slaves attached, about its reference point
+    let mut ib = [[0.0; 3]; 3];
+    for a in 0..3 {
+        for b in 0..3 {
+            // R I R^T
+            ib[a][b] = (0..3)
+                .map(|c| {
+                    (0..3)
+                        .map(|d| r[a][c] * inertia[c][d] * r[b][d])
+                        .sum::<f64>()
+                })
+                .sum::<f64>()
+                + i_add[a][b];
+        }
+    }
+    let mt = mass + m_add;
+    let sk = |v: V3<f64>| [[0.0, -v.z, v.y], [v.z, 0.0, -v.x], [-v.y, v.x, 0.0]];
+    let ss = sk(s1);
+    let mut a6 = [[0.0; 6]; 6];
+    for i in 0..3 {
+        a6[i][i] = mt;
+        for j in 0..3 {
+            a6[i][3 + j] = -ss[i][j];
+            a6[3 + i][j] = ss[i][j];
+            a6[3 + i][3 + j] = ib[i][j];
+        }
+    }
+    let u = solve6(a6, [f.x, f.y, f.z, m.x, m.y, m.z])?;
+    let (da, dal) = (V3::new(u[0], u[1], u[2]), V3::new(u[3], u[4], u[5]));
+    // reaction on the body is −f; the solve above is for the slaves' push; the body (with the
+    // slaves attached) accelerates by −da, −dal
+    let (da, dal) = (da * -1.0, dal * -1.0);
+    for (k, s, n, push, rs) in &active {
+        let d = *n * *push + (da + dal.cross(*rs)) * (dt * dt);
+        out[*k].applied = (d * (masses[*s as usize] / (dt * dt))).to_array();
+        for c in 0..3 {
+            x[*s as usize][c] += d.to_array()[c];
+            v[*s as usize][c] += d.to_array()[c] / dt;
+        }
+    }
+    let dxb = da * (dt * dt);
+    for c in 0..3 {
+        body.position[c] += dxb.to_array()[c];
+        body.velocity[c] += (da * dt).to_array()[c];
+        body.angular_velocity[c] += (dal * dt).to_array()[c];
+    }
+    body.rotation = rotate(dal * (dt * dt), body.rotation);
+    Ok(out)
+}
+
+/// `exp(skew(θ))·R` (Rodrigues).
+fn rotate(theta: V3<f64>, r: [[f64; 3]; 3]) -> [[f64; 3]; 3] {
+    let ang = theta.length2().sqrt();
+    if ang == 0.0 {
+        return r;
+    }
+    let k = theta * (1.0 / ang);
+    let (s, c) = ang.sin_cos();
+    let kk = [[0.0, -k.z, k.y], [k.z, 0.0, -k.x], [-k.y, k.x, 0.0]];
+    let ka = k.to_array();
+    let mut q = [[0.0; 3]; 3];
+    for i in 0..3 {
+        for j in 0..3 {
+            q[i][j] = if i == j { c } else { 0.0 } + s * kk[i][j] + (1.0 - c) * ka[i] * ka[j];
+        }
+    }
+    let mut out = [[0.0; 3]; 3];
+    for i in 0..3 {
+        for j in 0..3 {
+            out[i][j] = (0..3).map(|l| q[i][l] * r[l][j]).sum();
+        }
+    }
+    out
+}
