@@ -161,6 +161,7 @@ pub fn meshed_pass(
             force: fs,
             normal: pr.normal.to_array(),
             energy: law.map_or(0.0, |l| law_energy(l, target) * areas[k]),
+            applied: [0.0; 3],
         };
         geo.push(Some((pr.normal, pr.weights, h - target, nodes)));
     }
@@ -307,6 +308,7 @@ pub fn rigid_pass(
             force: fs,
             normal: n.to_array(),
             energy: law.map_or(0.0, |l| law_energy(l, target) * areas[k]),
+            applied: [0.0; 3],
         };
         active.push((k, s, n, h - target, rs));
     }
