@@ -449,7 +449,9 @@ impl Contact {
                 None => None,
             };
             let mut first: Option<Vec<SlaveCorrection>> = None;
-            for _ in 0..PASSES {
+            // hard contact is re-projected on the corrected geometry; a softened law is applied once
+            let passes = if kr.law.is_some() { 1 } else { PASSES };
+            for _ in 0..passes {
                 let mut dx = vec![[0.0; 3]; x.len()];
                 let c = match &back {
                     None => meshed_pass(
@@ -519,7 +521,8 @@ impl Contact {
         for rr in &mut self.rigid {
             let body = &mut bodies[rr.body.0];
             let mut first: Option<Vec<SlaveCorrection>> = None;
-            for _ in 0..PASSES {
+            let passes = if rr.law.is_some() { 1 } else { PASSES };
+            for _ in 0..passes {
                 let c = rigid_pass(
                     &rr.spec.surface,
                     rr.spec.mass,
