@@ -63,6 +63,8 @@ fn spring_forces(x: &[[f64; 3]], springs: &[(usize, usize, f64, f64)], f: &mut [
 }
 
 struct Impact {
+    /// Kinetic energy change made by the first correction (the impact).
+    ke_at_impact: f64,
     t_impact: f64,
     t_release: f64,
     mean_force: f64,
@@ -93,6 +95,7 @@ fn run_impact(
     let mut f = vec![[0.0; 3]; x.len()];
     let steps = (t_end / dt).ceil() as usize;
     let mut history = Vec::with_capacity(steps);
+    let mut ke_at_impact = f64::NAN;
     for _ in 0..steps {
         spring_forces(&x, springs, &mut f);
         for i in 0..x.len() {
@@ -134,6 +137,7 @@ fn run_impact(
         .map(|&i| mass[i as usize] * v[i as usize][0])
         .sum();
     Impact {
+        ke_at_impact,
         t_impact,
         t_release,
         mean_force: impulse / (t_release - t_impact),
@@ -295,4 +299,574 @@ fn truss_impact_on_a_rigid_wall() {
         );
         assert!(bodies[0].position[0] == l + clear, "the wall does not move");
     }
+}
+
+fn momentum(v: &[[f64; 3]], m: &[f64]) -> [f64; 3] {
+    let mut p = [0.0; 3];
+    for (vi, mi) in v.iter().zip(m) {
+        for a in 0..3 {
+            p[a] += mi * vi[a];
+        }
+    }
+    p
+}
+
+/// A wavy deformable plate (master, finite masses) and a cloud of slave nodes driven into it:
+/// after the correction no slave penetrates beyond round-off and momentum is unchanged; the
+/// GPU's and the CPU's searches give the same corrected state.
+#[test]
+fn hard_correction_leaves_no_penetration_and_keeps_momentum() {
+    let plate = abut::mesh::plate_quads(20, 20, 1.0, 1.0, 0.2, 7, &|x, y| {
+        0.03 * (5.0 * x).sin() * (4.0 * y).cos()
+    });
+    let cloud = abut::mesh::point_cloud(3000, [0.02, 0.02, -0.02], [0.98, 0.98, 0.02], 8);
+    let mut m = Model::new_3d();
+    m.add_nodes(&plate.positions, &vec![3.0; plate.positions.len()])
+        .unwrap();
+    let s = m.add_surface(Surface::quads(&plate.facets)).unwrap();
+    let r = m.add_nodes(&cloud, &vec![1.0; cloud.len()]).unwrap();
+    let set = m.add_node_set(&r.to_vec()).unwrap();
+    m.add_pair(
+        Pair::new(set, s)
+            .search_radius(0.1)
+            .enforce(kinematic(None)),
+    )
+    .unwrap();
+    let mut rng = abut::mesh::SplitMix64::new(4);
+    let v0: Vec<[f64; 3]> = (0..m.positions().len())
+        .map(|_| {
+            [
+                rng.range(-0.5, 0.5),
+                rng.range(-0.5, 0.5),
+                rng.range(-0.5, 0.5),
+            ]
+        })
+        .collect();
+    let dt = 1e-3;
+    let mut reference: Option<Vec<[f64; 3]>> = None;
+    for d in devices() {
+        let mut c = Contact::new(&d, &m).unwrap();
+        let mut x = m.positions().to_vec();
+        let mut v = v0.clone();
+        let p0 = momentum(&v, m.masses());
+        let rep = c
+            .kinematic_step(&mut x, &mut v, &mut [], dt)
+            .unwrap()
+            .clone();
+        assert!(rep.active > 500, "{d}: {} corrected", rep.active);
+        assert!(rep.max_overclosure > 1e-3);
+        assert!(
+            rep.max_overclosure_after <= 1e-12,
+            "{d}: {} left",
+            rep.max_overclosure_after
+        );
+        let p1 = momentum(&v, m.masses());
+        let scale: f64 = v
+            .iter()
+            .zip(m.masses())
+            .map(|(v, m)| m * v.iter().map(|c| c.abs()).sum::<f64>())
+            .sum();
+        for a in 0..3 {
+            assert!(
+                (p1[a] - p0[a]).abs() <= 1e-12 * scale,
+                "{d}: momentum {p0:?} → {p1:?}"
+            );
+        }
+        match &reference {
+            None => reference = Some(x),
+            Some(xr) => {
+                let worst = xr
+                    .iter()
+                    .zip(&x)
+                    .map(|(a, b)| (0..3).map(|k| (a[k] - b[k]).abs()).fold(0.0, f64::max))
+                    .fold(0.0, f64::max);
+                assert!(
+                    worst <= 1e-12,
+                    "{d}: corrected state differs from the CPU search's by {worst}"
+                );
+            }
+        }
+    }
+}
+
+/// The seed's Figure 38.2.3–1: pure master–slave keeps slave nodes out of the master, but a
+/// master node can still lie beyond a coarse slave surface. A balanced pair pushes it back.
+#[test]
+fn master_penetrates_a_coarse_slave_mesh_unless_balanced() {
+    for balanced in [false, true] {
+        let mut m = Model::new_2d();
+        // master: a peak whose apex (node 1) rises above the line of the slave nodes
+        m.add_nodes_2d(&[[2.0, -0.5], [0.0, 0.3], [-2.0, -0.5]], &[1.0; 3])
+            .unwrap();
+        let master = m.add_surface(Surface::segments(&[[0, 1], [1, 2]])).unwrap(); // normals up
+                                                                                   // slave: a coarse surface of one segment, normal down (towards the master)
+        let r = m
+            .add_nodes_2d(&[[-1.0, 0.0], [1.0, 0.0]], &[1.0; 2])
+            .unwrap();
+        let slave_surface = m
+            .add_surface(Surface::segments(&[[r.start, r.start + 1]]))
+            .unwrap();
+        let set = m.add_node_set(&r.to_vec()).unwrap();
+        let mut pair = Pair::new(set, master)
+            .search_radius(1.0)
+            .enforce(kinematic(None));
+        if balanced {
+            pair = pair.balanced(slave_surface, 0.5);
+        }
+        m.add_pair(pair).unwrap();
+        let mut c = Contact::new(&Device::cpu(), &m).unwrap();
+        let mut x = m.positions().to_vec();
+        let mut v = vec![[0.0; 3]; x.len()];
+        let p0 = momentum(&v, m.masses());
+        c.kinematic_step(&mut x, &mut v, &mut [], 1e-2).unwrap();
+        let slave_line_at_apex = 0.5 * (x[3][1] + x[4][1]);
+        if balanced {
+            assert!(
+                x[1][1] <= slave_line_at_apex + 1e-9 + 0.5 * (0.3 - 0.0),
+                "the balanced pass halves the apex's penetration: apex {} line {}",
+                x[1][1],
+                slave_line_at_apex
+            );
+            assert!(x[1][1] < 0.3, "the apex was pushed back");
+        } else {
+            assert_eq!(
+                x,
+                m.positions().to_vec(),
+                "pure master–slave: no slave penetrates, nothing is corrected"
+            );
+            assert!(
+                x[1][1] > slave_line_at_apex,
+                "the master apex lies beyond the coarse slave surface"
+            );
+        }
+        let p1 = momentum(&v, m.masses());
+        assert!((0..3).all(|a| (p1[a] - p0[a]).abs() < 1e-12));
+    }
+}
+
+/// Four point masses dropped under gravity on an analytical rigid plane and on a meshed plane
+/// of the same geometry (massive nodes): the same motion.
+#[test]
+fn body_on_analytical_and_meshed_plane_agree() {
+    let drops = [
+        [0.1, 0.1, 0.05],
+        [0.4, 0.1, 0.08],
+        [0.4, 0.4, 0.06],
+        [0.1, 0.4, 0.07],
+    ];
+    let run = |meshed: bool, d: &Device| -> Vec<[f64; 3]> {
+        let mut m = Model::new_3d();
+        let mut bodies = Vec::new();
+        let first;
+        if meshed {
+            let plate = abut::mesh::plate_quads(4, 4, 2.0, 2.0, 0.0, 0, &|_, _| 0.0);
+            let pos: Vec<[f64; 3]> = plate
+                .positions
+                .iter()
+                .map(|p| [p[0] - 1.0, p[1] - 1.0, 0.0])
+                .collect();
+            m.add_nodes(&pos, &vec![1e30; pos.len()]).unwrap();
+            let s = m.add_surface(Surface::quads(&plate.facets)).unwrap();
+            let r = m.add_nodes(&drops, &[0.25; 4]).unwrap();
+            first = r.start as usize;
+            let set = m.add_node_set(&r.to_vec()).unwrap();
+            m.add_pair(
+                Pair::new(set, s)
+                    .search_radius(0.2)
+                    .enforce(kinematic(None)),
+            )
+            .unwrap();
+        } else {
+            let body = m
+                .add_rigid_body(RigidBody {
+                    mass: 1e30,
+                    inertia: [[1e30, 0.0, 0.0], [0.0, 1e30, 0.0], [0.0, 0.0, 1e30]],
+                    surface: Analytical::Plane {
+                        point: [0.0; 3],
+                        normal: [0.0, 0.0, 1.0],
+                    },
+                })
+                .unwrap();
+            let r = m.add_nodes(&drops, &[0.25; 4]).unwrap();
+            first = r.start as usize;
+            let set = m.add_node_set(&r.to_vec()).unwrap();
+            m.add_rigid_pair(RigidPair {
+                slave: set,
+                body,
+                softened: None,
+            })
+            .unwrap();
+            bodies.push(BodyState::at([0.0; 3]));
+        }
+        let mut c = Contact::new(d, &m).unwrap();
+        let mut x = m.positions().to_vec();
+        let mut v = vec![[0.0; 3]; x.len()];
+        let dt = 1e-3;
+        for _ in 0..400 {
+            for i in first..x.len() {
+                v[i][2] -= 9.81 * dt;
+                v[i][0] += 0.5 * dt; // a sideways push as well
+                for a in 0..3 {
+                    x[i][a] += dt * v[i][a];
+                }
+            }
+            c.kinematic_step(&mut x, &mut v, &mut bodies, dt).unwrap();
+        }
+        x[first..].iter().chain(&v[first..]).copied().collect()
+    };
+    for d in devices() {
+        let a = run(false, &d);
+        let b = run(true, &d);
+        for (p, q) in a.iter().zip(&b) {
+            for k in 0..3 {
+                assert!(
+                    (p[k] - q[k]).abs() <= 1e-9,
+                    "{d}: analytical {p:?} vs meshed {q:?}"
+                );
+            }
+        }
+        assert!(
+            a[..4].iter().all(|p| p[2].abs() < 1e-12),
+            "{d}: resting on the plane: {:?}",
+            &a[..4]
+        );
+    }
+}
+
+/// Softened contact under a constant push settles where the law balances it: p(h)·A = F.
+#[test]
+fn softened_contact_reproduces_its_law_at_equilibrium() {
+    // softened kinematic contact damps like backward Euler: |λ|² = 1/(1 + k_p·A·dt²/m) per step
+    let (f, area, mass) = (3.0, 0.5, 0.02);
+    for law in [
+        PressureOverclosure::Exponential {
+            clearance: 0.01,
+            pressure: 4.0,
+        },
+        PressureOverclosure::Tabular(vec![(-0.005, 0.0), (0.005, 2.0), (0.02, 10.0)]),
+    ] {
+        for meshed in [false, true] {
+            let mut m = Model::new_3d();
+            let mut bodies = Vec::new();
+            if meshed {
+                m.add_nodes(
+                    &[
+                        [-1.0, -1.0, 0.0],
+                        [1.0, -1.0, 0.0],
+                        [1.0, 1.0, 0.0],
+                        [-1.0, 1.0, 0.0],
+                    ],
+                    &[1e30; 4],
+                )
+                .unwrap();
+                let s = m.add_surface(Surface::quads(&[[0, 1, 2, 3]])).unwrap();
+                let r = m.add_nodes(&[[0.2, 0.3, 0.0]], &[mass]).unwrap();
+                let set = m.add_node_set_with_areas(&r.to_vec(), &[area]).unwrap();
+                m.add_pair(
+                    Pair::new(set, s)
+                        .search_radius(0.5)
+                        .enforce(kinematic(Some(law.clone()))),
+                )
+                .unwrap();
+            } else {
+                let body = m
+                    .add_rigid_body(RigidBody {
+                        mass: 1e30,
+                        inertia: [[1e30, 0.0, 0.0], [0.0, 1e30, 0.0], [0.0, 0.0, 1e30]],
+                        surface: Analytical::Plane {
+                            point: [0.0; 3],
+                            normal: [0.0, 0.0, 1.0],
+                        },
+                    })
+                    .unwrap();
+                let r = m.add_nodes(&[[0.2, 0.3, 0.0]], &[mass]).unwrap();
+                let set = m.add_node_set_with_areas(&r.to_vec(), &[area]).unwrap();
+                m.add_rigid_pair(RigidPair {
+                    slave: set,
+                    body,
+                    softened: Some(law.clone()),
+                })
+                .unwrap();
+                bodies.push(BodyState::at([0.0; 3]));
+            }
+            let mut c = Contact::new(&Device::cpu(), &m).unwrap();
+            let mut x = m.positions().to_vec();
+            let mut v = vec![[0.0; 3]; x.len()];
+            let n = x.len() - 1;
+            let dt = 1e-3;
+            for _ in 0..3000 {
+                v[n][2] -= dt * f / mass;
+                x[n][2] += dt * v[n][2];
+                c.kinematic_step(&mut x, &mut v, &mut bodies, dt).unwrap();
+            }
+            let h = -x[n][2];
+            let p = law.pressure(h).0;
+            assert!(
+                (p * area - f).abs() <= 0.01 * f,
+                "{law:?} meshed={meshed}: p(h)·A = {} at h = {h}, push {f}",
+                p * area
+            );
+            assert!(v[n][2].abs() < 1e-3, "settled: v = {}", v[n][2]);
+        }
+    }
+}
+
+/// Analytical surfaces on a free rigid body: slaves pushed into a sphere, a cylinder (3D), a
+/// circle and a line (2D) end on the surface, and body plus slaves keep their linear momentum.
+#[test]
+fn rigid_bodies_with_analytical_surfaces() {
+    let cases: Vec<(u32, Analytical, Vec<[f64; 3]>)> = vec![
+        (
+            3,
+            Analytical::Sphere {
+                centre: [0.0; 3],
+                radius: 1.0,
+            },
+            vec![[0.95, 0.0, 0.0], [0.0, 0.6, 0.7], [-0.5, -0.5, -0.5]],
+        ),
+        (
+            3,
+            Analytical::Cylinder {
+                point: [0.0; 3],
+                axis: [0.0, 0.0, 1.0],
+                radius: 0.5,
+            },
+            vec![[0.45, 0.0, 3.0], [0.0, -0.4, -1.0]],
+        ),
+        (
+            2,
+            Analytical::Circle {
+                centre: [0.0, 0.0],
+                radius: 1.0,
+            },
+            vec![[0.9, 0.1, 0.0], [-0.2, -0.95, 0.0]],
+        ),
+        (
+            2,
+            Analytical::Line {
+                point: [0.0, 0.0],
+                normal: [0.0, 1.0],
+            },
+            vec![[0.3, -0.05, 0.0], [-2.0, -0.01, 0.0]],
+        ),
+    ];
+    for (dim, surface, nodes) in cases {
+        let mut m = if dim == 2 {
+            Model::new_2d()
+        } else {
+            Model::new_3d()
+        };
+        let body = m
+            .add_rigid_body(RigidBody {
+                mass: 5.0,
+                inertia: [[2.0, 0.0, 0.0], [0.0, 2.0, 0.0], [0.0, 0.0, 2.0]],
+                surface,
+            })
+            .unwrap();
+        let r = m.add_nodes(&nodes, &vec![0.7; nodes.len()]).unwrap();
+        let set = m.add_node_set(&r.to_vec()).unwrap();
+        m.add_rigid_pair(RigidPair {
+            slave: set,
+            body,
+            softened: None,
+        })
+        .unwrap();
+        let mut c = Contact::new(&Device::cpu(), &m).unwrap();
+        let mut x = m.positions().to_vec();
+        let mut v = vec![[0.0; 3]; x.len()];
+        let mut bodies = [BodyState::at([0.0; 3])];
+        let rep = c
+            .kinematic_step(&mut x, &mut v, &mut bodies, 1e-2)
+            .unwrap()
+            .clone();
+        assert_eq!(rep.active, nodes.len(), "{surface:?}");
+        assert!(
+            rep.max_overclosure_after <= 1e-3 * rep.max_overclosure,
+            "{surface:?}: {} left of {}",
+            rep.max_overclosure_after,
+            rep.max_overclosure
+        );
+        let mut p = momentum(&v, m.masses());
+        for a in 0..3 {
+            p[a] += 5.0 * bodies[0].velocity[a];
+        }
+        assert!(
+            p.iter().all(|c| c.abs() < 1e-9),
+            "{surface:?}: momentum {p:?}"
+        );
+        assert!(
+            bodies[0].velocity.iter().any(|c| c.abs() > 0.0),
+            "{surface:?}: the body takes the reaction"
+        );
+        if dim == 2 {
+            assert!(
+                x.iter().all(|p| p[2] == 0.0) && bodies[0].velocity[2] == 0.0,
+                "2D stays in its plane"
+            );
+        }
+    }
+}
+
+/// Initial overclosure: penetrating slave nodes are moved onto the master, strain-free, and
+/// the report names them with the energy the first increment would otherwise have injected.
+#[test]
+fn initial_overclosure_is_adjusted_and_reported() {
+    let mut m = Model::new_3d();
+    m.add_nodes(
+        &[
+            [-1.0, -1.0, 0.0],
+            [1.0, -1.0, 0.0],
+            [1.0, 1.0, 0.0],
+            [-1.0, 1.0, 0.0],
+        ],
+        &[1.0; 4],
+    )
+    .unwrap();
+    let s = m.add_surface(Surface::quads(&[[0, 1, 2, 3]])).unwrap();
+    let r = m
+        .add_nodes(
+            &[[0.1, 0.1, -0.02], [0.3, 0.2, 0.05], [-0.4, 0.5, -0.001]],
+            &[2.0; 3],
+        )
+        .unwrap();
+    let set = m.add_node_set(&r.to_vec()).unwrap();
+    m.add_pair(
+        Pair::new(set, s)
+            .search_radius(0.2)
+            .enforce(kinematic(None)),
+    )
+    .unwrap();
+    for d in devices() {
+        let mut c = Contact::new(&d, &m).unwrap();
+        let mut x = m.positions().to_vec();
+        let dt = 1e-3;
+        let rep = c.adjust_initial_overclosure(&mut x, &[], dt).unwrap();
+        let moved: Vec<u32> = rep.moved.iter().map(|(n, _)| *n).collect();
+        assert_eq!(moved, vec![4, 6], "{d}");
+        assert!((rep.max_distance - 0.02).abs() < 1e-6);
+        let energy = 0.5 * 2.0 * ((0.02f64 / dt).powi(2) + (0.001f64 / dt).powi(2));
+        assert!(
+            (rep.energy_avoided - energy).abs() < 1e-3 * energy,
+            "{d}: {}",
+            rep.energy_avoided
+        );
+        assert!(
+            x[4][2].abs() < 1e-12 && x[6][2].abs() < 1e-12 && x[5][2] == 0.05,
+            "{d}: {x:?}"
+        );
+        assert_eq!(x[4][0], 0.1, "moved along the normal only");
+    }
+}
+
+#[test]
+fn bad_kinematic_input_is_an_error() {
+    let mut m = Model::new_3d();
+    m.add_nodes(
+        &[
+            [-1.0, -1.0, 0.0],
+            [1.0, -1.0, 0.0],
+            [1.0, 1.0, 0.0],
+            [-1.0, 1.0, 0.0],
+            [0.0, 0.0, 0.1],
+        ],
+        &[1.0; 5],
+    )
+    .unwrap();
+    let s = m.add_surface(Surface::quads(&[[0, 1, 2, 3]])).unwrap();
+    let set = m.add_node_set(&[4]).unwrap();
+    let e = m
+        .add_pair(
+            Pair::new(set, s)
+                .enforce(kinematic(None))
+                .friction(Friction::coulomb(0.2)),
+        )
+        .unwrap_err();
+    assert!(e.to_string().contains("friction"), "{e}");
+    let e = m
+        .add_pair(Pair::new(set, s).enforce(kinematic(Some(PressureOverclosure::Linear))))
+        .unwrap_err();
+    assert!(e.to_string().contains("softened"), "{e}");
+    let e = m
+        .add_pair(
+            Pair::new(set, s)
+                .balanced(SurfaceId(9), 0.5)
+                .enforce(kinematic(None)),
+        )
+        .unwrap_err();
+    assert!(
+        matches!(
+            e,
+            Error::UnknownId {
+                what: "surface",
+                id: 9
+            }
+        ),
+        "{e}"
+    );
+    let e = m
+        .add_pair(Pair::new(set, s).balanced(s, 1.5).enforce(kinematic(None)))
+        .unwrap_err();
+    assert!(e.to_string().contains("weight"), "{e}");
+    let e = m
+        .add_rigid_body(RigidBody {
+            mass: -1.0,
+            inertia: [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]],
+            surface: Analytical::Sphere {
+                centre: [0.0; 3],
+                radius: 1.0,
+            },
+        })
+        .unwrap_err();
+    assert!(e.to_string().contains("mass"), "{e}");
+    let e = m
+        .add_rigid_body(RigidBody {
+            mass: 1.0,
+            inertia: [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]],
+            surface: Analytical::Circle {
+                centre: [0.0; 2],
+                radius: 1.0,
+            },
+        })
+        .unwrap_err();
+    assert!(e.to_string().contains("2D"), "{e}");
+    let body = m
+        .add_rigid_body(RigidBody {
+            mass: 1.0,
+            inertia: [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]],
+            surface: Analytical::Sphere {
+                centre: [0.0; 3],
+                radius: 1.0,
+            },
+        })
+        .unwrap();
+    m.add_rigid_pair(RigidPair {
+        slave: set,
+        body,
+        softened: None,
+    })
+    .unwrap();
+    let mut c = Contact::new(&Device::cpu(), &m).unwrap();
+    let mut x = m.positions().to_vec();
+    let mut v = vec![[0.0; 3]; x.len()];
+    let e = c.kinematic_step(&mut x, &mut v, &mut [], 1e-3).unwrap_err();
+    assert!(e.to_string().contains("rigid body states"), "{e}");
+    let e = c
+        .kinematic_step(&mut x, &mut v, &mut [BodyState::at([0.0; 3])], -1.0)
+        .unwrap_err();
+    assert!(e.to_string().contains("dt"), "{e}");
+    x[2][1] = f64::NAN;
+    let e = c
+        .kinematic_step(&mut x, &mut v, &mut [BodyState::at([0.0; 3])], 1e-3)
+        .unwrap_err();
+    assert!(
+        matches!(
+            e,
+            Error::NonFiniteCoordinate {
+                node: 2,
+                axis: 1,
+                ..
+            }
+        ),
+        "{e}"
+    );
 }
