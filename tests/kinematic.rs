@@ -607,6 +607,25 @@ fn softened_contact_reproduces_its_law_at_equilibrium() {
                 p * area
             );
             assert!(v[n][2].abs() < 1e-3, "settled: v = {}", v[n][2]);
+            // outputs: COPEN is the overclosure left, CPRESS the pressure of the law there
+            let out = if meshed {
+                c.outputs()[0].1.clone()
+            } else {
+                c.rigid_outputs()[0].1.clone()
+            };
+            assert_eq!(out.cstatus[0], Some(ContactStatus::Slip));
+            assert!(
+                (out.copen[0] + h).abs() <= 1e-3 * h.abs().max(1e-3),
+                "{law:?}: copen {} vs {}",
+                out.copen[0],
+                -h
+            );
+            assert!(
+                (out.cpress[0] * area - f).abs() <= 0.02 * f,
+                "{law:?} meshed={meshed}: cpress {}",
+                out.cpress[0]
+            );
+            assert!(out.contact_energy > 0.0);
         }
     }
 }

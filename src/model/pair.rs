@@ -118,6 +118,13 @@ pub enum PressureOverclosure {
 }
 
 impl PressureOverclosure {
+    /// A linear pressure–overclosure law, pressure = `slope`·overclosure (the two-point table
+    /// (0, 0), (1, slope), extrapolated with its slope): the linear softened law of kinematic
+    /// contact, where pressures need their own slope.
+    pub fn linear(slope: f64) -> Self {
+        Self::Tabular(vec![(0.0, 0.0), (1.0, slope)])
+    }
+
     /// Checks the law's parameters.
     pub fn validate(&self) -> Result<()> {
         let positive = |name: &'static str, v: f64| {
