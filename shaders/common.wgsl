@@ -24,11 +24,14 @@ struct SearchParams {
     n_slaves: u32,
     entry_capacity: u32,
     dim: u32,
-    _pad0: u32,
-    _pad1: u32,
-    _pad2: u32,
-    _pad3: u32,
+    max_local_iterations: u32,
+    flags: u32,
+    budget: f32,
+    n_motion_nodes: u32,
 }
+
+const FLAG_WIDE_LOCAL: u32 = 1u;
+const FLAG_SELF_CONTACT: u32 = 2u;
 
 // Rust twin: GpuHit (src/search/layout.rs), 64 bytes. One per slave node.
 struct Hit {
@@ -44,6 +47,11 @@ struct Hit {
 // Status words (Rust twin: STATUS_* in src/search/layout.rs).
 const STATUS_OVERFLOW: u32 = 0u;       // non-zero: the entry buffer was too small, nothing binned
 const STATUS_NEEDED_ENTRIES: u32 = 1u; // entries the binning needs
+const STATUS_BUDGET_EXCEEDED: u32 = 2u; // the motion budget is used up: rerun with a global search
+const STATUS_LOCAL_ITERATIONS: u32 = 3u; // most local-search iterations
+const STATUS_MOTION: u32 = 8u;         // bits of the largest motion since the last global search
+const STATUS_LOCAL_CAPPED: u32 = 9u;   // slaves whose local walk hit the cap
+const STATUS_CROWDED: u32 = 10u;       // self-contact slaves with unconnected facets near
 const STATUS_DT_STABLE: u32 = 4u;      // bits of the smallest stable increment (positive f32)
 const STATUS_DT_APPROACH: u32 = 5u;    // bits of the smallest approach limit (positive f32)
 const STATUS_ACTIVE: u32 = 6u;         // slave nodes in contact

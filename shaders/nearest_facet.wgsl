@@ -2,14 +2,18 @@
 // CPU mirror: src/cpu/nearest_facet.rs.
 //
 // Bindings: 0 params, 1 nodes, 2 facets, 3 slaves (node id per slave), 4 starts, 5 entries,
-//           6 status (read: overflow skips the pass), 7 hits (one Hit per slave).
+//           6 status (overflow skips the pass; self-contact crowding counted), 7 hits (one Hit
+//           per slave), 8 adjacency (as in local_search.wgsl; read for self-contact only).
 // Dispatch: one invocation per slave node, ITEM_WORKGROUP per workgroup, folded into 2D.
 // Invariants: every facet within the radius of a node is binned in the node's cell (bins are
 //             grown by bin_margin ≥ radius), so looking in that one cell is exact. Candidates
 //             come in increasing id order and only a strictly nearer one replaces the best, so
 //             exact ties go to the lowest facet id; the tracked node is the facet node nearest
 //             the slave node, ties to the lowest node id. A node outside the grid, or with no
-//             facet within the radius, gets facet = NO_FACET.
+//             facet within the radius, gets facet = NO_FACET. With FLAG_SELF_CONTACT a slave's
+//             own facets and the facets touching them are skipped, and a slave with another
+//             facet within the radius that shares no node with its nearest is counted in
+//             STATUS_CROWDED (the schedule then searches globally more often).
 
 @group(0) @binding(0) var<uniform> params: SearchParams;
 @group(0) @binding(1) var<storage, read> nodes: array<vec4<f32>>;
@@ -17,8 +21,39 @@
 @group(0) @binding(3) var<storage, read> slaves: array<u32>;
 @group(0) @binding(4) var<storage, read> starts: array<u32>;
 @group(0) @binding(5) var<storage, read> entries: array<u32>;
-@group(0) @binding(6) var<storage, read> status: array<u32>;
+@group(0) @binding(6) var<storage, read_write> status: array<atomic<u32>>;
 @group(0) @binding(7) var<storage, read_write> hits: array<Hit>;
+@group(0) @binding(8) var<storage, read> adjacency: array<u32>;
+
+// Self-contact: facet f is the slave's own or touches one of the slave's own facets
+// (twin of the one in local_search.wgsl).
+fn excluded(s: u32, fac: vec4<u32>) -> bool {
+    if ((params.flags & FLAG_SELF_CONTACT) == 0u) { return false; }
+    let n = facet_node_count(fac);
+    for (var j = 0u; j < n; j++) {
+        let node = fac[j];
+        if (node == s) { return true; }
+        for (var k = adjacency[s]; k < adjacency[s + 1u]; k++) {
+            let own = facets[adjacency[k]];
+            let m = facet_node_count(own);
+            for (var q = 0u; q < m; q++) {
+                if (own[q] == node) { return true; }
+            }
+        }
+    }
+    return false;
+}
+
+fn share_node(a: vec4<u32>, b: vec4<u32>) -> bool {
+    let na = facet_node_count(a);
+    let nb = facet_node_count(b);
+    for (var i = 0u; i < na; i++) {
+        for (var j = 0u; j < nb; j++) {
+            if (a[i] == b[j]) { return true; }
+        }
+    }
+    return false;
+}
 
 fn project(p: vec3<f32>, fac: vec4<u32>) -> Projection {
     let n = facet_node_count(fac);
@@ -36,7 +71,7 @@ fn nearest_facet(@builtin(workgroup_id) wg: vec3<u32>,
                  @builtin(local_invocation_index) li: u32) {
     let i = folded_id(wg, nwg, li, ITEM_WORKGROUP);
     if (i >= params.n_slaves) { return; }
-    if (status[STATUS_OVERFLOW] != 0u) { return; }
+    if (atomicLoad(&status[STATUS_OVERFLOW]) != 0u) { return; }
     var hit: Hit;
     hit.facet = NO_FACET;
     hit.node = NO_NODE;
@@ -57,14 +92,26 @@ fn nearest_facet(@builtin(workgroup_id) wg: vec3<u32>,
         var best: Projection;
         var best_f = NO_FACET;
         var best_d2 = params.radius * params.radius;
+        let slave = slaves[i];
         for (var k = s; k < e; k++) {
             let f = entries[k];
+            if (excluded(slave, facets[f])) { continue; }
             let pr = project(p, facets[f]);
             if (pr.dist2 < best_d2 || (best_f == NO_FACET && pr.dist2 == best_d2)) {
                 best = pr;
                 best_d2 = pr.dist2;
                 best_f = f;
             }
+        }
+        if (best_f != NO_FACET && (params.flags & FLAG_SELF_CONTACT) != 0u) {
+            let r2 = params.radius * params.radius;
+            var crowded = false;
+            for (var k = s; k < e; k++) {
+                let f = entries[k];
+                if (f == best_f || excluded(slave, facets[f]) || share_node(facets[f], facets[best_f])) { continue; }
+                if (project(p, facets[f]).dist2 <= r2) { crowded = true; }
+            }
+            if (crowded) { atomicAdd(&status[STATUS_CROWDED], 1u); }
         }
         if (best_f != NO_FACET) {
             let fac = facets[best_f];

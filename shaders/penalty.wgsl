@@ -11,7 +11,8 @@
 //             weights (continuous across facet edges) and the gap is measured along it; the
 //             force on the slave is F_n·N + F_t and the master nodes get −w_j times it (gather),
 //             so momentum is conserved to round-off. The override FRICTION = false removes all
-//             friction work. Nothing runs when the search overflowed (it will run again).
+//             friction work. Nothing runs when the search overflowed or the motion budget
+//             was used up (the increment will run again).
 //             Increments are positive f32, reduced with atomicMin on their bits (order-
 //             preserving for positive floats), so the result is deterministic.
 
@@ -103,7 +104,7 @@ fn penalty(@builtin(workgroup_id) wg: vec3<u32>,
            @builtin(local_invocation_index) li: u32) {
     let i = folded_id(wg, nwg, li, ITEM_WORKGROUP);
     if (i >= pp.n_slaves) { return; }
-    if (atomicLoad(&status[STATUS_OVERFLOW]) != 0u) { return; }
+    if (atomicLoad(&status[STATUS_OVERFLOW]) != 0u || atomicLoad(&status[STATUS_BUDGET_EXCEEDED]) != 0u) { return; }
     let hit = hits[i];
     var o: ContactOut;
     o.force = vec4<f32>(0.0);

@@ -320,7 +320,7 @@ impl Contact {
         };
         for pr in &mut self.pairs {
             let pp = pr.setup.params(dt, dt_ref);
-            let (result, status) = pr.search.run_with_penalty(
+            let (result, status) = pr.search.step_with_penalty(
                 positions,
                 &mut pr.exec,
                 &pr.setup,
@@ -434,11 +434,11 @@ impl Contact {
         let mut report = KinematicReport::default();
         let masses = &self.masses;
         for kr in &mut self.kinematic {
-            let result = kr.search.run(x)?;
+            let result = kr.search.step(x)?;
             let facets = facets_from(&result);
             let back = match &mut kr.back {
                 Some((search, surface, w)) => {
-                    let r = search.run(x)?;
+                    let r = search.step(x)?;
                     Some((
                         facets_from(&r),
                         surface.clone(),

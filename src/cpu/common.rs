@@ -65,3 +65,37 @@ pub fn for_each_cell(p: &SearchParams, lo: [u32; 3], hi: [u32; 3], mut visit: im
         }
     }
 }
+
+/// Self-contact exclusion: facet `fac` is slave `s`'s own or touches one of its own facets
+/// (WGSL: `excluded`). `adjacency` as in local_search.wgsl.
+pub fn excluded(
+    p: &SearchParams,
+    facets: &[[u32; 4]],
+    adjacency: &[u32],
+    s: u32,
+    fac: [u32; 4],
+) -> bool {
+    use crate::search::layout::FLAG_SELF_CONTACT;
+    if p.flags & FLAG_SELF_CONTACT == 0 {
+        return false;
+    }
+    for &node in &fac[..facet_node_count(fac)] {
+        if node == s {
+            return true;
+        }
+        for k in adjacency[s as usize]..adjacency[s as usize + 1] {
+            let own = facets[adjacency[k as usize] as usize];
+            if own[..facet_node_count(own)].contains(&node) {
+                return true;
+            }
+        }
+    }
+    false
+}
+
+/// Whether two facets share a node (WGSL: `share_node`).
+pub fn share_node(a: [u32; 4], b: [u32; 4]) -> bool {
+    a[..facet_node_count(a)]
+        .iter()
+        .any(|n| b[..facet_node_count(b)].contains(n))
+}

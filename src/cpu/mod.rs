@@ -12,6 +12,8 @@ pub mod brute_force;
 pub mod common;
 pub mod contact_sort;
 pub mod gather;
+pub mod local_search;
+pub mod motion;
 pub mod nearest_facet;
 pub mod nodal_normals;
 pub mod penalty;
@@ -34,8 +36,10 @@ pub struct CpuWorkspace {
     pub entries: Vec<u32>,
     /// Status words (`STATUS_*`).
     pub status: [u32; STATUS_WORDS],
-    /// One result per slave node.
+    /// One result per slave node (the tracked nodes between increments).
     pub hits: Vec<GpuHit>,
+    /// Positions at the last global search (motion budget).
+    pub reference: Vec<[f32; 4]>,
 }
 
 /// The CPU executor of the global search.
@@ -66,6 +70,48 @@ impl CpuSearch {
         self.entry_capacity = words;
         self.presize = false;
         self.ws.entries.truncate(words as usize);
+    }
+
+    /// Runs a global search (`local` false) or the motion check and the local search from
+    /// the tracked nodes of the previous increment. Returns hits, bin entries, regrowths and
+    /// the status words.
+    pub fn run_mode(
+        &mut self,
+        prep: &Prepared,
+        local: bool,
+    ) -> Result<(Vec<GpuHit>, u32, u32, [u32; STATUS_WORDS])> {
+        if !local {
+            let (hits, total, regrowths) = self.run(prep)?;
+            self.ws.reference.clear();
+            self.ws.reference.extend_from_slice(&prep.nodes);
+            return Ok((hits, total, regrowths, self.ws.status));
+        }
+        if self.ws.hits.len() != prep.slaves.len() || self.ws.reference.len() != prep.nodes.len() {
+            return Err(crate::error::Error::BadParameter {
+                name: "local search",
+                value: "before any global search".into(),
+                expected: "a global search first",
+            });
+        }
+        let mut status = [0u32; STATUS_WORDS];
+        motion::motion(
+            &prep.params,
+            &prep.nodes,
+            &self.ws.reference,
+            &prep.motion_nodes,
+            &mut status,
+        );
+        local_search::local_search(
+            &prep.params,
+            &prep.nodes,
+            &prep.facets,
+            &prep.slaves,
+            &prep.adjacency,
+            &mut status,
+            &mut self.ws.hits,
+        );
+        self.ws.status = status;
+        Ok((self.ws.hits.clone(), 0, 0, status))
     }
 
     /// Runs a full search (which settles the entry capacity), then only `STEPS[..first]`
@@ -171,8 +217,9 @@ pub fn run_step(
             &prep.slaves,
             &ws.scan[..=n_cells],
             &ws.entries,
-            &ws.status,
+            &mut ws.status,
             &mut ws.hits,
+            &prep.adjacency,
         ),
     }
 }

@@ -1,8 +1,10 @@
 //! CPU mirror of `shaders/nearest_facet.wgsl`: the nearest active facet of each slave node.
 
-use super::common::{facet_node_count, node};
+use super::common::{excluded, facet_node_count, node, share_node};
 use crate::geometry::{closest_on_quad, closest_on_segment, closest_on_triangle, Projection, V3};
-use crate::search::layout::{GpuHit, SearchParams, NO_FACET, STATUS_OVERFLOW};
+use crate::search::layout::{
+    GpuHit, SearchParams, FLAG_SELF_CONTACT, NO_FACET, STATUS_CROWDED, STATUS_OVERFLOW,
+};
 
 /// Nearest point on a padded facet (WGSL: `project`).
 pub fn project(nodes: &[[f32; 4]], p: V3<f32>, fac: [u32; 4]) -> Projection<f32> {
@@ -28,8 +30,9 @@ pub fn nearest_facet(
     slaves: &[u32],
     starts: &[u32],
     entries: &[u32],
-    status: &[u32],
+    status: &mut [u32],
     hits: &mut [GpuHit],
+    adjacency: &[u32],
 ) {
     if status[STATUS_OVERFLOW] != 0 {
         return;
@@ -52,13 +55,29 @@ pub fn nearest_facet(
         let mut best: Option<Projection<f32>> = None;
         let mut best_f = NO_FACET;
         let mut best_d2 = params.radius * params.radius;
+        let slave = slaves[i];
         for k in s..e {
             let f = entries[k as usize];
+            if excluded(params, facets, adjacency, slave, facets[f as usize]) {
+                continue;
+            }
             let pr = project(nodes, p, facets[f as usize]);
             if pr.dist2 < best_d2 || (best_f == NO_FACET && pr.dist2 == best_d2) {
                 best = Some(pr);
                 best_d2 = pr.dist2;
                 best_f = f;
+            }
+        }
+        if best_f != NO_FACET && params.flags & FLAG_SELF_CONTACT != 0 {
+            let r2 = params.radius * params.radius;
+            let crowded = (s..e).map(|k| entries[k as usize]).any(|f| {
+                f != best_f
+                    && !excluded(params, facets, adjacency, slave, facets[f as usize])
+                    && !share_node(facets[f as usize], facets[best_f as usize])
+                    && project(nodes, p, facets[f as usize]).dist2 <= r2
+            });
+            if crowded {
+                status[STATUS_CROWDED] += 1;
             }
         }
         let Some(best) = best else {

@@ -101,7 +101,7 @@ pub fn penalty(
     out: &mut [ContactOut],
     status: &mut [u32],
 ) {
-    if status[STATUS_OVERFLOW] != 0 {
+    if status[STATUS_OVERFLOW] != 0 || status[crate::search::layout::STATUS_BUDGET_EXCEEDED] != 0 {
         return;
     }
     for i in 0..pp.n_slaves as usize {

@@ -53,9 +53,13 @@ struct Pipelines {
     bin_scatter: wgpu::ComputePipeline,
     bin_sort: wgpu::ComputePipeline,
     nearest_facet: wgpu::ComputePipeline,
+    local_search: wgpu::ComputePipeline,
+    motion: wgpu::ComputePipeline,
 }
 
 struct BindGroups {
+    local_search: wgpu::BindGroup,
+    motion: wgpu::BindGroup,
     bin_count: wgpu::BindGroup,
     scan_blocks: Vec<wgpu::BindGroup>,
     scan_add: Vec<wgpu::BindGroup>,
@@ -76,6 +80,9 @@ struct Buffers {
     status: wgpu::Buffer,
     hits: GrowBuffer,
     readback: GrowBuffer,
+    reference: GrowBuffer,
+    adjacency: GrowBuffer,
+    motion_nodes: GrowBuffer,
 }
 
 /// The global search on one GPU device; its buffers grow as needed and are reused.
@@ -128,6 +135,8 @@ impl GpuSearch {
             bin_scatter: pipeline(&module("bin_scatter"), "bin_scatter"),
             bin_sort: pipeline(&module("bin_sort"), "bin_sort"),
             nearest_facet: pipeline(&module("nearest_facet"), "nearest_facet"),
+            local_search: pipeline(&module("local_search"), "local_search"),
+            motion: pipeline(&module("motion"), "motion"),
         };
         if let Some(e) = pollster::block_on(scope.pop()) {
             return Err(Error::Gpu {
@@ -149,7 +158,7 @@ impl GpuSearch {
                 4 * UNIFORM_STRIDE,
                 U::UNIFORM | U::COPY_DST,
             ),
-            nodes: GrowBuffer::new(device, "nodes", 0, storage),
+            nodes: GrowBuffer::new(device, "nodes", 0, storage | U::COPY_SRC),
             facets: GrowBuffer::new(device, "facets", 0, storage),
             slaves: GrowBuffer::new(device, "slaves", 0, storage),
             scan: GrowBuffer::new(device, "cell counts and starts", 0, storage | U::COPY_SRC),
@@ -163,6 +172,9 @@ impl GpuSearch {
             }),
             hits: GrowBuffer::new(device, "hits", 0, U::STORAGE | U::COPY_SRC),
             readback: GrowBuffer::new(device, "readback", 0, U::MAP_READ | U::COPY_DST),
+            reference: GrowBuffer::new(device, "reference positions", 0, storage),
+            adjacency: GrowBuffer::new(device, "node facets", 0, storage),
+            motion_nodes: GrowBuffer::new(device, "motion nodes", 0, storage),
         };
         Ok(Self {
             ctx,
@@ -210,6 +222,13 @@ impl GpuSearch {
             .ensure(d, l, (prep.params.n_cells as u64 + 1) * 4)?;
         replaced |= b.entries.ensure(d, l, self.entry_capacity as u64 * 4)?;
         replaced |= b.hits.ensure(d, l, hits_bytes)?;
+        replaced |= b.reference.ensure(d, l, (prep.nodes.len() * 16) as u64)?;
+        replaced |= b
+            .adjacency
+            .ensure(d, l, (prep.adjacency.len() * 4) as u64)?;
+        replaced |= b
+            .motion_nodes
+            .ensure(d, l, (prep.motion_nodes.len() * 4) as u64)?;
         b.readback.ensure(d, l, READBACK_HITS_OFFSET + hits_bytes)?;
         if replaced || self.scan_levels != levels.levels.len() {
             self.bind_groups = None;
@@ -246,6 +265,28 @@ impl GpuSearch {
         };
         let n_levels = levels.levels.len();
         BindGroups {
+            local_search: group(
+                &p.local_search,
+                &[
+                    params.clone(),
+                    b.nodes.buffer.as_entire_binding(),
+                    b.facets.buffer.as_entire_binding(),
+                    b.slaves.buffer.as_entire_binding(),
+                    b.adjacency.buffer.as_entire_binding(),
+                    b.status.as_entire_binding(),
+                    b.hits.buffer.as_entire_binding(),
+                ],
+            ),
+            motion: group(
+                &p.motion,
+                &[
+                    params.clone(),
+                    b.nodes.buffer.as_entire_binding(),
+                    b.reference.buffer.as_entire_binding(),
+                    b.motion_nodes.buffer.as_entire_binding(),
+                    b.status.as_entire_binding(),
+                ],
+            ),
             bin_count: group(
                 &p.bin_count,
                 &[
@@ -302,6 +343,7 @@ impl GpuSearch {
                     b.entries.buffer.as_entire_binding(),
                     b.status.as_entire_binding(),
                     b.hits.buffer.as_entire_binding(),
+                    b.adjacency.buffer.as_entire_binding(),
                 ],
             ),
         }
@@ -316,17 +358,27 @@ impl GpuSearch {
         self.run_from(prep, 0, None)
     }
 
-    /// Runs the search followed by the passes of `after` (one submit); presizes like `run`.
-    pub(crate) fn run_after(
+    /// Runs a global search (`local` false; presized like `run`) or the motion check and the
+    /// local search, followed by the passes of `after`, in one submit.
+    pub(crate) fn run_mode(
         &mut self,
         prep: &Prepared,
-        after: &mut (dyn AfterSearch + 'static),
+        local: bool,
+        after: Option<&mut (dyn AfterSearch + 'static)>,
         read_hits: bool,
     ) -> Result<(Vec<GpuHit>, u32, u32, [u32; STATUS_WORDS])> {
-        if self.presize {
+        if local {
+            if self.last.is_none() {
+                return Err(Error::BadParameter {
+                    name: "local search",
+                    value: "before any global search".into(),
+                    expected: "a global search first",
+                });
+            }
+        } else if self.presize {
             self.entry_capacity = presized_capacity(prep, self.entry_capacity);
         }
-        self.run_with(prep, 0, None, Some(after), read_hits)
+        self.run_with(prep, 0, None, after, read_hits, local)
     }
 
     /// Runs the steps `STEPS[first..]` on the GPU, starting from the CPU mirror's state after
@@ -337,9 +389,9 @@ impl GpuSearch {
         prep: &Prepared,
         first: usize,
         preload: &CpuWorkspace,
-    ) -> Result<(Vec<GpuHit>, u32, u32)> {
+    ) -> Result<(Vec<GpuHit>, u32, u32, [u32; STATUS_WORDS])> {
         self.entry_capacity = self.entry_capacity.max(preload.entries.len() as u32);
-        self.run_from(prep, first, Some(preload))
+        self.run_with(prep, first, Some(preload), None, true, false)
     }
 
     fn run_from(
@@ -348,7 +400,7 @@ impl GpuSearch {
         first: usize,
         preload: Option<&CpuWorkspace>,
     ) -> Result<(Vec<GpuHit>, u32, u32)> {
-        let (hits, total, regrowths, _) = self.run_with(prep, first, preload, None, true)?;
+        let (hits, total, regrowths, _) = self.run_with(prep, first, preload, None, true, false)?;
         Ok((hits, total, regrowths))
     }
 
@@ -363,10 +415,21 @@ impl GpuSearch {
         preload: Option<&CpuWorkspace>,
         mut after: Option<&mut (dyn AfterSearch + 'static)>,
         read_hits: bool,
+        local: bool,
     ) -> Result<(Vec<GpuHit>, u32, u32, [u32; STATUS_WORDS])> {
         let levels = ScanLevels::new(prep.params.n_cells + 1);
         self.ensure_buffers(prep, &levels)?;
         let q = &self.ctx.queue;
+        q.write_buffer(
+            &self.buffers.adjacency.buffer,
+            0,
+            bytemuck::cast_slice(&prep.adjacency),
+        );
+        q.write_buffer(
+            &self.buffers.motion_nodes.buffer,
+            0,
+            bytemuck::cast_slice(&prep.motion_nodes),
+        );
         q.write_buffer(
             &self.buffers.nodes.buffer,
             0,
@@ -417,10 +480,11 @@ impl GpuSearch {
             let (status, total, hits) = self.submit(
                 &params,
                 &levels,
-                prep.slaves.len(),
+                prep,
                 first,
                 after.as_deref_mut(),
                 read_hits,
+                local,
             )?;
             if status[STATUS_OVERFLOW] == 0 {
                 self.last = Some((levels.words, params.n_cells, total));
@@ -511,11 +575,13 @@ impl GpuSearch {
         &self,
         params: &SearchParams,
         levels: &ScanLevels,
-        n_slaves: usize,
+        prep: &Prepared,
         first: usize,
         mut after: Option<&mut (dyn AfterSearch + 'static)>,
         read_hits: bool,
+        local: bool,
     ) -> Result<([u32; STATUS_WORDS], u32, Vec<GpuHit>)> {
+        let n_slaves = prep.slaves.len();
         let (device, b, p) = (&self.ctx.device, &self.buffers, &self.pipelines);
         let bg = self
             .bind_groups
@@ -526,9 +592,12 @@ impl GpuSearch {
         let mut enc = device.create_command_encoder(&wgpu::CommandEncoderDescriptor {
             label: Some("global search"),
         });
-        if first == 0 {
+        if first == 0 && !local {
             enc.clear_buffer(&b.scan.buffer, 0, Some(levels.words as u64 * 4));
+        }
+        if first == 0 {
             enc.clear_buffer(&b.status, 0, Some(SEARCH_STATUS_BYTES));
+            enc.clear_buffer(&b.status, 32, Some(SEARCH_STATUS_BYTES));
         }
         let dispatch =
             |enc: &mut wgpu::CommandEncoder,
@@ -545,7 +614,28 @@ impl GpuSearch {
                     pass.dispatch_workgroups(x, y, 1);
                 }
             };
-        for step in &STEPS[first..] {
+        let steps: &[Step] = if local { &[] } else { &STEPS[first..] };
+        if local {
+            dispatch(
+                &mut enc,
+                "motion + local_search",
+                &[
+                    (
+                        &p.motion,
+                        &bg.motion,
+                        prep.motion_nodes.len() as u32,
+                        ITEM_WORKGROUP,
+                    ),
+                    (
+                        &p.local_search,
+                        &bg.local_search,
+                        params.n_slaves,
+                        ITEM_WORKGROUP,
+                    ),
+                ],
+            );
+        }
+        for step in steps {
             match step {
                 Step::BinCount => dispatch(
                     &mut enc,
@@ -602,6 +692,16 @@ impl GpuSearch {
                     )],
                 ),
             }
+        }
+        if !local && first < STEPS.len() {
+            // the frame of this global search is the reference of the motion budget
+            enc.copy_buffer_to_buffer(
+                &b.nodes.buffer,
+                0,
+                &b.reference.buffer,
+                0,
+                (prep.nodes.len() * 16) as u64,
+            );
         }
         if let Some(a) = after.as_deref_mut() {
             a.encode(&mut enc, max_dim);

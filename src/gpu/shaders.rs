@@ -8,39 +8,18 @@ pub const COMMON: &str = include_str!("../../shaders/common.wgsl");
 pub const PENALTY_COMMON: &str = include_str!("../../shaders/penalty_common.wgsl");
 
 /// (file stem, source, needs `penalty_common.wgsl`) of every kernel file.
-pub const KERNELS: [(&str, &str, bool); 9] = [
-    (
-        "bin_count",
-        include_str!("../../shaders/bin_count.wgsl"),
-        false,
-    ),
+#[rustfmt::skip]
+pub const KERNELS: [(&str, &str, bool); 11] = [
+    ("bin_count", include_str!("../../shaders/bin_count.wgsl"), false),
     ("scan", include_str!("../../shaders/scan.wgsl"), false),
-    (
-        "bin_scatter",
-        include_str!("../../shaders/bin_scatter.wgsl"),
-        false,
-    ),
-    (
-        "bin_sort",
-        include_str!("../../shaders/bin_sort.wgsl"),
-        false,
-    ),
-    (
-        "nearest_facet",
-        include_str!("../../shaders/nearest_facet.wgsl"),
-        false,
-    ),
-    (
-        "nodal_normals",
-        include_str!("../../shaders/nodal_normals.wgsl"),
-        true,
-    ),
+    ("bin_scatter", include_str!("../../shaders/bin_scatter.wgsl"), false),
+    ("bin_sort", include_str!("../../shaders/bin_sort.wgsl"), false),
+    ("nearest_facet", include_str!("../../shaders/nearest_facet.wgsl"), false),
+    ("local_search", include_str!("../../shaders/local_search.wgsl"), false),
+    ("motion", include_str!("../../shaders/motion.wgsl"), false),
+    ("nodal_normals", include_str!("../../shaders/nodal_normals.wgsl"), true),
     ("penalty", include_str!("../../shaders/penalty.wgsl"), true),
-    (
-        "contact_sort",
-        include_str!("../../shaders/contact_sort.wgsl"),
-        true,
-    ),
+    ("contact_sort", include_str!("../../shaders/contact_sort.wgsl"), true),
     ("gather", include_str!("../../shaders/gather.wgsl"), true),
 ];
 

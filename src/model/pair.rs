@@ -21,6 +21,9 @@ pub struct Pair {
     /// slave-on-master pass (the master-on-slave pass gets 1 − weight). `None`: pure
     /// master–slave.
     pub balanced: Option<(SurfaceId, f64)>,
+    /// When the search runs globally; `None`: the defaults (every 100 increments, every 4 for
+    /// self-contact, budget ½ of the radius, fast local tracking).
+    pub schedule: Option<crate::search::Schedule>,
 }
 
 /// Contact constraint enforcement ("Contact constraint enforcement methods" in the seed).
@@ -262,7 +265,14 @@ impl Pair {
             enforce: Enforce::default(),
             friction: Friction::Frictionless,
             balanced: None,
+            schedule: None,
         }
+    }
+
+    /// Sets when the search runs globally (Abaqus' *CONTACT CONTROLS).
+    pub fn schedule(mut self, schedule: crate::search::Schedule) -> Self {
+        self.schedule = Some(schedule);
+        self
     }
 
     /// Makes the pair balanced: `slave_surface` is the surface the slave nodes lie on, and

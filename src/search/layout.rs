@@ -13,6 +13,19 @@ pub const NO_FACET: u32 = u32::MAX;
 pub const STATUS_OVERFLOW: usize = 0;
 /// Status word: the number of bin entries the pass needed (WGSL: `STATUS_NEEDED_ENTRIES`).
 pub const STATUS_NEEDED_ENTRIES: usize = 1;
+/// Status word: the motion since the last global search used up the budget; the local
+/// increment is run again with a global search (WGSL: `STATUS_BUDGET_EXCEEDED`).
+pub const STATUS_BUDGET_EXCEEDED: usize = 2;
+/// Status word: the most local-search iterations any slave took (WGSL: `STATUS_LOCAL_ITERATIONS`).
+pub const STATUS_LOCAL_ITERATIONS: usize = 3;
+/// Status word: bits of the largest motion since the last global search, a positive f32
+/// (WGSL: `STATUS_MOTION`).
+pub const STATUS_MOTION: usize = 8;
+/// Status word: slaves whose local walk hit the iteration cap (WGSL: `STATUS_LOCAL_CAPPED`).
+pub const STATUS_LOCAL_CAPPED: usize = 9;
+/// Status word: self-contact slaves with unconnected facets within the radius
+/// (WGSL: `STATUS_CROWDED`).
+pub const STATUS_CROWDED: usize = 10;
 /// Status word: bits of the smallest stable increment, a positive f32 (WGSL: `STATUS_DT_STABLE`).
 pub const STATUS_DT_STABLE: usize = 4;
 /// Status word: bits of the smallest approach limit, a positive f32 (WGSL: `STATUS_DT_APPROACH`).
@@ -22,7 +35,7 @@ pub const STATUS_ACTIVE: usize = 6;
 /// Status word: slave nodes slipping (WGSL: `STATUS_SLIPPING`).
 pub const STATUS_SLIPPING: usize = 7;
 /// Number of status words.
-pub const STATUS_WORDS: usize = 8;
+pub const STATUS_WORDS: usize = 12;
 
 /// Uniform parameters of the search kernels. WGSL twin: `SearchParams` in common.wgsl.
 ///
@@ -54,10 +67,26 @@ pub struct SearchParams {
     pub entry_capacity: u32,
     /// Spatial dimension (2 or 3).
     pub dim: u32,
-    /// Padding to 64 bytes.
-    pub _pad: [u32; 4],
+    /// Local search: the most walk iterations per slave.
+    pub max_local_iterations: u32,
+    /// `FLAG_*` bits.
+    pub flags: u32,
+    /// Motion budget: a node moving more than half of this since the last global search asks
+    /// for a global search (model length units).
+    pub budget: f32,
+    /// Nodes whose motion is measured (slaves and master nodes).
+    pub n_motion_nodes: u32,
 }
 const _: () = assert!(std::mem::size_of::<SearchParams>() == 64);
+
+/// Flag: the local search walks the facets around every node of the tracked node's facets
+/// (the more expensive, more robust alternative) (WGSL: `FLAG_WIDE_LOCAL`).
+pub const FLAG_WIDE_LOCAL: u32 = 1;
+/// Flag: self-contact, a slave's own facets and their neighbours are skipped
+/// (WGSL: `FLAG_SELF_CONTACT`).
+pub const FLAG_SELF_CONTACT: u32 = 2;
+/// Walk iterations of the local search before it gives up (WGSL default).
+pub const MAX_LOCAL_ITERATIONS: u32 = 16;
 
 /// Parameters of one scan level. WGSL twin: `ScanParams` in scan.wgsl.
 #[repr(C)]

@@ -19,6 +19,7 @@ use crate::penalty::layout::PenaltyParams;
 use crate::penalty::PenaltySetup;
 use grid::Grid;
 use layout::{GpuHit, SearchParams, NO_FACET};
+use std::sync::Arc;
 
 /// The steps of one global search, in order (shader and CPU mirror of the same name).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -66,6 +67,14 @@ pub struct ContactPoint {
 /// What one search did, for diagnostics and benchmarks.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct SearchStats {
+    /// Global or local, and why.
+    pub trigger: Trigger,
+    /// Most local-search iterations a slave took (local increments).
+    pub local_iterations: u32,
+    /// Slaves whose local walk hit the iteration cap.
+    pub local_capped: u32,
+    /// Largest motion of a pair node since the last global search, model units.
+    pub motion: f64,
     /// The grid used.
     pub grid: Grid,
     /// Bin entries ((facet, cell) pairs) written.
@@ -115,6 +124,59 @@ pub struct Prepared {
     /// Bin entries the host expects (from f64 bounding boxes); executors size the entry
     /// buffer from it, and the kernels' overflow check catches any shortfall.
     pub estimated_entries: u64,
+    /// Active facets of each model node: words 0..=n_nodes are starts within this same array,
+    /// then the lists (local_search.wgsl's layout).
+    pub adjacency: Arc<[u32]>,
+    /// The nodes whose motion the budget measures: slaves, then master nodes not slaves.
+    pub motion_nodes: Arc<[u32]>,
+    /// A local-search increment (in the frame of the last global search) rather than a global one.
+    pub local: bool,
+}
+
+/// When a pair searches globally (seed: "Finite-sliding tracking", "Tracking approach for
+/// self-contact pairs"; Abaqus' *CONTACT CONTROLS).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Schedule {
+    /// A global search every this many increments (the first increment always searches
+    /// globally). Defaults: 100 for two-surface pairs, 4 for self-contact.
+    pub interval: u32,
+    /// Motion budget as a fraction of the search radius: when a node of the pair has moved
+    /// more than half of `budget·radius` since the last global search (slave and master motion
+    /// together could then have used it up), the increment searches globally. Contacts within
+    /// `(1 − budget)·radius` are then always tracked. Default 0.5.
+    pub budget: f64,
+    /// The slightly more expensive local search: facets around every node of the tracked
+    /// node's facets (Abaqus' FAST LOCAL TRACKING=NO).
+    pub wide_local: bool,
+}
+
+impl Schedule {
+    /// The defaults for a two-surface pair (`self_contact` false) or a self-contact pair.
+    pub fn default_for(self_contact: bool) -> Self {
+        Self {
+            interval: if self_contact { 4 } else { 100 },
+            budget: 0.5,
+            wide_local: false,
+        }
+    }
+}
+
+/// Why an increment searched the way it did.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Trigger {
+    /// A global search, the first of the run.
+    First,
+    /// A global search, because the interval came round.
+    Interval,
+    /// A global search, because the motion budget was used up (the local search ran first and
+    /// was discarded).
+    Budget,
+    /// A global search, self-contact: unconnected facets were near a slave at the last one.
+    Crowded,
+    /// A global search asked for by the caller (`run`).
+    Requested,
+    /// The local search.
+    Local,
 }
 
 /// A global search bound to one contact pair and one device; reusable every increment.
@@ -125,6 +187,14 @@ pub struct GlobalSearch {
     radius: f64,
     dim: u32,
     masses: Vec<f32>,
+    adjacency: Arc<[u32]>,
+    motion_nodes: Arc<[u32]>,
+    schedule: Schedule,
+    self_contact: bool,
+    /// Grid and parameters of the last global search: the frame local increments work in.
+    frame: Option<(Grid, SearchParams)>,
+    since_global: u32,
+    crowded: bool,
 }
 
 enum Executor {
@@ -140,7 +210,11 @@ impl GlobalSearch {
         let master = model.surface(p.master)?.clone();
         let slaves = model.node_set(p.slave)?.to_vec();
         let radius = p.search_radius.unwrap_or_else(|| master.mean_facet_size());
-        Self::from_parts(device, model, master, slaves, radius)
+        let mut search = Self::from_parts(device, model, master, slaves, radius)?;
+        if let Some(schedule) = p.schedule {
+            search.set_schedule(schedule)?;
+        }
+        Ok(search)
     }
 
     /// A search of the nodes `slaves` against `master` (a surface of `model`) within `radius`
@@ -171,6 +245,33 @@ impl GlobalSearch {
             DeviceKind::Gpu(ctx) => Executor::Gpu(Box::new(GpuSearch::new(ctx.clone())?)),
             DeviceKind::Cpu => Executor::Cpu(CpuSearch::default()),
         };
+        let n_nodes = model.positions().len();
+        let mut active_index = vec![u32::MAX; master.facets.len()];
+        for (k, &f) in master.active.iter().enumerate() {
+            active_index[f as usize] = k as u32;
+        }
+        let mut adjacency = Vec::with_capacity(n_nodes + 1 + 4 * master.active.len());
+        adjacency.resize(n_nodes + 1, 0);
+        for n in 0..n_nodes {
+            adjacency[n] = adjacency.len() as u32;
+            let list: Vec<u32> = master
+                .facets_of_node(n as u32)
+                .iter()
+                .map(|&f| active_index[f as usize])
+                .collect();
+            adjacency.extend(list);
+        }
+        adjacency[n_nodes] = adjacency.len() as u32;
+        let master_nodes = master.nodes();
+        let self_contact = slaves.iter().any(|s| master_nodes.binary_search(s).is_ok());
+        let mut motion_nodes = slaves.clone();
+        let mut sorted = slaves.clone();
+        sorted.sort_unstable();
+        motion_nodes.extend(
+            master_nodes
+                .iter()
+                .filter(|n| sorted.binary_search(n).is_err()),
+        );
         Ok(Self {
             executor,
             master,
@@ -178,7 +279,37 @@ impl GlobalSearch {
             radius,
             dim: model.dim(),
             masses: model.masses().iter().map(|&m| m as f32).collect(),
+            adjacency: adjacency.into(),
+            motion_nodes: motion_nodes.into(),
+            schedule: Schedule::default_for(self_contact),
+            self_contact,
+            frame: None,
+            since_global: 0,
+            crowded: false,
         })
+    }
+
+    /// Sets when the search runs globally.
+    pub fn set_schedule(&mut self, schedule: Schedule) -> Result<()> {
+        if schedule.interval == 0 || !(schedule.budget > 0.0 && schedule.budget <= 1.0) {
+            return Err(Error::BadParameter {
+                name: "search schedule",
+                value: format!("{schedule:?}"),
+                expected: "needs an interval ≥ 1 and a budget in (0, 1]",
+            });
+        }
+        self.schedule = schedule;
+        Ok(())
+    }
+
+    /// The schedule in use.
+    pub fn schedule(&self) -> Schedule {
+        self.schedule
+    }
+
+    /// Whether this is a self-contact search (slave nodes lie on the master surface).
+    pub fn is_self_contact(&self) -> bool {
+        self.self_contact
     }
 
     /// The search radius in use, model units.
@@ -203,14 +334,93 @@ impl GlobalSearch {
         }
     }
 
-    /// Runs the global search at node positions `positions` (one per model node, model units).
+    /// Runs a global search at node positions `positions` (one per model node, model units),
+    /// whatever the schedule (it resets the schedule's count).
     pub fn run(&mut self, positions: &[[f64; 3]]) -> Result<SearchResult> {
-        let prepared = self.prepare(positions)?;
-        let (raw, entries, regrowths) = match &mut self.executor {
-            Executor::Gpu(g) => g.run(&prepared)?,
-            Executor::Cpu(c) => c.run(&prepared)?,
-        };
-        Ok(self.finish(&prepared, raw, entries, regrowths))
+        Ok(self.execute(positions, Some(Trigger::Requested), None)?.0)
+    }
+
+    /// One increment of finite-sliding tracking: a global search when the schedule calls for
+    /// one (the first increment, every `interval` increments, a used-up motion budget, crowded
+    /// self-contact), the local search otherwise. `stats.trigger` says which ran and why.
+    pub fn step(&mut self, positions: &[[f64; 3]]) -> Result<SearchResult> {
+        let trigger = self.decide();
+        Ok(self.execute(positions, trigger, None)?.0)
+    }
+
+    /// The schedule's choice for the next increment: `Some(trigger)` for a global search,
+    /// `None` for the local search.
+    fn decide(&self) -> Option<Trigger> {
+        if self.frame.is_none() {
+            Some(Trigger::First)
+        } else if self.since_global + 1 >= self.schedule.interval {
+            Some(Trigger::Interval)
+        } else if self.self_contact && self.crowded {
+            Some(Trigger::Crowded)
+        } else {
+            None
+        }
+    }
+
+    /// Runs one increment, global (`Some(trigger)`) or local (`None`), with the penalty passes
+    /// of `pen` after it when given; a local increment whose motion budget is used up is run
+    /// again globally.
+    fn execute(
+        &mut self,
+        positions: &[[f64; 3]],
+        mut global: Option<Trigger>,
+        mut pen: Option<PenaltyRun<'_>>,
+    ) -> Result<(SearchResult, [u32; layout::STATUS_WORDS])> {
+        loop {
+            let prepared = match global {
+                Some(_) => self.prepare(positions)?,
+                None => self.prepare_local(positions)?,
+            };
+            let local = global.is_none();
+            let (raw, entries, regrowths, status) = match (&mut self.executor, pen.as_mut()) {
+                (Executor::Gpu(g), None) => g.run_mode(&prepared, local, None, true)?,
+                (Executor::Cpu(c), None) => c.run_mode(&prepared, local)?,
+                (Executor::Gpu(g), Some(run)) => {
+                    let PenaltyExec::Gpu(p) = &mut *run.exec else {
+                        return Err(mixed_devices());
+                    };
+                    p.set_inputs(run.params, run.velocities, run.outputs)?;
+                    g.run_mode(&prepared, local, Some(p.as_mut()), run.outputs)?
+                }
+                (Executor::Cpu(c), Some(run)) => {
+                    let PenaltyExec::Cpu(p) = &mut *run.exec else {
+                        return Err(mixed_devices());
+                    };
+                    let (hits, entries, regrowths, mut status) = c.run_mode(&prepared, local)?;
+                    p.run(
+                        run.setup,
+                        run.params,
+                        &prepared,
+                        run.velocities,
+                        &hits,
+                        &mut status,
+                    );
+                    (hits, entries, regrowths, status)
+                }
+            };
+            if local && status[layout::STATUS_BUDGET_EXCEEDED] != 0 {
+                global = Some(Trigger::Budget);
+                continue;
+            }
+            match global {
+                Some(_) => {
+                    self.frame = Some((prepared.grid, prepared.params));
+                    self.since_global = 0;
+                    self.crowded = status[layout::STATUS_CROWDED] > 0;
+                }
+                None => self.since_global += 1,
+            }
+            let trigger = global.unwrap_or(Trigger::Local);
+            return Ok((
+                self.finish(&prepared, raw, entries, regrowths, trigger, &status),
+                status,
+            ));
+        }
     }
 
     /// Runs `STEPS[..first_gpu_step]` on the CPU mirror and the rest on this search's GPU,
@@ -223,49 +433,50 @@ impl GlobalSearch {
     ) -> Result<SearchResult> {
         let prepared = self.prepare(positions)?;
         let first = first_gpu_step.min(STEPS.len());
-        let (raw, entries, regrowths) = match &mut self.executor {
+        let (raw, entries, regrowths, status) = match &mut self.executor {
             Executor::Gpu(g) => {
                 let mut cpu = CpuSearch::default();
                 let ws = cpu.run_prefix(&prepared, first)?;
                 g.run_split(&prepared, first, ws)?
             }
-            Executor::Cpu(c) => c.run(&prepared)?,
+            Executor::Cpu(c) => c.run_mode(&prepared, false)?,
         };
-        Ok(self.finish(&prepared, raw, entries, regrowths))
+        self.frame = Some((prepared.grid, prepared.params));
+        self.since_global = 0;
+        Ok(self.finish(
+            &prepared,
+            raw,
+            entries,
+            regrowths,
+            Trigger::Requested,
+            &status,
+        ))
     }
 
-    /// Runs the search and then the penalty passes of `pen` in the same increment (one
-    /// submit on the GPU). Returns the search result (with contacts only when `outputs`, on
-    /// the GPU) and the status words.
-    pub(crate) fn run_with_penalty(
+    /// Runs the scheduled search and then the penalty passes of `pen` in the same increment
+    /// (one submit on the GPU). Returns the search result (with contacts only when `outputs`,
+    /// on the GPU) and the status words.
+    pub(crate) fn step_with_penalty(
         &mut self,
         positions: &[[f64; 3]],
-        pen: &mut PenaltyExec,
+        exec: &mut PenaltyExec,
         setup: &PenaltySetup,
-        pp: &PenaltyParams,
+        params: &PenaltyParams,
         velocities: &[[f32; 4]],
         outputs: bool,
     ) -> Result<(SearchResult, [u32; layout::STATUS_WORDS])> {
-        let prepared = self.prepare(positions)?;
-        let (raw, entries, regrowths, status) = match (&mut self.executor, pen) {
-            (Executor::Gpu(g), PenaltyExec::Gpu(p)) => {
-                p.set_inputs(pp, velocities, outputs)?;
-                g.run_after(&prepared, p.as_mut(), outputs)?
-            }
-            (Executor::Cpu(c), PenaltyExec::Cpu(p)) => {
-                let (hits, entries, regrowths) = c.run(&prepared)?;
-                let mut status = [0u32; layout::STATUS_WORDS];
-                p.run(setup, pp, &prepared, velocities, &hits, &mut status);
-                (hits, entries, regrowths, status)
-            }
-            _ => {
-                return Err(Error::Gpu {
-                    during: "penalty step".into(),
-                    message: "search and penalty executors run on different devices".into(),
-                })
-            }
-        };
-        Ok((self.finish(&prepared, raw, entries, regrowths), status))
+        let trigger = self.decide();
+        self.execute(
+            positions,
+            trigger,
+            Some(PenaltyRun {
+                exec,
+                setup,
+                params,
+                velocities,
+                outputs,
+            }),
+        )
     }
 
     /// The slave nodes searched, in order.
@@ -293,6 +504,8 @@ impl GlobalSearch {
         raw: Vec<GpuHit>,
         entries: u32,
         regrowths: u32,
+        trigger: Trigger,
+        status: &[u32; layout::STATUS_WORDS],
     ) -> SearchResult {
         let o = prepared.grid.origin;
         let mut candidates = 0u64;
@@ -324,6 +537,10 @@ impl GlobalSearch {
             contacts,
             raw,
             stats: SearchStats {
+                trigger,
+                local_iterations: status[layout::STATUS_LOCAL_ITERATIONS],
+                local_capped: status[layout::STATUS_LOCAL_CAPPED],
+                motion: f32::from_bits(status[layout::STATUS_MOTION]) as f64,
                 grid: prepared.grid,
                 entries,
                 candidates,
@@ -404,7 +621,10 @@ impl GlobalSearch {
             n_slaves: self.slaves.len() as u32,
             entry_capacity: 0,
             dim: self.dim,
-            _pad: [0; 4],
+            max_local_iterations: layout::MAX_LOCAL_ITERATIONS,
+            flags: self.flags(),
+            budget: (self.schedule.budget * self.radius) as f32,
+            n_motion_nodes: self.motion_nodes.len() as u32,
         };
         let margin = params.bin_margin as f64;
         let estimated_entries = boxes
@@ -428,6 +648,89 @@ impl GlobalSearch {
             facets,
             slaves: self.slaves.clone(),
             estimated_entries,
+            adjacency: self.adjacency.clone(),
+            motion_nodes: self.motion_nodes.clone(),
+            local: false,
         })
+    }
+
+    fn flags(&self) -> u32 {
+        (if self.schedule.wide_local {
+            layout::FLAG_WIDE_LOCAL
+        } else {
+            0
+        }) | (if self.self_contact {
+            layout::FLAG_SELF_CONTACT
+        } else {
+            0
+        })
+    }
+
+    /// The kernels' input for a local increment: positions in the frame of the last global
+    /// search (no grid is fitted).
+    pub fn prepare_local(&self, positions: &[[f64; 3]]) -> Result<Prepared> {
+        if positions.len() != self.masses.len() {
+            return Err(Error::LengthMismatch {
+                what: "positions (one per model node)",
+                expected: self.masses.len(),
+                got: positions.len(),
+            });
+        }
+        validate_positions(positions, 0, self.dim)?;
+        let Some((grid, mut params)) = self.frame else {
+            return Err(Error::BadParameter {
+                name: "local search",
+                value: "before any global search".into(),
+                expected: "a global search first",
+            });
+        };
+        let o = grid.origin;
+        let nodes = positions
+            .iter()
+            .zip(&self.masses)
+            .map(|(x, &m)| {
+                [
+                    (x[0] - o[0]) as f32,
+                    (x[1] - o[1]) as f32,
+                    (x[2] - o[2]) as f32,
+                    m,
+                ]
+            })
+            .collect();
+        params.flags = self.flags();
+        params.budget = (self.schedule.budget * self.radius) as f32;
+        let facets = self
+            .master
+            .active
+            .iter()
+            .map(|&f| self.master.facets[f as usize].padded())
+            .collect();
+        Ok(Prepared {
+            params,
+            grid,
+            nodes,
+            facets,
+            slaves: self.slaves.clone(),
+            estimated_entries: 0,
+            adjacency: self.adjacency.clone(),
+            motion_nodes: self.motion_nodes.clone(),
+            local: true,
+        })
+    }
+}
+
+/// The penalty passes to run after a search in the same increment.
+pub(crate) struct PenaltyRun<'a> {
+    exec: &'a mut PenaltyExec,
+    setup: &'a PenaltySetup,
+    params: &'a PenaltyParams,
+    velocities: &'a [[f32; 4]],
+    outputs: bool,
+}
+
+fn mixed_devices() -> Error {
+    Error::Gpu {
+        during: "penalty step".into(),
+        message: "search and penalty executors run on different devices".into(),
     }
 }

@@ -1,0 +1,146 @@
+// local_search.wgsl — finite-sliding tracking between global searches (seed: "Local contact
+// searches"). CPU mirror: src/cpu/local_search.rs.
+//
+// Bindings: 0 params (uniform SearchParams), 1 nodes (grid-local, in the frame of the last
+//           global search), 2 facets, 3 slaves, 4 adjacency (words 0..=n_nodes: start of each
+//           model node's active facets within this same buffer; then the lists, increasing),
+//           5 status (atomic words), 6 hits (read: the tracked node; written: the result).
+// Dispatch: one invocation per slave node, ITEM_WORKGROUP per workgroup, folded into 2D.
+// Invariants: a slave looks only at the facets attached to its tracked master node (with
+//             FLAG_WIDE_LOCAL, at the facets around every node of those), takes the nearest
+//             (ties: lowest id), moves the tracked node to that facet's node nearest the slave
+//             (ties: lowest id), and repeats until the tracked node stays, at most
+//             max_local_iterations times; the most iterations taken and the number of slaves
+//             that hit the cap are reduced into the status words. A slave beyond the radius
+//             keeps its tracked node (facet = NO_FACET) so tracking resumes when it comes back;
+//             a slave with no tracked node waits for the next global search. Nothing runs when
+//             the motion budget is exceeded (the increment is run again with a global search).
+
+@group(0) @binding(0) var<uniform> params: SearchParams;
+@group(0) @binding(1) var<storage, read> nodes: array<vec4<f32>>;
+@group(0) @binding(2) var<storage, read> facets: array<vec4<u32>>;
+@group(0) @binding(3) var<storage, read> slaves: array<u32>;
+@group(0) @binding(4) var<storage, read> adjacency: array<u32>;
+@group(0) @binding(5) var<storage, read_write> status: array<atomic<u32>>;
+@group(0) @binding(6) var<storage, read_write> hits: array<Hit>;
+
+fn project_facet(p: vec3<f32>, fac: vec4<u32>) -> Projection {
+    let n = facet_node_count(fac);
+    let x0 = nodes[fac.x].xyz;
+    let x1 = nodes[fac.y].xyz;
+    if (n == 2u) { return closest_on_segment(p, x0, x1); }
+    let x2 = nodes[fac.z].xyz;
+    if (n == 3u) { return closest_on_triangle(p, x0, x1, x2); }
+    return closest_on_quad(p, x0, x1, x2, nodes[fac.w].xyz);
+}
+
+// Self-contact: facet f is the slave's own or touches one of the slave's own facets.
+fn excluded(s: u32, fac: vec4<u32>) -> bool {
+    if ((params.flags & FLAG_SELF_CONTACT) == 0u) { return false; }
+    let n = facet_node_count(fac);
+    for (var j = 0u; j < n; j++) {
+        let node = fac[j];
+        if (node == s) { return true; }
+        for (var k = adjacency[s]; k < adjacency[s + 1u]; k++) {
+            let own = facets[adjacency[k]];
+            let m = facet_node_count(own);
+            for (var q = 0u; q < m; q++) {
+                if (own[q] == node) { return true; }
+            }
+        }
+    }
+    return false;
+}
+
+struct Best {
+    facet: u32,
+    d2: f32,
+    pr: Projection,
+    candidates: u32,
+}
+
+fn consider(b: ptr<function, Best>, s: u32, p: vec3<f32>, f: u32) {
+    let fac = facets[f];
+    if (excluded(s, fac)) { return; }
+    (*b).candidates += 1u;
+    let pr = project_facet(p, fac);
+    if ((*b).facet == NO_FACET || pr.dist2 < (*b).d2 || (pr.dist2 == (*b).d2 && f < (*b).facet)) {
+        (*b).facet = f;
+        (*b).d2 = pr.dist2;
+        (*b).pr = pr;
+    }
+}
+
+@compute @workgroup_size(64)
+fn local_search(@builtin(workgroup_id) wg: vec3<u32>,
+                @builtin(num_workgroups) nwg: vec3<u32>,
+                @builtin(local_invocation_index) li: u32) {
+    let i = folded_id(wg, nwg, li, ITEM_WORKGROUP);
+    if (i >= params.n_slaves) { return; }
+    if (atomicLoad(&status[STATUS_BUDGET_EXCEEDED]) != 0u) { return; }
+    var hit = hits[i];
+    let s = slaves[i];
+    let p = nodes[s].xyz;
+    var tracked = hit.node;
+    hit.facet = NO_FACET;
+    hit.candidates = 0u;
+    hit.slave = s;
+    hit.point_gap = vec4<f32>(0.0);
+    hit.normal_dist = vec4<f32>(0.0);
+    hit.weights = vec4<f32>(0.0);
+    if (tracked == NO_NODE) {
+        hits[i] = hit;
+        return;
+    }
+    var b: Best;
+    var it = 0u;
+    var settled = false;
+    loop {
+        b.facet = NO_FACET;
+        b.d2 = 0.0;
+        for (var k = adjacency[tracked]; k < adjacency[tracked + 1u]; k++) {
+            let f = adjacency[k];
+            if ((params.flags & FLAG_WIDE_LOCAL) != 0u) {
+                let fac = facets[f];
+                let n = facet_node_count(fac);
+                for (var j = 0u; j < n; j++) {
+                    let node = fac[j];
+                    for (var q = adjacency[node]; q < adjacency[node + 1u]; q++) {
+                        consider(&b, s, p, adjacency[q]);
+                    }
+                }
+            } else {
+                consider(&b, s, p, f);
+            }
+        }
+        it += 1u;
+        if (b.facet == NO_FACET) { settled = true; break; }
+        let fac = facets[b.facet];
+        let n = facet_node_count(fac);
+        var next = NO_NODE;
+        var nd2 = 0.0;
+        for (var j = 0u; j < n; j++) {
+            let node = fac[j];
+            let d = nodes[node].xyz - p;
+            let d2 = dot(d, d);
+            if (next == NO_NODE || d2 < nd2 || (d2 == nd2 && node < next)) {
+                next = node;
+                nd2 = d2;
+            }
+        }
+        if (next == tracked) { settled = true; break; }
+        tracked = next;
+        if (it >= params.max_local_iterations) { break; }
+    }
+    atomicMax(&status[STATUS_LOCAL_ITERATIONS], it);
+    if (!settled) { atomicAdd(&status[STATUS_LOCAL_CAPPED], 1u); }
+    hit.candidates = b.candidates;
+    hit.node = tracked;
+    if (b.facet != NO_FACET && b.d2 <= params.radius * params.radius) {
+        hit.facet = b.facet;
+        hit.point_gap = vec4<f32>(b.pr.point, dot(p - b.pr.point, b.pr.normal));
+        hit.normal_dist = vec4<f32>(b.pr.normal, sqrt(b.d2));
+        hit.weights = b.pr.weights;
+    }
+    hits[i] = hit;
+}

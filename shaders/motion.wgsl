@@ -1,0 +1,31 @@
+// motion.wgsl — the motion budget: how far the pair's nodes moved since the last global search.
+// CPU mirror: src/cpu/motion.rs.
+//
+// Bindings: 0 params (uniform SearchParams), 1 nodes (grid-local, frame of the last global
+//           search), 2 reference (positions at the last global search, same frame),
+//           3 motion_nodes (the slave nodes and the master surface's nodes), 4 status.
+// Dispatch: one invocation per motion node, ITEM_WORKGROUP per workgroup, folded into 2D.
+// Invariants: the largest displacement is reduced with atomicMax on its bits (positive floats
+//             order as their bits); if twice any node's displacement reaches the budget —
+//             slave plus master motion could have used it up — STATUS_BUDGET_EXCEEDED is set
+//             and the increment is run again with a global search.
+
+@group(0) @binding(0) var<uniform> params: SearchParams;
+@group(0) @binding(1) var<storage, read> nodes: array<vec4<f32>>;
+@group(0) @binding(2) var<storage, read> reference: array<vec4<f32>>;
+@group(0) @binding(3) var<storage, read> motion_nodes: array<u32>;
+@group(0) @binding(4) var<storage, read_write> status: array<atomic<u32>>;
+
+@compute @workgroup_size(64)
+fn motion(@builtin(workgroup_id) wg: vec3<u32>,
+          @builtin(num_workgroups) nwg: vec3<u32>,
+          @builtin(local_invocation_index) li: u32) {
+    let k = folded_id(wg, nwg, li, ITEM_WORKGROUP);
+    if (k >= params.n_motion_nodes) { return; }
+    let id = motion_nodes[k];
+    let d = length(nodes[id].xyz - reference[id].xyz);
+    atomicMax(&status[STATUS_MOTION], bitcast<u32>(d));
+    if (2.0 * d >= params.budget) {
+        atomicStore(&status[STATUS_BUDGET_EXCEEDED], 1u);
+    }
+}

@@ -1,0 +1,138 @@
+//! CPU mirror of `shaders/local_search.wgsl`: tracking between global searches.
+
+use super::common::{excluded, facet_node_count, node};
+use super::nearest_facet::project;
+use crate::geometry::{Projection, V3};
+use crate::model::NO_NODE;
+use crate::search::layout::*;
+
+struct Best {
+    facet: u32,
+    d2: f32,
+    pr: Option<Projection<f32>>,
+    candidates: u32,
+}
+
+#[allow(clippy::too_many_arguments)]
+fn consider(
+    b: &mut Best,
+    params: &SearchParams,
+    nodes: &[[f32; 4]],
+    facets: &[[u32; 4]],
+    adjacency: &[u32],
+    s: u32,
+    p: V3<f32>,
+    f: u32,
+) {
+    let fac = facets[f as usize];
+    if excluded(params, facets, adjacency, s, fac) {
+        return;
+    }
+    b.candidates += 1;
+    let pr = project(nodes, p, fac);
+    if b.facet == NO_FACET || pr.dist2 < b.d2 || (pr.dist2 == b.d2 && f < b.facet) {
+        b.facet = f;
+        b.d2 = pr.dist2;
+        b.pr = Some(pr);
+    }
+}
+
+/// One "invocation" per slave node (WGSL: `local_search`).
+#[allow(clippy::too_many_arguments)]
+pub fn local_search(
+    params: &SearchParams,
+    nodes: &[[f32; 4]],
+    facets: &[[u32; 4]],
+    slaves: &[u32],
+    adjacency: &[u32],
+    status: &mut [u32],
+    hits: &mut [GpuHit],
+) {
+    if status[STATUS_BUDGET_EXCEEDED] != 0 {
+        return;
+    }
+    for i in 0..params.n_slaves as usize {
+        let s = slaves[i];
+        let p = node(nodes, s);
+        let mut tracked = hits[i].node;
+        let mut hit = GpuHit::miss(s, 0);
+        if tracked == NO_NODE {
+            hits[i] = hit;
+            continue;
+        }
+        let mut b = Best {
+            facet: NO_FACET,
+            d2: 0.0,
+            pr: None,
+            candidates: 0,
+        };
+        let mut it = 0;
+        let mut settled = false;
+        loop {
+            b.facet = NO_FACET;
+            b.d2 = 0.0;
+            for k in adjacency[tracked as usize]..adjacency[tracked as usize + 1] {
+                let f = adjacency[k as usize];
+                if params.flags & FLAG_WIDE_LOCAL != 0 {
+                    let fac = facets[f as usize];
+                    for &n in &fac[..facet_node_count(fac)] {
+                        for q in adjacency[n as usize]..adjacency[n as usize + 1] {
+                            consider(
+                                &mut b,
+                                params,
+                                nodes,
+                                facets,
+                                adjacency,
+                                s,
+                                p,
+                                adjacency[q as usize],
+                            );
+                        }
+                    }
+                } else {
+                    consider(&mut b, params, nodes, facets, adjacency, s, p, f);
+                }
+            }
+            it += 1;
+            if b.facet == NO_FACET {
+                settled = true;
+                break;
+            }
+            let fac = facets[b.facet as usize];
+            let mut next = NO_NODE;
+            let mut nd2 = 0.0f32;
+            for &n in &fac[..facet_node_count(fac)] {
+                let d2 = (node(nodes, n) - p).length2();
+                if next == NO_NODE || d2 < nd2 || (d2 == nd2 && n < next) {
+                    next = n;
+                    nd2 = d2;
+                }
+            }
+            if next == tracked {
+                settled = true;
+                break;
+            }
+            tracked = next;
+            if it >= params.max_local_iterations {
+                break;
+            }
+        }
+        status[STATUS_LOCAL_ITERATIONS] = status[STATUS_LOCAL_ITERATIONS].max(it);
+        if !settled {
+            status[STATUS_LOCAL_CAPPED] += 1;
+        }
+        hit.candidates = b.candidates;
+        hit.node = tracked;
+        if let (true, Some(pr)) = (
+            b.facet != NO_FACET && b.d2 <= params.radius * params.radius,
+            b.pr,
+        ) {
+            let q = pr.point;
+            hit.facet = b.facet;
+            hit.point_gap = [q.x, q.y, q.z, (p - q).dot(pr.normal)];
+            hit.normal_dist = [pr.normal.x, pr.normal.y, pr.normal.z, b.d2.sqrt()];
+            hit.weights = pr.weights;
+        }
+        hits[i] = hit;
+    }
+}

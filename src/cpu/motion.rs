@@ -1,0 +1,21 @@
+//! CPU mirror of `shaders/motion.wgsl`: the motion budget since the last global search.
+
+use super::common::node;
+use crate::search::layout::{SearchParams, STATUS_BUDGET_EXCEEDED, STATUS_MOTION};
+
+/// One "invocation" per motion node.
+pub fn motion(
+    params: &SearchParams,
+    nodes: &[[f32; 4]],
+    reference: &[[f32; 4]],
+    motion_nodes: &[u32],
+    status: &mut [u32],
+) {
+    for &id in &motion_nodes[..params.n_motion_nodes as usize] {
+        let d = (node(nodes, id) - node(reference, id)).length2().sqrt();
+        status[STATUS_MOTION] = status[STATUS_MOTION].max(d.to_bits());
+        if 2.0 * d >= params.budget {
+            status[STATUS_BUDGET_EXCEEDED] = 1;
+        }
+    }
+}
