@@ -3,18 +3,23 @@
 //
 // Bindings: 0 params (uniform SearchParams), 1 nodes (grid-local, frame of the last global
 //           search), 2 reference (positions at the last global search, same frame),
-//           3 motion_nodes (the slave nodes and the master surface's nodes), 4 status.
+//           3 motion_nodes (the slave nodes, in slave order, then the master surface's other
+//           nodes), 4 status, 5 hits (the tracked node of each slave).
 // Dispatch: one invocation per motion node, ITEM_WORKGROUP per workgroup, folded into 2D.
-// Invariants: the largest displacement is reduced with atomicMax on its bits (positive floats
-//             order as their bits); if twice any node's displacement reaches the budget —
-//             slave plus master motion could have used it up — STATUS_BUDGET_EXCEEDED is set
-//             and the increment is run again with a global search.
+// Invariants: tracked slaves are followed by the local search whatever they move, so only
+//             the untracked slaves (no facet within the radius at the last global search) and
+//             the master nodes count: if twice one of their displacements reaches the budget —
+//             an untracked slave and the master could together have closed it —
+//             STATUS_BUDGET_EXCEEDED is set and the increment runs again with a global search.
+//             The largest such displacement is reduced with atomicMax on its bits (positive
+//             floats order as their bits).
 
 @group(0) @binding(0) var<uniform> params: SearchParams;
 @group(0) @binding(1) var<storage, read> nodes: array<vec4<f32>>;
 @group(0) @binding(2) var<storage, read> reference: array<vec4<f32>>;
 @group(0) @binding(3) var<storage, read> motion_nodes: array<u32>;
 @group(0) @binding(4) var<storage, read_write> status: array<atomic<u32>>;
+@group(0) @binding(5) var<storage, read> hits: array<Hit>;
 
 @compute @workgroup_size(64)
 fn motion(@builtin(workgroup_id) wg: vec3<u32>,
@@ -22,6 +27,7 @@ fn motion(@builtin(workgroup_id) wg: vec3<u32>,
           @builtin(local_invocation_index) li: u32) {
     let k = folded_id(wg, nwg, li, ITEM_WORKGROUP);
     if (k >= params.n_motion_nodes) { return; }
+    if (k < params.n_slaves && hits[k].node != NO_NODE) { return; }
     let id = motion_nodes[k];
     let d = length(nodes[id].xyz - reference[id].xyz);
     atomicMax(&status[STATUS_MOTION], bitcast<u32>(d));

@@ -100,6 +100,7 @@ impl CpuSearch {
             &self.ws.reference,
             &prep.motion_nodes,
             &mut status,
+            &self.ws.hits,
         );
         local_search::local_search(
             &prep.params,

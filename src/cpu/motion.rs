@@ -1,17 +1,25 @@
 //! CPU mirror of `shaders/motion.wgsl`: the motion budget since the last global search.
 
 use super::common::node;
-use crate::search::layout::{SearchParams, STATUS_BUDGET_EXCEEDED, STATUS_MOTION};
+use crate::model::NO_NODE;
+use crate::search::layout::{GpuHit, SearchParams, STATUS_BUDGET_EXCEEDED, STATUS_MOTION};
 
-/// One "invocation" per motion node.
+/// One "invocation" per motion node; tracked slaves are skipped.
 pub fn motion(
     params: &SearchParams,
     nodes: &[[f32; 4]],
     reference: &[[f32; 4]],
     motion_nodes: &[u32],
     status: &mut [u32],
+    hits: &[GpuHit],
 ) {
-    for &id in &motion_nodes[..params.n_motion_nodes as usize] {
+    for (k, &id) in motion_nodes[..params.n_motion_nodes as usize]
+        .iter()
+        .enumerate()
+    {
+        if k < params.n_slaves as usize && hits[k].node != NO_NODE {
+            continue;
+        }
         let d = (node(nodes, id) - node(reference, id)).length2().sqrt();
         status[STATUS_MOTION] = status[STATUS_MOTION].max(d.to_bits());
         if 2.0 * d >= params.budget {

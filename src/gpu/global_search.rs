@@ -285,6 +285,7 @@ impl GpuSearch {
                     b.reference.buffer.as_entire_binding(),
                     b.motion_nodes.buffer.as_entire_binding(),
                     b.status.as_entire_binding(),
+                    b.hits.buffer.as_entire_binding(),
                 ],
             ),
             bin_count: group(

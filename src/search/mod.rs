@@ -140,10 +140,11 @@ pub struct Schedule {
     /// A global search every this many increments (the first increment always searches
     /// globally). Defaults: 100 for two-surface pairs, 4 for self-contact.
     pub interval: u32,
-    /// Motion budget as a fraction of the search radius: when a node of the pair has moved
-    /// more than half of `budget·radius` since the last global search (slave and master motion
-    /// together could then have used it up), the increment searches globally. Contacts within
-    /// `(1 − budget)·radius` are then always tracked. Default 0.5.
+    /// Motion budget as a fraction of the search radius: when an untracked slave node (none of
+    /// whose facets was within the radius at the last global search) or a master node has
+    /// moved more than half of `budget·radius` since then (the two together could have used it
+    /// up), the increment searches globally; tracked slaves are followed by the local search.
+    /// Every contact within `(1 − budget)·radius` is then tracked. Default 0.5.
     pub budget: f64,
     /// The slightly more expensive local search: facets around every node of the tracked
     /// node's facets (Abaqus' FAST LOCAL TRACKING=NO).
