@@ -12,8 +12,9 @@
 //             the slave node, ties to the lowest node id. A node outside the grid, or with no
 //             facet within the radius, gets facet = NO_FACET. With FLAG_SELF_CONTACT a slave's
 //             own facets and the facets touching them are skipped, and a slave with another
-//             facet within the radius that shares no node with its nearest is counted in
-//             STATUS_CROWDED (the schedule then searches globally more often).
+//             facet within the radius that shares no node with its nearest and faces it (its
+//             gap is more than half its distance: not a neighbour in the same plane) is counted
+//             in STATUS_CROWDED (the schedule then searches globally more often).
 
 @group(0) @binding(0) var<uniform> params: SearchParams;
 @group(0) @binding(1) var<storage, read> nodes: array<vec4<f32>>;
@@ -109,7 +110,10 @@ fn nearest_facet(@builtin(workgroup_id) wg: vec3<u32>,
             for (var k = s; k < e; k++) {
                 let f = entries[k];
                 if (f == best_f || excluded(slave, facets[f]) || share_node(facets[f], facets[best_f])) { continue; }
-                if (project(p, facets[f]).dist2 <= r2) { crowded = true; }
+                // near and facing the slave (not merely beside it in its own plane)
+                let pr = project(p, facets[f]);
+                let gap = dot(p - pr.point, pr.normal);
+                if (pr.dist2 <= r2 && 4.0 * gap * gap > pr.dist2) { crowded = true; }
             }
             if (crowded) { atomicAdd(&status[STATUS_CROWDED], 1u); }
         }

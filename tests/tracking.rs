@@ -171,3 +171,311 @@ fn sliding_across_many_facets() {
         }
     }
 }
+
+/// Curved masters: slaves orbit a cylinder and slide over a sphere.
+#[test]
+fn curved_cylinder_and_sphere_masters() {
+    // cylinder of radius 1 around z, as quads (n_theta × n_z)
+    let (nt, nz) = (48, 20);
+    let mut pos = Vec::new();
+    for j in 0..=nz {
+        for i in 0..nt {
+            let th = 2.0 * std::f64::consts::PI * i as f64 / nt as f64;
+            pos.push([th.cos(), th.sin(), j as f64 * 0.1]);
+        }
+    }
+    let mut quads = Vec::new();
+    for j in 0..nz {
+        for i in 0..nt {
+            let a = (j * nt + i) as u32;
+            let b = (j * nt + (i + 1) % nt) as u32;
+            quads.push([a, b, b + nt as u32, a + nt as u32]); // outward normals
+        }
+    }
+    let h = 2.0 * std::f64::consts::PI / nt as f64;
+    let n_s = 600;
+    let mut rng = abut::mesh::SplitMix64::new(5);
+    let sl: Vec<(f64, f64, f64)> = (0..n_s)
+        .map(|_| {
+            (
+                rng.range(0.0, 6.28),
+                rng.range(0.2, 1.8),
+                rng.range(0.99, 1.02),
+            )
+        })
+        .collect();
+    let slaves: Vec<[f64; 3]> = sl
+        .iter()
+        .map(|&(t, z, r)| [r * t.cos(), r * t.sin(), z])
+        .collect();
+    let (m, p, first) = model_with(3, &pos, Surface::quads(&quads), &slaves, 2.0 * h);
+    let base = m.positions().to_vec();
+    let at = |k: usize| {
+        let mut x = base.clone();
+        for (q, &(t, z, r)) in x[first..].iter_mut().zip(&sl) {
+            let th = t + 0.3 * h * k as f64; // a full turn in ~ 160 increments
+            *q = [
+                r * th.cos(),
+                r * th.sin(),
+                z + 0.05 * (0.03 * k as f64).sin(),
+            ];
+        }
+        x
+    };
+    let s = sphere_triangles(24, 48, 1.0, [0.0; 3]);
+    let hs = std::f64::consts::PI / 24.0;
+    let sph_sl: Vec<(f64, f64, f64)> = (0..n_s)
+        .map(|_| {
+            (
+                rng.range(0.0, 6.28),
+                rng.range(0.3, 2.8),
+                rng.range(0.99, 1.02),
+            )
+        })
+        .collect();
+    let sph_slaves: Vec<[f64; 3]> = sph_sl
+        .iter()
+        .map(|&(ph, th, r)| {
+            [
+                r * th.sin() * ph.cos(),
+                r * th.sin() * ph.sin(),
+                r * th.cos(),
+            ]
+        })
+        .collect();
+    let (ms, ps, fs) = model_with(
+        3,
+        &s.positions,
+        Surface::triangles(&s.facets),
+        &sph_slaves,
+        2.0 * hs,
+    );
+    let bs = ms.positions().to_vec();
+    let at_s = |k: usize| {
+        let mut x = bs.clone();
+        for (q, &(ph, th, r)) in x[fs..].iter_mut().zip(&sph_sl) {
+            let ph = ph + 0.3 * hs * k as f64;
+            let th = th + 0.2 * (0.02 * k as f64).sin();
+            *q = [
+                r * th.sin() * ph.cos(),
+                r * th.sin() * ph.sin(),
+                r * th.cos(),
+            ];
+        }
+        x
+    };
+    for d in devices() {
+        let t = track(&d, &m, p, wide(100), 200, &at);
+        eprintln!("{d} cylinder: {t:?}");
+        assert!(
+            t.compared > 100_000 && t.discrepancies == 0 && t.budget == 0,
+            "{d} cylinder: {t:?}"
+        );
+        let fast = track(&d, &m, p, schedule(100), 200, &at);
+        assert_eq!(fast.discrepancies, 0, "{d} cylinder fast: {fast:?}");
+        let t = track(&d, &ms, ps, wide(100), 200, &at_s);
+        eprintln!("{d} sphere: {t:?}");
+        assert!(
+            t.compared > 100_000 && t.discrepancies == 0,
+            "{d} sphere: {t:?}"
+        );
+    }
+}
+
+/// A plate with a hole and free edges: slaves cross the hole and slide off the edges and back.
+#[test]
+fn holes_and_free_edges() {
+    let n = 30;
+    let h = 1.0 / n as f64;
+    let plate = plate_quads(n, n, 1.0, 1.0, 0.0, 3, &|_, _| 0.0);
+    // remove a 6 × 6 hole in the middle
+    let quads: Vec<[u32; 4]> = plate
+        .facets
+        .iter()
+        .enumerate()
+        .filter(|(k, _)| {
+            let (i, j) = (k % n, k / n);
+            !(12..18).contains(&i) || !(12..18).contains(&j)
+        })
+        .map(|(_, q)| *q)
+        .collect();
+    let slaves: Vec<[f64; 3]> =
+        abut::mesh::point_cloud(1500, [0.05, 0.05, -0.02], [0.95, 0.95, 0.02], 4);
+    let (m, p, first) = model_with(
+        3,
+        &plate.positions,
+        Surface::quads(&quads),
+        &slaves,
+        2.0 * h,
+    );
+    let base = m.positions().to_vec();
+    let at = |k: usize| {
+        let mut x = base.clone();
+        for (i, q) in x[first..].iter_mut().enumerate() {
+            let a = 0.3 + 0.1 * (i % 5) as f64; // some slide off the plate and come back
+            let w = 0.3 * h / a;
+            q[0] += a * (w * k as f64).sin();
+            q[1] += 0.2 * (0.5 * w * k as f64).cos() - 0.2;
+        }
+        x
+    };
+    for d in devices() {
+        let t = track(&d, &m, p, wide(100), 300, &at);
+        eprintln!("{d}: {t:?}");
+        assert!(t.compared > 100_000 && t.discrepancies == 0, "{d}: {t:?}");
+        assert!(
+            t.budget > 0,
+            "{d}: slaves leaving the plate become untracked and trigger the budget: {t:?}"
+        );
+    }
+}
+
+/// Large motion (more than a facet per increment): the budget fires before any contact in the
+/// guaranteed zone is missed.
+#[test]
+fn large_motion_triggers_the_budget() {
+    let n = 30;
+    let h = 1.0 / n as f64;
+    let plate = plate_quads(n, n, 1.0, 1.0, 0.0, 3, &|_, _| 0.0);
+    // slaves start far above and fall through the radius at 1.5 facets per increment, some
+    // landing; others sweep sideways fast
+    let slaves: Vec<[f64; 3]> = abut::mesh::point_cloud(1000, [0.1, 0.1, 0.3], [0.9, 0.9, 0.6], 6);
+    let (m, p, first) = model_with(
+        3,
+        &plate.positions,
+        Surface::quads(&quads_of(&plate)),
+        &slaves,
+        2.0 * h,
+    );
+    let base = m.positions().to_vec();
+    let at = |k: usize| {
+        let mut x = base.clone();
+        for q in &mut x[first..] {
+            q[2] = (q[2] - 1.5 * h * k as f64).max(0.005);
+        }
+        x
+    };
+    for d in devices() {
+        let t = track(&d, &m, p, schedule(100), 40, &at);
+        eprintln!("{d}: {t:?}");
+        assert!(t.compared > 10_000 && t.discrepancies == 0, "{d}: {t:?}");
+        assert!(t.budget >= 3, "{d}: {t:?}");
+    }
+}
+
+fn quads_of(m: &abut::mesh::Mesh<[u32; 4]>) -> Vec<[u32; 4]> {
+    m.facets.clone()
+}
+
+/// A sheet folding onto itself (self-contact): the folding half comes down onto the other;
+/// slaves are all the sheet's nodes, their own facets and neighbours excluded.
+#[test]
+fn sheet_folding_onto_itself() {
+    let (nx, ny) = (30, 10);
+    let sheet = plate_quads(nx, ny, 2.0, 1.0, 0.0, 0, &|_, _| 0.0);
+    let h = 2.0 / nx as f64;
+    let mut m = Model::new_3d();
+    m.add_nodes(&sheet.positions, &vec![1.0; sheet.positions.len()])
+        .unwrap();
+    let s = m.add_surface(Surface::quads(&sheet.facets)).unwrap();
+    let all: Vec<u32> = (0..sheet.positions.len() as u32).collect();
+    let set = m.add_node_set(&all).unwrap();
+    let p = m
+        .add_pair(Pair::new(set, s).search_radius(2.0 * h))
+        .unwrap();
+    let base = m.positions().to_vec();
+    // fold the right half about the line x = 1 (lifted so that it lands 0.4 h above the left
+    // half): θ from 0 to 178° in 150 increments
+    let at = |k: usize| {
+        let th = (178.0f64 * k as f64 / 150.0).min(178.0).to_radians();
+        base.iter()
+            .map(|q| {
+                if q[0] <= 1.0 {
+                    *q
+                } else {
+                    let r = q[0] - 1.0;
+                    [
+                        1.0 + r * th.cos(),
+                        q[1],
+                        r * th.sin() + 0.4 * h * (th / std::f64::consts::PI),
+                    ]
+                }
+            })
+            .collect()
+    };
+    let probe = GlobalSearch::new(&Device::cpu(), &m, p).unwrap();
+    assert!(probe.is_self_contact());
+    assert_eq!(probe.schedule().interval, 4, "self-contact default");
+    for d in devices() {
+        let t = track(
+            &d,
+            &m,
+            p,
+            Schedule {
+                interval: 4,
+                budget: 0.5,
+                wide_local: true,
+            },
+            160,
+            &at,
+        );
+        eprintln!("{d}: {t:?}");
+        assert!(
+            t.compared > 3_000,
+            "{d}: the folded half comes into contact: {t:?}"
+        );
+        assert_eq!(t.discrepancies, 0, "{d}: {t:?}");
+    }
+}
+
+/// The local search on the GPU gives the CPU mirror's results increment by increment, and the
+/// same bytes on every run.
+#[test]
+fn local_search_parity_and_determinism() {
+    let plate = plate_triangles(30, 30, 1.0, 1.0, 0.3, 8, &|x, y| 0.02 * (4.0 * x * y).sin());
+    let h = 1.0 / 30.0;
+    let slaves: Vec<[f64; 3]> =
+        abut::mesh::point_cloud(3000, [0.2, 0.2, -0.01], [0.8, 0.8, 0.01], 9);
+    let (m, p, first) = model_with(
+        3,
+        &plate.positions,
+        Surface::triangles(&plate.facets),
+        &slaves,
+        2.0 * h,
+    );
+    let base = m.positions().to_vec();
+    let at = |k: usize| {
+        let mut x = base.clone();
+        for q in &mut x[first..] {
+            q[0] += 0.15 * (0.05 * k as f64).sin();
+            q[2] += 0.02 * (4.0 * q[0] * q[1]).sin();
+        }
+        x
+    };
+    for schedule in [schedule(100), wide(100)] {
+        let run = |d: &Device| -> Vec<Vec<abut::search::layout::GpuHit>> {
+            let mut s = GlobalSearch::new(d, &m, p).unwrap();
+            s.set_schedule(schedule).unwrap();
+            (0..60).map(|k| s.step(&at(k)).unwrap().raw).collect()
+        };
+        let cpu = run(&Device::cpu());
+        for g in gpus() {
+            let a = run(g);
+            let b = run(g);
+            assert!(a == b, "{g}: two runs differ");
+            let mut differ = 0;
+            for (x, y) in a.iter().zip(&cpu) {
+                for (hg, hc) in x.iter().zip(y) {
+                    if hg.facet != hc.facet || hg.node != hc.node {
+                        differ += 1;
+                    }
+                }
+            }
+            // ties (a slave equally near two facets) may go either way in f32; nothing else
+            assert!(
+                differ * 1000 < 60 * 3000,
+                "{g}: {differ} hits differ from the CPU mirror"
+            );
+        }
+    }
+}

@@ -74,7 +74,11 @@ pub fn nearest_facet(
                 f != best_f
                     && !excluded(params, facets, adjacency, slave, facets[f as usize])
                     && !share_node(facets[f as usize], facets[best_f as usize])
-                    && project(nodes, p, facets[f as usize]).dist2 <= r2
+                    && {
+                        let pr = project(nodes, p, facets[f as usize]);
+                        let gap = (p - pr.point).dot(pr.normal);
+                        pr.dist2 <= r2 && 4.0 * gap * gap > pr.dist2
+                    }
             });
             if crowded {
                 status[STATUS_CROWDED] += 1;
