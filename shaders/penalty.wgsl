@@ -181,12 +181,14 @@ fn penalty(@builtin(workgroup_id) wg: vec3<u32>,
                 o.status = CSTATUS_STICK;
             } else {
                 f_t = trial * (limit / t_len);
-                if (k_t > 0.0) { o.dissipation += limit * (t_len - limit) / k_t; }
+                if (k_t > 0.0) { o.dissipation += pp.weight * limit * (t_len - limit) / k_t; }
             }
             if (k_t > 0.0) { o.tangential.w = 0.5 * dot(f_t, f_t) / k_t; }
         }
-        o.force = vec4<f32>(f_n * nrm + f_t, f_n);
-        o.tangential = vec4<f32>(f_t, o.tangential.w + lv.energy);
+        // a balanced pair's pass contributes its weight's share
+        let w = pp.weight;
+        o.force = vec4<f32>(w * (f_n * nrm + f_t), w * f_n);
+        o.tangential = vec4<f32>(w * f_t, w * (o.tangential.w + lv.energy));
         atomicAdd(&status[STATUS_ACTIVE], 1u);
         if (o.status == CSTATUS_SLIP) { atomicAdd(&status[STATUS_SLIPPING], 1u); }
     }

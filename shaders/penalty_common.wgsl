@@ -34,7 +34,7 @@ struct PenaltyParams {
     stick_stiffness: f32,
     clearance: f32,
     pressure: f32,
-    _pad1: f32,
+    weight: f32,
     table: array<vec4<f32>, 8>,
 }
 

@@ -173,14 +173,44 @@ impl Contact {
             let slaves = model.node_set(pair.slave)?.to_vec();
             match &pair.enforce {
                 Enforce::Penalty(_) => {
+                    let make_exec = |setup: &PenaltySetup| -> Result<PenaltyExec> {
+                        Ok(match device.kind() {
+                            DeviceKind::Gpu(ctx) => PenaltyExec::Gpu(Box::new(GpuPenalty::new(
+                                ctx.clone(),
+                                setup,
+                                n_nodes,
+                            )?)),
+                            DeviceKind::Cpu => PenaltyExec::Cpu(CpuPenalty::new(setup, n_nodes)),
+                        })
+                    };
                     let setup = PenaltySetup::new(model, id, search.master(), &slaves)?;
-                    let exec = match device.kind() {
-                        DeviceKind::Gpu(ctx) => PenaltyExec::Gpu(Box::new(GpuPenalty::new(
-                            ctx.clone(),
-                            &setup,
-                            n_nodes,
-                        )?)),
-                        DeviceKind::Cpu => PenaltyExec::Cpu(CpuPenalty::new(&setup, n_nodes)),
+                    let exec = make_exec(&setup)?;
+                    let back = match pair.balanced {
+                        // balanced: the master surface's nodes against the slave surface too
+                        Some((surface, _)) => {
+                            let slave_surface = model.surface(surface)?.clone();
+                            let nodes = search.master().nodes();
+                            let reverse = PenaltySetup::reverse(model, id, &slave_surface, &nodes)?;
+                            let rsearch = GlobalSearch::from_parts(
+                                device,
+                                model,
+                                slave_surface,
+                                nodes.clone(),
+                                search.radius(),
+                            )?;
+                            let rexec = make_exec(&reverse)?;
+                            Some(PairRun {
+                                id,
+                                search: rsearch,
+                                setup: reverse,
+                                exec: rexec,
+                                output: PairOutput {
+                                    slaves: nodes,
+                                    ..Default::default()
+                                },
+                            })
+                        }
+                        None => None,
                     };
                     pairs.push(PairRun {
                         id,
@@ -192,6 +222,7 @@ impl Contact {
                             ..Default::default()
                         },
                     });
+                    pairs.extend(back);
                 }
                 Enforce::Kinematic(kin) => {
                     let master = search.master().clone();
@@ -363,7 +394,8 @@ impl Contact {
     }
 
     /// The contact outputs of each penalty and kinematic pair after its last increment (empty
-    /// before the first; penalty outputs only when requested).
+    /// before the first; penalty outputs only when requested). A balanced penalty pair gives
+    /// two entries: its slave-on-master pass, then its master-on-slave pass.
     pub fn outputs(&self) -> Vec<(PairId, &PairOutput)> {
         let mut v: Vec<(PairId, &PairOutput)> =
             self.pairs.iter().map(|p| (p.id, &p.output)).collect();

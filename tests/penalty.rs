@@ -785,3 +785,80 @@ fn fast_approach_is_reported_and_caught() {
         }
     }
 }
+
+/// Balanced pairs: each surface is slave in turn and the two passes are weighted; w = 1 is pure
+/// master–slave; momentum holds and GPU matches CPU.
+#[test]
+fn balanced_pairs_weight_both_passes() {
+    let build = |w: Option<f64>| {
+        let a = plate_quads(4, 4, 1.0, 1.0, 0.0, 0, &|_, _| 0.0); // master, normal +z, at z = 0
+        let b = plate_quads(3, 3, 1.0, 1.0, 0.0, 0, &|_, _| 0.0); // slave surface, normal −z
+        let mut m = Model::new_3d();
+        m.add_nodes(&a.positions, &vec![1.0; a.positions.len()])
+            .unwrap();
+        let s = m.add_surface(Surface::quads(&a.facets)).unwrap();
+        let off = m.positions().len() as u32;
+        let h = 0.01;
+        let pos: Vec<[f64; 3]> = b.positions.iter().map(|p| [p[0], p[1], -h]).collect();
+        let r = m.add_nodes(&pos, &vec![1.0; pos.len()]).unwrap();
+        // reversed node order so that the slave surface faces down, towards the master
+        let quads: Vec<[u32; 4]> = b
+            .facets
+            .iter()
+            .map(|q| [q[0] + off, q[3] + off, q[2] + off, q[1] + off])
+            .collect();
+        let ss = m.add_surface(Surface::quads(&quads)).unwrap();
+        let set = m.add_node_set(&r.to_vec()).unwrap();
+        let mut pair = Pair::new(set, s).search_radius(0.2).enforce(penalty(100.0));
+        if let Some(w) = w {
+            pair = pair.balanced(ss, w);
+        }
+        m.add_pair(pair).unwrap();
+        (m, off as usize)
+    };
+    for d in devices() {
+        let forces = |w: Option<f64>| {
+            let (m, off) = build(w);
+            let mut c = Contact::new(&d, &m).unwrap();
+            let v = vec![[0.0; 3]; m.positions().len()];
+            let f = c
+                .penalty_step(m.positions(), &v, 1e-3)
+                .unwrap()
+                .forces
+                .clone();
+            (f, off, c.outputs().len())
+        };
+        let (pure, off, n_pure) = forces(None);
+        let (one, _, n_one) = forces(Some(1.0));
+        let (half, _, n_half) = forces(Some(0.5));
+        assert_eq!(
+            (n_pure, n_one, n_half),
+            (1, 2, 2),
+            "{d}: a balanced pair has two passes"
+        );
+        for (a, b) in pure.iter().zip(&one) {
+            for k in 0..3 {
+                assert!(
+                    (a[k] - b[k]).abs() < 1e-9,
+                    "{d}: w = 1 is pure master–slave"
+                );
+            }
+        }
+        // body B (the slave surface, below the master plane) is pushed up: pure: 16 slave nodes × k·h;
+        // balanced ½: half of that plus half of the 25 master nodes' k·h
+        let on_b = |f: &[[f64; 3]]| f[off..].iter().map(|x| x[2]).sum::<f64>();
+        let kh = 100.0 * 0.01;
+        assert!(
+            (on_b(&pure) - 16.0 * kh).abs() < 1e-4,
+            "{d}: pure {}",
+            on_b(&pure)
+        );
+        assert!(
+            (on_b(&half) - (0.5 * 16.0 + 0.5 * 25.0) * kh).abs() < 1e-4,
+            "{d}: balanced {}",
+            on_b(&half)
+        );
+        let (sum, mag) = momentum(&half);
+        assert!(sum.iter().all(|s| s.abs() <= 1e-6 * mag), "{d}: {sum:?}");
+    }
+}

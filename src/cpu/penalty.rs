@@ -191,16 +191,18 @@ pub fn penalty(
                 } else {
                     f_t = trial * (limit / t_len);
                     if k_t > 0.0 {
-                        o.dissipation += limit * (t_len - limit) / k_t;
+                        o.dissipation += pp.weight * limit * (t_len - limit) / k_t;
                     }
                 }
                 if k_t > 0.0 {
                     o.tangential[3] = 0.5 * f_t.dot(f_t) / k_t;
                 }
             }
-            let f = nrm * f_n + f_t;
-            o.force = [f.x, f.y, f.z, f_n];
-            o.tangential = [f_t.x, f_t.y, f_t.z, o.tangential[3] + lv.energy];
+            let w = pp.weight;
+            let f = (nrm * f_n + f_t) * w;
+            o.force = [f.x, f.y, f.z, w * f_n];
+            let ft = f_t * w;
+            o.tangential = [ft.x, ft.y, ft.z, w * (o.tangential[3] + lv.energy)];
             status[STATUS_ACTIVE] += 1;
             if o.status == CSTATUS_SLIP {
                 status[STATUS_SLIPPING] += 1;

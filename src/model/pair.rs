@@ -277,7 +277,7 @@ impl Pair {
 
     /// Makes the pair balanced: `slave_surface` is the surface the slave nodes lie on, and
     /// the two passes are weighted `weight` (slave on master) and `1 − weight` (master on
-    /// slave); ½ is the usual choice. Kinematic pairs only.
+    /// slave); ½ is the usual choice.
     pub fn balanced(mut self, slave_surface: SurfaceId, weight: f64) -> Self {
         self.balanced = Some((slave_surface, weight));
         self
@@ -339,13 +339,6 @@ impl Pair {
                 }
                 non_negative("penalty damping", p.damping)?;
                 p.law.validate()?;
-                if self.balanced.is_some() {
-                    return Err(Error::BadParameter {
-                        name: "balanced",
-                        value: "penalty pair".into(),
-                        expected: "balanced pairs are supported with kinematic enforcement",
-                    });
-                }
             }
             Enforce::Kinematic(k) => {
                 if let Some(law) = &k.softened {

@@ -66,8 +66,9 @@ pub struct PenaltyParams {
     pub clearance: f32,
     /// Exponential law: pressure p0 at zero clearance.
     pub pressure: f32,
-    /// Padding.
-    pub _pad1: f32,
+    /// Weight of this pass (balanced pairs: w and 1 − w; pure master–slave: 1): the force,
+    /// outputs and energy of each contact are scaled by it.
+    pub weight: f32,
     /// Tabular law: (overclosure, pressure) points, two per vec4.
     pub table: [[f32; 4]; 8],
 }

@@ -26,8 +26,40 @@ pub struct PenaltySetup {
 }
 
 impl PenaltySetup {
-    /// Builds the setup of pair `id` whose master surface is `master` and slaves `slaves`.
+    /// Builds the setup of pair `id` whose master surface is `master` and slaves `slaves`
+    /// (the slave-on-master pass; weighted when the pair is balanced).
     pub fn new(model: &Model, id: PairId, master: &MasterSurface, slaves: &[u32]) -> Result<Self> {
+        let pair: &Pair = model.pair(id)?;
+        let areas: Vec<f64> = match model.node_set_areas(pair.slave)? {
+            Some(a) => a.to_vec(),
+            None => vec![master.mean_facet_area(); slaves.len()],
+        };
+        let weight = pair.balanced.map_or(1.0, |(_, w)| w);
+        Self::from_parts(model, id, master, slaves, &areas, weight)
+    }
+
+    /// The master-on-slave pass of a balanced pair: the master surface's nodes against the
+    /// slave surface `slave_surface`, weighted 1 − w.
+    pub fn reverse(
+        model: &Model,
+        id: PairId,
+        slave_surface: &MasterSurface,
+        master_nodes: &[u32],
+    ) -> Result<Self> {
+        let pair: &Pair = model.pair(id)?;
+        let w = pair.balanced.map_or(0.5, |(_, w)| w);
+        let areas = vec![slave_surface.mean_facet_area(); master_nodes.len()];
+        Self::from_parts(model, id, slave_surface, master_nodes, &areas, 1.0 - w)
+    }
+
+    fn from_parts(
+        model: &Model,
+        id: PairId,
+        master: &MasterSurface,
+        slaves: &[u32],
+        areas: &[f64],
+        weight: f64,
+    ) -> Result<Self> {
         let pair: &Pair = model.pair(id)?;
         let crate::model::Enforce::Penalty(pen) = &pair.enforce else {
             return Err(crate::error::Error::BadParameter {
@@ -36,10 +68,7 @@ impl PenaltySetup {
                 expected: "a penalty pair",
             });
         };
-        let areas: Vec<f32> = match model.node_set_areas(pair.slave)? {
-            Some(a) => a.iter().map(|&x| x as f32).collect(),
-            None => vec![master.mean_facet_area() as f32; slaves.len()],
-        };
+        let areas: Vec<f32> = areas.iter().map(|&a| a as f32).collect();
         // active index of each surface facet
         let mut active_index = vec![u32::MAX; master.facets.len()];
         for (k, &f) in master.active.iter().enumerate() {
@@ -74,12 +103,14 @@ impl PenaltySetup {
                 push(n, NO_SLAVE, &mut adjacency);
             }
         }
+        let mut params = base_params(pen, &pair.friction, slaves.len(), master.active.len());
+        params.weight = weight as f32;
         Ok(Self {
             pair_nodes,
             adjacency,
             areas,
             friction: !matches!(pair.friction, Friction::Frictionless),
-            params: base_params(pen, &pair.friction, slaves.len(), master.active.len()),
+            params,
         })
     }
 
@@ -129,7 +160,7 @@ fn base_params(
         stick_stiffness: 1.0,
         clearance: 0.0,
         pressure: 0.0,
-        _pad1: 0.0,
+        weight: 1.0,
         table: [[0.0; 4]; 8],
     };
     match pen.stiffness {
