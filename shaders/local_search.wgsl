@@ -7,7 +7,9 @@
 //           5 status (atomic words), 6 hits (read: the tracked node; written: the result).
 // Dispatch: one invocation per slave node, ITEM_WORKGROUP per workgroup, folded into 2D.
 // Invariants: a slave looks only at the facets attached to its tracked master node (with
-//             FLAG_WIDE_LOCAL, at the facets around every node of those), takes the nearest
+//             FLAG_WIDE_LOCAL, also at the facets around every node of the nearest of those,
+//             which finds the nearest facet where it touches no node nearest the slave, as with
+//             obtuse triangles), takes the nearest
 //             (ties: lowest id), moves the tracked node to that facet's node nearest the slave
 //             (ties: lowest id), and repeats until the tracked node stays, at most
 //             max_local_iterations times; the most iterations taken and the number of slaves
@@ -99,18 +101,18 @@ fn local_search(@builtin(workgroup_id) wg: vec3<u32>,
         b.facet = NO_FACET;
         b.d2 = 0.0;
         for (var k = adjacency[tracked]; k < adjacency[tracked + 1u]; k++) {
-            let f = adjacency[k];
-            if ((params.flags & FLAG_WIDE_LOCAL) != 0u) {
-                let fac = facets[f];
-                let n = facet_node_count(fac);
-                for (var j = 0u; j < n; j++) {
-                    let node = fac[j];
-                    for (var q = adjacency[node]; q < adjacency[node + 1u]; q++) {
-                        consider(&b, s, p, adjacency[q]);
-                    }
+            consider(&b, s, p, adjacency[k]);
+        }
+        if ((params.flags & FLAG_WIDE_LOCAL) != 0u && b.facet != NO_FACET) {
+            // the wider search: also the facets around every node of the nearest one
+            let near = facets[b.facet];
+            let n = facet_node_count(near);
+            for (var j = 0u; j < n; j++) {
+                let node = near[j];
+                if (node == tracked) { continue; }
+                for (var q = adjacency[node]; q < adjacency[node + 1u]; q++) {
+                    consider(&b, s, p, adjacency[q]);
                 }
-            } else {
-                consider(&b, s, p, f);
             }
         }
         it += 1u;

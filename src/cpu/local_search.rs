@@ -72,25 +72,35 @@ pub fn local_search(
             b.facet = NO_FACET;
             b.d2 = 0.0;
             for k in adjacency[tracked as usize]..adjacency[tracked as usize + 1] {
-                let f = adjacency[k as usize];
-                if params.flags & FLAG_WIDE_LOCAL != 0 {
-                    let fac = facets[f as usize];
-                    for &n in &fac[..facet_node_count(fac)] {
-                        for q in adjacency[n as usize]..adjacency[n as usize + 1] {
-                            consider(
-                                &mut b,
-                                params,
-                                nodes,
-                                facets,
-                                adjacency,
-                                s,
-                                p,
-                                adjacency[q as usize],
-                            );
-                        }
+                consider(
+                    &mut b,
+                    params,
+                    nodes,
+                    facets,
+                    adjacency,
+                    s,
+                    p,
+                    adjacency[k as usize],
+                );
+            }
+            if params.flags & FLAG_WIDE_LOCAL != 0 && b.facet != NO_FACET {
+                let near = facets[b.facet as usize];
+                for &n in &near[..facet_node_count(near)] {
+                    if n == tracked {
+                        continue;
                     }
-                } else {
-                    consider(&mut b, params, nodes, facets, adjacency, s, p, f);
+                    for q in adjacency[n as usize]..adjacency[n as usize + 1] {
+                        consider(
+                            &mut b,
+                            params,
+                            nodes,
+                            facets,
+                            adjacency,
+                            s,
+                            p,
+                            adjacency[q as usize],
+                        );
+                    }
                 }
             }
             it += 1;

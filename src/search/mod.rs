@@ -146,8 +146,10 @@ pub struct Schedule {
     /// up), the increment searches globally; tracked slaves are followed by the local search.
     /// Every contact within `(1 − budget)·radius` is then tracked. Default 0.5.
     pub budget: f64,
-    /// The slightly more expensive local search: facets around every node of the tracked
-    /// node's facets (Abaqus' FAST LOCAL TRACKING=NO).
+    /// The slightly more expensive local search: also the facets around every node of the
+    /// nearest facet found around the tracked node (Abaqus' FAST LOCAL TRACKING=NO). The fast
+    /// walk can settle on a node none of whose facets is the nearest (obtuse triangles); this
+    /// one does not (measured in tests/tracking.rs).
     pub wide_local: bool,
 }
 
