@@ -52,6 +52,7 @@ const STATUS_LOCAL_ITERATIONS: u32 = 3u; // most local-search iterations
 const STATUS_MOTION: u32 = 8u;         // bits of the largest motion since the last global search
 const STATUS_LOCAL_CAPPED: u32 = 9u;   // slaves whose local walk hit the cap
 const STATUS_CROWDED: u32 = 10u;       // self-contact slaves with unconnected facets near
+const STATUS_FRAME_STALE: u32 = 11u;   // a master node left the grid's box (device positions)
 const STATUS_DT_STABLE: u32 = 4u;      // bits of the smallest stable increment (positive f32)
 const STATUS_DT_APPROACH: u32 = 5u;    // bits of the smallest approach limit (positive f32)
 const STATUS_ACTIVE: u32 = 6u;         // slave nodes in contact

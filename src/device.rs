@@ -96,6 +96,51 @@ impl Device {
             .collect()
     }
 
+    /// A device on the caller's own wgpu device and queue, so that searches can read positions
+    /// the caller keeps in its own buffers. Errors when the device's limits fall short of what
+    /// abut needs (8 storage buffers per stage, workgroups of 256, 65,535 per dimension).
+    pub fn from_wgpu(device: wgpu::Device, queue: wgpu::Queue) -> Result<Self> {
+        let info = device.adapter_info();
+        let limits = device.limits();
+        let mut need = wgpu::Limits::downlevel_defaults();
+        need.max_storage_buffers_per_shader_stage = 8;
+        need.max_compute_workgroup_size_x = 256;
+        need.max_compute_invocations_per_workgroup = 256;
+        need.max_compute_workgroups_per_dimension = 65_535;
+        need.max_storage_buffer_binding_size = limits.max_storage_buffer_binding_size;
+        need.max_buffer_size = limits.max_buffer_size;
+        let mut failed = None;
+        need.check_limits_with_fail_fn(&limits, true, |name, needed, available| {
+            failed = Some((name, needed, available))
+        });
+        if let Some((limit, needed, available)) = failed {
+            return Err(Error::AdapterLimit {
+                adapter: info.name,
+                limit,
+                available,
+                needed,
+            });
+        }
+        // the caller's uncaptured-error handler is left alone: abut's own operations run in
+        // error scopes and report through them
+        let uncaptured = Arc::new(Mutex::new(Vec::new()));
+        Ok(Self::from_context(GpuContext {
+            device,
+            queue,
+            info,
+            limits,
+            uncaptured,
+        }))
+    }
+
+    /// The wgpu device and queue of a GPU device (to make buffers on it), `None` on the CPU path.
+    pub fn wgpu(&self) -> Option<(&wgpu::Device, &wgpu::Queue)> {
+        match &self.kind {
+            DeviceKind::Gpu(c) => Some((&c.device, &c.queue)),
+            DeviceKind::Cpu => None,
+        }
+    }
+
     /// The CPU path.
     pub fn cpu() -> Self {
         Self {

@@ -18,6 +18,7 @@ pub mod nearest_facet;
 pub mod nodal_normals;
 pub mod penalty;
 pub mod scan;
+pub mod to_local;
 
 use crate::error::Result;
 use crate::search::layout::{

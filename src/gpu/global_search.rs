@@ -9,8 +9,8 @@ use crate::cpu::{grown_capacity, presized_capacity};
 use crate::device::GpuContext;
 use crate::error::{Error, Result};
 use crate::search::layout::{
-    fold_dispatch, GpuHit, ScanLevels, ScanParams, SearchParams, ITEM_WORKGROUP, SCAN_BLOCK,
-    STATUS_NEEDED_ENTRIES, STATUS_OVERFLOW, STATUS_WORDS,
+    fold_dispatch, FrameParams, GpuHit, ScanLevels, ScanParams, SearchParams, ITEM_WORKGROUP,
+    SCAN_BLOCK, STATUS_NEEDED_ENTRIES, STATUS_OVERFLOW, STATUS_WORDS,
 };
 use crate::search::{Bins, Prepared, Step, STEPS};
 use wgpu::BufferUsages as U;
@@ -55,6 +55,7 @@ struct Pipelines {
     nearest_facet: wgpu::ComputePipeline,
     local_search: wgpu::ComputePipeline,
     motion: wgpu::ComputePipeline,
+    to_local: wgpu::ComputePipeline,
 }
 
 struct BindGroups {
@@ -102,6 +103,11 @@ pub struct GpuSearch {
     last: Option<(u32, u32, u32)>,
     /// Bumped whenever the bind groups (and so possibly the buffers) are rebuilt.
     generation: u64,
+    /// The caller's positions buffer for the next run (positions kept on the device).
+    device_positions: Option<wgpu::Buffer>,
+    /// Bind group of to_local for that buffer, with the generation it was built at.
+    to_local_group: Option<(wgpu::Buffer, u64, wgpu::BindGroup)>,
+    frame: wgpu::Buffer,
 }
 
 impl GpuSearch {
@@ -109,6 +115,12 @@ impl GpuSearch {
     pub fn new(ctx: Arc<GpuContext>) -> Result<Self> {
         let ctx_limit = ctx.limits.max_compute_workgroups_per_dimension;
         let device = &ctx.device;
+        let ctx_frame = device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("frame params"),
+            size: std::mem::size_of::<FrameParams>() as u64,
+            usage: U::UNIFORM | U::COPY_DST,
+            mapped_at_creation: false,
+        });
         let scope = device.push_error_scope(wgpu::ErrorFilter::Validation);
         let module = |stem: &str| {
             let src = shaders::source(stem).expect("kernel file listed in shaders::KERNELS");
@@ -137,6 +149,7 @@ impl GpuSearch {
             nearest_facet: pipeline(&module("nearest_facet"), "nearest_facet"),
             local_search: pipeline(&module("local_search"), "local_search"),
             motion: pipeline(&module("motion"), "motion"),
+            to_local: pipeline(&module("to_local"), "to_local"),
         };
         if let Some(e) = pollster::block_on(scope.pop()) {
             return Err(Error::Gpu {
@@ -187,7 +200,16 @@ impl GpuSearch {
             max_workgroups_per_dim: ctx_limit,
             last: None,
             generation: 0,
+            device_positions: None,
+            to_local_group: None,
+            frame: ctx_frame,
         })
+    }
+
+    /// Takes the positions of the next runs from the caller's buffer (one `vec4<f32>` per model
+    /// node, model frame, STORAGE usage) instead of uploading them; `None` goes back to uploads.
+    pub fn set_device_positions(&mut self, buffer: Option<wgpu::Buffer>) {
+        self.device_positions = buffer;
     }
 
     /// Sets the entry buffer's size (words) and stops sizing it from the host's estimate, so
@@ -213,7 +235,7 @@ impl GpuSearch {
         replaced |= b
             .scan_params
             .ensure(d, l, levels.levels.len() as u64 * UNIFORM_STRIDE)?;
-        replaced |= b.nodes.ensure(d, l, (prep.nodes.len() * 16) as u64)?;
+        replaced |= b.nodes.ensure(d, l, (prep.n_nodes * 16) as u64)?;
         replaced |= b.facets.ensure(d, l, (prep.facets.len() * 16) as u64)?;
         replaced |= b.slaves.ensure(d, l, (prep.slaves.len() * 4) as u64)?;
         replaced |= b.scan.ensure(d, l, levels.words as u64 * 4)?;
@@ -222,7 +244,7 @@ impl GpuSearch {
             .ensure(d, l, (prep.params.n_cells as u64 + 1) * 4)?;
         replaced |= b.entries.ensure(d, l, self.entry_capacity as u64 * 4)?;
         replaced |= b.hits.ensure(d, l, hits_bytes)?;
-        replaced |= b.reference.ensure(d, l, (prep.nodes.len() * 16) as u64)?;
+        replaced |= b.reference.ensure(d, l, (prep.n_nodes * 16) as u64)?;
         replaced |= b
             .adjacency
             .ensure(d, l, (prep.adjacency.len() * 4) as u64)?;
@@ -420,6 +442,29 @@ impl GpuSearch {
     ) -> Result<(Vec<GpuHit>, u32, u32, [u32; STATUS_WORDS])> {
         let levels = ScanLevels::new(prep.params.n_cells + 1);
         self.ensure_buffers(prep, &levels)?;
+        if let Some(src) = self.device_positions.clone() {
+            let need = prep.n_nodes as u64 * 16;
+            if src.size() < need || !src.usage().contains(U::STORAGE) {
+                return Err(Error::BadParameter {
+                    name: "device positions",
+                    value: format!("buffer of {} bytes, usage {:?}", src.size(), src.usage()),
+                    expected: "needs one vec4<f32> per model node and STORAGE usage",
+                });
+            }
+            let frame = FrameParams {
+                origin: [
+                    prep.grid.origin[0] as f32,
+                    prep.grid.origin[1] as f32,
+                    prep.grid.origin[2] as f32,
+                    0.0,
+                ],
+                n_nodes: prep.n_nodes as u32,
+                _pad: [0; 3],
+            };
+            self.ctx
+                .queue
+                .write_buffer(&self.frame, 0, bytemuck::bytes_of(&frame));
+        }
         let q = &self.ctx.queue;
         q.write_buffer(
             &self.buffers.adjacency.buffer,
@@ -431,11 +476,13 @@ impl GpuSearch {
             0,
             bytemuck::cast_slice(&prep.motion_nodes),
         );
-        q.write_buffer(
-            &self.buffers.nodes.buffer,
-            0,
-            bytemuck::cast_slice(&prep.nodes),
-        );
+        if self.device_positions.is_none() {
+            q.write_buffer(
+                &self.buffers.nodes.buffer,
+                0,
+                bytemuck::cast_slice(&prep.nodes),
+            );
+        }
         q.write_buffer(
             &self.buffers.facets.buffer,
             0,
@@ -469,6 +516,45 @@ impl GpuSearch {
                 self.bind_groups = Some(self.bind_groups(&levels));
                 self.scan_levels = levels.levels.len();
                 self.generation += 1;
+            }
+            if let Some(src) = self.device_positions.clone() {
+                let fresh = matches!(&self.to_local_group, Some((b, g, _)) if *b == src && *g == self.generation);
+                if !fresh {
+                    let group = self
+                        .ctx
+                        .device
+                        .create_bind_group(&wgpu::BindGroupDescriptor {
+                            label: Some("to_local"),
+                            layout: &self.pipelines.to_local.get_bind_group_layout(0),
+                            entries: &[
+                                wgpu::BindGroupEntry {
+                                    binding: 0,
+                                    resource: self.buffers.params.as_entire_binding(),
+                                },
+                                wgpu::BindGroupEntry {
+                                    binding: 1,
+                                    resource: self.frame.as_entire_binding(),
+                                },
+                                wgpu::BindGroupEntry {
+                                    binding: 2,
+                                    resource: src.as_entire_binding(),
+                                },
+                                wgpu::BindGroupEntry {
+                                    binding: 3,
+                                    resource: self.buffers.nodes.buffer.as_entire_binding(),
+                                },
+                                wgpu::BindGroupEntry {
+                                    binding: 4,
+                                    resource: self.buffers.adjacency.buffer.as_entire_binding(),
+                                },
+                                wgpu::BindGroupEntry {
+                                    binding: 5,
+                                    resource: self.buffers.status.as_entire_binding(),
+                                },
+                            ],
+                        });
+                    self.to_local_group = Some((src, self.generation, group));
+                }
             }
             if let Some(a) = after.as_deref_mut() {
                 a.prepare(&self.shared(), self.generation)?;
@@ -522,6 +608,36 @@ impl GpuSearch {
             hits: &self.buffers.hits.buffer,
             status: &self.buffers.status,
         }
+    }
+
+    /// Reads the caller's positions buffer back as f64 (the rare refit of a device-positions
+    /// increment).
+    pub fn read_positions(&self, buffer: &wgpu::Buffer, n_nodes: usize) -> Result<Vec<[f64; 3]>> {
+        if !buffer.usage().contains(U::COPY_SRC) {
+            return Err(Error::BadParameter {
+                name: "device positions",
+                value: format!("usage {:?}", buffer.usage()),
+                expected: "COPY_SRC, so the grid can be refitted",
+            });
+        }
+        let d = &self.ctx.device;
+        let bytes = n_nodes as u64 * 16;
+        let staging = d.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("positions readback"),
+            size: bytes.max(16),
+            usage: U::MAP_READ | U::COPY_DST,
+            mapped_at_creation: false,
+        });
+        let mut enc = d.create_command_encoder(&wgpu::CommandEncoderDescriptor {
+            label: Some("positions readback"),
+        });
+        enc.copy_buffer_to_buffer(buffer, 0, &staging, 0, bytes);
+        self.ctx.queue.submit([enc.finish()]);
+        let raw = read_back(d, &staging, bytes, "positions readback")?;
+        let v: Vec<[f32; 4]> = bytemuck::pod_collect_to_vec(&raw);
+        Ok(v.iter()
+            .map(|p| [p[0] as f64, p[1] as f64, p[2] as f64])
+            .collect())
     }
 
     /// Reads back the bins of the last search: cell starts (n_cells + 1 words) and the sorted
@@ -615,6 +731,15 @@ impl GpuSearch {
                     pass.dispatch_workgroups(x, y, 1);
                 }
             };
+        if let Some((_, _, group)) = &self.to_local_group {
+            if self.device_positions.is_some() {
+                dispatch(
+                    &mut enc,
+                    "to_local",
+                    &[(&p.to_local, group, prep.n_nodes as u32, ITEM_WORKGROUP)],
+                );
+            }
+        }
         let steps: &[Step] = if local { &[] } else { &STEPS[first..] };
         if local {
             dispatch(
@@ -701,7 +826,7 @@ impl GpuSearch {
                 0,
                 &b.reference.buffer,
                 0,
-                (prep.nodes.len() * 16) as u64,
+                (prep.n_nodes * 16) as u64,
             );
         }
         if let Some(a) = after.as_deref_mut() {

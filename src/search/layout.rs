@@ -26,6 +26,9 @@ pub const STATUS_LOCAL_CAPPED: usize = 9;
 /// Status word: self-contact slaves with unconnected facets within the radius
 /// (WGSL: `STATUS_CROWDED`).
 pub const STATUS_CROWDED: usize = 10;
+/// Status word: a master node left the grid's box (positions on the device): the grid is
+/// refitted and the increment run again (WGSL: `STATUS_FRAME_STALE`).
+pub const STATUS_FRAME_STALE: usize = 11;
 /// Status word: bits of the smallest stable increment, a positive f32 (WGSL: `STATUS_DT_STABLE`).
 pub const STATUS_DT_STABLE: usize = 4;
 /// Status word: bits of the smallest approach limit, a positive f32 (WGSL: `STATUS_DT_APPROACH`).
@@ -87,6 +90,19 @@ pub const FLAG_WIDE_LOCAL: u32 = 1;
 pub const FLAG_SELF_CONTACT: u32 = 2;
 /// Walk iterations of the local search before it gives up (WGSL default).
 pub const MAX_LOCAL_ITERATIONS: u32 = 16;
+
+/// The local frame of positions kept on the device. WGSL twin: `FrameParams` in to_local.wgsl.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, PartialEq, Pod, Zeroable)]
+pub struct FrameParams {
+    /// Grid origin in model coordinates, rounded to f32 (w unused).
+    pub origin: [f32; 4],
+    /// Model nodes.
+    pub n_nodes: u32,
+    /// Padding.
+    pub _pad: [u32; 3],
+}
+const _: () = assert!(std::mem::size_of::<FrameParams>() == 32);
 
 /// Parameters of one scan level. WGSL twin: `ScanParams` in scan.wgsl.
 #[repr(C)]

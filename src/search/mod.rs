@@ -131,6 +131,8 @@ pub struct Prepared {
     pub motion_nodes: Arc<[u32]>,
     /// A local-search increment (in the frame of the last global search) rather than a global one.
     pub local: bool,
+    /// Model nodes (`nodes` is empty when the positions stay on the device).
+    pub n_nodes: usize,
 }
 
 /// When a pair searches globally (seed: "Finite-sliding tracking", "Tracking approach for
@@ -178,6 +180,9 @@ pub enum Trigger {
     Crowded,
     /// A global search asked for by the caller (`run`).
     Requested,
+    /// A global search with a refitted grid: positions kept on the device took a master node
+    /// out of the grid's box.
+    Frame,
     /// The local search.
     Local,
 }
@@ -426,6 +431,99 @@ impl GlobalSearch {
         }
     }
 
+    /// One increment like [`GlobalSearch::step`], with the positions read from the caller's own
+    /// buffer on this search's GPU (one `vec4<f32>` per model node, model frame; usage
+    /// STORAGE, and COPY_SRC for the rare refit below): nothing is uploaded, and the hits are
+    /// read back only when `read_hits` (otherwise `contacts` is empty; the status words, 48
+    /// bytes, always come back). The frame is the last global search's grid: the first
+    /// increment must be a host one ([`GlobalSearch::step`] or `run`). If a master node leaves
+    /// the grid's box, the buffer is read back once, the grid refitted and the increment run
+    /// again (`Trigger::Frame`). Needs a GPU device made with [`Device::from_wgpu`] on the
+    /// buffer's device (or one of abut's own, for buffers it made).
+    pub fn step_device(
+        &mut self,
+        positions: &wgpu::Buffer,
+        read_hits: bool,
+    ) -> Result<SearchResult> {
+        if self.frame.is_none() {
+            return Err(Error::BadParameter {
+                name: "step_device",
+                value: "no global search yet".into(),
+                expected: "a first increment from host positions (step or run)",
+            });
+        }
+        let mut global = self.decide();
+        loop {
+            let prepared = self.prepare_device(global.is_none())?;
+            let local = global.is_none();
+            let Executor::Gpu(g) = &mut self.executor else {
+                return Err(Error::BadParameter {
+                    name: "step_device",
+                    value: "CPU path".into(),
+                    expected: "a GPU device",
+                });
+            };
+            g.set_device_positions(Some(positions.clone()));
+            let run = g.run_mode(&prepared, local, None, read_hits);
+            g.set_device_positions(None);
+            let (raw, entries, regrowths, status) = run?;
+            if status[layout::STATUS_FRAME_STALE] != 0 {
+                let host = g.read_positions(positions, prepared.n_nodes)?;
+                return Ok(self.execute(&host, Some(Trigger::Frame), None)?.0);
+            }
+            if local && status[layout::STATUS_BUDGET_EXCEEDED] != 0 {
+                global = Some(Trigger::Budget);
+                continue;
+            }
+            match global {
+                Some(_) => {
+                    self.since_global = 0;
+                    self.crowded = status[layout::STATUS_CROWDED] > 0;
+                }
+                None => self.since_global += 1,
+            }
+            return Ok(self.finish(
+                &prepared,
+                raw,
+                entries,
+                regrowths,
+                global.unwrap_or(Trigger::Local),
+                &status,
+            ));
+        }
+    }
+
+    /// The kernels' input when the positions stay on the device: the last global search's
+    /// frame and grid, no node array.
+    fn prepare_device(&self, local: bool) -> Result<Prepared> {
+        let Some((grid, mut params)) = self.frame else {
+            return Err(Error::BadParameter {
+                name: "step_device",
+                value: "no global search yet".into(),
+                expected: "a first increment from host positions",
+            });
+        };
+        params.flags = self.flags();
+        params.budget = (self.schedule.budget * self.radius) as f32;
+        Ok(Prepared {
+            params,
+            grid,
+            nodes: Vec::new(),
+            facets: self
+                .master
+                .active
+                .iter()
+                .map(|&f| self.master.facets[f as usize].padded())
+                .collect(),
+            slaves: self.slaves.clone(),
+            estimated_entries: 0,
+            adjacency: self.adjacency.clone(),
+            motion_nodes: self.motion_nodes.clone(),
+            local,
+            n_nodes: self.masses.len(),
+        })
+    }
+
     /// Runs `STEPS[..first_gpu_step]` on the CPU mirror and the rest on this search's GPU,
     /// handing the intermediate buffers over: when GPU and CPU disagree, the first split that
     /// reproduces the CPU result names the step that diverges. On the CPU path it is `run`.
@@ -654,6 +752,7 @@ impl GlobalSearch {
             adjacency: self.adjacency.clone(),
             motion_nodes: self.motion_nodes.clone(),
             local: false,
+            n_nodes: self.masses.len(),
         })
     }
 
@@ -718,6 +817,7 @@ impl GlobalSearch {
             adjacency: self.adjacency.clone(),
             motion_nodes: self.motion_nodes.clone(),
             local: true,
+            n_nodes: self.masses.len(),
         })
     }
 }

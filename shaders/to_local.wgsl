@@ -1,0 +1,43 @@
+// to_local.wgsl — positions the caller keeps on the device, into the search's local frame.
+// CPU mirror: src/cpu/to_local.rs.
+//
+// Bindings: 0 params (uniform SearchParams), 1 frame (uniform FrameParams: the grid origin),
+//           2 positions (the caller's buffer: one vec4<f32> per model node, model frame, w
+//           ignored), 3 nodes (the search's grid-local nodes; w, the mass, is kept),
+//           4 adjacency (as in local_search.wgsl: tells master nodes), 5 status.
+// Dispatch: one invocation per model node, ITEM_WORKGROUP per workgroup, folded into 2D.
+// Invariants: nothing is read back; the subtraction is in f32 (the caller's positions are f32
+//             already, so a model far from its origin should keep them relative to a nearby
+//             point). A master node outside the grid's box sets STATUS_FRAME_STALE: the host
+//             then refits the grid and runs the increment again.
+
+// Rust twin: FrameParams (src/search/layout.rs), 32 bytes.
+struct FrameParams {
+    origin: vec4<f32>,
+    n_nodes: u32,
+    _pad0: u32,
+    _pad1: u32,
+    _pad2: u32,
+}
+
+@group(0) @binding(0) var<uniform> params: SearchParams;
+@group(0) @binding(1) var<uniform> frame: FrameParams;
+@group(0) @binding(2) var<storage, read> positions: array<vec4<f32>>;
+@group(0) @binding(3) var<storage, read_write> nodes: array<vec4<f32>>;
+@group(0) @binding(4) var<storage, read> adjacency: array<u32>;
+@group(0) @binding(5) var<storage, read_write> status: array<atomic<u32>>;
+
+@compute @workgroup_size(64)
+fn to_local(@builtin(workgroup_id) wg: vec3<u32>,
+            @builtin(num_workgroups) nwg: vec3<u32>,
+            @builtin(local_invocation_index) li: u32) {
+    let i = folded_id(wg, nwg, li, ITEM_WORKGROUP);
+    if (i >= frame.n_nodes) { return; }
+    let x = positions[i].xyz - frame.origin.xyz;
+    nodes[i] = vec4<f32>(x, nodes[i].w);
+    if (adjacency[i] != adjacency[i + 1u]) {
+        let top = vec3<f32>(f32(params.dims_x), f32(params.dims_y), f32(params.dims_z)) * params.cell_size;
+        let inside = all(x >= vec3<f32>(0.0)) && all(x <= top);
+        if (!inside) { atomicStore(&status[STATUS_FRAME_STALE], 1u); }
+    }
+}
