@@ -9,8 +9,8 @@ use crate::cpu::{grown_capacity, presized_capacity};
 use crate::device::GpuContext;
 use crate::error::{Error, Result};
 use crate::search::layout::{
-    fold_dispatch, FrameParams, GpuHit, ScanLevels, ScanParams, SearchParams, ITEM_WORKGROUP,
-    SCAN_BLOCK, STATUS_NEEDED_ENTRIES, STATUS_OVERFLOW, STATUS_WORDS,
+    FrameParams, GpuHit, ScanLevels, ScanParams, SearchParams, ITEM_WORKGROUP, SCAN_BLOCK,
+    STATUS_NEEDED_ENTRIES, STATUS_OVERFLOW, STATUS_WORDS,
 };
 use crate::search::{Bins, Prepared, Step, STEPS};
 use wgpu::BufferUsages as U;
@@ -263,19 +263,7 @@ impl GpuSearch {
         let b = &self.buffers;
         let p = &self.pipelines;
         let group = |pipe: &wgpu::ComputePipeline, bufs: &[wgpu::BindingResource]| {
-            let entries: Vec<wgpu::BindGroupEntry> = bufs
-                .iter()
-                .enumerate()
-                .map(|(i, r)| wgpu::BindGroupEntry {
-                    binding: i as u32,
-                    resource: r.clone(),
-                })
-                .collect();
-            d.create_bind_group(&wgpu::BindGroupDescriptor {
-                label: None,
-                layout: &pipe.get_bind_group_layout(0),
-                entries: &entries,
-            })
+            super::bind_group(d, pipe, bufs)
         };
         let params = b.params.as_entire_binding();
         let scan_level = |i: usize| {
@@ -716,21 +704,9 @@ impl GpuSearch {
             enc.clear_buffer(&b.status, 0, Some(SEARCH_STATUS_BYTES));
             enc.clear_buffer(&b.status, 32, Some(SEARCH_STATUS_BYTES));
         }
-        let dispatch =
-            |enc: &mut wgpu::CommandEncoder,
-             label: &str,
-             work: &[(&wgpu::ComputePipeline, &wgpu::BindGroup, u32, u32)]| {
-                let mut pass = enc.begin_compute_pass(&wgpu::ComputePassDescriptor {
-                    label: Some(label),
-                    timestamp_writes: None,
-                });
-                for &(pipe, group, n, per) in work {
-                    let (x, y) = fold_dispatch(n, per, max_dim);
-                    pass.set_pipeline(pipe);
-                    pass.set_bind_group(0, group, &[]);
-                    pass.dispatch_workgroups(x, y, 1);
-                }
-            };
+        let dispatch = |enc: &mut wgpu::CommandEncoder, label: &str, work: &[super::Work<'_>]| {
+            super::run_pass(enc, label, work, max_dim)
+        };
         if let Some((_, _, group)) = &self.to_local_group {
             if self.device_positions.is_some() {
                 dispatch(

@@ -10,7 +10,7 @@ use crate::device::GpuContext;
 use crate::error::{Error, Result};
 use crate::penalty::layout::{ContactOut, PenaltyParams, NO_LIMIT};
 use crate::penalty::PenaltySetup;
-use crate::search::layout::{fold_dispatch, ScanLevels, ScanParams, ITEM_WORKGROUP, SCAN_BLOCK};
+use crate::search::layout::{ScanLevels, ScanParams, ITEM_WORKGROUP, SCAN_BLOCK};
 use wgpu::BufferUsages as U;
 
 const UNIFORM_STRIDE: u64 = 256;
@@ -270,33 +270,10 @@ impl GpuPenalty {
         let d = &self.ctx.device;
         // bindings numbered in order, except where an entry point leaves some out (contact_sort)
         let group_at = |pipe: &wgpu::ComputePipeline, bufs: &[(u32, wgpu::BindingResource)]| {
-            let entries: Vec<wgpu::BindGroupEntry> = bufs
-                .iter()
-                .map(|(i, r)| wgpu::BindGroupEntry {
-                    binding: *i,
-                    resource: r.clone(),
-                })
-                .collect();
-            d.create_bind_group(&wgpu::BindGroupDescriptor {
-                label: None,
-                layout: &pipe.get_bind_group_layout(0),
-                entries: &entries,
-            })
+            super::bind_group_at(d, pipe, bufs)
         };
         let group = |pipe: &wgpu::ComputePipeline, bufs: &[wgpu::BindingResource]| {
-            let entries: Vec<wgpu::BindGroupEntry> = bufs
-                .iter()
-                .enumerate()
-                .map(|(i, r)| wgpu::BindGroupEntry {
-                    binding: i as u32,
-                    resource: r.clone(),
-                })
-                .collect();
-            d.create_bind_group(&wgpu::BindGroupDescriptor {
-                label: None,
-                layout: &pipe.get_bind_group_layout(0),
-                entries: &entries,
-            })
+            super::bind_group(d, pipe, bufs)
         };
         let p = &self.pipelines;
         let pp = self.params.as_entire_binding();
@@ -415,21 +392,9 @@ impl AfterSearch for GpuPenalty {
         // status words 4..8: increments start at "no limit", counts at 0
         let status = self.status.as_ref().expect("prepared before encoding");
         enc.copy_buffer_to_buffer(&self.status_init, 0, status, 16, 16);
-        let run =
-            |enc: &mut wgpu::CommandEncoder,
-             label: &str,
-             work: &[(&wgpu::ComputePipeline, &wgpu::BindGroup, u32, u32)]| {
-                let mut pass = enc.begin_compute_pass(&wgpu::ComputePassDescriptor {
-                    label: Some(label),
-                    timestamp_writes: None,
-                });
-                for &(pipe, group, n, per) in work {
-                    let (x, y) = fold_dispatch(n, per, max_dim);
-                    pass.set_pipeline(pipe);
-                    pass.set_bind_group(0, group, &[]);
-                    pass.dispatch_workgroups(x, y, 1);
-                }
-            };
+        let run = |enc: &mut wgpu::CommandEncoder, label: &str, work: &[super::Work<'_>]| {
+            super::run_pass(enc, label, work, max_dim)
+        };
         run(
             enc,
             "nodal_normals + penalty",

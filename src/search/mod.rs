@@ -779,15 +779,9 @@ impl GlobalSearch {
             });
         }
         validate_positions(positions, 0, self.dim)?;
-        let Some((grid, mut params)) = self.frame else {
-            return Err(Error::BadParameter {
-                name: "local search",
-                value: "before any global search".into(),
-                expected: "a global search first",
-            });
-        };
-        let o = grid.origin;
-        let nodes = positions
+        let mut prepared = self.prepare_device(true)?;
+        let o = prepared.grid.origin;
+        prepared.nodes = positions
             .iter()
             .zip(&self.masses)
             .map(|(x, &m)| {
@@ -799,26 +793,7 @@ impl GlobalSearch {
                 ]
             })
             .collect();
-        params.flags = self.flags();
-        params.budget = (self.schedule.budget * self.radius) as f32;
-        let facets = self
-            .master
-            .active
-            .iter()
-            .map(|&f| self.master.facets[f as usize].padded())
-            .collect();
-        Ok(Prepared {
-            params,
-            grid,
-            nodes,
-            facets,
-            slaves: self.slaves.clone(),
-            estimated_entries: 0,
-            adjacency: self.adjacency.clone(),
-            motion_nodes: self.motion_nodes.clone(),
-            local: true,
-            n_nodes: self.masses.len(),
-        })
+        Ok(prepared)
     }
 }
 
