@@ -139,7 +139,12 @@ fn penalty(@builtin(workgroup_id) wg: vec3<u32>,
     var nrm = normalize_or_zero(nsum);
     if (dot(nrm, nrm) == 0.0) { nrm = hit.normal_dist.xyz; }
     let p = nodes[s].xyz;
-    let gap = dot(p - hit.point_gap.xyz, nrm);
+    var gap = dot(p - hit.point_gap.xyz, nrm);
+    if ((pp.flags & PENALTY_ANCHORED) != 0u) {
+        // small sliding: the anchor's tangent plane
+        nrm = hit.normal_dist.xyz;
+        gap = hit.point_gap.w;
+    }
     let m_eff = 1.0 / (1.0 / nodes[s].w + inv_mm);
     var k = pp.stiffness;
     if (pp.stiffness_mode == STIFFNESS_AUTO) {

@@ -12,6 +12,7 @@ const STIFFNESS_AUTO: u32 = 0u;
 const STIFFNESS_MODULUS: u32 = 1u;
 const STIFFNESS_ABSOLUTE: u32 = 2u;
 const NO_LIMIT: f32 = 3.40282347e38;
+const PENALTY_ANCHORED: u32 = 1u;
 
 // Rust twin: PenaltyParams, 208 bytes.
 struct PenaltyParams {
@@ -21,8 +22,8 @@ struct PenaltyParams {
     law: u32,
     stiffness_mode: u32,
     table_len: u32,
+    flags: u32,
     _pad0: u32,
-    _pad0b: u32,
     stiffness: f32,
     modulus: f32,
     dt: f32,

@@ -5,7 +5,9 @@ use crate::device::{Device, DeviceKind};
 use crate::error::{Error, Result};
 use crate::geometry::{closest_on_facet, V3};
 use crate::gpu::GpuPenalty;
-use crate::kinematic::{facets_from, meshed_pass, rigid_pass, BodyState, SlaveCorrection, PASSES};
+use crate::kinematic::{
+    anchored_pass, facets_from, meshed_pass, rigid_pass, BodyState, SlaveCorrection, PASSES,
+};
 use crate::model::{validate_positions, Model, PairId};
 use crate::model::{BodyId, Enforce, MasterSurface, PressureOverclosure, RigidBody, RigidPairId};
 use crate::penalty::layout::{ContactOut, CSTATUS_OPEN, CSTATUS_SLIP, CSTATUS_STICK, NO_LIMIT};
@@ -97,6 +99,8 @@ struct KinematicRun {
     slaves: Vec<u32>,
     areas: Vec<f64>,
     law: Option<PressureOverclosure>,
+    /// Small or infinitesimal sliding: corrections along the anchors' planes.
+    anchored: bool,
     output: PairOutput,
 }
 
@@ -254,6 +258,7 @@ impl Contact {
                         slaves: slaves.clone(),
                         areas,
                         law: kin.softened.clone(),
+                        anchored: pair.sliding != crate::model::Sliding::Finite,
                         output: PairOutput {
                             slaves,
                             ..Default::default()
@@ -482,10 +487,23 @@ impl Contact {
             };
             let mut first: Option<Vec<SlaveCorrection>> = None;
             // hard contact is re-projected on the corrected geometry; a softened law is applied once
-            let passes = if kr.law.is_some() { 1 } else { PASSES };
+            let passes = if kr.law.is_some() || kr.anchored {
+                1
+            } else {
+                PASSES
+            };
             for _ in 0..passes {
                 let mut dx = vec![[0.0; 3]; x.len()];
                 let c = match &back {
+                    None if kr.anchored => anchored_pass(
+                        &kr.master,
+                        masses,
+                        &result,
+                        &kr.areas,
+                        kr.law.as_ref(),
+                        dt,
+                        &mut dx,
+                    ),
                     None => meshed_pass(
                         &kr.master,
                         masses,
@@ -541,11 +559,35 @@ impl Contact {
             }
             let c = first.unwrap_or_default();
             // what is left, measured on the corrected positions
-            let mut probe = vec![[0.0; 3]; x.len()];
-            let after = meshed_pass(
-                &kr.master, masses, x, &kr.slaves, &facets, &kr.areas, None, dt, &mut probe,
-            );
-            let left = after.iter().map(|a| a.overclosure).fold(0.0f64, f64::max);
+            let left = if kr.anchored {
+                // on the anchors' planes, moved with the corrected masters
+                result
+                    .contacts
+                    .iter()
+                    .zip(&kr.slaves)
+                    .filter_map(|(cp, &s)| {
+                        let cp = (*cp)?;
+                        let nodes = kr.master.facets[cp.facet as usize].nodes();
+                        let mut x0 = [0.0; 3];
+                        for (j, &n) in nodes.iter().enumerate() {
+                            for a in 0..3 {
+                                x0[a] += cp.weights[j] * x[n as usize][a];
+                            }
+                        }
+                        Some(
+                            -(0..3)
+                                .map(|a| (x[s as usize][a] - x0[a]) * cp.normal[a])
+                                .sum::<f64>(),
+                        )
+                    })
+                    .fold(0.0f64, f64::max)
+            } else {
+                let mut probe = vec![[0.0; 3]; x.len()];
+                let after = meshed_pass(
+                    &kr.master, masses, x, &kr.slaves, &facets, &kr.areas, None, dt, &mut probe,
+                );
+                after.iter().map(|a| a.overclosure).fold(0.0f64, f64::max)
+            };
             report.max_overclosure_after = report.max_overclosure_after.max(left);
             tally(&mut report, &c);
             fill_kinematic_output(&mut kr.output, &c, &kr.areas, Some(result));

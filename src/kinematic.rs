@@ -105,9 +105,22 @@ pub fn law_energy(law: &PressureOverclosure, h: f64) -> f64 {
         .sum()
 }
 
+/// The geometry of one slave's contact for a pass: normal, load-transfer weights,
+/// overclosure, and the facet's nodes.
+pub struct SlaveGeometry<'a> {
+    /// Unit normal along which the slave is pushed.
+    pub normal: V3<f64>,
+    /// Load-transfer weights of the facet's nodes.
+    pub weights: [f64; 4],
+    /// Overclosure (positive = penetrating).
+    pub overclosure: f64,
+    /// The facet's nodes.
+    pub nodes: &'a [u32],
+}
+
 /// One pass of a meshed pair: slaves `slaves` against the facets `facet_of` (None: no
-/// partner) of `master`, at positions `x`. Adds the corrections to `dx` (dense, per node) and
-/// returns the per-slave corrections.
+/// partner) of `master`, at positions `x`, the geometry recomputed in f64 on those facets.
+/// Adds the corrections to `dx` (dense, per node) and returns the per-slave corrections.
 #[allow(clippy::too_many_arguments)]
 pub fn meshed_pass(
     master: &MasterSurface,
@@ -120,50 +133,99 @@ pub fn meshed_pass(
     dt: f64,
     dx: &mut [[f64; 3]],
 ) -> Vec<SlaveCorrection> {
+    let geometry: Vec<Option<SlaveGeometry>> = slaves
+        .iter()
+        .zip(facet_of)
+        .map(|(&s, f)| {
+            let nodes = master.facets[(*f)? as usize].nodes();
+            let xs: Vec<V3<f64>> = nodes
+                .iter()
+                .map(|&n| V3::from_array(x[n as usize]))
+                .collect();
+            let p = V3::from_array(x[s as usize]);
+            let pr = closest_on_facet(p, &xs);
+            Some(SlaveGeometry {
+                normal: pr.normal,
+                weights: pr.weights,
+                overclosure: -pr.gap(p),
+                nodes,
+            })
+        })
+        .collect();
+    correct(masses, slaves, &geometry, areas, law, dt, dx)
+}
+
+/// Small sliding's pass: the geometry is each slave's anchor (fixed weights, the tangent
+/// plane's normal and gap) from the search result.
+#[allow(clippy::too_many_arguments)]
+pub fn anchored_pass(
+    master: &MasterSurface,
+    masses: &[f64],
+    search: &SearchResult,
+    areas: &[f64],
+    law: Option<&PressureOverclosure>,
+    dt: f64,
+    dx: &mut [[f64; 3]],
+) -> Vec<SlaveCorrection> {
+    let geometry: Vec<Option<SlaveGeometry>> = search
+        .contacts
+        .iter()
+        .map(|c| {
+            let c = (*c)?;
+            Some(SlaveGeometry {
+                normal: V3::from_array(c.normal),
+                weights: c.weights,
+                overclosure: -c.gap,
+                nodes: master.facets[c.facet as usize].nodes(),
+            })
+        })
+        .collect();
+    correct(masses, &search.slaves, &geometry, areas, law, dt, dx)
+}
+
+/// The correction of the module docs for the slaves' geometry.
+fn correct(
+    masses: &[f64],
+    slaves: &[u32],
+    geometry: &[Option<SlaveGeometry>],
+    areas: &[f64],
+    law: Option<&PressureOverclosure>,
+    dt: f64,
+    dx: &mut [[f64; 3]],
+) -> Vec<SlaveCorrection> {
     let mut force = std::collections::BTreeMap::<u32, (V3<f64>, f64)>::new();
     let mut out = vec![SlaveCorrection::default(); slaves.len()];
-    let mut geo = Vec::with_capacity(slaves.len());
-    for (k, (&s, f)) in slaves.iter().zip(facet_of).enumerate() {
-        let Some(f) = *f else {
-            geo.push(None);
-            continue;
-        };
-        let nodes = master.facets[f as usize].nodes();
-        let xs: Vec<V3<f64>> = nodes
-            .iter()
-            .map(|&n| V3::from_array(x[n as usize]))
-            .collect();
-        let p = V3::from_array(x[s as usize]);
-        let pr = closest_on_facet(p, &xs);
-        let h = -pr.gap(p);
+    let mut push_of = vec![0.0; slaves.len()];
+    for (k, (&s, g)) in slaves.iter().zip(geometry).enumerate() {
+        let Some(g) = g else { continue };
+        let h = g.overclosure;
+        let ms = masses[s as usize];
         let target = match law {
             None => 0.0,
-            Some(l) => softened_target(l, h, masses[s as usize], areas[k], dt),
+            Some(l) => softened_target(l, h, ms, areas[k], dt),
         };
         let needs_push = match law {
             None => h > 0.0,
             Some(_) => h > target,
         };
         if !needs_push {
-            geo.push(None);
             continue;
         }
-        let ms = masses[s as usize];
         let fs = ms * (h - target) / (dt * dt);
-        for (j, &n) in nodes.iter().enumerate() {
+        for (j, &n) in g.nodes.iter().enumerate() {
             let e = force.entry(n).or_insert((V3::zero(), 0.0));
-            e.0 = e.0 - pr.normal * (pr.weights[j] * fs);
-            e.1 += pr.weights[j] * ms;
+            e.0 = e.0 - g.normal * (g.weights[j] * fs);
+            e.1 += g.weights[j] * ms;
         }
         out[k] = SlaveCorrection {
             overclosure: h,
             target,
             force: fs,
-            normal: pr.normal.to_array(),
+            normal: g.normal.to_array(),
             energy: law.map_or(0.0, |l| law_energy(l, target) * areas[k]),
             applied: [0.0; 3],
         };
-        geo.push(Some((pr.normal, pr.weights, h - target, nodes)));
+        push_of[k] = h - target;
     }
     // master corrections
     let mut da = std::collections::BTreeMap::new();
@@ -177,16 +239,18 @@ pub fn meshed_pass(
     }
     // slave corrections: onto the corrected master
     for (k, &s) in slaves.iter().enumerate() {
-        if let Some((n, w, push, nodes)) = &geo[k] {
-            let mut d = *n * *push;
-            for (j, node) in nodes.iter().enumerate() {
-                d = d + da[node] * (w[j] * dt * dt);
-            }
-            for c in 0..3 {
-                dx[s as usize][c] += d.to_array()[c];
-            }
-            out[k].applied = (d * (masses[s as usize] / (dt * dt))).to_array();
+        let Some(g) = &geometry[k] else { continue };
+        if out[k].force <= 0.0 {
+            continue;
         }
+        let mut d = g.normal * push_of[k];
+        for (j, node) in g.nodes.iter().enumerate() {
+            d = d + da[node] * (g.weights[j] * dt * dt);
+        }
+        for c in 0..3 {
+            dx[s as usize][c] += d.to_array()[c];
+        }
+        out[k].applied = (d * (masses[s as usize] / (dt * dt))).to_array();
     }
     out
 }

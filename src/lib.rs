@@ -21,7 +21,7 @@ pub use error::{Error, Result};
 pub use kinematic::BodyState;
 pub use model::{
     Analytical, BodyId, Enforce, Facet, Friction, Kinematic, Model, NodeRange, NodeSetId, Pair,
-    PairId, Penalty, PressureOverclosure, RigidBody, RigidPair, RigidPairId, Stiffness, Surface,
-    SurfaceId,
+    PairId, Penalty, PressureOverclosure, RigidBody, RigidPair, RigidPairId, Sliding, Stiffness,
+    Surface, SurfaceId,
 };
 pub use search::{ContactPoint, GlobalSearch, SearchResult, SearchStats};

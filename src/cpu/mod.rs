@@ -5,6 +5,7 @@
 //! sequential; the results equal the GPU's up to f32 round-off (and exactly for the integer
 //! binning). It is also the backend used where no adapter exists.
 
+pub mod anchor;
 pub mod bin_count;
 pub mod bin_scatter;
 pub mod bin_sort;
@@ -46,6 +47,8 @@ pub struct CpuWorkspace {
 /// The CPU executor of the global search.
 #[derive(Clone, Debug)]
 pub struct CpuSearch {
+    /// Small sliding: the slaves' anchors (local runs evaluate them instead of searching).
+    anchors: Option<Vec<crate::search::layout::Anchor>>,
     ws: CpuWorkspace,
     entry_capacity: u32,
     presize: bool,
@@ -56,6 +59,7 @@ pub struct CpuSearch {
 impl Default for CpuSearch {
     fn default() -> Self {
         Self {
+            anchors: None,
             ws: CpuWorkspace::default(),
             entry_capacity: 0,
             presize: true,
@@ -95,6 +99,19 @@ impl CpuSearch {
             });
         }
         let mut status = [0u32; STATUS_WORDS];
+        if let Some(anchors) = &self.anchors {
+            anchor::anchor(
+                &prep.params,
+                &prep.nodes,
+                &prep.facets,
+                &prep.slaves,
+                anchors,
+                &mut status,
+                &mut self.ws.hits,
+            );
+            self.ws.status = status;
+            return Ok((self.ws.hits.clone(), 0, 0, status));
+        }
         motion::motion(
             &prep.params,
             &prep.nodes,
@@ -114,6 +131,11 @@ impl CpuSearch {
         );
         self.ws.status = status;
         Ok((self.ws.hits.clone(), 0, 0, status))
+    }
+
+    /// Small sliding: installs the slaves' anchors.
+    pub fn set_anchors(&mut self, anchors: &[crate::search::layout::Anchor]) {
+        self.anchors = Some(anchors.to_vec());
     }
 
     /// Runs a full search (which settles the entry capacity), then only `STEPS[..first]`

@@ -147,7 +147,11 @@ pub fn penalty(
         }
         let p = node(nodes, s);
         let c = V3::new(hit.point_gap[0], hit.point_gap[1], hit.point_gap[2]);
-        let gap = (p - c).dot(nrm);
+        let mut gap = (p - c).dot(nrm);
+        if pp.flags & PENALTY_ANCHORED != 0 {
+            nrm = V3::new(hit.normal_dist[0], hit.normal_dist[1], hit.normal_dist[2]);
+            gap = hit.point_gap[3];
+        }
         let m_eff = 1.0 / (1.0 / nodes[s as usize][3] + inv_mm);
         let mut k = pp.stiffness;
         if pp.stiffness_mode == STIFFNESS_AUTO {

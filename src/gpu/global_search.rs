@@ -9,7 +9,7 @@ use crate::cpu::{grown_capacity, presized_capacity};
 use crate::device::GpuContext;
 use crate::error::{Error, Result};
 use crate::search::layout::{
-    FrameParams, GpuHit, ScanLevels, ScanParams, SearchParams, ITEM_WORKGROUP, SCAN_BLOCK,
+    Anchor, FrameParams, GpuHit, ScanLevels, ScanParams, SearchParams, ITEM_WORKGROUP, SCAN_BLOCK,
     STATUS_NEEDED_ENTRIES, STATUS_OVERFLOW, STATUS_WORDS,
 };
 use crate::search::{Bins, Prepared, Step, STEPS};
@@ -56,9 +56,11 @@ struct Pipelines {
     local_search: wgpu::ComputePipeline,
     motion: wgpu::ComputePipeline,
     to_local: wgpu::ComputePipeline,
+    anchor: wgpu::ComputePipeline,
 }
 
 struct BindGroups {
+    anchor: wgpu::BindGroup,
     local_search: wgpu::BindGroup,
     motion: wgpu::BindGroup,
     bin_count: wgpu::BindGroup,
@@ -84,6 +86,7 @@ struct Buffers {
     reference: GrowBuffer,
     adjacency: GrowBuffer,
     motion_nodes: GrowBuffer,
+    anchors: GrowBuffer,
 }
 
 /// The global search on one GPU device; its buffers grow as needed and are reused.
@@ -108,6 +111,8 @@ pub struct GpuSearch {
     /// Bind group of to_local for that buffer, with the generation it was built at.
     to_local_group: Option<(wgpu::Buffer, u64, wgpu::BindGroup)>,
     frame: wgpu::Buffer,
+    /// Small sliding: local increments run the anchor kernel instead of the local search.
+    anchored: bool,
 }
 
 impl GpuSearch {
@@ -150,6 +155,7 @@ impl GpuSearch {
             local_search: pipeline(&module("local_search"), "local_search"),
             motion: pipeline(&module("motion"), "motion"),
             to_local: pipeline(&module("to_local"), "to_local"),
+            anchor: pipeline(&module("anchor"), "anchor"),
         };
         if let Some(e) = pollster::block_on(scope.pop()) {
             return Err(Error::Gpu {
@@ -188,6 +194,7 @@ impl GpuSearch {
             reference: GrowBuffer::new(device, "reference positions", 0, storage),
             adjacency: GrowBuffer::new(device, "node facets", 0, storage),
             motion_nodes: GrowBuffer::new(device, "motion nodes", 0, storage),
+            anchors: GrowBuffer::new(device, "anchors", 0, storage),
         };
         Ok(Self {
             ctx,
@@ -203,7 +210,28 @@ impl GpuSearch {
             device_positions: None,
             to_local_group: None,
             frame: ctx_frame,
+            anchored: false,
         })
+    }
+
+    /// Small sliding: installs the slaves' anchors; from then on local runs evaluate them
+    /// (the anchor kernel) instead of searching.
+    pub fn set_anchors(&mut self, anchors: &[Anchor]) -> Result<()> {
+        let bytes = std::mem::size_of_val(anchors) as u64;
+        if self
+            .buffers
+            .anchors
+            .ensure(&self.ctx.device, &self.ctx.limits, bytes)?
+        {
+            self.bind_groups = None;
+        }
+        self.ctx.queue.write_buffer(
+            &self.buffers.anchors.buffer,
+            0,
+            bytemuck::cast_slice(anchors),
+        );
+        self.anchored = true;
+        Ok(())
     }
 
     /// Takes the positions of the next runs from the caller's buffer (one `vec4<f32>` per model
@@ -245,6 +273,11 @@ impl GpuSearch {
         replaced |= b.entries.ensure(d, l, self.entry_capacity as u64 * 4)?;
         replaced |= b.hits.ensure(d, l, hits_bytes)?;
         replaced |= b.reference.ensure(d, l, (prep.n_nodes * 16) as u64)?;
+        replaced |= b.anchors.ensure(
+            d,
+            l,
+            (prep.slaves.len() * std::mem::size_of::<Anchor>()) as u64,
+        )?;
         replaced |= b
             .adjacency
             .ensure(d, l, (prep.adjacency.len() * 4) as u64)?;
@@ -275,6 +308,18 @@ impl GpuSearch {
         };
         let n_levels = levels.levels.len();
         BindGroups {
+            anchor: group(
+                &p.anchor,
+                &[
+                    params.clone(),
+                    b.nodes.buffer.as_entire_binding(),
+                    b.facets.buffer.as_entire_binding(),
+                    b.slaves.buffer.as_entire_binding(),
+                    b.anchors.buffer.as_entire_binding(),
+                    b.status.as_entire_binding(),
+                    b.hits.buffer.as_entire_binding(),
+                ],
+            ),
             local_search: group(
                 &p.local_search,
                 &[
@@ -702,7 +747,7 @@ impl GpuSearch {
         }
         if first == 0 {
             enc.clear_buffer(&b.status, 0, Some(SEARCH_STATUS_BYTES));
-            enc.clear_buffer(&b.status, 32, Some(SEARCH_STATUS_BYTES));
+            enc.clear_buffer(&b.status, 32, Some(2 * SEARCH_STATUS_BYTES));
         }
         let dispatch = |enc: &mut wgpu::CommandEncoder, label: &str, work: &[super::Work<'_>]| {
             super::run_pass(enc, label, work, max_dim)
@@ -717,7 +762,13 @@ impl GpuSearch {
             }
         }
         let steps: &[Step] = if local { &[] } else { &STEPS[first..] };
-        if local {
+        if local && self.anchored {
+            dispatch(
+                &mut enc,
+                "anchor",
+                &[(&p.anchor, &bg.anchor, params.n_slaves, ITEM_WORKGROUP)],
+            );
+        } else if local {
             dispatch(
                 &mut enc,
                 "motion + local_search",

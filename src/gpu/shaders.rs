@@ -9,7 +9,7 @@ pub const PENALTY_COMMON: &str = include_str!("../../shaders/penalty_common.wgsl
 
 /// (file stem, source, needs `penalty_common.wgsl`) of every kernel file.
 #[rustfmt::skip]
-pub const KERNELS: [(&str, &str, bool); 12] = [
+pub const KERNELS: [(&str, &str, bool); 13] = [
     ("bin_count", include_str!("../../shaders/bin_count.wgsl"), false),
     ("scan", include_str!("../../shaders/scan.wgsl"), false),
     ("bin_scatter", include_str!("../../shaders/bin_scatter.wgsl"), false),
@@ -18,6 +18,7 @@ pub const KERNELS: [(&str, &str, bool); 12] = [
     ("local_search", include_str!("../../shaders/local_search.wgsl"), false),
     ("motion", include_str!("../../shaders/motion.wgsl"), false),
     ("to_local", include_str!("../../shaders/to_local.wgsl"), false),
+    ("anchor", include_str!("../../shaders/anchor.wgsl"), false),
     ("nodal_normals", include_str!("../../shaders/nodal_normals.wgsl"), true),
     ("penalty", include_str!("../../shaders/penalty.wgsl"), true),
     ("contact_sort", include_str!("../../shaders/contact_sort.wgsl"), true),

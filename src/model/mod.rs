@@ -8,7 +8,8 @@ mod rigid;
 mod surface;
 
 pub use pair::{
-    Enforce, Friction, Kinematic, Pair, Penalty, PressureOverclosure, Stiffness, MAX_TABLE_POINTS,
+    Enforce, Friction, Kinematic, Pair, Penalty, PressureOverclosure, Sliding, Stiffness,
+    MAX_TABLE_POINTS,
 };
 pub use rigid::{Analytical, BodyId, RigidBody, RigidPair, RigidPairId};
 pub use surface::{DegenerateFacet, Facet, MasterSurface, Surface, NO_NODE};

@@ -21,9 +21,26 @@ pub struct Pair {
     /// slave-on-master pass (the master-on-slave pass gets 1 − weight). `None`: pure
     /// master–slave.
     pub balanced: Option<(SurfaceId, f64)>,
+    /// Sliding formulation.
+    pub sliding: Sliding,
     /// When the search runs globally; `None`: the defaults (every 100 increments, every 4 for
     /// self-contact, budget ½ of the radius, fast local tracking).
     pub schedule: Option<crate::search::Schedule>,
+}
+
+/// The sliding formulation (seed: "Sliding formulation", "Small-sliding tracking approach").
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
+pub enum Sliding {
+    /// Any relative motion: searched every increment (global on a schedule, local between).
+    #[default]
+    Finite,
+    /// One global search at the start anchors each slave node on its nearest facet; the
+    /// tangent plane there turns with the facet; load transfer stays at the anchor. No search
+    /// afterwards.
+    Small,
+    /// As small sliding, but the plane's orientation never changes either (Abaqus' small
+    /// sliding with NLGEOM=NO).
+    Infinitesimal,
 }
 
 /// Contact constraint enforcement ("Contact constraint enforcement methods" in the seed).
@@ -266,7 +283,14 @@ impl Pair {
             friction: Friction::Frictionless,
             balanced: None,
             schedule: None,
+            sliding: Sliding::Finite,
         }
+    }
+
+    /// Sets the sliding formulation.
+    pub fn sliding(mut self, sliding: Sliding) -> Self {
+        self.sliding = sliding;
+        self
     }
 
     /// Sets when the search runs globally (Abaqus' *CONTACT CONTROLS).

@@ -23,6 +23,9 @@ pub const STIFFNESS_AUTO: u32 = 0;
 pub const STIFFNESS_MODULUS: u32 = 1;
 /// Absolute stiffness (WGSL: `STIFFNESS_ABSOLUTE`).
 pub const STIFFNESS_ABSOLUTE: u32 = 2;
+/// Flag: small sliding, the contact normal and gap are the hit's (the anchor's tangent plane),
+/// not the smoothed normal at the closest point (WGSL: `PENALTY_ANCHORED`).
+pub const PENALTY_ANCHORED: u32 = 1;
 /// "No limit" for increments (largest finite f32; WGSL: `NO_LIMIT`).
 pub const NO_LIMIT: f32 = f32::MAX;
 
@@ -42,8 +45,10 @@ pub struct PenaltyParams {
     pub stiffness_mode: u32,
     /// Points in `table`.
     pub table_len: u32,
+    /// `PENALTY_*` flag bits.
+    pub flags: u32,
     /// Padding.
-    pub _pad0: [u32; 2],
+    pub _pad0: u32,
     /// Auto: scale; modulus: scale; absolute: k (force per length).
     pub stiffness: f32,
     /// Young's modulus for the modulus rule.

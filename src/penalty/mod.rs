@@ -105,6 +105,9 @@ impl PenaltySetup {
         }
         let mut params = base_params(pen, &pair.friction, slaves.len(), master.active.len());
         params.weight = weight as f32;
+        if pair.sliding != crate::model::Sliding::Finite {
+            params.flags |= PENALTY_ANCHORED;
+        }
         Ok(Self {
             pair_nodes,
             adjacency,
@@ -148,7 +151,8 @@ fn base_params(
         law: LAW_LINEAR,
         stiffness_mode: STIFFNESS_AUTO,
         table_len: 0,
-        _pad0: [0; 2],
+        flags: 0,
+        _pad0: 0,
         stiffness: 1.0,
         modulus: 0.0,
         dt: 0.0,

@@ -38,7 +38,13 @@ pub const STATUS_ACTIVE: usize = 6;
 /// Status word: slave nodes slipping (WGSL: `STATUS_SLIPPING`).
 pub const STATUS_SLIPPING: usize = 7;
 /// Number of status words.
-pub const STATUS_WORDS: usize = 12;
+pub const STATUS_WORDS: usize = 16;
+/// Status word: small sliding, slave nodes that slid more than an element length from their
+/// anchor (WGSL: `STATUS_SLID_TOO_FAR`).
+pub const STATUS_SLID_TOO_FAR: usize = 12;
+/// Status word: small sliding, anchors whose tangent plane is more than 10° off the deformed
+/// facet (WGSL: `STATUS_PLANE_OFF`).
+pub const STATUS_PLANE_OFF: usize = 13;
 
 /// Uniform parameters of the search kernels. WGSL twin: `SearchParams` in common.wgsl.
 ///
@@ -90,6 +96,32 @@ pub const FLAG_WIDE_LOCAL: u32 = 1;
 pub const FLAG_SELF_CONTACT: u32 = 2;
 /// Walk iterations of the local search before it gives up (WGSL default).
 pub const MAX_LOCAL_ITERATIONS: u32 = 16;
+
+/// Small sliding: a slave node's anchor on its master facet, fixed at the first global search.
+/// WGSL twin: `Anchor` in anchor.wgsl.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, PartialEq, Pod, Zeroable)]
+pub struct Anchor {
+    /// Active facet index, `NO_FACET` when the slave projects onto no facet (unconstrained).
+    pub facet: u32,
+    /// The facet node nearest the anchor point at the start.
+    pub node: u32,
+    /// `ANCHOR_*` bits.
+    pub flags: u32,
+    /// Padding.
+    pub _pad: u32,
+    /// Load-transfer weights of the anchor point X0, fixed.
+    pub weights: [f32; 4],
+    /// Smoothed master normal N(X0) at the start (xyz); w: the facet's element length.
+    pub normal0: [f32; 4],
+    /// The facet's own normal at X0 at the start (xyz; its rotation turns the plane).
+    pub facet_normal0: [f32; 4],
+}
+const _: () = assert!(std::mem::size_of::<Anchor>() == 64);
+
+/// Anchor flag: infinitesimal sliding, the plane's orientation never changes
+/// (WGSL: `ANCHOR_FROZEN`).
+pub const ANCHOR_FROZEN: u32 = 1;
 
 /// The local frame of positions kept on the device. WGSL twin: `FrameParams` in to_local.wgsl.
 #[repr(C)]

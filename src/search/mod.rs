@@ -71,6 +71,11 @@ pub struct SearchStats {
     pub trigger: Trigger,
     /// Most local-search iterations a slave took (local increments).
     pub local_iterations: u32,
+    /// Small sliding: slave nodes that slid more than an element length from their anchor
+    /// (the formulation's own assumption no longer holds for them).
+    pub slid_too_far: u32,
+    /// Small sliding: anchors whose tangent plane is more than 10° off the deformed facet.
+    pub plane_off: u32,
     /// Slaves whose local walk hit the iteration cap.
     pub local_capped: u32,
     /// Largest motion of a pair node since the last global search, model units.
@@ -185,6 +190,8 @@ pub enum Trigger {
     Frame,
     /// The local search.
     Local,
+    /// Small sliding: the contact points from the fixed anchors (no search at all).
+    Anchored,
 }
 
 /// A global search bound to one contact pair and one device; reusable every increment.
@@ -203,6 +210,10 @@ pub struct GlobalSearch {
     frame: Option<(Grid, SearchParams)>,
     since_global: u32,
     crowded: bool,
+    /// Sliding formulation of the pair (finite unless set).
+    sliding: crate::model::Sliding,
+    /// Small sliding: the anchors, fixed at the first global search.
+    anchors: Option<Vec<layout::Anchor>>,
 }
 
 enum Executor {
@@ -222,6 +233,7 @@ impl GlobalSearch {
         if let Some(schedule) = p.schedule {
             search.set_schedule(schedule)?;
         }
+        search.set_sliding(p.sliding);
         Ok(search)
     }
 
@@ -294,7 +306,19 @@ impl GlobalSearch {
             frame: None,
             since_global: 0,
             crowded: false,
+            sliding: crate::model::Sliding::Finite,
+            anchors: None,
         })
+    }
+
+    /// Sets the sliding formulation (before the first increment).
+    pub fn set_sliding(&mut self, sliding: crate::model::Sliding) {
+        self.sliding = sliding;
+    }
+
+    /// Small sliding: the anchors (after the first increment).
+    pub fn anchors(&self) -> Option<&[layout::Anchor]> {
+        self.anchors.as_deref()
     }
 
     /// Sets when the search runs globally.
@@ -359,6 +383,13 @@ impl GlobalSearch {
     /// The schedule's choice for the next increment: `Some(trigger)` for a global search,
     /// `None` for the local search.
     fn decide(&self) -> Option<Trigger> {
+        if self.sliding != crate::model::Sliding::Finite {
+            return if self.anchors.is_none() {
+                Some(Trigger::First)
+            } else {
+                None
+            };
+        }
         if self.frame.is_none() {
             Some(Trigger::First)
         } else if self.since_global + 1 >= self.schedule.interval {
@@ -379,13 +410,18 @@ impl GlobalSearch {
         mut global: Option<Trigger>,
         mut pen: Option<PenaltyRun<'_>>,
     ) -> Result<(SearchResult, [u32; layout::STATUS_WORDS])> {
+        let mut anchored_first = false;
         loop {
             let prepared = match global {
                 Some(_) => self.prepare(positions)?,
                 None => self.prepare_local(positions)?,
             };
             let local = global.is_none();
-            let (raw, entries, regrowths, status) = match (&mut self.executor, pen.as_mut()) {
+            // small sliding's first increment: the global search alone, to anchor the slaves;
+            // then the same increment from the anchors (with the enforcement passes)
+            let anchoring = self.sliding != crate::model::Sliding::Finite && self.anchors.is_none();
+            let pen_now = if anchoring { None } else { pen.as_mut() };
+            let (raw, entries, regrowths, status) = match (&mut self.executor, pen_now) {
                 (Executor::Gpu(g), None) => g.run_mode(&prepared, local, None, true)?,
                 (Executor::Cpu(c), None) => c.run_mode(&prepared, local)?,
                 (Executor::Gpu(g), Some(run)) => {
@@ -423,7 +459,27 @@ impl GlobalSearch {
                 }
                 None => self.since_global += 1,
             }
-            let trigger = global.unwrap_or(Trigger::Local);
+            let anchored = self.anchors.is_some();
+            let trigger = if anchored_first {
+                Trigger::First
+            } else {
+                global.unwrap_or(if anchored {
+                    Trigger::Anchored
+                } else {
+                    Trigger::Local
+                })
+            };
+            if anchoring {
+                let anchors = self.build_anchors(positions, &raw);
+                match &mut self.executor {
+                    Executor::Gpu(g) => g.set_anchors(&anchors)?,
+                    Executor::Cpu(c) => c.set_anchors(&anchors),
+                }
+                self.anchors = Some(anchors);
+                global = None;
+                anchored_first = true;
+                continue;
+            }
             return Ok((
                 self.finish(&prepared, raw, entries, regrowths, trigger, &status),
                 status,
@@ -491,6 +547,107 @@ impl GlobalSearch {
                 &status,
             ));
         }
+    }
+
+    /// Small sliding: each slave's anchor from the first global search, in f64 — the nearest
+    /// point X0 on its facet, its weights, the smoothed normal N(X0) and the facet's own normal
+    /// there. A slave projects onto the surface when it lies along the facet's normal from X0,
+    /// or when X0 is on an edge or vertex the facet shares with another (a ridge); otherwise
+    /// (beyond a free edge) it gets no anchor and no constraint.
+    fn build_anchors(&self, positions: &[[f64; 3]], raw: &[GpuHit]) -> Vec<layout::Anchor> {
+        let frozen = if self.sliding == crate::model::Sliding::Infinitesimal {
+            layout::ANCHOR_FROZEN
+        } else {
+            0
+        };
+        raw.iter()
+            .zip(&self.slaves)
+            .map(|(h, &s)| {
+                let none = layout::Anchor {
+                    facet: NO_FACET,
+                    node: u32::MAX,
+                    flags: frozen,
+                    _pad: 0,
+                    weights: [0.0; 4],
+                    normal0: [0.0; 4],
+                    facet_normal0: [0.0; 4],
+                };
+                if h.facet == NO_FACET {
+                    return none;
+                }
+                let f = self.master.active[h.facet as usize];
+                let nodes = self.master.facets[f as usize].nodes();
+                let xs: Vec<crate::geometry::V3<f64>> = nodes
+                    .iter()
+                    .map(|&n| crate::geometry::V3::from_array(positions[n as usize]))
+                    .collect();
+                let p = crate::geometry::V3::from_array(positions[s as usize]);
+                let pr = crate::geometry::closest_on_facet(p, &xs);
+                let dist = pr.dist2.sqrt();
+                let size = self.master.facet_size[f as usize];
+                let orthogonal = dist <= 1e-9 * size || pr.gap(p).abs() >= (1.0 - 1e-9) * dist;
+                let on: Vec<u32> = nodes
+                    .iter()
+                    .zip(&pr.weights)
+                    .filter(|(_, w)| **w > 1e-9)
+                    .map(|(n, _)| *n)
+                    .collect();
+                let shared = match on.len() {
+                    // on an edge: shared with another facet (a ridge, not a free edge)
+                    2 => self.edge_facets(on[0], on[1]) >= 2,
+                    // at a vertex: an interior one (every edge around it shared)
+                    1 => self.master.facets_of_node(on[0]).iter().all(|&g| {
+                        let gn = self.master.facets[g as usize].nodes();
+                        let k = gn.iter().position(|&n| n == on[0]).unwrap_or(0);
+                        let (prev, next) =
+                            (gn[(k + gn.len() - 1) % gn.len()], gn[(k + 1) % gn.len()]);
+                        (gn.len() == 2 || self.edge_facets(on[0], prev) >= 2)
+                            && self.edge_facets(on[0], next) >= 2
+                    }),
+                    _ => false,
+                };
+                if !(orthogonal || shared) {
+                    return none;
+                }
+                let mut n0 = crate::geometry::V3::<f64>::zero();
+                for (k, &n) in nodes.iter().enumerate() {
+                    n0 = n0
+                        + crate::geometry::V3::from_array(self.master.nodal_normals[n as usize])
+                            * pr.weights[k];
+                }
+                let n0 = n0.normalize_or_zero();
+                let mut w = [0.0f32; 4];
+                for k in 0..4 {
+                    w[k] = pr.weights[k] as f32;
+                }
+                layout::Anchor {
+                    facet: h.facet,
+                    node: h.node,
+                    flags: frozen,
+                    _pad: 0,
+                    weights: w,
+                    normal0: [n0.x as f32, n0.y as f32, n0.z as f32, size as f32],
+                    facet_normal0: [
+                        pr.normal.x as f32,
+                        pr.normal.y as f32,
+                        pr.normal.z as f32,
+                        0.0,
+                    ],
+                }
+            })
+            .collect()
+    }
+
+    /// Active facets containing both nodes `a` and `b` (2 for an interior edge, 1 for a free
+    /// one; for 2D segments, facets containing node `a` when `a` is a segment end).
+    fn edge_facets(&self, a: u32, b: u32) -> usize {
+        let fa = self.master.facets_of_node(a);
+        if self.dim == 2 {
+            return fa.len();
+        }
+        fa.iter()
+            .filter(|&&g| self.master.facets[g as usize].nodes().contains(&b))
+            .count()
     }
 
     /// The kernels' input when the positions stay on the device: the last global search's
@@ -640,6 +797,8 @@ impl GlobalSearch {
             stats: SearchStats {
                 trigger,
                 local_iterations: status[layout::STATUS_LOCAL_ITERATIONS],
+                slid_too_far: status[layout::STATUS_SLID_TOO_FAR],
+                plane_off: status[layout::STATUS_PLANE_OFF],
                 local_capped: status[layout::STATUS_LOCAL_CAPPED],
                 motion: f32::from_bits(status[layout::STATUS_MOTION]) as f64,
                 grid: prepared.grid,
