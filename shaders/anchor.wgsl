@@ -3,7 +3,8 @@
 // CPU mirror: src/cpu/anchor.rs.
 //
 // Bindings: 0 params (uniform SearchParams), 1 nodes, 2 facets, 3 slaves, 4 anchors (one Anchor
-//           per slave, fixed at the first global search), 5 status, 6 hits (written).
+//           per slave, fixed at the first global search), 5 status, 6 hits (written),
+//           7 adjacency (as in local_search.wgsl: for the current smoothed normal).
 // Dispatch: one invocation per slave node, ITEM_WORKGROUP per workgroup, folded into 2D.
 // Invariants: the anchor point X0 = Σ w_j x_j keeps its place among the facet's nodes (fixed
 //             weights); the tangent plane through it has the normal N(X0) of the start, turned
@@ -11,7 +12,8 @@
 //             infinitesimal); the gap is measured along it. A slave that projected onto no
 //             facet gets facet = NO_FACET and no constraint. Diagnostics: a slave that slid more
 //             than its facet's element length in the plane counts in STATUS_SLID_TOO_FAR; a
-//             plane more than 10° off the facet's current normal at X0, in STATUS_PLANE_OFF.
+//             plane more than 10° off the current smoothed normal at X0 (the deformed master),
+//             in STATUS_PLANE_OFF.
 
 // Rust twin: Anchor (src/search/layout.rs), 64 bytes.
 struct Anchor {
@@ -34,6 +36,36 @@ const COS_10_DEGREES: f32 = 0.98480775;
 @group(0) @binding(4) var<storage, read> anchors: array<Anchor>;
 @group(0) @binding(5) var<storage, read_write> status: array<atomic<u32>>;
 @group(0) @binding(6) var<storage, read_write> hits: array<Hit>;
+@group(0) @binding(7) var<storage, read> adjacency: array<u32>;
+
+// Area vector of a facet (twin of nodal_normals.wgsl's).
+fn area_normal(fac: vec4<u32>) -> vec3<f32> {
+    let x0 = nodes[fac.x].xyz;
+    let x1 = nodes[fac.y].xyz;
+    let n = facet_node_count(fac);
+    if (n == 2u) {
+        let t = x1 - x0;
+        return vec3<f32>(t.y, -t.x, 0.0);
+    }
+    let x2 = nodes[fac.z].xyz;
+    if (n == 3u) { return 0.5 * cross(x1 - x0, x2 - x0); }
+    return 0.5 * cross(x2 - x0, nodes[fac.w].xyz - x1);
+}
+
+// The current smoothed normal at the point with weights w on facet fac.
+fn smoothed_normal(fac: vec4<u32>, w: vec4<f32>) -> vec3<f32> {
+    let n = facet_node_count(fac);
+    var sum = vec3<f32>(0.0);
+    for (var j = 0u; j < n; j++) {
+        let node = fac[j];
+        var nn = vec3<f32>(0.0);
+        for (var k = adjacency[node]; k < adjacency[node + 1u]; k++) {
+            nn += area_normal(facets[adjacency[k]]);
+        }
+        sum += w[j] * normalize_or_zero(nn);
+    }
+    return normalize_or_zero(sum);
+}
 
 // The facet's normal at the point with weights w (the bilinear normal for a quad).
 fn facet_normal_at(fac: vec4<u32>, w: vec4<f32>) -> vec3<f32> {
@@ -103,7 +135,7 @@ fn anchor(@builtin(workgroup_id) wg: vec3<u32>,
     let gap = dot(d, nrm);
     let slide = length(d - nrm * gap);
     if (slide > a.normal0.w) { atomicAdd(&status[STATUS_SLID_TOO_FAR], 1u); }
-    if (dot(nrm, nf) < COS_10_DEGREES) { atomicAdd(&status[STATUS_PLANE_OFF], 1u); }
+    if (dot(nrm, smoothed_normal(fac, a.weights)) < COS_10_DEGREES) { atomicAdd(&status[STATUS_PLANE_OFF], 1u); }
     hit.facet = a.facet;
     hit.point_gap = vec4<f32>(x0, gap);
     hit.normal_dist = vec4<f32>(nrm, length(d));

@@ -277,3 +277,53 @@ fn anchored_parity_and_kinematic_small_sliding() {
         );
     }
 }
+
+/// The diagnostic of planes that stopped representing the master: an infinitesimal plane
+/// under a master turned 17°, and a small-sliding plane on a master folded about its anchor
+/// facet; a small-sliding plane under a rigid rotation stays fine.
+#[test]
+fn planes_that_stop_representing_the_master_are_reported() {
+    let plate = plate_quads(4, 4, 1.0, 1.0, 0.0, 0, &|_, _| 0.0);
+    for (sliding, fold, expect) in [
+        (Sliding::Infinitesimal, false, 1u32),
+        (Sliding::Small, false, 0),
+        (Sliding::Small, true, 1),
+    ] {
+        let mut m = Model::new_3d();
+        m.add_nodes(&plate.positions, &vec![1.0; plate.positions.len()])
+            .unwrap();
+        let s = m.add_surface(Surface::quads(&plate.facets)).unwrap();
+        // on the shared edge x = 0.5 between two facets
+        let r = m.add_nodes(&[[0.5, 0.4, 0.01]], &[1.0]).unwrap();
+        let set = m.add_node_set(&r.to_vec()).unwrap();
+        let p = m
+            .add_pair(Pair::new(set, s).search_radius(0.2).sliding(sliding))
+            .unwrap();
+        for d in devices() {
+            let mut search = GlobalSearch::new(&d, &m, p).unwrap();
+            search.step(m.positions()).unwrap();
+            let x: Vec<[f64; 3]> = m
+                .positions()
+                .iter()
+                .map(|q| {
+                    if fold {
+                        // the half x > 0.5 folds up by 40° about the line x = 0.5
+                        if q[0] > 0.5 {
+                            [
+                                0.5 + (q[0] - 0.5) * 40f64.to_radians().cos(),
+                                q[1],
+                                (q[0] - 0.5) * 40f64.to_radians().sin() + q[2],
+                            ]
+                        } else {
+                            *q
+                        }
+                    } else {
+                        rotate_x(*q, 0.3)
+                    }
+                })
+                .collect();
+            let r = search.step(&x).unwrap();
+            assert_eq!(r.stats.plane_off, expect, "{d} {sliding:?} fold={fold}");
+        }
+    }
+}

@@ -42,7 +42,32 @@ pub fn rotate_like(a: V3<f32>, b: V3<f32>, v: V3<f32>) -> V3<f32> {
     v * c + k.cross(v) + k * (k.dot(v) / (1.0 + c))
 }
 
+/// The current smoothed normal at the point with weights `w` on `fac` (WGSL: `smoothed_normal`).
+pub fn smoothed_normal(
+    nodes: &[[f32; 4]],
+    facets: &[[u32; 4]],
+    adjacency: &[u32],
+    fac: [u32; 4],
+    w: [f32; 4],
+) -> V3<f32> {
+    let mut sum = V3::zero();
+    for j in 0..facet_node_count(fac) {
+        let n = fac[j] as usize;
+        let mut nn = V3::zero();
+        for k in adjacency[n]..adjacency[n + 1] {
+            nn = nn
+                + super::nodal_normals::facet_area_normal(
+                    nodes,
+                    facets[adjacency[k as usize] as usize],
+                );
+        }
+        sum = sum + nn.normalize_or_zero() * w[j];
+    }
+    sum.normalize_or_zero()
+}
+
 /// One "invocation" per slave node.
+#[allow(clippy::too_many_arguments)]
 pub fn anchor(
     params: &SearchParams,
     nodes: &[[f32; 4]],
@@ -51,6 +76,7 @@ pub fn anchor(
     anchors: &[Anchor],
     status: &mut [u32],
     hits: &mut [GpuHit],
+    adjacency: &[u32],
 ) {
     for i in 0..params.n_slaves as usize {
         let a = anchors[i];
@@ -85,7 +111,7 @@ pub fn anchor(
         if slide > a.normal0[3] {
             status[STATUS_SLID_TOO_FAR] += 1;
         }
-        if nrm.dot(nf) < COS_10_DEGREES {
+        if nrm.dot(smoothed_normal(nodes, facets, adjacency, fac, a.weights)) < COS_10_DEGREES {
             status[STATUS_PLANE_OFF] += 1;
         }
         hit.facet = a.facet;

@@ -108,6 +108,7 @@ impl CpuSearch {
                 anchors,
                 &mut status,
                 &mut self.ws.hits,
+                &prep.adjacency,
             );
             self.ws.status = status;
             return Ok((self.ws.hits.clone(), 0, 0, status));

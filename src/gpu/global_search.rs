@@ -318,6 +318,7 @@ impl GpuSearch {
                     b.anchors.buffer.as_entire_binding(),
                     b.status.as_entire_binding(),
                     b.hits.buffer.as_entire_binding(),
+                    b.adjacency.buffer.as_entire_binding(),
                 ],
             ),
             local_search: group(
