@@ -398,6 +398,21 @@ impl Contact {
         Ok(&self.report)
     }
 
+    /// Whether any pair is enforced by penalty.
+    pub fn has_penalty_pairs(&self) -> bool {
+        !self.pairs.is_empty()
+    }
+
+    /// Whether any pair (meshed or rigid) is enforced kinematically.
+    pub fn has_kinematic_pairs(&self) -> bool {
+        !self.kinematic.is_empty() || !self.rigid.is_empty()
+    }
+
+    /// The report of the last penalty increment.
+    pub fn report(&self) -> &StepReport {
+        &self.report
+    }
+
     /// The contact outputs of each penalty and kinematic pair after its last increment (empty
     /// before the first; penalty outputs only when requested). A balanced penalty pair gives
     /// two entries: its slave-on-master pass, then its master-on-slave pass.

@@ -5,6 +5,7 @@ pub mod contact;
 pub mod cpu;
 pub mod device;
 pub mod error;
+pub mod explicit;
 pub mod geometry;
 pub mod gpu;
 pub mod kinematic;

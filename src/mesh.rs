@@ -208,3 +208,62 @@ pub fn point_cloud(n: usize, lo: [f64; 3], hi: [f64; 3], seed: u64) -> Vec<[f64;
         })
         .collect()
 }
+
+/// A box [0, lx]×[0, ly]×[0, lz] shifted by `origin`, as nx×ny×nz hexahedra each split into
+/// six tetrahedra around its main diagonal (positive volumes).
+pub fn block_tets(n: [usize; 3], l: [f64; 3], origin: [f64; 3]) -> Mesh<[u32; 4]> {
+    let id =
+        |i: usize, j: usize, k: usize| (k * (n[1] + 1) * (n[0] + 1) + j * (n[0] + 1) + i) as u32;
+    let mut positions = Vec::new();
+    for k in 0..=n[2] {
+        for j in 0..=n[1] {
+            for i in 0..=n[0] {
+                positions.push([
+                    origin[0] + l[0] * i as f64 / n[0] as f64,
+                    origin[1] + l[1] * j as f64 / n[1] as f64,
+                    origin[2] + l[2] * k as f64 / n[2] as f64,
+                ]);
+            }
+        }
+    }
+    let mut facets = Vec::new();
+    for k in 0..n[2] {
+        for j in 0..n[1] {
+            for i in 0..n[0] {
+                let h = [
+                    id(i, j, k),
+                    id(i + 1, j, k),
+                    id(i + 1, j + 1, k),
+                    id(i, j + 1, k),
+                    id(i, j, k + 1),
+                    id(i + 1, j, k + 1),
+                    id(i + 1, j + 1, k + 1),
+                    id(i, j + 1, k + 1),
+                ];
+                for t in [
+                    [0, 1, 2, 6],
+                    [0, 2, 3, 6],
+                    [0, 3, 7, 6],
+                    [0, 7, 4, 6],
+                    [0, 4, 5, 6],
+                    [0, 5, 1, 6],
+                ] {
+                    let mut tet = [h[t[0]], h[t[1]], h[t[2]], h[t[3]]];
+                    let p = |q: u32| positions[q as usize];
+                    let (a, b, c, d) = (p(tet[0]), p(tet[1]), p(tet[2]), p(tet[3]));
+                    let u = [b[0] - a[0], b[1] - a[1], b[2] - a[2]];
+                    let v = [c[0] - a[0], c[1] - a[1], c[2] - a[2]];
+                    let w = [d[0] - a[0], d[1] - a[1], d[2] - a[2]];
+                    let vol = u[0] * (v[1] * w[2] - v[2] * w[1])
+                        - u[1] * (v[0] * w[2] - v[2] * w[0])
+                        + u[2] * (v[0] * w[1] - v[1] * w[0]);
+                    if vol < 0.0 {
+                        tet.swap(1, 2);
+                    }
+                    facets.push(tet);
+                }
+            }
+        }
+    }
+    Mesh { positions, facets }
+}

@@ -1,0 +1,329 @@
+//! Elements of the small explicit solver: 2-node bars, 3-node plane-strain triangles and 4-node
+//! tetrahedra, linear elastic in the St Venant–Kirchhoff form (Green–Lagrange strain, second
+//! Piola–Kirchhoff stress), which stays right under large rotation.
+
+use crate::geometry::V3;
+
+/// Linear elastic material.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Material {
+    /// Young's modulus.
+    pub young: f64,
+    /// Poisson's ratio.
+    pub poisson: f64,
+    /// Density (mass per volume; per length for bars, per area for plane-strain triangles of
+    /// unit thickness the volume is area × thickness).
+    pub density: f64,
+}
+
+impl Material {
+    /// Lamé's first parameter λ.
+    pub fn lambda(&self) -> f64 {
+        let (e, nu) = (self.young, self.poisson);
+        e * nu / ((1.0 + nu) * (1.0 - 2.0 * nu))
+    }
+    /// Shear modulus μ.
+    pub fn mu(&self) -> f64 {
+        self.young / (2.0 * (1.0 + self.poisson))
+    }
+    /// Dilatational (P-wave) speed √((λ + 2μ)/ρ), the speed the stable increment is set by.
+    pub fn p_wave_speed(&self) -> f64 {
+        ((self.lambda() + 2.0 * self.mu()) / self.density).sqrt()
+    }
+}
+
+/// An element: its nodes, reference geometry and material.
+#[derive(Clone, Debug, PartialEq)]
+pub enum Element {
+    /// 2-node bar of cross-section `area` (uniaxial stress, modulus E).
+    Bar {
+        /// Node indices.
+        nodes: [u32; 2],
+        /// Cross-section area.
+        area: f64,
+        /// Reference length.
+        length0: f64,
+        /// Material.
+        material: Material,
+    },
+    /// 3-node plane-strain triangle (x–y plane) of out-of-plane `thickness`.
+    Tri3 {
+        /// Node indices (counter-clockwise).
+        nodes: [u32; 3],
+        /// Thickness.
+        thickness: f64,
+        /// Reference area.
+        area0: f64,
+        /// Reference shape-function gradients (x, y) of the three nodes.
+        grad: [[f64; 2]; 3],
+        /// Material.
+        material: Material,
+    },
+    /// 4-node tetrahedron.
+    Tet4 {
+        /// Node indices (positive volume).
+        nodes: [u32; 4],
+        /// Reference volume.
+        volume0: f64,
+        /// Reference shape-function gradients of the four nodes.
+        grad: [[f64; 3]; 4],
+        /// Material.
+        material: Material,
+    },
+}
+
+fn sub(a: [f64; 3], b: [f64; 3]) -> V3<f64> {
+    V3::new(a[0] - b[0], a[1] - b[1], a[2] - b[2])
+}
+
+impl Element {
+    /// A bar between `nodes` at reference positions `x`.
+    pub fn bar(nodes: [u32; 2], x: &[[f64; 3]], area: f64, material: Material) -> Option<Self> {
+        let l = sub(x[nodes[1] as usize], x[nodes[0] as usize])
+            .length2()
+            .sqrt();
+        (l > 0.0).then_some(Element::Bar {
+            nodes,
+            area,
+            length0: l,
+            material,
+        })
+    }
+
+    /// A plane-strain triangle; `None` when its reference area is not positive.
+    pub fn tri3(
+        nodes: [u32; 3],
+        x: &[[f64; 3]],
+        thickness: f64,
+        material: Material,
+    ) -> Option<Self> {
+        let p: Vec<[f64; 3]> = nodes.iter().map(|&n| x[n as usize]).collect();
+        let area = 0.5
+            * ((p[1][0] - p[0][0]) * (p[2][1] - p[0][1])
+                - (p[2][0] - p[0][0]) * (p[1][1] - p[0][1]));
+        if !(area > 0.0) {
+            return None;
+        }
+        let mut grad = [[0.0; 2]; 3];
+        for i in 0..3 {
+            let (j, k) = ((i + 1) % 3, (i + 2) % 3);
+            grad[i] = [
+                (p[j][1] - p[k][1]) / (2.0 * area),
+                (p[k][0] - p[j][0]) / (2.0 * area),
+            ];
+        }
+        Some(Element::Tri3 {
+            nodes,
+            thickness,
+            area0: area,
+            grad,
+            material,
+        })
+    }
+
+    /// A tetrahedron; `None` when its reference volume is not positive.
+    pub fn tet4(nodes: [u32; 4], x: &[[f64; 3]], material: Material) -> Option<Self> {
+        let p: Vec<V3<f64>> = nodes
+            .iter()
+            .map(|&n| V3::from_array(x[n as usize]))
+            .collect();
+        let (a, b, c) = (p[1] - p[0], p[2] - p[0], p[3] - p[0]);
+        let vol6 = a.dot(b.cross(c));
+        if !(vol6 > 0.0) {
+            return None;
+        }
+        // gradients of the barycentric coordinates: rows of the inverse of [a b c]ᵀ
+        let g1 = b.cross(c) * (1.0 / vol6);
+        let g2 = c.cross(a) * (1.0 / vol6);
+        let g3 = a.cross(b) * (1.0 / vol6);
+        let g0 = (g1 + g2 + g3) * -1.0;
+        Some(Element::Tet4 {
+            nodes,
+            volume0: vol6 / 6.0,
+            grad: [g0.to_array(), g1.to_array(), g2.to_array(), g3.to_array()],
+            material,
+        })
+    }
+
+    /// The element's nodes.
+    pub fn nodes(&self) -> &[u32] {
+        match self {
+            Element::Bar { nodes, .. } => nodes,
+            Element::Tri3 { nodes, .. } => nodes,
+            Element::Tet4 { nodes, .. } => nodes,
+        }
+    }
+
+    /// Reference mass (density × reference measure).
+    pub fn mass(&self) -> f64 {
+        match self {
+            Element::Bar {
+                area,
+                length0,
+                material,
+                ..
+            } => material.density * area * length0,
+            Element::Tri3 {
+                thickness,
+                area0,
+                material,
+                ..
+            } => material.density * thickness * area0,
+            Element::Tet4 {
+                volume0, material, ..
+            } => material.density * volume0,
+        }
+    }
+
+    /// Stable increment of the element alone: a characteristic length over the wave speed (E
+    /// for bars, the P-wave speed otherwise). For triangles and tetrahedra the length is
+    /// 1/√(Σ_i |∇N_i|²), which bounds the lumped-mass element's highest frequency from above
+    /// (trace bound: ω² ≤ n·c²·Σ|∇N_i|²/n), so the increment is safe; for a bar it is exact.
+    pub fn stable_increment(&self) -> f64 {
+        match self {
+            Element::Bar {
+                length0, material, ..
+            } => length0 / (material.young / material.density).sqrt(),
+            Element::Tri3 { grad, material, .. } => {
+                let s: f64 = grad.iter().map(|g| g[0] * g[0] + g[1] * g[1]).sum();
+                1.0 / (s.sqrt() * material.p_wave_speed())
+            }
+            Element::Tet4 { grad, material, .. } => {
+                let s: f64 = grad
+                    .iter()
+                    .map(|g| g[0] * g[0] + g[1] * g[1] + g[2] * g[2])
+                    .sum();
+                1.0 / (s.sqrt() * material.p_wave_speed())
+            }
+        }
+    }
+
+    /// Adds the element's internal forces at positions `x` to `f` (the forces the element
+    /// exerts on its nodes) and returns its strain energy.
+    pub fn add_internal_forces(&self, x: &[[f64; 3]], f: &mut [[f64; 3]]) -> f64 {
+        match self {
+            Element::Bar {
+                nodes,
+                area,
+                length0,
+                material,
+            } => {
+                let d = sub(x[nodes[1] as usize], x[nodes[0] as usize]);
+                let l2 = d.length2();
+                // Green–Lagrange strain along the bar, 2nd Piola–Kirchhoff stress
+                let e = 0.5 * (l2 / (length0 * length0) - 1.0);
+                let s = material.young * e;
+                // force on node 1: −S·A·(d/L0²)·L0 = −S·A·d/L0
+                let t = d * (s * area / length0);
+                for a in 0..3 {
+                    f[nodes[0] as usize][a] += t.to_array()[a];
+                    f[nodes[1] as usize][a] -= t.to_array()[a];
+                }
+                0.5 * material.young * e * e * area * length0
+            }
+            Element::Tri3 {
+                nodes,
+                thickness,
+                area0,
+                grad,
+                material,
+            } => {
+                // F (2×2) = Σ x_i ⊗ ∇N_i
+                let mut ff = [[0.0; 2]; 2];
+                for (k, &n) in nodes.iter().enumerate() {
+                    for r in 0..2 {
+                        for c in 0..2 {
+                            ff[r][c] += x[n as usize][r] * grad[k][c];
+                        }
+                    }
+                }
+                let (s, w) = stvk_2d(&ff, material);
+                // P = F S; f_i = −V0 P ∇N_i
+                let vol = area0 * thickness;
+                for (k, &n) in nodes.iter().enumerate() {
+                    for r in 0..2 {
+                        let mut p_g = 0.0;
+                        for c in 0..2 {
+                            let p_rc: f64 = (0..2).map(|m| ff[r][m] * s[m][c]).sum();
+                            p_g += p_rc * grad[k][c];
+                        }
+                        f[n as usize][r] -= vol * p_g;
+                    }
+                }
+                w * vol
+            }
+            Element::Tet4 {
+                nodes,
+                volume0,
+                grad,
+                material,
+            } => {
+                let mut ff = [[0.0; 3]; 3];
+                for (k, &n) in nodes.iter().enumerate() {
+                    for r in 0..3 {
+                        for c in 0..3 {
+                            ff[r][c] += x[n as usize][r] * grad[k][c];
+                        }
+                    }
+                }
+                let (s, w) = stvk_3d(&ff, material);
+                for (k, &n) in nodes.iter().enumerate() {
+                    for r in 0..3 {
+                        let mut p_g = 0.0;
+                        for c in 0..3 {
+                            let p_rc: f64 = (0..3).map(|m| ff[r][m] * s[m][c]).sum();
+                            p_g += p_rc * grad[k][c];
+                        }
+                        f[n as usize][r] -= volume0 * p_g;
+                    }
+                }
+                w * volume0
+            }
+        }
+    }
+}
+
+/// Second Piola–Kirchhoff stress and strain energy density of St Venant–Kirchhoff in plane
+/// strain (E_zz = 0).
+fn stvk_2d(ff: &[[f64; 2]; 2], m: &Material) -> ([[f64; 2]; 2], f64) {
+    let mut e = [[0.0; 2]; 2];
+    for r in 0..2 {
+        for c in 0..2 {
+            let ftf: f64 = (0..2).map(|k| ff[k][r] * ff[k][c]).sum();
+            e[r][c] = 0.5 * (ftf - if r == c { 1.0 } else { 0.0 });
+        }
+    }
+    let (l, mu) = (m.lambda(), m.mu());
+    let tr = e[0][0] + e[1][1];
+    let mut s = [[0.0; 2]; 2];
+    let mut ee = 0.0;
+    for r in 0..2 {
+        for c in 0..2 {
+            s[r][c] = 2.0 * mu * e[r][c] + if r == c { l * tr } else { 0.0 };
+            ee += e[r][c] * e[r][c];
+        }
+    }
+    (s, 0.5 * l * tr * tr + mu * ee)
+}
+
+/// Second Piola–Kirchhoff stress and strain energy density of St Venant–Kirchhoff.
+fn stvk_3d(ff: &[[f64; 3]; 3], m: &Material) -> ([[f64; 3]; 3], f64) {
+    let mut e = [[0.0; 3]; 3];
+    for r in 0..3 {
+        for c in 0..3 {
+            let ftf: f64 = (0..3).map(|k| ff[k][r] * ff[k][c]).sum();
+            e[r][c] = 0.5 * (ftf - if r == c { 1.0 } else { 0.0 });
+        }
+    }
+    let (l, mu) = (m.lambda(), m.mu());
+    let tr = e[0][0] + e[1][1] + e[2][2];
+    let mut s = [[0.0; 3]; 3];
+    let mut ee = 0.0;
+    for r in 0..3 {
+        for c in 0..3 {
+            s[r][c] = 2.0 * mu * e[r][c] + if r == c { l * tr } else { 0.0 };
+            ee += e[r][c] * e[r][c];
+        }
+    }
+    (s, 0.5 * l * tr * tr + mu * ee)
+}
