@@ -199,3 +199,67 @@ fn block_dropped_on_a_rigid_plate() {
         }
     }
 }
+
+/// A long run: a block dropped with a sideways throw onto a plate with Coulomb friction,
+/// bouncing and sliding, 10⁵ increments (CPU path): the energy balance stays bounded.
+#[test]
+fn long_bouncing_and_sliding_run_stays_balanced() {
+    let block = block_tets([2, 2, 2], [0.2, 0.2, 0.2], [0.4, 0.4, 0.02]);
+    let plate = plate_quads(6, 6, 3.0, 3.0, 0.0, 0, &|_, _| 0.0);
+    let nb = block.positions.len();
+    let mut x = block.positions.clone();
+    x.extend(plate.positions.iter().copied());
+    let elements: Vec<Element> = block
+        .facets
+        .iter()
+        .map(|t| Element::tet4(*t, &x, SOFT).unwrap())
+        .collect();
+    let mut point = vec![0.0; nb];
+    point.extend(vec![1e9; plate.positions.len()]);
+    let mut s = Solver::new(x.clone(), elements, &point).unwrap();
+    s.gravity = [0.0, 0.0, -9.81];
+    for i in nb..x.len() {
+        s.fixed[i] = [true; 3];
+    }
+    for v in &mut s.v[..nb] {
+        *v = [1.0, 0.3, 0.0];
+    }
+    let mut model = Model::new_3d();
+    model.add_nodes(&x, &s.mass).unwrap();
+    let quads: Vec<[u32; 4]> = plate
+        .facets
+        .iter()
+        .map(|q| q.map(|n| n + nb as u32))
+        .collect();
+    let surf = model.add_surface(Surface::quads(&quads)).unwrap();
+    let bottom: Vec<u32> = (0..nb as u32)
+        .filter(|&i| x[i as usize][2] < 0.02 + 1e-9)
+        .collect();
+    let set = model.add_node_set(&bottom).unwrap();
+    model
+        .add_pair(
+            Pair::new(set, surf)
+                .search_radius(0.05)
+                .friction(Friction::coulomb(0.3)),
+        )
+        .unwrap();
+    let mut c = Contact::new(&Device::cpu(), &model).unwrap();
+    let dt = s.stable_increment();
+    let (mut early, mut late) = (0.0f64, 0.0f64);
+    let n = 100_000;
+    for k in 0..n {
+        s.step(dt, Some(&mut c)).unwrap();
+        if k < n / 10 {
+            early = early.max(s.balance_error());
+        } else {
+            late = late.max(s.balance_error());
+        }
+    }
+    let slid = s.x[0][0] - x[0][0];
+    assert!(slid > 0.05 && slid < 1.0, "it slid and stopped: {slid}");
+    assert!(s.energy.contact_work < 0.0, "friction dissipated energy");
+    assert!(
+        early.max(late) < 0.05 && late <= early + 0.01,
+        "energy balance error {early} then {late}"
+    );
+}
