@@ -12,6 +12,7 @@ pub mod kinematic;
 pub mod mesh;
 pub mod model;
 pub mod penalty;
+pub mod scene;
 pub mod search;
 
 pub use contact::{

@@ -26,6 +26,9 @@ enum Command {
     /// increment and the error against the exact solution of a mass on a linear spring:
     /// contact duration π·√(m/k), rebound at the impact speed, peak penetration v₀·√(m/k).
     Bounce(BounceArgs),
+    /// Runs a scene file with the explicit solver and abut's contact; writes history.csv and
+    /// summary.json to --output when given, and prints the summary.
+    Run(RunArgs),
     /// Global contact search on a built-in scene: a cloud of slave nodes around a wavy quad
     /// plate. Prints the adapter, what was found, the time and the error against an f64
     /// brute-force oracle on a sample of nodes.
@@ -49,6 +52,18 @@ struct SearchArgs {
     /// Slave nodes checked against the f64 brute-force oracle.
     #[arg(long, default_value_t = 2000)]
     check: usize,
+}
+
+#[derive(clap::Args, Clone)]
+struct RunArgs {
+    /// The scene file (TOML; see `abut::scene`).
+    scene: std::path::PathBuf,
+    /// Where to run.
+    #[arg(long, value_enum, default_value_t = BackendArg::Auto)]
+    backend: BackendArg,
+    /// Directory for history.csv and summary.json.
+    #[arg(long)]
+    output: Option<std::path::PathBuf>,
 }
 
 #[derive(clap::Args, Clone)]
@@ -95,6 +110,7 @@ fn main() -> ExitCode {
         .unwrap_or(Command::Bounce(BounceArgs::default()));
     let result = match command {
         Command::Bounce(a) => bounce(&a),
+        Command::Run(a) => run_scene(&a),
         Command::Search(a) => search(&a),
     };
     match result {
@@ -112,6 +128,28 @@ fn device(b: BackendArg) -> abut::Result<Device> {
         BackendArg::Gpu => Device::gpu(),
         BackendArg::Cpu => Ok(Device::cpu()),
     }
+}
+
+fn run_scene(a: &RunArgs) -> abut::Result<()> {
+    let text = std::fs::read_to_string(&a.scene).map_err(|e| abut::Error::BadParameter {
+        name: "scene file",
+        value: format!("{}: {e}", a.scene.display()),
+        expected: "a readable file",
+    })?;
+    let scene = abut::scene::Scene::parse(&text).map_err(|e| abut::Error::BadParameter {
+        name: "scene file",
+        value: format!("{}: {e}", a.scene.display()),
+        expected: "a valid scene",
+    })?;
+    let device = device(a.backend)?;
+    println!("device: {device}");
+    println!("scene: {}", scene.title);
+    let summary = abut::scene::run(&scene, &device, a.output.as_deref())?;
+    println!(
+        "{}",
+        serde_json::to_string_pretty(&summary).unwrap_or_default()
+    );
+    Ok(())
 }
 
 fn bounce(a: &BounceArgs) -> abut::Result<()> {

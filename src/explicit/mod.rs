@@ -59,6 +59,9 @@ pub struct Solver {
     pub time: f64,
     /// Energies.
     pub energy: Energy,
+    /// Contact force on each node in the last increment (penalty forces, and kinematic
+    /// corrections as the forces m·Δv/dt that would make them).
+    pub contact_force: Vec<[f64; 3]>,
     started: bool,
     balance0: Option<f64>,
     /// (external, contact, damping) power at the last step's time, and the increment since.
@@ -103,6 +106,7 @@ impl Solver {
             safety: 0.9,
             time: 0.0,
             energy: Energy::default(),
+            contact_force: vec![[0.0; 3]; n],
             started: false,
             balance0: None,
             last_power: None,
@@ -179,6 +183,11 @@ impl Solver {
                         kinematic[i][a] = self.mass[i] * (self.v[i][a] - v_pred[i][a]) / dv_scale;
                     }
                 }
+            }
+        }
+        for i in 0..n {
+            for a in 0..3 {
+                self.contact_force[i][a] = penalty[i][a] + kinematic[i][a];
             }
         }
         // energies at this step's time: velocities there are the mean of the half-step ones
