@@ -88,6 +88,24 @@ pub fn softened_target(law: &PressureOverclosure, h: f64, mass: f64, area: f64, 
     0.5 * (lo + hi)
 }
 
+/// The overclosure a correction should leave for a slave at overclosure `h` (0 for hard
+/// contact, the softened law's balance otherwise), or `None` when it needs no push.
+fn push_target(
+    law: Option<&PressureOverclosure>,
+    h: f64,
+    mass: f64,
+    area: f64,
+    dt: f64,
+) -> Option<f64> {
+    match law {
+        None => (h > 0.0).then_some(0.0),
+        Some(l) => {
+            let target = softened_target(l, h, mass, area, dt);
+            (h > target).then_some(target)
+        }
+    }
+}
+
 /// Elastic energy per area of a law up to overclosure h (trapezoids on a fine partition for
 /// the exponential law, exact for tabular).
 pub fn law_energy(law: &PressureOverclosure, h: f64) -> f64 {
@@ -200,17 +218,9 @@ fn correct(
         let Some(g) = g else { continue };
         let h = g.overclosure;
         let ms = masses[s as usize];
-        let target = match law {
-            None => 0.0,
-            Some(l) => softened_target(l, h, ms, areas[k], dt),
-        };
-        let needs_push = match law {
-            None => h > 0.0,
-            Some(_) => h > target,
-        };
-        if !needs_push {
+        let Some(target) = push_target(law, h, ms, areas[k], dt) else {
             continue;
-        }
+        };
         let fs = ms * (h - target) / (dt * dt);
         for (j, &n) in g.nodes.iter().enumerate() {
             let e = force.entry(n).or_insert((V3::zero(), 0.0));
@@ -341,17 +351,9 @@ pub fn rigid_pass(
         let (gap, nb) = surface.gap(to_body(&r, p - xb));
         let h = -gap;
         let ms = masses[s as usize];
-        let target = match law {
-            None => 0.0,
-            Some(l) => softened_target(l, h, ms, areas[k], dt),
-        };
-        let needs_push = match law {
-            None => h > 0.0,
-            Some(_) => h > target,
-        };
-        if !needs_push {
+        let Some(target) = push_target(law, h, ms, areas[k], dt) else {
             continue;
-        }
+        };
         let n = to_model(&r, nb);
         let fs = ms * (h - target) / (dt * dt);
         let rs = p - xb;
