@@ -215,7 +215,7 @@ fn main() {
         found = found.max(cpu_r.contacts.iter().flatten().count());
         let reference = first_result.unwrap_or(cpu_r);
         let master = m.surface(m.pair(p).unwrap().master).unwrap();
-        let brute = if (case.slaves as f64) * (tris.len() as f64) <= 1.1e8 {
+        let brute = if (case.slaves as f64) * (tris.len() as f64) <= 1e8 {
             let t = Instant::now();
             std::hint::black_box(brute_force(master, m.positions(), &reference.slaves, h));
             ms(t.elapsed())

@@ -1,6 +1,9 @@
 //! The penalty pass against the search's cost: per device, the steady-state time of a global
 //! search alone and of a whole penalty increment (search + nodal normals + penalty + contact
-//! sort + gather, one submit), frictionless and with Coulomb friction.
+//! sort + gather, one submit), frictionless and with Coulomb friction. The increments here
+//! search globally every time (schedule interval 1) so that their difference to the search
+//! alone is the penalty passes; with the default schedule most increments search locally and
+//! cost less (see the tracking benchmark).
 //!
 //! `cargo bench --bench penalty` (`-- --quick` for the smallest size). Prints a markdown table
 //! (also `target/bench/penalty.md`). A search alone reads back its hits (64 bytes per slave);
@@ -11,6 +14,7 @@ use std::fmt::Write as _;
 use std::time::{Duration, Instant};
 
 use abut::mesh::{plate_triangles, point_cloud, SplitMix64};
+use abut::search::Schedule;
 use abut::{
     Contact, Device, Enforce, Friction, GlobalSearch, Model, Pair, PairId, Penalty, Stiffness,
     Surface,
@@ -48,7 +52,12 @@ fn build(slaves: usize, facets: usize, friction: Friction) -> (Model, PairId, Ve
             Pair::new(set, s)
                 .search_radius(h)
                 .enforce(Enforce::Penalty(pen))
-                .friction(friction),
+                .friction(friction)
+                .schedule(Schedule {
+                    interval: 1,
+                    budget: 0.5,
+                    wide_local: false,
+                }),
         )
         .unwrap();
     let mut rng = SplitMix64::new(3);

@@ -151,7 +151,6 @@ pub struct Contact {
     rigid: Vec<RigidRun>,
     masses: Vec<f64>,
     kin_report: KinematicReport,
-    dim: u32,
     n_nodes: usize,
     dt_ref: Option<f64>,
     want_outputs: bool,
@@ -293,7 +292,6 @@ impl Contact {
             rigid,
             masses: model.masses().to_vec(),
             kin_report: KinematicReport::default(),
-            dim: model.dim(),
             n_nodes,
             dt_ref: None,
             want_outputs: false,
@@ -341,7 +339,6 @@ impl Contact {
             },
             e => e,
         })?;
-        let _ = self.dim;
         let dt_ref = *self.dt_ref.get_or_insert(dt);
         let vel: Vec<[f32; 4]> = velocities
             .iter()
@@ -469,37 +466,21 @@ impl Contact {
                 .map(|(v, m)| 0.5 * m * (v[0] * v[0] + v[1] * v[1] + v[2] * v[2]))
                 .sum()
         };
-        let ke_body = |b: &[BodyState], spec: &[(BodyId, RigidBody)]| -> f64 {
-            spec.iter()
-                .map(|(id, s)| {
-                    let st = &b[id.0];
-                    0.5 * s.mass * st.velocity.iter().map(|c| c * c).sum::<f64>()
-                })
-                .sum()
-        };
-        let specs: Vec<(BodyId, RigidBody)> = self
-            .rigid
-            .iter()
-            .map(|r| (r.body, r.spec.clone()))
-            .collect();
-        let before = ke(v, &self.masses) + ke_body(bodies, &specs);
+        let before = ke(v, &self.masses) + bodies_kinetic_energy(&self.rigid, bodies);
         let mut report = KinematicReport::default();
         let masses = &self.masses;
         for kr in &mut self.kinematic {
             let result = kr.search.step(x)?;
             let facets = facets_from(&result);
-            let back = match &mut kr.back {
-                Some((search, surface, w)) => {
-                    let r = search.step(x)?;
-                    Some((
-                        facets_from(&r),
-                        surface.clone(),
-                        *w,
-                        search.slaves().to_vec(),
-                    ))
-                }
+            let back_facets = match &mut kr.back {
+                Some((search, _, _)) => Some(facets_from(&search.step(x)?)),
                 None => None,
             };
+            let back = kr
+                .back
+                .as_ref()
+                .zip(back_facets.as_ref())
+                .map(|((search, surface, w), bf)| (bf, surface, *w, search.slaves()));
             let mut first: Option<Vec<SlaveCorrection>> = None;
             // hard contact is re-projected on the corrected geometry; a softened law is applied once
             let passes = if kr.law.is_some() || kr.anchored {
@@ -649,7 +630,8 @@ impl Contact {
             tally(&mut report, &c);
             fill_kinematic_output(&mut rr.output, &c, &rr.areas, None);
         }
-        report.kinetic_energy_change = ke(v, &self.masses) + ke_body(bodies, &specs) - before;
+        report.kinetic_energy_change =
+            ke(v, &self.masses) + bodies_kinetic_energy(&self.rigid, bodies) - before;
         self.kin_report = report;
         Ok(&self.kin_report)
     }
@@ -725,6 +707,33 @@ impl Contact {
         }
         Ok(rep)
     }
+}
+
+/// Kinetic energy of the rigid bodies the rigid pairs act on (each counted once), translation
+/// and rotation.
+fn bodies_kinetic_energy(rigid: &[RigidRun], bodies: &[BodyState]) -> f64 {
+    let mut seen = std::collections::BTreeSet::new();
+    rigid
+        .iter()
+        .filter(|r| seen.insert(r.body.0))
+        .map(|r| {
+            let b = &bodies[r.body.0];
+            let (m, i, rot, w) = (
+                r.spec.mass,
+                &r.spec.inertia,
+                &b.rotation,
+                b.angular_velocity,
+            );
+            // ω·(R I Rᵀ)ω = (Rᵀω)·I(Rᵀω)
+            let wb: Vec<f64> = (0..3)
+                .map(|a| (0..3).map(|k| rot[k][a] * w[k]).sum())
+                .collect();
+            let rot_ke: f64 = (0..3)
+                .map(|a| (0..3).map(|c| wb[a] * i[a][c] * wb[c]).sum::<f64>())
+                .sum();
+            0.5 * m * b.velocity.iter().map(|c| c * c).sum::<f64>() + 0.5 * rot_ke
+        })
+        .sum()
 }
 
 fn slave_areas(

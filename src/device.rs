@@ -102,25 +102,7 @@ impl Device {
     pub fn from_wgpu(device: wgpu::Device, queue: wgpu::Queue) -> Result<Self> {
         let info = device.adapter_info();
         let limits = device.limits();
-        let mut need = wgpu::Limits::downlevel_defaults();
-        need.max_storage_buffers_per_shader_stage = 8;
-        need.max_compute_workgroup_size_x = 256;
-        need.max_compute_invocations_per_workgroup = 256;
-        need.max_compute_workgroups_per_dimension = 65_535;
-        need.max_storage_buffer_binding_size = limits.max_storage_buffer_binding_size;
-        need.max_buffer_size = limits.max_buffer_size;
-        let mut failed = None;
-        need.check_limits_with_fail_fn(&limits, true, |name, needed, available| {
-            failed = Some((name, needed, available))
-        });
-        if let Some((limit, needed, available)) = failed {
-            return Err(Error::AdapterLimit {
-                adapter: info.name,
-                limit,
-                available,
-                needed,
-            });
-        }
+        required_limits(&limits, &info.name)?;
         // the caller's uncaptured-error handler is left alone: abut's own operations run in
         // error scopes and report through them
         let uncaptured = Arc::new(Mutex::new(Vec::new()));
@@ -252,10 +234,10 @@ fn ranked_adapters(backends: wgpu::Backends) -> Vec<wgpu::Adapter> {
     adapters
 }
 
-/// The limits abut asks for: WebGPU's compute defaults, storage bindings as large as the
-/// adapter allows (the workspace grows into them).
-fn required_limits(adapter: &wgpu::Adapter) -> Result<wgpu::Limits> {
-    let have = adapter.limits();
+/// The limits abut asks for, checked against what an adapter or device offers (`have`):
+/// WebGPU's compute defaults, storage bindings as large as offered (the workspace grows into
+/// them). The error names the first limit that falls short.
+fn required_limits(have: &wgpu::Limits, adapter: &str) -> Result<wgpu::Limits> {
     let mut need = wgpu::Limits::downlevel_defaults();
     need.max_storage_buffers_per_shader_stage = 8;
     need.max_compute_workgroup_size_x = 256;
@@ -264,12 +246,12 @@ fn required_limits(adapter: &wgpu::Adapter) -> Result<wgpu::Limits> {
     need.max_storage_buffer_binding_size = have.max_storage_buffer_binding_size;
     need.max_buffer_size = have.max_buffer_size;
     let mut failed = None;
-    need.check_limits_with_fail_fn(&have, true, |name, needed, available| {
+    need.check_limits_with_fail_fn(have, true, |name, needed, available| {
         failed = Some((name, needed, available));
     });
     if let Some((limit, needed, available)) = failed {
         return Err(Error::AdapterLimit {
-            adapter: adapter.get_info().name,
+            adapter: adapter.to_string(),
             limit,
             available,
             needed,
@@ -282,7 +264,7 @@ impl GpuContext {
     /// Creates a device on `adapter` with [`required_limits`].
     fn new(adapter: wgpu::Adapter) -> Result<Self> {
         let info = adapter.get_info();
-        let limits = required_limits(&adapter)?;
+        let limits = required_limits(&adapter.limits(), &info.name)?;
         let desc = wgpu::DeviceDescriptor {
             label: Some("abut"),
             required_limits: limits.clone(),

@@ -198,7 +198,7 @@ fn curved_cylinder_and_sphere_masters() {
     let sl: Vec<(f64, f64, f64)> = (0..n_s)
         .map(|_| {
             (
-                rng.range(0.0, 6.28),
+                rng.range(0.0, std::f64::consts::TAU),
                 rng.range(0.2, 1.8),
                 rng.range(0.99, 1.02),
             )
@@ -227,7 +227,7 @@ fn curved_cylinder_and_sphere_masters() {
     let sph_sl: Vec<(f64, f64, f64)> = (0..n_s)
         .map(|_| {
             (
-                rng.range(0.0, 6.28),
+                rng.range(0.0, std::f64::consts::TAU),
                 rng.range(0.3, 2.8),
                 rng.range(0.99, 1.02),
             )

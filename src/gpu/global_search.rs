@@ -113,6 +113,8 @@ pub struct GpuSearch {
     frame: wgpu::Buffer,
     /// Small sliding: local increments run the anchor kernel instead of the local search.
     anchored: bool,
+    /// The pair's constant arrays still have to be uploaded (first run, or buffers replaced).
+    static_dirty: bool,
 }
 
 impl GpuSearch {
@@ -211,6 +213,7 @@ impl GpuSearch {
             to_local_group: None,
             frame: ctx_frame,
             anchored: false,
+            static_dirty: true,
         })
     }
 
@@ -285,6 +288,7 @@ impl GpuSearch {
             .motion_nodes
             .ensure(d, l, (prep.motion_nodes.len() * 4) as u64)?;
         b.readback.ensure(d, l, READBACK_HITS_OFFSET + hits_bytes)?;
+        self.static_dirty |= replaced;
         if replaced || self.scan_levels != levels.levels.len() {
             self.bind_groups = None;
         }
@@ -500,16 +504,6 @@ impl GpuSearch {
                 .write_buffer(&self.frame, 0, bytemuck::bytes_of(&frame));
         }
         let q = &self.ctx.queue;
-        q.write_buffer(
-            &self.buffers.adjacency.buffer,
-            0,
-            bytemuck::cast_slice(&prep.adjacency),
-        );
-        q.write_buffer(
-            &self.buffers.motion_nodes.buffer,
-            0,
-            bytemuck::cast_slice(&prep.motion_nodes),
-        );
         if self.device_positions.is_none() {
             q.write_buffer(
                 &self.buffers.nodes.buffer,
@@ -517,16 +511,31 @@ impl GpuSearch {
                 bytemuck::cast_slice(&prep.nodes),
             );
         }
-        q.write_buffer(
-            &self.buffers.facets.buffer,
-            0,
-            bytemuck::cast_slice(&prep.facets),
-        );
-        q.write_buffer(
-            &self.buffers.slaves.buffer,
-            0,
-            bytemuck::cast_slice(&prep.slaves),
-        );
+        // facets, slaves, adjacency and motion nodes are the pair's constants: uploaded once,
+        // and again only into buffers that were just replaced
+        if self.static_dirty {
+            q.write_buffer(
+                &self.buffers.adjacency.buffer,
+                0,
+                bytemuck::cast_slice(&prep.adjacency),
+            );
+            q.write_buffer(
+                &self.buffers.motion_nodes.buffer,
+                0,
+                bytemuck::cast_slice(&prep.motion_nodes),
+            );
+            q.write_buffer(
+                &self.buffers.facets.buffer,
+                0,
+                bytemuck::cast_slice(&prep.facets),
+            );
+            q.write_buffer(
+                &self.buffers.slaves.buffer,
+                0,
+                bytemuck::cast_slice(&prep.slaves),
+            );
+            self.static_dirty = false;
+        }
         for i in 0..levels.levels.len() {
             let sp = levels.params(i);
             q.write_buffer(

@@ -93,8 +93,8 @@ pub struct SearchStats {
 /// The result of a global search: one entry per slave node, in node-set order.
 #[derive(Clone, Debug)]
 pub struct SearchResult {
-    /// The slave nodes (model node ids), in the order of `contacts`.
-    pub slaves: Vec<u32>,
+    /// The slave nodes (model node ids), in the order of `contacts` (shared, not copied).
+    pub slaves: Arc<[u32]>,
     /// The partner of each slave node, `None` when no facet lies within the search radius.
     pub contacts: Vec<Option<ContactPoint>>,
     /// The raw grid-local f32 results the kernels wrote (for parity checks).
@@ -122,10 +122,10 @@ pub struct Prepared {
     pub grid: Grid,
     /// Every model node, grid-local, w = its mass.
     pub nodes: Vec<[f32; 4]>,
-    /// Active facets, padded node ids.
-    pub facets: Vec<[u32; 4]>,
-    /// Slave node ids.
-    pub slaves: Vec<u32>,
+    /// Active facets, padded node ids (the pair's constant, shared).
+    pub facets: Arc<[[u32; 4]]>,
+    /// Slave node ids (the pair's constant, shared).
+    pub slaves: Arc<[u32]>,
     /// Bin entries the host expects (from f64 bounding boxes); executors size the entry
     /// buffer from it, and the kernels' overflow check catches any shortfall.
     pub estimated_entries: u64,
@@ -198,12 +198,15 @@ pub enum Trigger {
 pub struct GlobalSearch {
     executor: Executor,
     master: MasterSurface,
-    slaves: Vec<u32>,
     radius: f64,
     dim: u32,
     masses: Vec<f32>,
     adjacency: Arc<[u32]>,
     motion_nodes: Arc<[u32]>,
+    /// Active facets, padded: the kernels' facet list.
+    facets: Arc<[[u32; 4]]>,
+    /// The slaves, shared with every `Prepared`.
+    slave_ids: Arc<[u32]>,
     schedule: Schedule,
     self_contact: bool,
     /// Grid and parameters of the last global search: the frame local increments work in.
@@ -292,10 +295,17 @@ impl GlobalSearch {
                 .iter()
                 .filter(|n| sorted.binary_search(n).is_err()),
         );
+        let facets: Arc<[[u32; 4]]> = master
+            .active
+            .iter()
+            .map(|&f| master.facets[f as usize].padded())
+            .collect();
+        let slave_ids: Arc<[u32]> = slaves.into();
         Ok(Self {
             executor,
             master,
-            slaves,
+            facets,
+            slave_ids,
             radius,
             dim: model.dim(),
             masses: model.masses().iter().map(|&m| m as f32).collect(),
@@ -561,7 +571,7 @@ impl GlobalSearch {
             0
         };
         raw.iter()
-            .zip(&self.slaves)
+            .zip(self.slave_ids.iter())
             .map(|(h, &s)| {
                 let none = layout::Anchor {
                     facet: NO_FACET,
@@ -666,13 +676,8 @@ impl GlobalSearch {
             params,
             grid,
             nodes: Vec::new(),
-            facets: self
-                .master
-                .active
-                .iter()
-                .map(|&f| self.master.facets[f as usize].padded())
-                .collect(),
-            slaves: self.slaves.clone(),
+            facets: self.facets.clone(),
+            slaves: self.slave_ids.clone(),
             estimated_entries: 0,
             adjacency: self.adjacency.clone(),
             motion_nodes: self.motion_nodes.clone(),
@@ -739,7 +744,7 @@ impl GlobalSearch {
 
     /// The slave nodes searched, in order.
     pub fn slaves(&self) -> &[u32] {
-        &self.slaves
+        &self.slave_ids
     }
 
     /// The master surface searched.
@@ -791,7 +796,7 @@ impl GlobalSearch {
             })
             .collect();
         SearchResult {
-            slaves: self.slaves.clone(),
+            slaves: self.slave_ids.clone(),
             contacts,
             raw,
             stats: SearchStats {
@@ -822,7 +827,6 @@ impl GlobalSearch {
         let mut lo = [f64::INFINITY; 3];
         let mut hi = [f64::NEG_INFINITY; 3];
         let mut extent_sum = 0.0;
-        let mut facets = Vec::with_capacity(self.master.active.len());
         let mut boxes = Vec::with_capacity(self.master.active.len());
         for &f in &self.master.active {
             let facet = &self.master.facets[f as usize];
@@ -840,10 +844,9 @@ impl GlobalSearch {
                 hi[a] = hi[a].max(fhi[a]);
             }
             extent_sum += (0..3).map(|a| fhi[a] - flo[a]).fold(0.0, f64::max);
-            facets.push(facet.padded());
             boxes.push((flo, fhi));
         }
-        let n_facets = facets.len();
+        let n_facets = self.facets.len();
         let grid = Grid::fit(
             lo,
             hi,
@@ -878,7 +881,7 @@ impl GlobalSearch {
             dims_z: grid.dims[2],
             n_cells: grid.n_cells(),
             n_facets: n_facets as u32,
-            n_slaves: self.slaves.len() as u32,
+            n_slaves: self.slave_ids.len() as u32,
             entry_capacity: 0,
             dim: self.dim,
             max_local_iterations: layout::MAX_LOCAL_ITERATIONS,
@@ -905,8 +908,8 @@ impl GlobalSearch {
             params,
             grid,
             nodes,
-            facets,
-            slaves: self.slaves.clone(),
+            facets: self.facets.clone(),
+            slaves: self.slave_ids.clone(),
             estimated_entries,
             adjacency: self.adjacency.clone(),
             motion_nodes: self.motion_nodes.clone(),
