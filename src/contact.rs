@@ -460,6 +460,22 @@ impl Contact {
                 len: bodies.len(),
             });
         }
+        for r in &self.rigid {
+            let b = &bodies[r.body.0];
+            let values = b
+                .position
+                .iter()
+                .chain(&b.velocity)
+                .chain(&b.angular_velocity)
+                .chain(b.rotation.iter().flatten());
+            if let Some(v) = values.copied().find(|v| !v.is_finite()) {
+                return Err(Error::BadParameter {
+                    name: "rigid body state",
+                    value: format!("{v} in body {}", r.body.0),
+                    expected: "finite position, rotation, velocity and angular velocity",
+                });
+            }
+        }
         let ke = |v: &[[f64; 3]], masses: &[f64]| -> f64 {
             v.iter()
                 .zip(masses)

@@ -882,6 +882,15 @@ fn bad_kinematic_input_is_an_error() {
         .kinematic_step(&mut x, &mut v, &mut [BodyState::at([0.0; 3])], -1.0)
         .unwrap_err();
     assert!(e.to_string().contains("dt"), "{e}");
+    let mut bad = BodyState::at([0.0; 3]);
+    bad.angular_velocity[2] = f64::INFINITY;
+    let e = c
+        .kinematic_step(&mut x, &mut v, &mut [bad], 1e-3)
+        .unwrap_err();
+    assert!(
+        e.to_string().contains("rigid body state") && e.to_string().contains("body 0"),
+        "{e}"
+    );
     x[2][1] = f64::NAN;
     let e = c
         .kinematic_step(&mut x, &mut v, &mut [BodyState::at([0.0; 3])], 1e-3)
