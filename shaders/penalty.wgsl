@@ -151,6 +151,8 @@ fn penalty(@builtin(workgroup_id) wg: vec3<u32>,
         k = 0.25 * pp.stiffness * m_eff / (pp.dt_ref * pp.dt_ref);
     } else if (pp.stiffness_mode == STIFFNESS_MODULUS) {
         k = pp.stiffness * pp.modulus * area / h_facet;
+    } else if (pp.stiffness_mode == STIFFNESS_PER_AREA) {
+        k = pp.stiffness * area;
     }
     let lv = law(-gap, k, area);
     let v_rel = vel[s].xyz - vm;

@@ -11,6 +11,7 @@ const LAW_TABULAR: u32 = 2u;
 const STIFFNESS_AUTO: u32 = 0u;
 const STIFFNESS_MODULUS: u32 = 1u;
 const STIFFNESS_ABSOLUTE: u32 = 2u;
+const STIFFNESS_PER_AREA: u32 = 3u;
 const NO_LIMIT: f32 = 3.40282347e38;
 const PENALTY_ANCHORED: u32 = 1u;
 

@@ -193,7 +193,13 @@ impl Contact {
                         Some((surface, _)) => {
                             let slave_surface = model.surface(surface)?.clone();
                             let nodes = search.master().nodes();
-                            let reverse = PenaltySetup::reverse(model, id, &slave_surface, &nodes)?;
+                            let reverse = PenaltySetup::reverse(
+                                model,
+                                id,
+                                search.master(),
+                                &slave_surface,
+                                &nodes,
+                            )?;
                             let rsearch = GlobalSearch::from_parts(
                                 device,
                                 model,
@@ -541,7 +547,8 @@ impl Contact {
                             &mut dx_a,
                         );
                         let mut dx_b = vec![[0.0; 3]; x.len()];
-                        let areas_b = vec![surface.mean_facet_area(); nodes.len()];
+                        let areas_b: Vec<f64> =
+                            nodes.iter().map(|&n| kr.master.tributary_area(n)).collect();
                         meshed_pass(
                             surface,
                             masses,

@@ -23,6 +23,48 @@ pub struct GpuContext {
     pub limits: wgpu::Limits,
     /// Errors wgpu raised outside an error scope (kept instead of panicking).
     pub uncaptured: Arc<Mutex<Vec<String>>>,
+    /// What the executors have dispatched and moved so far (see [`Traffic`]).
+    pub traffic: Arc<Mutex<Traffic>>,
+}
+
+/// Running totals of what the GPU executors did on one device: compute passes and their
+/// dispatches, workgroups, and bytes moved between host and device. Take a snapshot before
+/// and after a stretch of work ([`Device::traffic`]) and subtract ([`Traffic::since`]).
+#[derive(Clone, Debug, Default, PartialEq, serde::Serialize)]
+pub struct Traffic {
+    /// Dispatches per compute pass, by the pass's label.
+    pub dispatches: std::collections::BTreeMap<String, u64>,
+    /// Workgroups launched.
+    pub workgroups: u64,
+    /// Bytes written from the host into device buffers.
+    pub uploaded_bytes: u64,
+    /// Bytes read back from the device.
+    pub read_back_bytes: u64,
+    /// Command submissions.
+    pub submits: u64,
+}
+
+impl Traffic {
+    /// What happened after `earlier` (a snapshot of the same device).
+    pub fn since(&self, earlier: &Traffic) -> Traffic {
+        Traffic {
+            dispatches: self
+                .dispatches
+                .iter()
+                .map(|(k, v)| (k.clone(), v - earlier.dispatches.get(k).copied().unwrap_or(0)))
+                .filter(|(_, v)| *v > 0)
+                .collect(),
+            workgroups: self.workgroups - earlier.workgroups,
+            uploaded_bytes: self.uploaded_bytes - earlier.uploaded_bytes,
+            read_back_bytes: self.read_back_bytes - earlier.read_back_bytes,
+            submits: self.submits - earlier.submits,
+        }
+    }
+
+    /// Total dispatches.
+    pub fn total_dispatches(&self) -> u64 {
+        self.dispatches.values().sum()
+    }
 }
 
 impl fmt::Debug for GpuContext {
@@ -112,6 +154,7 @@ impl Device {
             info,
             limits,
             uncaptured,
+            traffic: Arc::default(),
         }))
     }
 
@@ -133,6 +176,15 @@ impl Device {
     fn from_context(ctx: GpuContext) -> Self {
         Self {
             kind: DeviceKind::Gpu(Arc::new(ctx)),
+        }
+    }
+
+    /// A snapshot of what the GPU executors have dispatched and moved on this device so far
+    /// (`None` on the CPU path, which dispatches nothing).
+    pub fn traffic(&self) -> Option<Traffic> {
+        match self.kind() {
+            DeviceKind::Gpu(ctx) => Some(ctx.traffic.lock().map(|t| t.clone()).unwrap_or_default()),
+            DeviceKind::Cpu => None,
         }
     }
 
@@ -290,6 +342,7 @@ impl GpuContext {
             info,
             limits,
             uncaptured,
+            traffic: Arc::default(),
         })
     }
 

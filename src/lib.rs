@@ -18,7 +18,7 @@ pub mod search;
 pub use contact::{
     Contact, ContactStatus, KinematicReport, OverclosureReport, PairOutput, StepReport,
 };
-pub use device::Device;
+pub use device::{Device, Traffic};
 pub use error::{Error, Result};
 pub use kinematic::BodyState;
 pub use model::{

@@ -158,6 +158,8 @@ pub fn penalty(
             k = 0.25 * pp.stiffness * m_eff / (pp.dt_ref * pp.dt_ref);
         } else if pp.stiffness_mode == STIFFNESS_MODULUS {
             k = pp.stiffness * pp.modulus * area / h_facet;
+        } else if pp.stiffness_mode == STIFFNESS_PER_AREA {
+            k = pp.stiffness * area;
         }
         let lv = law(pp, -gap, k, area);
         let vs = vel[s as usize];

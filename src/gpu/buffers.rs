@@ -83,11 +83,15 @@ fn create(
 
 /// Maps `buffer` (MAP_READ) for `bytes`, waits, copies the bytes out and unmaps.
 pub fn read_back(
-    device: &wgpu::Device,
+    ctx: &crate::device::GpuContext,
     buffer: &wgpu::Buffer,
     bytes: u64,
     during: &str,
 ) -> Result<Vec<u8>> {
+    if let Ok(mut t) = ctx.traffic.lock() {
+        t.read_back_bytes += bytes;
+    }
+    let device = &ctx.device;
     let slice = buffer.slice(..bytes);
     let (tx, rx) = std::sync::mpsc::channel();
     slice.map_async(wgpu::MapMode::Read, move |r| {

@@ -228,7 +228,7 @@ impl GpuSearch {
         {
             self.bind_groups = None;
         }
-        self.ctx.queue.write_buffer(
+        super::upload(&self.ctx, 
             &self.buffers.anchors.buffer,
             0,
             bytemuck::cast_slice(anchors),
@@ -499,13 +499,10 @@ impl GpuSearch {
                 n_nodes: prep.n_nodes as u32,
                 _pad: [0; 3],
             };
-            self.ctx
-                .queue
-                .write_buffer(&self.frame, 0, bytemuck::bytes_of(&frame));
+            super::upload(&self.ctx, &self.frame, 0, bytemuck::bytes_of(&frame));
         }
-        let q = &self.ctx.queue;
         if self.device_positions.is_none() {
-            q.write_buffer(
+            super::upload(&self.ctx, 
                 &self.buffers.nodes.buffer,
                 0,
                 bytemuck::cast_slice(&prep.nodes),
@@ -514,22 +511,22 @@ impl GpuSearch {
         // facets, slaves, adjacency and motion nodes are the pair's constants: uploaded once,
         // and again only into buffers that were just replaced
         if self.static_dirty {
-            q.write_buffer(
+            super::upload(&self.ctx, 
                 &self.buffers.adjacency.buffer,
                 0,
                 bytemuck::cast_slice(&prep.adjacency),
             );
-            q.write_buffer(
+            super::upload(&self.ctx, 
                 &self.buffers.motion_nodes.buffer,
                 0,
                 bytemuck::cast_slice(&prep.motion_nodes),
             );
-            q.write_buffer(
+            super::upload(&self.ctx, 
                 &self.buffers.facets.buffer,
                 0,
                 bytemuck::cast_slice(&prep.facets),
             );
-            q.write_buffer(
+            super::upload(&self.ctx, 
                 &self.buffers.slaves.buffer,
                 0,
                 bytemuck::cast_slice(&prep.slaves),
@@ -538,20 +535,20 @@ impl GpuSearch {
         }
         for i in 0..levels.levels.len() {
             let sp = levels.params(i);
-            q.write_buffer(
+            super::upload(&self.ctx, 
                 &self.buffers.scan_params.buffer,
                 i as u64 * UNIFORM_STRIDE,
                 bytemuck::bytes_of(&sp),
             );
         }
         if let Some(ws) = preload {
-            q.write_buffer(&self.buffers.scan.buffer, 0, bytemuck::cast_slice(&ws.scan));
-            q.write_buffer(
+            super::upload(&self.ctx, &self.buffers.scan.buffer, 0, bytemuck::cast_slice(&ws.scan));
+            super::upload(&self.ctx, 
                 &self.buffers.entries.buffer,
                 0,
                 bytemuck::cast_slice(&ws.entries),
             );
-            q.write_buffer(&self.buffers.status, 0, bytemuck::cast_slice(&ws.status));
+            super::upload(&self.ctx, &self.buffers.status, 0, bytemuck::cast_slice(&ws.status));
         }
         let mut regrowths = 0;
         loop {
@@ -604,9 +601,7 @@ impl GpuSearch {
             }
             let mut params = prep.params;
             params.entry_capacity = self.entry_capacity;
-            self.ctx
-                .queue
-                .write_buffer(&self.buffers.params, 0, bytemuck::bytes_of(&params));
+            super::upload(&self.ctx, &self.buffers.params, 0, bytemuck::bytes_of(&params));
             let (status, total, hits) = self.submit(
                 &params,
                 &levels,
@@ -675,8 +670,8 @@ impl GpuSearch {
             label: Some("positions readback"),
         });
         enc.copy_buffer_to_buffer(buffer, 0, &staging, 0, bytes);
-        self.ctx.queue.submit([enc.finish()]);
-        let raw = read_back(d, &staging, bytes, "positions readback")?;
+        super::submit(&self.ctx, enc.finish());
+        let raw = read_back(&self.ctx, &staging, bytes, "positions readback")?;
         let v: Vec<[f32; 4]> = bytemuck::pod_collect_to_vec(&raw);
         Ok(v.iter()
             .map(|p| [p[0] as f64, p[1] as f64, p[2] as f64])
@@ -715,14 +710,14 @@ impl GpuSearch {
                 entries_bytes,
             );
         }
-        self.ctx.queue.submit([enc.finish()]);
+        super::submit(&self.ctx, enc.finish());
         if let Some(e) = pollster::block_on(scope.pop()) {
             return Err(Error::Gpu {
                 during: "reading bins".into(),
                 message: e.to_string(),
             });
         }
-        let bytes = read_back(d, &staging, starts_bytes + entries_bytes, "bins readback")?;
+        let bytes = read_back(&self.ctx, &staging, starts_bytes + entries_bytes, "bins readback")?;
         Ok(Bins {
             starts: bytemuck::pod_collect_to_vec(&bytes[..starts_bytes as usize]),
             entries: bytemuck::pod_collect_to_vec(&bytes[starts_bytes as usize..]),
@@ -760,7 +755,7 @@ impl GpuSearch {
             enc.clear_buffer(&b.status, 32, Some(2 * SEARCH_STATUS_BYTES));
         }
         let dispatch = |enc: &mut wgpu::CommandEncoder, label: &str, work: &[super::Work<'_>]| {
-            super::run_pass(enc, label, work, max_dim)
+            super::run_pass(&self.ctx.traffic, enc, label, work, max_dim)
         };
         if let Some((_, _, group)) = &self.to_local_group {
             if self.device_positions.is_some() {
@@ -891,7 +886,7 @@ impl GpuSearch {
                 hits_bytes,
             );
         }
-        self.ctx.queue.submit([enc.finish()]);
+        super::submit(&self.ctx, enc.finish());
         if let Some(e) = pollster::block_on(scope.pop()) {
             return Err(Error::Gpu {
                 during: "contact increment".into(),
@@ -899,7 +894,7 @@ impl GpuSearch {
             });
         }
         let bytes = read_back(
-            device,
+            &self.ctx,
             &b.readback.buffer,
             READBACK_HITS_OFFSET + hits_bytes,
             "global search readback",

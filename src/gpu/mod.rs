@@ -15,11 +15,19 @@ pub(crate) type Work<'a> = (&'a wgpu::ComputePipeline, &'a wgpu::BindGroup, u32,
 /// Records one compute pass running `work` in order, each dispatch folded into 2D beyond
 /// `max_dim` workgroups per dimension.
 pub(crate) fn run_pass(
+    traffic: &std::sync::Mutex<crate::device::Traffic>,
     enc: &mut wgpu::CommandEncoder,
     label: &str,
     work: &[Work<'_>],
     max_dim: u32,
 ) {
+    if let Ok(mut t) = traffic.lock() {
+        *t.dispatches.entry(label.to_string()).or_default() += work.len() as u64;
+        t.workgroups += work
+            .iter()
+            .map(|&(_, _, n, per)| n.div_ceil(per.max(1)) as u64)
+            .sum::<u64>();
+    }
     let mut pass = enc.begin_compute_pass(&wgpu::ComputePassDescriptor {
         label: Some(label),
         timestamp_writes: None,
@@ -30,6 +38,27 @@ pub(crate) fn run_pass(
         pass.set_bind_group(0, group, &[]);
         pass.dispatch_workgroups(x, y, 1);
     }
+}
+
+/// Writes `data` into `buffer` at `offset` through the queue, counting the bytes.
+pub(crate) fn upload(
+    ctx: &crate::device::GpuContext,
+    buffer: &wgpu::Buffer,
+    offset: u64,
+    data: &[u8],
+) {
+    if let Ok(mut t) = ctx.traffic.lock() {
+        t.uploaded_bytes += data.len() as u64;
+    }
+    ctx.queue.write_buffer(buffer, offset, data);
+}
+
+/// Submits `commands`, counting the submission.
+pub(crate) fn submit(ctx: &crate::device::GpuContext, commands: wgpu::CommandBuffer) {
+    if let Ok(mut t) = ctx.traffic.lock() {
+        t.submits += 1;
+    }
+    ctx.queue.submit([commands]);
 }
 
 /// A bind group for group 0 of `pipeline` with `resources` at the given binding numbers.

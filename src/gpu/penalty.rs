@@ -147,30 +147,29 @@ impl GpuPenalty {
             Ok(bytes)
         };
         let out_bytes = check("contact outputs", n_slaves as u64 * 64)?;
-        let q = &ctx.queue;
         let pair_nodes = storage(
             d,
             "pair nodes",
             check("pair nodes", n_pair_nodes as u64 * 16)?,
             U::empty(),
         );
-        q.write_buffer(&pair_nodes, 0, bytemuck::cast_slice(&setup.pair_nodes));
+        super::upload(&ctx, &pair_nodes, 0, bytemuck::cast_slice(&setup.pair_nodes));
         let adjacency = storage(
             d,
             "adjacency",
             check("adjacency", setup.adjacency.len() as u64 * 4)?,
             U::empty(),
         );
-        q.write_buffer(&adjacency, 0, bytemuck::cast_slice(&setup.adjacency));
+        super::upload(&ctx, &adjacency, 0, bytemuck::cast_slice(&setup.adjacency));
         let state = storage(d, "slave state", n_slaves as u64 * 32, U::empty());
-        q.write_buffer(&state, 0, bytemuck::cast_slice(&setup.initial_state()));
+        super::upload(&ctx, &state, 0, bytemuck::cast_slice(&setup.initial_state()));
         let status_init = d.create_buffer(&wgpu::BufferDescriptor {
             label: Some("status init"),
             size: 16,
             usage: U::COPY_SRC | U::COPY_DST,
             mapped_at_creation: false,
         });
-        q.write_buffer(
+        super::upload(&ctx, 
             &status_init,
             0,
             bytemuck::cast_slice(&[NO_LIMIT.to_bits(), NO_LIMIT.to_bits(), 0u32, 0u32]),
@@ -182,7 +181,7 @@ impl GpuPenalty {
             mapped_at_creation: false,
         });
         for i in 0..levels.levels.len() {
-            q.write_buffer(
+            super::upload(&ctx, 
                 &scan_params,
                 i as u64 * UNIFORM_STRIDE,
                 bytemuck::bytes_of(&levels.params(i)),
@@ -245,8 +244,7 @@ impl GpuPenalty {
         velocities: &[[f32; 4]],
         outputs: bool,
     ) -> Result<()> {
-        let q = &self.ctx.queue;
-        q.write_buffer(&self.params, 0, bytemuck::bytes_of(params));
+        super::upload(&self.ctx, &self.params, 0, bytemuck::bytes_of(params));
         if self.vel.ensure(
             &self.ctx.device,
             &self.ctx.limits,
@@ -261,7 +259,7 @@ impl GpuPenalty {
         )? {
             self.groups = None;
         }
-        q.write_buffer(&self.vel.buffer, 0, bytemuck::cast_slice(velocities));
+        super::upload(&self.ctx, &self.vel.buffer, 0, bytemuck::cast_slice(velocities));
         self.read_outputs = outputs;
         Ok(())
     }
@@ -393,7 +391,7 @@ impl AfterSearch for GpuPenalty {
         let status = self.status.as_ref().expect("prepared before encoding");
         enc.copy_buffer_to_buffer(&self.status_init, 0, status, 16, 16);
         let run = |enc: &mut wgpu::CommandEncoder, label: &str, work: &[super::Work<'_>]| {
-            super::run_pass(enc, label, work, max_dim)
+            super::run_pass(&self.ctx.traffic, enc, label, work, max_dim)
         };
         run(
             enc,
@@ -462,7 +460,7 @@ impl AfterSearch for GpuPenalty {
             0
         };
         let bytes = read_back(
-            &ctx.device,
+            ctx,
             &self.staging,
             (self.pair_bytes() + out_bytes).max(16),
             "penalty readback",

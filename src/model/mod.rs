@@ -217,6 +217,17 @@ impl Model {
             self.surface(s)?;
         }
         pair.validate()?;
+        if let Enforce::Penalty(p) = &pair.enforce {
+            if matches!(p.stiffness, Stiffness::PerArea(_))
+                && self.node_set_areas(pair.slave)?.is_none()
+            {
+                return Err(Error::BadParameter {
+                    name: "penalty stiffness",
+                    value: format!("PerArea on node set {}", pair.slave.0),
+                    expected: "a slave node set with areas (Model::add_node_set_with_areas)",
+                });
+            }
+        }
         self.pairs.push(pair);
         Ok(PairId(self.pairs.len() - 1))
     }

@@ -116,6 +116,11 @@ pub enum Stiffness {
     },
     /// A fixed stiffness, force per length, for every slave node.
     Absolute(f64),
+    /// A stiffness per unit tributary area (pressure per length, Abaqus' linear
+    /// pressure–overclosure slope): slave node i gets `k·A_i`, which makes a uniform pressure
+    /// give a uniform overclosure. Needs the slave nodes' areas
+    /// ([`crate::Model::add_node_set_with_areas`]).
+    PerArea(f64),
 }
 
 /// Pressure as a function of overclosure h = −gap (positive when penetrating).
@@ -359,7 +364,9 @@ impl Pair {
                         positive("penalty modulus", modulus)?;
                         positive("penalty scale", scale)?;
                     }
-                    Stiffness::Absolute(k) => positive("penalty stiffness", k)?,
+                    Stiffness::Absolute(k) | Stiffness::PerArea(k) => {
+                        positive("penalty stiffness", k)?
+                    }
                 }
                 non_negative("penalty damping", p.damping)?;
                 p.law.validate()?;

@@ -250,6 +250,15 @@ impl MasterSurface {
         sum / self.active.len() as f64
     }
 
+    /// Tributary area (length in 2D) of node `n` on this surface: each active facet's area
+    /// shared equally among its nodes, model units (0 for nodes on no active facet).
+    pub fn tributary_area(&self, n: u32) -> f64 {
+        self.facets_of_node(n)
+            .iter()
+            .map(|&f| self.facet_area[f as usize] / self.facets[f as usize].nodes().len() as f64)
+            .sum()
+    }
+
     /// Nodes of the active facets, increasing.
     pub fn nodes(&self) -> Vec<u32> {
         let mut v: Vec<u32> = self

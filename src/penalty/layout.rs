@@ -23,6 +23,8 @@ pub const STIFFNESS_AUTO: u32 = 0;
 pub const STIFFNESS_MODULUS: u32 = 1;
 /// Absolute stiffness (WGSL: `STIFFNESS_ABSOLUTE`).
 pub const STIFFNESS_ABSOLUTE: u32 = 2;
+/// Stiffness per unit tributary area (WGSL: `STIFFNESS_PER_AREA`).
+pub const STIFFNESS_PER_AREA: u32 = 3;
 /// Flag: small sliding, the contact normal and gap are the hit's (the anchor's tangent plane),
 /// not the smoothed normal at the closest point (WGSL: `PENALTY_ANCHORED`).
 pub const PENALTY_ANCHORED: u32 = 1;

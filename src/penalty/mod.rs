@@ -38,17 +38,22 @@ impl PenaltySetup {
         Self::from_parts(model, id, master, slaves, &areas, weight)
     }
 
-    /// The master-on-slave pass of a balanced pair: the master surface's nodes against the
-    /// slave surface `slave_surface`, weighted 1 − w.
+    /// The master-on-slave pass of a balanced pair: the nodes of the pair's master surface
+    /// `master` against the slave surface `slave_surface`, weighted 1 − w; each master node
+    /// carries its tributary area on `master`.
     pub fn reverse(
         model: &Model,
         id: PairId,
+        master: &MasterSurface,
         slave_surface: &MasterSurface,
         master_nodes: &[u32],
     ) -> Result<Self> {
         let pair: &Pair = model.pair(id)?;
         let w = pair.balanced.map_or(0.5, |(_, w)| w);
-        let areas = vec![slave_surface.mean_facet_area(); master_nodes.len()];
+        let areas: Vec<f64> = master_nodes
+            .iter()
+            .map(|&n| master.tributary_area(n))
+            .collect();
         Self::from_parts(model, id, slave_surface, master_nodes, &areas, 1.0 - w)
     }
 
@@ -176,6 +181,10 @@ fn base_params(
         }
         Stiffness::Absolute(k) => {
             p.stiffness_mode = STIFFNESS_ABSOLUTE;
+            p.stiffness = k as f32;
+        }
+        Stiffness::PerArea(k) => {
+            p.stiffness_mode = STIFFNESS_PER_AREA;
             p.stiffness = k as f32;
         }
     }
