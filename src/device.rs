@@ -51,7 +51,12 @@ impl Traffic {
             dispatches: self
                 .dispatches
                 .iter()
-                .map(|(k, v)| (k.clone(), v - earlier.dispatches.get(k).copied().unwrap_or(0)))
+                .map(|(k, v)| {
+                    (
+                        k.clone(),
+                        v - earlier.dispatches.get(k).copied().unwrap_or(0),
+                    )
+                })
                 .filter(|(_, v)| *v > 0)
                 .collect(),
             workgroups: self.workgroups - earlier.workgroups,

@@ -283,6 +283,166 @@ impl Element {
     }
 }
 
+impl Element {
+    /// The deformation gradient at positions `x` (3×3; plane-strain triangles have F_zz = 1,
+    /// bars the stretch along their axis and the identity across it, rotated with the axis
+    /// approximated as the reference axis' stretch only).
+    fn deformation_gradient(&self, x: &[[f64; 3]]) -> [[f64; 3]; 3] {
+        let mut ff = [[0.0; 3]; 3];
+        match self {
+            Element::Bar { .. } => unreachable!("bars have no full deformation gradient"),
+            Element::Tri3 { nodes, grad, .. } => {
+                for (k, &n) in nodes.iter().enumerate() {
+                    for r in 0..2 {
+                        for c in 0..2 {
+                            ff[r][c] += x[n as usize][r] * grad[k][c];
+                        }
+                    }
+                }
+                ff[2][2] = 1.0;
+            }
+            Element::Tet4 { nodes, grad, .. } => {
+                for (k, &n) in nodes.iter().enumerate() {
+                    for r in 0..3 {
+                        for c in 0..3 {
+                            ff[r][c] += x[n as usize][r] * grad[k][c];
+                        }
+                    }
+                }
+            }
+        }
+        ff
+    }
+
+    /// Cauchy stress at positions `x` (model stress units, model frame). Plane-strain
+    /// triangles include σ_zz; a bar's stress is uniaxial along its current axis.
+    pub fn stress(&self, x: &[[f64; 3]]) -> [[f64; 3]; 3] {
+        if let Element::Bar {
+            nodes,
+            length0,
+            material,
+            ..
+        } = self
+        {
+            let d = sub(x[nodes[1] as usize], x[nodes[0] as usize]);
+            let l2 = d.length2();
+            let e = 0.5 * (l2 / (length0 * length0) - 1.0);
+            // Cauchy = (stretch²/stretch)·S = λ·S along the axis (the area change of a bar
+            // is not modelled)
+            let sigma = material.young * e * l2.sqrt() / length0;
+            let u = d * (1.0 / l2.sqrt());
+            let u = u.to_array();
+            let mut s = [[0.0; 3]; 3];
+            for r in 0..3 {
+                for c in 0..3 {
+                    s[r][c] = sigma * u[r] * u[c];
+                }
+            }
+            return s;
+        }
+        let ff = self.deformation_gradient(x);
+        let m = match self {
+            Element::Tri3 { material, .. } | Element::Tet4 { material, .. } => material,
+            Element::Bar { .. } => unreachable!(),
+        };
+        // S from the full 3D St Venant–Kirchhoff law (E_zz = 0 in plane strain)
+        let (s, _) = stvk_3d(&ff, m);
+        let det = ff[0][0] * (ff[1][1] * ff[2][2] - ff[1][2] * ff[2][1])
+            - ff[0][1] * (ff[1][0] * ff[2][2] - ff[1][2] * ff[2][0])
+            + ff[0][2] * (ff[1][0] * ff[2][1] - ff[1][1] * ff[2][0]);
+        let mut sigma = [[0.0; 3]; 3];
+        for r in 0..3 {
+            for c in 0..3 {
+                let mut acc = 0.0;
+                for a in 0..3 {
+                    for b in 0..3 {
+                        acc += ff[r][a] * s[a][b] * ff[c][b];
+                    }
+                }
+                sigma[r][c] = acc / det;
+            }
+        }
+        sigma
+    }
+
+    /// Adds linear bulk viscosity (Abaqus' b1 form, pressure `b1·ρ·c·L·ε̇_vol` with L the
+    /// element's stable length and c its wave speed) at velocities `v` to `f`, and returns
+    /// its power (≤ 0: it only dissipates).
+    pub fn add_bulk_viscosity(
+        &self,
+        x: &[[f64; 3]],
+        v: &[[f64; 3]],
+        b1: f64,
+        f: &mut [[f64; 3]],
+    ) -> f64 {
+        let c_len = self.stable_increment();
+        match self {
+            Element::Bar {
+                nodes,
+                area,
+                length0,
+                material,
+            } => {
+                // axial strain rate along the current axis
+                let d = sub(x[nodes[1] as usize], x[nodes[0] as usize]);
+                let u = d * (1.0 / d.length2().sqrt());
+                let dv = sub(v[nodes[1] as usize], v[nodes[0] as usize]);
+                let rate = dv.dot(u) / length0;
+                let c = length0 / c_len;
+                let p = b1 * material.density * c * length0 * rate;
+                let t = (u * (p * area)).to_array();
+                for a in 0..3 {
+                    f[nodes[0] as usize][a] += t[a];
+                    f[nodes[1] as usize][a] -= t[a];
+                }
+                -p * area * length0 * rate
+            }
+            Element::Tri3 {
+                nodes,
+                thickness,
+                area0,
+                grad,
+                material,
+            } => {
+                let rate: f64 = nodes
+                    .iter()
+                    .enumerate()
+                    .map(|(k, &n)| v[n as usize][0] * grad[k][0] + v[n as usize][1] * grad[k][1])
+                    .sum();
+                let c = material.p_wave_speed();
+                let p = b1 * material.density * c * (c_len * c) * rate;
+                let vol = area0 * thickness;
+                for (k, &n) in nodes.iter().enumerate() {
+                    for r in 0..2 {
+                        f[n as usize][r] -= vol * p * grad[k][r];
+                    }
+                }
+                -vol * p * rate
+            }
+            Element::Tet4 {
+                nodes,
+                volume0,
+                grad,
+                material,
+            } => {
+                let rate: f64 = nodes
+                    .iter()
+                    .enumerate()
+                    .map(|(k, &n)| (0..3).map(|r| v[n as usize][r] * grad[k][r]).sum::<f64>())
+                    .sum();
+                let c = material.p_wave_speed();
+                let p = b1 * material.density * c * (c_len * c) * rate;
+                for (k, &n) in nodes.iter().enumerate() {
+                    for r in 0..3 {
+                        f[n as usize][r] -= volume0 * p * grad[k][r];
+                    }
+                }
+                -volume0 * p * rate
+            }
+        }
+    }
+}
+
 /// Second Piola–Kirchhoff stress and strain energy density of St Venant–Kirchhoff in plane
 /// strain (E_zz = 0).
 fn stvk_2d(ff: &[[f64; 2]; 2], m: &Material) -> ([[f64; 2]; 2], f64) {

@@ -1,14 +1,80 @@
 //! The small explicit solver that uses abut the way a host program would: central differences
 //! with lumped masses, St Venant–Kirchhoff bars, plane-strain triangles and tetrahedra, point
-//! masses, gravity, fixed degrees of freedom, mass-proportional damping, penalty and kinematic
-//! contact through [`crate::Contact`], and energy bookkeeping with the balance error.
+//! masses, rigid bodies carrying mesh nodes and analytical surfaces, gravity, fixed and
+//! prescribed motions, mass-proportional damping and linear bulk viscosity, penalty and
+//! kinematic contact through [`crate::Contact`], and energy bookkeeping with the balance error.
 
 pub mod elements;
+mod rigid;
 
 pub use elements::{Element, Material};
+pub use rigid::{BodyMotion, SolverBody};
 
 use crate::contact::Contact;
 use crate::error::{Error, Result};
+use crate::kinematic::BodyState;
+
+/// A prescribed motion of one degree of freedom.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Motion {
+    /// Constant velocity (model length per time).
+    Velocity(f64),
+    /// A smooth ramp to `displacement` over `duration`, then held: velocity
+    /// (Δ/T)·(1 − cos 2πt/T), which starts and ends at zero acceleration.
+    Ramp {
+        /// Total displacement.
+        displacement: f64,
+        /// Ramp time.
+        duration: f64,
+    },
+}
+
+impl Motion {
+    /// Velocity at time `t`.
+    pub fn velocity(&self, t: f64) -> f64 {
+        match *self {
+            Motion::Velocity(v) => v,
+            Motion::Ramp {
+                displacement,
+                duration,
+            } => {
+                if t >= duration || t < 0.0 {
+                    0.0
+                } else {
+                    displacement / duration
+                        * (1.0 - (2.0 * std::f64::consts::PI * t / duration).cos())
+                }
+            }
+        }
+    }
+
+    /// Displacement at time `t` (the integral of [`Motion::velocity`] from 0).
+    pub fn displacement(&self, t: f64) -> f64 {
+        match *self {
+            Motion::Velocity(v) => v * t,
+            Motion::Ramp {
+                displacement,
+                duration,
+            } => {
+                let tau = t.clamp(0.0, duration) / duration;
+                displacement
+                    * (tau
+                        - (2.0 * std::f64::consts::PI * tau).sin() / (2.0 * std::f64::consts::PI))
+            }
+        }
+    }
+}
+
+/// A degree of freedom whose motion is prescribed.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Prescribed {
+    /// Node index.
+    pub node: u32,
+    /// Direction: 0 = x, 1 = y, 2 = z.
+    pub dof: usize,
+    /// The motion.
+    pub motion: Motion,
+}
 
 /// Energies since the start (model units).
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
@@ -47,12 +113,19 @@ pub struct Solver {
     pub elements: Vec<Element>,
     /// Fixed degrees of freedom per node.
     pub fixed: Vec<[bool; 3]>,
+    /// Prescribed motions of single degrees of freedom.
+    pub prescribed: Vec<Prescribed>,
+    /// Rigid bodies. Body k is the contact model's `BodyId(k)` when the model has one: bodies
+    /// carrying analytical surfaces come first, in the model's order.
+    pub bodies: Vec<SolverBody>,
     /// Gravity (acceleration).
     pub gravity: [f64; 3],
     /// Constant external forces per node.
     pub loads: Vec<[f64; 3]>,
     /// Mass-proportional damping coefficient α (force −α·m·v).
     pub damping: f64,
+    /// Linear bulk viscosity b1 (Abaqus' default is 0.06; 0 = none).
+    pub bulk_viscosity: f64,
     /// Safety factor on the elements' stable increment.
     pub safety: f64,
     /// Time reached.
@@ -62,10 +135,17 @@ pub struct Solver {
     /// Contact force on each node in the last increment (penalty forces, and kinematic
     /// corrections as the forces m·Δv/dt that would make them).
     pub contact_force: Vec<[f64; 3]>,
+    /// Contact force on each rigid body in the last increment (the resultant on its nodes and
+    /// its analytical surface).
+    pub body_contact_force: Vec<[f64; 3]>,
     started: bool,
     balance0: Option<f64>,
     /// (external, contact, damping) power at the last step's time, and the increment since.
     last_power: Option<([f64; 3], f64)>,
+    /// The body each node is carried by.
+    carried: Vec<Option<u32>>,
+    /// Whether a node's degree of freedom is prescribed.
+    is_prescribed: Vec<[bool; 3]>,
 }
 
 impl Solver {
@@ -81,7 +161,14 @@ impl Solver {
             });
         }
         let mut mass = point_masses.to_vec();
-        for e in &elements {
+        for (k, e) in elements.iter().enumerate() {
+            if let Some(&n) = e.nodes().iter().find(|&&n| n as usize >= x.len()) {
+                return Err(Error::IndexOutOfRange {
+                    what: format!("node of element {k}"),
+                    index: n as u64,
+                    len: x.len(),
+                });
+            }
             let share = e.mass() / e.nodes().len() as f64;
             for &n in e.nodes() {
                 mass[n as usize] += share;
@@ -97,25 +184,94 @@ impl Solver {
         Ok(Self {
             v: vec![[0.0; 3]; n],
             fixed: vec![[false; 3]; n],
+            prescribed: Vec::new(),
+            bodies: Vec::new(),
             loads: vec![[0.0; 3]; n],
             x,
             mass,
             elements,
             gravity: [0.0; 3],
             damping: 0.0,
+            bulk_viscosity: 0.0,
             safety: 0.9,
             time: 0.0,
             energy: Energy::default(),
             contact_force: vec![[0.0; 3]; n],
+            body_contact_force: Vec::new(),
             started: false,
             balance0: None,
             last_power: None,
+            carried: vec![None; n],
+            is_prescribed: vec![[false; 3]; n],
         })
     }
 
-    /// The largest stable increment of the elements, times the safety factor (∞ with none).
+    /// Adds a rigid body; its nodes are moved with it from now on (their own masses and
+    /// fixed flags no longer count). Returns its index. Errors: a node carried twice or
+    /// belonging to an element.
+    pub fn add_body(&mut self, body: SolverBody) -> Result<usize> {
+        let k = self.bodies.len();
+        for &n in &body.nodes {
+            let n_us = n as usize;
+            if n_us >= self.x.len() {
+                return Err(Error::IndexOutOfRange {
+                    what: "rigid body node".into(),
+                    index: n as u64,
+                    len: self.x.len(),
+                });
+            }
+            if self.carried[n_us].is_some() || self.elements.iter().any(|e| e.nodes().contains(&n))
+            {
+                return Err(Error::BadParameter {
+                    name: "rigid body node",
+                    value: n.to_string(),
+                    expected: "a node of no element and of no other body",
+                });
+            }
+        }
+        for &n in &body.nodes {
+            self.carried[n as usize] = Some(k as u32);
+        }
+        body.place_nodes(&mut self.x, &mut self.v);
+        self.bodies.push(body);
+        self.body_contact_force.push([0.0; 3]);
+        Ok(k)
+    }
+
+    /// Prescribes the motion of one degree of freedom. Errors: the node out of range or
+    /// carried by a rigid body, a direction beyond z.
+    pub fn prescribe(&mut self, p: Prescribed) -> Result<()> {
+        let n = p.node as usize;
+        if n >= self.x.len() || p.dof > 2 {
+            return Err(Error::IndexOutOfRange {
+                what: format!("prescribed node (direction {})", p.dof),
+                index: p.node as u64,
+                len: self.x.len(),
+            });
+        }
+        if self.carried[n].is_some() {
+            return Err(Error::BadParameter {
+                name: "prescribed node",
+                value: p.node.to_string(),
+                expected: "a node not carried by a rigid body (prescribe the body's motion)",
+            });
+        }
+        self.is_prescribed[n][p.dof] = true;
+        self.prescribed.push(p);
+        Ok(())
+    }
+
+    /// The states of the rigid bodies (for [`Contact::kinematic_step`]).
+    pub fn body_states(&self) -> Vec<BodyState> {
+        self.bodies.iter().map(|b| b.state).collect()
+    }
+
+    /// The largest stable increment of the elements, times the safety factor and the bulk
+    /// viscosity's reduction √(1+b1²) − b1 (∞ with no elements).
     pub fn stable_increment(&self) -> f64 {
+        let b = self.bulk_viscosity;
         self.safety
+            * ((1.0 + b * b).sqrt() - b)
             * self
                 .elements
                 .iter()
@@ -145,8 +301,15 @@ impl Solver {
                 expected: "must be finite and positive",
             });
         }
-        let (f_int, internal) = self.internal_forces();
+        let (mut f_int, internal) = self.internal_forces();
         let n = self.x.len();
+        // bulk viscosity acts with the half-step velocities (the last ones known)
+        let mut p_bulk = 0.0;
+        if self.bulk_viscosity > 0.0 {
+            for e in &self.elements {
+                p_bulk -= e.add_bulk_viscosity(&self.x, &self.v, self.bulk_viscosity, &mut f_int);
+            }
+        }
         let mut penalty = vec![[0.0; 3]; n];
         if let Some(c) = contact.as_deref_mut() {
             if c.has_penalty_pairs() {
@@ -156,9 +319,13 @@ impl Solver {
         // velocity update (the first moves by half an increment), prediction of positions
         let dv_scale = if self.started { dt } else { 0.5 * dt };
         let v_old = self.v.clone();
+        let bodies_old: Vec<BodyState> = self.body_states();
         let mut ext = vec![[0.0; 3]; n];
         let mut damp = vec![[0.0; 3]; n];
         for i in 0..n {
+            if self.carried[i].is_some() {
+                continue;
+            }
             for a in 0..3 {
                 if self.fixed[i][a] {
                     self.v[i][a] = 0.0;
@@ -168,19 +335,93 @@ impl Solver {
                 damp[i][a] = -self.damping * self.mass[i] * self.v[i][a];
                 self.v[i][a] += dv_scale * (f_int[i][a] + ext[i][a] + penalty[i][a] + damp[i][a])
                     / self.mass[i];
-                self.x[i][a] += dt * self.v[i][a];
             }
+        }
+        // prescribed degrees of freedom: the velocity that reaches the prescribed displacement
+        // exactly; the force that makes it counts as external
+        for p in &self.prescribed {
+            let (i, a) = (p.node as usize, p.dof);
+            let u = (p.motion.displacement(self.time + dt) - p.motion.displacement(self.time)) / dt;
+            ext[i][a] += self.mass[i] * (u - self.v[i][a]) / dv_scale;
+            self.v[i][a] = u;
+        }
+        for i in 0..n {
+            if self.carried[i].is_none() {
+                for a in 0..3 {
+                    self.x[i][a] += dt * self.v[i][a];
+                }
+            }
+        }
+        // rigid bodies: gravity, loads and penalty forces on their nodes
+        let mut body_ext = vec![([0.0; 3], [0.0; 3]); self.bodies.len()];
+        for (k, b) in self.bodies.iter_mut().enumerate() {
+            let (fp, mp) = b.resultant(&self.x, &penalty);
+            let (fl, ml) = b.resultant(&self.x, &self.loads);
+            let g = self.gravity.map(|g| g * b.mass);
+            let f_ext = [0, 1, 2].map(|a| fl[a] + g[a]);
+            let moving = b.motion == BodyMotion::Free;
+            body_ext[k] = if moving {
+                (f_ext, ml)
+            } else {
+                ([0.0; 3], [0.0; 3])
+            };
+            b.accelerate(
+                [0, 1, 2].map(|a| f_ext[a] + fp[a]),
+                [0, 1, 2].map(|a| ml[a] + mp[a]),
+                dv_scale,
+            );
+            b.advance(dt);
+            b.place_nodes(&mut self.x, &mut self.v);
         }
         // kinematic contact corrects the predicted state; it acts as the force m·Δv/dv_scale
         // would have in the velocity update
         let mut kinematic = vec![[0.0; 3]; n];
+        let mut body_kin = vec![([0.0; 3], [0.0; 3]); self.bodies.len()];
         if let Some(c) = contact {
             if c.has_kinematic_pairs() {
                 let v_pred = self.v.clone();
-                c.kinematic_step(&mut self.x, &mut self.v, &mut [], dt)?;
+                let pred: Vec<BodyState> = self.body_states();
+                let mut states = pred.clone();
+                c.kinematic_step(&mut self.x, &mut self.v, &mut states, dt)?;
                 for i in 0..n {
                     for a in 0..3 {
                         kinematic[i][a] = self.mass[i] * (self.v[i][a] - v_pred[i][a]) / dv_scale;
+                    }
+                }
+                for (k, b) in self.bodies.iter_mut().enumerate() {
+                    // corrections of the analytical surface, and of the carried nodes taken
+                    // as an impulse on the body
+                    let mut dv = [0.0; 3];
+                    let mut dw = [0.0; 3];
+                    for a in 0..3 {
+                        dv[a] = states[k].velocity[a] - pred[k].velocity[a];
+                        dw[a] = states[k].angular_velocity[a] - pred[k].angular_velocity[a];
+                    }
+                    let (j, h) = b.resultant(&self.x, &kinematic);
+                    let iw = rigid::world_inertia(&b.state.rotation, &b.inertia);
+                    let from_nodes = rigid::solve3(&iw, h);
+                    let mut force = [0.0; 3];
+                    let mut moment = [0.0; 3];
+                    let lw = rigid::rotate(&iw, dw);
+                    for a in 0..3 {
+                        force[a] = b.mass * dv[a] / dv_scale + j[a];
+                        moment[a] = lw[a] / dv_scale + h[a];
+                    }
+                    body_kin[k] = (force, moment);
+                    if b.motion == BodyMotion::Free {
+                        for a in 0..3 {
+                            b.state.velocity[a] =
+                                pred[k].velocity[a] + dv[a] + dv_scale * j[a] / b.mass;
+                            b.state.angular_velocity[a] =
+                                pred[k].angular_velocity[a] + dw[a] + dv_scale * from_nodes[a];
+                        }
+                        b.state.position = bodies_old[k].position;
+                        b.state.rotation = bodies_old[k].rotation;
+                        b.advance(dt);
+                    }
+                    b.place_nodes(&mut self.x, &mut self.v);
+                    for &i in &b.nodes {
+                        kinematic[i as usize] = [0.0; 3];
                     }
                 }
             }
@@ -190,20 +431,41 @@ impl Solver {
                 self.contact_force[i][a] = penalty[i][a] + kinematic[i][a];
             }
         }
+        for (k, b) in self.bodies.iter().enumerate() {
+            let (fp, _) = b.resultant(&self.x, &penalty);
+            self.body_contact_force[k] = [0, 1, 2].map(|a| fp[a] + body_kin[k].0[a]);
+        }
         // energies at this step's time: velocities there are the mean of the half-step ones
         // around it (at the start, the initial velocity)
-        let (mut kinetic, mut p_ext, mut p_con, mut p_damp) = (0.0, 0.0, 0.0, 0.0);
+        let (mut kinetic, mut p_ext, mut p_con, mut p_damp) = (0.0, 0.0, 0.0, p_bulk);
+        let now = |old: f64, new: f64| if self.started { 0.5 * (old + new) } else { old };
         for i in 0..n {
+            if self.carried[i].is_some() {
+                continue;
+            }
             for a in 0..3 {
-                let v_now = if self.started {
-                    0.5 * (v_old[i][a] + self.v[i][a])
-                } else {
-                    v_old[i][a]
-                };
+                let v_now = now(v_old[i][a], self.v[i][a]);
                 kinetic += 0.5 * self.mass[i] * v_now * v_now;
                 p_ext += ext[i][a] * v_now;
                 p_con += (penalty[i][a] + kinematic[i][a]) * v_now;
                 p_damp -= damp[i][a] * v_now;
+            }
+        }
+        for (k, b) in self.bodies.iter().enumerate() {
+            let v_now = [0, 1, 2].map(|a| now(bodies_old[k].velocity[a], b.state.velocity[a]));
+            let w_now = [0, 1, 2].map(|a| {
+                now(
+                    bodies_old[k].angular_velocity[a],
+                    b.state.angular_velocity[a],
+                )
+            });
+            kinetic += b.kinetic(v_now, w_now);
+            let (fp, mp) = b.resultant(&self.x, &penalty);
+            let (fk, mk) = body_kin[k];
+            let (fe, me) = body_ext[k];
+            for a in 0..3 {
+                p_ext += fe[a] * v_now[a] + me[a] * w_now[a];
+                p_con += (fp[a] + fk[a]) * v_now[a] + (mp[a] + mk[a]) * w_now[a];
             }
         }
         // work since the last step by the trapezoidal rule on the powers at the two times

@@ -228,7 +228,8 @@ impl GpuSearch {
         {
             self.bind_groups = None;
         }
-        super::upload(&self.ctx, 
+        super::upload(
+            &self.ctx,
             &self.buffers.anchors.buffer,
             0,
             bytemuck::cast_slice(anchors),
@@ -502,7 +503,8 @@ impl GpuSearch {
             super::upload(&self.ctx, &self.frame, 0, bytemuck::bytes_of(&frame));
         }
         if self.device_positions.is_none() {
-            super::upload(&self.ctx, 
+            super::upload(
+                &self.ctx,
                 &self.buffers.nodes.buffer,
                 0,
                 bytemuck::cast_slice(&prep.nodes),
@@ -511,22 +513,26 @@ impl GpuSearch {
         // facets, slaves, adjacency and motion nodes are the pair's constants: uploaded once,
         // and again only into buffers that were just replaced
         if self.static_dirty {
-            super::upload(&self.ctx, 
+            super::upload(
+                &self.ctx,
                 &self.buffers.adjacency.buffer,
                 0,
                 bytemuck::cast_slice(&prep.adjacency),
             );
-            super::upload(&self.ctx, 
+            super::upload(
+                &self.ctx,
                 &self.buffers.motion_nodes.buffer,
                 0,
                 bytemuck::cast_slice(&prep.motion_nodes),
             );
-            super::upload(&self.ctx, 
+            super::upload(
+                &self.ctx,
                 &self.buffers.facets.buffer,
                 0,
                 bytemuck::cast_slice(&prep.facets),
             );
-            super::upload(&self.ctx, 
+            super::upload(
+                &self.ctx,
                 &self.buffers.slaves.buffer,
                 0,
                 bytemuck::cast_slice(&prep.slaves),
@@ -535,20 +541,32 @@ impl GpuSearch {
         }
         for i in 0..levels.levels.len() {
             let sp = levels.params(i);
-            super::upload(&self.ctx, 
+            super::upload(
+                &self.ctx,
                 &self.buffers.scan_params.buffer,
                 i as u64 * UNIFORM_STRIDE,
                 bytemuck::bytes_of(&sp),
             );
         }
         if let Some(ws) = preload {
-            super::upload(&self.ctx, &self.buffers.scan.buffer, 0, bytemuck::cast_slice(&ws.scan));
-            super::upload(&self.ctx, 
+            super::upload(
+                &self.ctx,
+                &self.buffers.scan.buffer,
+                0,
+                bytemuck::cast_slice(&ws.scan),
+            );
+            super::upload(
+                &self.ctx,
                 &self.buffers.entries.buffer,
                 0,
                 bytemuck::cast_slice(&ws.entries),
             );
-            super::upload(&self.ctx, &self.buffers.status, 0, bytemuck::cast_slice(&ws.status));
+            super::upload(
+                &self.ctx,
+                &self.buffers.status,
+                0,
+                bytemuck::cast_slice(&ws.status),
+            );
         }
         let mut regrowths = 0;
         loop {
@@ -601,7 +619,12 @@ impl GpuSearch {
             }
             let mut params = prep.params;
             params.entry_capacity = self.entry_capacity;
-            super::upload(&self.ctx, &self.buffers.params, 0, bytemuck::bytes_of(&params));
+            super::upload(
+                &self.ctx,
+                &self.buffers.params,
+                0,
+                bytemuck::bytes_of(&params),
+            );
             let (status, total, hits) = self.submit(
                 &params,
                 &levels,
@@ -717,7 +740,12 @@ impl GpuSearch {
                 message: e.to_string(),
             });
         }
-        let bytes = read_back(&self.ctx, &staging, starts_bytes + entries_bytes, "bins readback")?;
+        let bytes = read_back(
+            &self.ctx,
+            &staging,
+            starts_bytes + entries_bytes,
+            "bins readback",
+        )?;
         Ok(Bins {
             starts: bytemuck::pod_collect_to_vec(&bytes[..starts_bytes as usize]),
             entries: bytemuck::pod_collect_to_vec(&bytes[starts_bytes as usize..]),

@@ -153,7 +153,12 @@ impl GpuPenalty {
             check("pair nodes", n_pair_nodes as u64 * 16)?,
             U::empty(),
         );
-        super::upload(&ctx, &pair_nodes, 0, bytemuck::cast_slice(&setup.pair_nodes));
+        super::upload(
+            &ctx,
+            &pair_nodes,
+            0,
+            bytemuck::cast_slice(&setup.pair_nodes),
+        );
         let adjacency = storage(
             d,
             "adjacency",
@@ -162,14 +167,20 @@ impl GpuPenalty {
         );
         super::upload(&ctx, &adjacency, 0, bytemuck::cast_slice(&setup.adjacency));
         let state = storage(d, "slave state", n_slaves as u64 * 32, U::empty());
-        super::upload(&ctx, &state, 0, bytemuck::cast_slice(&setup.initial_state()));
+        super::upload(
+            &ctx,
+            &state,
+            0,
+            bytemuck::cast_slice(&setup.initial_state()),
+        );
         let status_init = d.create_buffer(&wgpu::BufferDescriptor {
             label: Some("status init"),
             size: 16,
             usage: U::COPY_SRC | U::COPY_DST,
             mapped_at_creation: false,
         });
-        super::upload(&ctx, 
+        super::upload(
+            &ctx,
             &status_init,
             0,
             bytemuck::cast_slice(&[NO_LIMIT.to_bits(), NO_LIMIT.to_bits(), 0u32, 0u32]),
@@ -181,7 +192,8 @@ impl GpuPenalty {
             mapped_at_creation: false,
         });
         for i in 0..levels.levels.len() {
-            super::upload(&ctx, 
+            super::upload(
+                &ctx,
                 &scan_params,
                 i as u64 * UNIFORM_STRIDE,
                 bytemuck::bytes_of(&levels.params(i)),
@@ -259,7 +271,12 @@ impl GpuPenalty {
         )? {
             self.groups = None;
         }
-        super::upload(&self.ctx, &self.vel.buffer, 0, bytemuck::cast_slice(velocities));
+        super::upload(
+            &self.ctx,
+            &self.vel.buffer,
+            0,
+            bytemuck::cast_slice(velocities),
+        );
         self.read_outputs = outputs;
         Ok(())
     }
