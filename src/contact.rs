@@ -427,6 +427,11 @@ impl Contact {
         v
     }
 
+    /// What the last kinematic increment did.
+    pub fn kinematic_report(&self) -> &KinematicReport {
+        &self.kin_report
+    }
+
     /// The contact outputs of each rigid pair after the last kinematic increment.
     pub fn rigid_outputs(&self) -> Vec<(RigidPairId, &PairOutput)> {
         self.rigid.iter().map(|p| (p.id, &p.output)).collect()

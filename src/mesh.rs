@@ -209,20 +209,44 @@ pub fn point_cloud(n: usize, lo: [f64; 3], hi: [f64; 3], seed: u64) -> Vec<[f64;
         .collect()
 }
 
+/// The `n + 1` cell boundaries of `n` cells over [start, start + length], each cell `ratio`
+/// times the one before it (1: uniform). A negative ratio grades from the far end: the cells
+/// are smallest at `start + length`.
+pub fn graded(start: f64, length: f64, n: usize, ratio: f64) -> Vec<f64> {
+    let r = ratio.abs();
+    let sizes: Vec<f64> = (0..n).map(|k| r.powi(k as i32)).collect();
+    let total: f64 = sizes.iter().sum();
+    let mut out = Vec::with_capacity(n + 1);
+    let mut acc = 0.0;
+    out.push(0.0);
+    for s in &sizes {
+        acc += s;
+        out.push(acc / total);
+    }
+    if ratio < 0.0 {
+        out = out.iter().rev().map(|u| 1.0 - u).collect();
+    }
+    out.iter().map(|u| start + length * u).collect()
+}
+
 /// A box [0, lx]×[0, ly]×[0, lz] shifted by `origin`, as nx×ny×nz hexahedra each split into
 /// six tetrahedra around its main diagonal (positive volumes).
 pub fn block_tets(n: [usize; 3], l: [f64; 3], origin: [f64; 3]) -> Mesh<[u32; 4]> {
+    block_tets_on([0, 1, 2].map(|a| graded(origin[a], l[a], n[a], 1.0)))
+}
+
+/// The box of hexahedra with cell boundaries `coords` per axis (increasing), each split into
+/// six tetrahedra around its main diagonal (positive volumes). Node (i, j, k) has index
+/// `k·(ny+1)·(nx+1) + j·(nx+1) + i`.
+pub fn block_tets_on(coords: [Vec<f64>; 3]) -> Mesh<[u32; 4]> {
+    let n = [0, 1, 2].map(|a| coords[a].len() - 1);
     let id =
         |i: usize, j: usize, k: usize| (k * (n[1] + 1) * (n[0] + 1) + j * (n[0] + 1) + i) as u32;
     let mut positions = Vec::new();
     for k in 0..=n[2] {
         for j in 0..=n[1] {
             for i in 0..=n[0] {
-                positions.push([
-                    origin[0] + l[0] * i as f64 / n[0] as f64,
-                    origin[1] + l[1] * j as f64 / n[1] as f64,
-                    origin[2] + l[2] * k as f64 / n[2] as f64,
-                ]);
+                positions.push([coords[0][i], coords[1][j], coords[2][k]]);
             }
         }
     }
@@ -265,5 +289,63 @@ pub fn block_tets(n: [usize; 3], l: [f64; 3], origin: [f64; 3]) -> Mesh<[u32; 4]
             }
         }
     }
+    Mesh { positions, facets }
+}
+
+/// The rectangle of quads with cell boundaries `xs`, `ys` (increasing) in the x–y plane (z = 0),
+/// each quad cut into two counter-clockwise triangles along alternating diagonals. Node (i, j)
+/// has index `j·(nx+1) + i`.
+pub fn rect_triangles_on(xs: &[f64], ys: &[f64]) -> Mesh<[u32; 3]> {
+    let nx = xs.len() - 1;
+    let mut positions = Vec::with_capacity(xs.len() * ys.len());
+    for &y in ys {
+        for &x in xs {
+            positions.push([x, y, 0.0]);
+        }
+    }
+    let mut facets = Vec::with_capacity(2 * nx * (ys.len() - 1));
+    for j in 0..ys.len() - 1 {
+        for i in 0..nx {
+            let (a, b, c, d) = (
+                grid_node(i, j, nx),
+                grid_node(i + 1, j, nx),
+                grid_node(i + 1, j + 1, nx),
+                grid_node(i, j + 1, nx),
+            );
+            if (i + j) % 2 == 0 {
+                facets.push([a, b, c]);
+                facets.push([a, c, d]);
+            } else {
+                facets.push([a, b, d]);
+                facets.push([b, c, d]);
+            }
+        }
+    }
+    Mesh { positions, facets }
+}
+
+/// An arc of `n` segments of the circle of `radius` about `centre` (x–y plane) from angle
+/// `from` to `to` (radians from +x, counter-clockwise), the segments running counter-clockwise
+/// so that their normals point away from the centre. `ratio` grades the segments as
+/// [`graded`] does (negative: smallest at `to`).
+pub fn arc_segments(
+    centre: [f64; 3],
+    radius: f64,
+    from: f64,
+    to: f64,
+    n: usize,
+    ratio: f64,
+) -> Mesh<[u32; 2]> {
+    let positions = graded(from, to - from, n, ratio)
+        .iter()
+        .map(|a| {
+            [
+                centre[0] + radius * a.cos(),
+                centre[1] + radius * a.sin(),
+                0.0,
+            ]
+        })
+        .collect();
+    let facets = (0..n as u32).map(|k| [k, k + 1]).collect();
     Mesh { positions, facets }
 }

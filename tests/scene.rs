@@ -61,7 +61,7 @@ fn bad_scene_files_name_the_key_and_line() {
         ("title = \"x\"\n[run]\nend_time = \"soon\"\n", "end_time"),
         ("title = \"x\"\n[run]\nend_time = 1.0\nspeed = 2\n", "speed"),
         ("title = \"x\"\n[run]\nend_time = -1.0\n[[part]]\nname = \"a\"\nshape = \"plate\"\norigin = [0,0,0]\nsize = [1,1,0]\ndivisions = [1,1,0]\n", "run.end_time"),
-        ("title = \"x\"\n[run]\nend_time = 1.0\n[[part]]\nname = \"a\"\nshape = \"sphere\"\norigin = [0,0,0]\nsize = [1,1,1]\ndivisions = [1,1,1]\n", "part.shape"),
+        ("title = \"x\"\n[run]\nend_time = 1.0\n[[part]]\nname = \"a\"\nshape = \"cone\"\norigin = [0,0,0]\nsize = [1,1,1]\ndivisions = [1,1,1]\n", "part.shape"),
         ("title = \"x\"\n[run]\nend_time = 1.0\n[[part]]\nname = \"a\"\nshape = \"block\"\nmaterial = \"steel\"\norigin = [0,0,0]\nsize = [1,1,1]\ndivisions = [1,1,1]\n", "part.material"),
     ];
     for (text, key) in cases {

@@ -1,6 +1,8 @@
 //! Elements of the small explicit solver: 2-node bars, 3-node plane-strain triangles and 4-node
-//! tetrahedra, linear elastic in the St Venant–Kirchhoff form (Green–Lagrange strain, second
-//! Piola–Kirchhoff stress), which stays right under large rotation.
+//! tetrahedra, linear elastic in forms that stay right under large rotation: bars are
+//! corotational (engineering strain (l − L0)/L0 along the current axis, so a 1D wave is exactly
+//! the linear one whatever its amplitude), triangles and tetrahedra St Venant–Kirchhoff
+//! (Green–Lagrange strain, second Piola–Kirchhoff stress).
 
 use crate::geometry::V3;
 
@@ -35,7 +37,8 @@ impl Material {
 /// An element: its nodes, reference geometry and material.
 #[derive(Clone, Debug, PartialEq)]
 pub enum Element {
-    /// 2-node bar of cross-section `area` (uniaxial stress, modulus E).
+    /// 2-node corotational bar of cross-section `area` (uniaxial stress σ = E·(l − L0)/L0
+    /// along the current axis).
     Bar {
         /// Node indices.
         nodes: [u32; 2],
@@ -209,12 +212,10 @@ impl Element {
                 material,
             } => {
                 let d = sub(x[nodes[1] as usize], x[nodes[0] as usize]);
-                let l2 = d.length2();
-                // Green–Lagrange strain along the bar, 2nd Piola–Kirchhoff stress
-                let e = 0.5 * (l2 / (length0 * length0) - 1.0);
-                let s = material.young * e;
-                // force on node 1: −S·A·(d/L0²)·L0 = −S·A·d/L0
-                let t = d * (s * area / length0);
+                let l = d.length2().sqrt();
+                // engineering strain along the current axis; axial force σ·A
+                let e = (l - length0) / length0;
+                let t = d * (material.young * e * area / l);
                 for a in 0..3 {
                     f[nodes[0] as usize][a] += t.to_array()[a];
                     f[nodes[1] as usize][a] -= t.to_array()[a];
@@ -325,12 +326,10 @@ impl Element {
         } = self
         {
             let d = sub(x[nodes[1] as usize], x[nodes[0] as usize]);
-            let l2 = d.length2();
-            let e = 0.5 * (l2 / (length0 * length0) - 1.0);
-            // Cauchy = (stretch²/stretch)·S = λ·S along the axis (the area change of a bar
-            // is not modelled)
-            let sigma = material.young * e * l2.sqrt() / length0;
-            let u = d * (1.0 / l2.sqrt());
+            let l = d.length2().sqrt();
+            // the area change of a bar is not modelled
+            let sigma = material.young * (l - length0) / length0;
+            let u = d * (1.0 / l);
             let u = u.to_array();
             let mut s = [[0.0; 3]; 3];
             for r in 0..3 {

@@ -1,0 +1,610 @@
+//! From a checked [`Scene`] to the solver and the contact model: generated meshes, their faces
+//! (nodes, facets and tributary areas), rigid bodies, boundary conditions and pairs.
+
+use crate::error::{Error, Result};
+use crate::explicit::{BodyMotion, Element, Material, Motion, Prescribed, Solver, SolverBody};
+use crate::geometry::V3;
+use crate::mesh::{arc_segments, block_tets_on, graded, plate_quads, rect_triangles_on};
+use crate::mesh::{polyline, sphere_triangles};
+use crate::model::{
+    Analytical, Enforce, Facet, Friction, Kinematic, Model, Pair, Penalty, RigidBody, RigidPair,
+    Sliding, Stiffness, Surface,
+};
+use crate::search::Schedule;
+
+use super::spec::{axis_of, bad, PartSpec, Scene};
+
+/// Mass given to the nodes of fixed rigid parts and to fixed or moving rigid bodies in the
+/// contact model, so that kinematic contact treats them as immovable.
+pub const IMMOVABLE_MASS: f64 = 1e12;
+
+/// A part's nodes and how to find its faces.
+#[derive(Clone, Debug)]
+pub struct PartNodes {
+    /// Part name.
+    pub name: String,
+    /// First model node.
+    pub base: usize,
+    /// Node count.
+    pub count: usize,
+    /// Element count.
+    pub elements: usize,
+    grid: Grid,
+}
+
+#[derive(Clone, Debug)]
+enum Grid {
+    /// Tetrahedral block: cells per axis.
+    Block([usize; 3]),
+    /// Plane-strain rectangle: cells per axis, thickness.
+    Rect([usize; 2], f64),
+    /// Bar along `axis` of cross-section area: four parallel chains of 2-node bars at the
+    /// corners of a square section, node (cell k, corner c) at `4k + c`, corners
+    /// counter-clockwise in the two other axes.
+    Bar(usize),
+    /// Quads in the x–y plane (normal +z).
+    Plate([usize; 2]),
+    /// Segments and triangles as generated (normals as the surface needs).
+    Facets(Vec<Facet>),
+    /// Point masses with their slave areas.
+    Points(f64),
+}
+
+/// A face: its nodes, facets (outward normals) and each node's tributary area.
+#[derive(Clone, Debug, Default)]
+pub struct Face {
+    /// Model nodes, increasing.
+    pub nodes: Vec<u32>,
+    /// Facets of the face.
+    pub facets: Vec<Facet>,
+    /// Tributary area (length in 2D, per unit thickness times the thickness) of each node.
+    pub areas: Vec<f64>,
+}
+
+/// What a scene builds: the solver, the contact model, and per part its nodes.
+#[derive(Clone, Debug)]
+pub struct Built {
+    /// The solver, with boundary conditions, bodies and initial velocities.
+    pub solver: Solver,
+    /// The contact model.
+    pub model: Model,
+    /// Each part's nodes.
+    pub parts: Vec<PartNodes>,
+    /// Each contact's slave nodes, in `[[contact]]` order.
+    pub slaves: Vec<Vec<u32>>,
+    /// Each [[rigid]] body's solver index.
+    pub bodies: Vec<(String, usize)>,
+}
+
+fn material(scene: &Scene, p: &PartSpec) -> Material {
+    let m = scene
+        .material
+        .iter()
+        .find(|m| Some(&m.name) == p.material.as_ref())
+        .expect("checked: deformable parts name a material");
+    Material {
+        young: m.young,
+        poisson: m.poisson,
+        density: m.density,
+    }
+}
+
+fn facet_area(f: &Facet, x: &[[f64; 3]], thickness: f64) -> f64 {
+    let p = |n: u32| V3::from_array(x[n as usize]);
+    match *f {
+        Facet::Segment([a, b]) => (p(b) - p(a)).length2().sqrt() * thickness,
+        Facet::Triangle([a, b, c]) => 0.5 * (p(b) - p(a)).cross(p(c) - p(a)).length2().sqrt(),
+        Facet::Quad([a, b, c, d]) => {
+            0.5 * (p(b) - p(a)).cross(p(c) - p(a)).length2().sqrt()
+                + 0.5 * (p(c) - p(a)).cross(p(d) - p(a)).length2().sqrt()
+        }
+    }
+}
+
+impl PartNodes {
+    /// The face `face` of the part at positions `x`.
+    pub fn face(&self, face: &str, x: &[[f64; 3]]) -> Result<Face> {
+        let base = self.base as u32;
+        let mut facets: Vec<Facet> = Vec::new();
+        let mut thickness = 1.0;
+        let mut lone: Option<(Vec<u32>, f64)> = None;
+        let wrong = || {
+            Err(Error::BadParameter {
+                name: "face",
+                value: format!("{face} (part {})", self.name),
+                expected: "a face this part's shape has",
+            })
+        };
+        match (&self.grid, face) {
+            (Grid::Block(_) | Grid::Rect(..) | Grid::Bar(..) | Grid::Points(_), "all") => {
+                lone = Some(((base..base + self.count as u32).collect(), f64::NAN));
+            }
+            (Grid::Block(n), f) => {
+                let Some((axis, plus)) = face_axis(f) else {
+                    return wrong();
+                };
+                let id = |i: usize, j: usize, k: usize| {
+                    base + (k * (n[1] + 1) * (n[0] + 1) + j * (n[0] + 1) + i) as u32
+                };
+                let (u, v) = match axis {
+                    0 => (1, 2),
+                    1 => (2, 0),
+                    _ => (0, 1),
+                };
+                let fixed = if plus { n[axis] } else { 0 };
+                let at = |a: usize, b: usize| {
+                    let mut c = [0usize; 3];
+                    c[axis] = fixed;
+                    c[u] = a;
+                    c[v] = b;
+                    id(c[0], c[1], c[2])
+                };
+                for b in 0..n[v] {
+                    for a in 0..n[u] {
+                        let q = [at(a, b), at(a + 1, b), at(a + 1, b + 1), at(a, b + 1)];
+                        // (u, v, axis) is right-handed: counter-clockwise in (u, v) faces +axis
+                        facets.push(Facet::Quad(if plus { q } else { [q[0], q[3], q[2], q[1]] }));
+                    }
+                }
+            }
+            (Grid::Rect(n, t), f) => {
+                thickness = *t;
+                let id = |i: usize, j: usize| base + (j * (n[0] + 1) + i) as u32;
+                // counter-clockwise around the rectangle: segment normals point outward
+                match f {
+                    "y-" => (0..n[0])
+                        .for_each(|i| facets.push(Facet::Segment([id(i, 0), id(i + 1, 0)]))),
+                    "x+" => (0..n[1])
+                        .for_each(|j| facets.push(Facet::Segment([id(n[0], j), id(n[0], j + 1)]))),
+                    "y+" => (0..n[0])
+                        .for_each(|i| facets.push(Facet::Segment([id(i + 1, n[1]), id(i, n[1])]))),
+                    "x-" => (0..n[1])
+                        .for_each(|j| facets.push(Facet::Segment([id(0, j + 1), id(0, j)]))),
+                    _ => return wrong(),
+                }
+            }
+            (Grid::Bar(axis), f) => {
+                let Some((a, plus)) = face_axis(f) else {
+                    return wrong();
+                };
+                if a != *axis {
+                    return wrong();
+                }
+                // the end furthest along the face's direction: a quad of the four chain ends
+                let last = (self.count / 4 - 1) as u32;
+                let first_is_plus = x[self.base][a] > x[self.base + 4 * last as usize][a];
+                let k = if plus == first_is_plus { 0 } else { last };
+                let q = [0, 1, 2, 3].map(|c| base + 4 * k + c);
+                // corners run counter-clockwise about +axis; the quad faces outward
+                facets.push(Facet::Quad(if plus { q } else { [q[0], q[3], q[2], q[1]] }));
+            }
+            (Grid::Plate(n), "z+") => {
+                let id = |i: usize, j: usize| base + (j * (n[0] + 1) + i) as u32;
+                for j in 0..n[1] {
+                    for i in 0..n[0] {
+                        facets.push(Facet::Quad([
+                            id(i, j),
+                            id(i + 1, j),
+                            id(i + 1, j + 1),
+                            id(i, j + 1),
+                        ]));
+                    }
+                }
+            }
+            (Grid::Facets(f), "out" | "y+") => {
+                let is_line = matches!(f.first(), Some(Facet::Segment(_)));
+                if (face == "y+") != is_line {
+                    return wrong();
+                }
+                facets = f
+                    .iter()
+                    .map(|f| match *f {
+                        Facet::Segment([a, b]) => Facet::Segment([a + base, b + base]),
+                        Facet::Triangle([a, b, c]) => {
+                            Facet::Triangle([a + base, b + base, c + base])
+                        }
+                        Facet::Quad(q) => Facet::Quad(q.map(|n| n + base)),
+                    })
+                    .collect();
+            }
+            (Grid::Points(area), _) => {
+                lone = Some(((base..base + self.count as u32).collect(), *area));
+            }
+            _ => return wrong(),
+        }
+        if let Some((nodes, area)) = lone {
+            let n = nodes.len();
+            let areas = if area.is_nan() {
+                vec![1.0; n]
+            } else {
+                vec![area; n]
+            };
+            return Ok(Face {
+                nodes,
+                facets: Vec::new(),
+                areas,
+            });
+        }
+        let mut area_of = std::collections::BTreeMap::<u32, f64>::new();
+        for f in &facets {
+            let share = facet_area(f, x, thickness) / f.nodes().len() as f64;
+            for &n in f.nodes() {
+                *area_of.entry(n).or_default() += share;
+            }
+        }
+        Ok(Face {
+            nodes: area_of.keys().copied().collect(),
+            areas: area_of.values().copied().collect(),
+            facets,
+        })
+    }
+}
+
+fn face_axis(face: &str) -> Option<(usize, bool)> {
+    let axis = axis_of(face.get(..1)?)?;
+    match face.get(1..) {
+        Some("+") => Some((axis, true)),
+        Some("-") => Some((axis, false)),
+        _ => None,
+    }
+}
+
+fn coords(p: &PartSpec, axis: usize) -> Vec<f64> {
+    graded(
+        p.origin[axis],
+        p.size[axis],
+        p.divisions[axis],
+        p.grading[axis],
+    )
+}
+
+impl Scene {
+    /// Builds the solver, the contact model and the parts' node ranges.
+    pub fn build(&self) -> Result<Built> {
+        let two_d = self.is_2d();
+        let mut x: Vec<[f64; 3]> = Vec::new();
+        let mut elements = Vec::new();
+        let mut point = Vec::new();
+        let mut velocity = Vec::new();
+        let mut fixed = Vec::new();
+        let mut parts = Vec::new();
+        for p in &self.part {
+            let base = x.len();
+            let n_el = elements.len();
+            let mut rigid = false;
+            let grid = match p.shape.as_str() {
+                "block" => {
+                    let mat = material(self, p);
+                    let mesh = block_tets_on([coords(p, 0), coords(p, 1), coords(p, 2)]);
+                    x.extend(&mesh.positions);
+                    for t in &mesh.facets {
+                        let tet = t.map(|n| n + base as u32);
+                        elements.push(Element::tet4(tet, &x, mat).ok_or_else(|| {
+                            Error::BadParameter {
+                                name: "part",
+                                value: p.name.clone(),
+                                expected: "a block with positive volumes",
+                            }
+                        })?);
+                    }
+                    Grid::Block([p.divisions[0], p.divisions[1], p.divisions[2]])
+                }
+                "rect" => {
+                    let mat = material(self, p);
+                    let mesh = rect_triangles_on(&coords(p, 0), &coords(p, 1));
+                    x.extend(mesh.positions.iter().map(|q| [q[0], q[1], 0.0]));
+                    for t in &mesh.facets {
+                        let tri = t.map(|n| n + base as u32);
+                        elements.push(Element::tri3(tri, &x, p.thickness, mat).ok_or_else(
+                            || Error::BadParameter {
+                                name: "part",
+                                value: p.name.clone(),
+                                expected: "a rectangle with positive areas",
+                            },
+                        )?);
+                    }
+                    Grid::Rect([p.divisions[0], p.divisions[1]], p.thickness)
+                }
+                "bar" => {
+                    let mat = material(self, p);
+                    let axis = (0..3).find(|&a| p.size[a] != 0.0).expect("checked");
+                    let (u, v) = ((axis + 1) % 3, (axis + 2) % 3);
+                    let half = 0.5 * p.area.sqrt();
+                    let ts = graded(0.0, 1.0, p.divisions[0], p.grading[0]);
+                    for t in &ts {
+                        for (su, sv) in [(-1.0, -1.0), (1.0, -1.0), (1.0, 1.0), (-1.0, 1.0)] {
+                            let mut q = [0, 1, 2].map(|a| p.origin[a] + t * p.size[a]);
+                            q[u] += su * half;
+                            q[v] += sv * half;
+                            x.push(q);
+                        }
+                    }
+                    for k in 0..p.divisions[0] as u32 {
+                        for c in 0..4 {
+                            let nodes = [base as u32 + 4 * k + c, base as u32 + 4 * (k + 1) + c];
+                            elements.push(Element::bar(nodes, &x, 0.25 * p.area, mat).ok_or_else(
+                                || Error::BadParameter {
+                                    name: "part",
+                                    value: p.name.clone(),
+                                    expected: "a bar with positive element lengths",
+                                },
+                            )?);
+                        }
+                    }
+                    Grid::Bar(axis)
+                }
+                "plate" => {
+                    rigid = true;
+                    let mesh = plate_quads(
+                        p.divisions[0],
+                        p.divisions[1],
+                        p.size[0],
+                        p.size[1],
+                        0.0,
+                        0,
+                        &|_, _| 0.0,
+                    );
+                    x.extend(
+                        mesh.positions
+                            .iter()
+                            .map(|q| [q[0] + p.origin[0], q[1] + p.origin[1], p.origin[2]]),
+                    );
+                    Grid::Plate([p.divisions[0], p.divisions[1]])
+                }
+                "line" => {
+                    rigid = true;
+                    let mesh = polyline(p.divisions[0], p.size[0], 0.0, 0, &|_| 0.0);
+                    x.extend(
+                        mesh.positions
+                            .iter()
+                            .map(|q| [q[0] + p.origin[0], q[1] + p.origin[1], 0.0]),
+                    );
+                    Grid::Facets(mesh.facets.iter().map(|&s| Facet::Segment(s)).collect())
+                }
+                "arc" => {
+                    rigid = true;
+                    let mesh = arc_segments(
+                        p.origin,
+                        p.radius,
+                        p.angles[0].to_radians(),
+                        p.angles[1].to_radians(),
+                        p.divisions[0],
+                        p.grading[0],
+                    );
+                    x.extend(&mesh.positions);
+                    Grid::Facets(mesh.facets.iter().map(|&s| Facet::Segment(s)).collect())
+                }
+                "sphere" => {
+                    rigid = true;
+                    let mesh = sphere_triangles(p.divisions[0], p.divisions[1], p.radius, p.origin);
+                    x.extend(&mesh.positions);
+                    Grid::Facets(mesh.facets.iter().map(|&t| Facet::Triangle(t)).collect())
+                }
+                _ => {
+                    x.extend(&p.points);
+                    Grid::Points(p.area)
+                }
+            };
+            let count = x.len() - base;
+            point.extend(std::iter::repeat_n(
+                if rigid {
+                    IMMOVABLE_MASS
+                } else if p.shape == "points" {
+                    p.mass
+                } else {
+                    0.0
+                },
+                count,
+            ));
+            velocity.extend(std::iter::repeat_n(
+                if rigid { [0.0; 3] } else { p.velocity },
+                count,
+            ));
+            let mut free = [!rigid; 3];
+            if two_d {
+                free[2] = false;
+            }
+            if let Grid::Bar(axis) = grid {
+                // bars carry load along their axis only
+                free = [false; 3];
+                free[axis] = true;
+            }
+            fixed.extend(std::iter::repeat_n(free.map(|f| !f), count));
+            parts.push(PartNodes {
+                name: p.name.clone(),
+                base,
+                count,
+                elements: elements.len() - n_el,
+                grid,
+            });
+        }
+        let mut solver = Solver::new(x.clone(), elements, &point)?;
+        solver.fixed = fixed;
+        solver.v = velocity;
+        solver.gravity = self.run.gravity;
+        solver.safety = self.run.safety;
+        solver.damping = self.run.damping;
+        solver.bulk_viscosity = self.run.bulk_viscosity;
+        let part = |name: &str| {
+            parts
+                .iter()
+                .find(|p: &&PartNodes| p.name == name)
+                .expect("checked")
+        };
+        for b in &self.boundary {
+            let face = part(&b.part).face(&b.face, &x)?;
+            for d in &b.fix {
+                let a = axis_of(d).expect("checked");
+                for &n in &face.nodes {
+                    solver.fixed[n as usize][a] = true;
+                }
+            }
+            if let Some(u) = b.displacement {
+                let dirs: Vec<usize> = if b.directions.is_empty() {
+                    (0..3).filter(|&a| u[a] != 0.0).collect()
+                } else {
+                    b.directions
+                        .iter()
+                        .map(|d| axis_of(d).expect("checked"))
+                        .collect()
+                };
+                for &n in &face.nodes {
+                    for &a in &dirs {
+                        solver.prescribe(Prescribed {
+                            node: n,
+                            dof: a,
+                            motion: Motion::Ramp {
+                                displacement: u[a],
+                                duration: b.ramp,
+                            },
+                        })?;
+                    }
+                }
+            }
+            if let Some(load) = b.load {
+                let total: f64 = face.areas.iter().sum();
+                for (&n, &a) in face.nodes.iter().zip(&face.areas) {
+                    for d in 0..3 {
+                        solver.loads[n as usize][d] += load[d] * a / total;
+                    }
+                }
+            }
+        }
+        let mut model = if two_d {
+            Model::new_2d()
+        } else {
+            Model::new_3d()
+        };
+        model.add_nodes(&x, &solver.mass)?;
+        let mut bodies = Vec::new();
+        for r in &self.rigid {
+            let motion = match r.motion.as_deref() {
+                Some("fixed") => BodyMotion::Fixed,
+                Some("velocity") => BodyMotion::Velocity(r.velocity),
+                _ => BodyMotion::Free,
+            };
+            let d = r.direction;
+            let surface = match r.surface.as_str() {
+                "plane" => Analytical::Plane {
+                    point: [0.0; 3],
+                    normal: d,
+                },
+                "line" => Analytical::Line {
+                    point: [0.0; 2],
+                    normal: [d[0], d[1]],
+                },
+                "sphere" => Analytical::Sphere {
+                    centre: [0.0; 3],
+                    radius: r.radius,
+                },
+                "circle" => Analytical::Circle {
+                    centre: [0.0; 2],
+                    radius: r.radius,
+                },
+                _ => Analytical::Cylinder {
+                    point: [0.0; 3],
+                    axis: d,
+                    radius: r.radius,
+                },
+            };
+            let inertia = r.inertia.unwrap_or_else(|| {
+                let i = if matches!(r.surface.as_str(), "sphere" | "circle" | "cylinder") {
+                    0.4 * r.mass * r.radius * r.radius
+                } else {
+                    r.mass
+                };
+                [[i, 0.0, 0.0], [0.0, i, 0.0], [0.0, 0.0, i]]
+            });
+            let heavy = if motion == BodyMotion::Free {
+                1.0
+            } else {
+                IMMOVABLE_MASS
+            };
+            model.add_rigid_body(RigidBody {
+                mass: r.mass * heavy,
+                inertia: inertia.map(|row| row.map(|c| c * heavy)),
+                surface,
+            })?;
+            let mut body = SolverBody::new(r.mass, inertia, r.point, Vec::new(), &x, motion)?;
+            if motion == BodyMotion::Free {
+                body.state.velocity = r.velocity;
+            }
+            bodies.push((r.name.clone(), solver.add_body(body)?));
+        }
+        let mut slaves = Vec::new();
+        for c in &self.contact {
+            let sface = part(&c.slave).face(&c.slave_face, &x)?;
+            let set = model.add_node_set_with_areas(&sface.nodes, &sface.areas)?;
+            slaves.push(sface.nodes.clone());
+            if let Some(k) = self.rigid.iter().position(|r| r.name == c.master) {
+                model.add_rigid_pair(RigidPair {
+                    slave: set,
+                    body: crate::model::BodyId(k),
+                    softened: None,
+                })?;
+                continue;
+            }
+            let mface = part(&c.master).face(c.master_face.as_deref().expect("checked"), &x)?;
+            if mface.facets.is_empty() {
+                return bad(
+                    "contact.master_face",
+                    format!("{:?} (master {})", c.master_face, c.master),
+                    "a face with facets (a bar end or point set cannot be a master surface)",
+                );
+            }
+            let surf = model.add_surface(Surface::from_facets(mface.facets))?;
+            let enforce = match c.enforce.as_deref() {
+                Some("kinematic") => Enforce::Kinematic(Kinematic::default()),
+                _ => Enforce::Penalty(Penalty {
+                    stiffness: match (c.stiffness, c.stiffness_per_area) {
+                        (Some(k), _) => Stiffness::Absolute(k),
+                        (_, Some(k)) => Stiffness::PerArea(k),
+                        _ => Stiffness::Auto {
+                            scale: c.penalty_scale.unwrap_or(1.0),
+                        },
+                    },
+                    ..Penalty::default()
+                }),
+            };
+            let friction = if c.friction > 0.0 {
+                Friction::coulomb(c.friction)
+            } else {
+                Friction::Frictionless
+            };
+            let sliding = match c.sliding.as_deref() {
+                Some("small") => Sliding::Small,
+                Some("infinitesimal") => Sliding::Infinitesimal,
+                _ => Sliding::Finite,
+            };
+            let mut pair = Pair::new(set, surf)
+                .enforce(enforce)
+                .friction(friction)
+                .sliding(sliding);
+            if let Some(k) = c.search_interval {
+                pair = pair.schedule(Schedule {
+                    interval: k,
+                    ..Schedule::default_for(false)
+                });
+            }
+            if let Some(w) = c.balanced {
+                if sface.facets.is_empty() {
+                    return bad(
+                        "contact.balanced",
+                        format!("slave face {} of {}", c.slave_face, c.slave),
+                        "a balanced pair needs a slave face with facets",
+                    );
+                }
+                let s = model.add_surface(Surface::from_facets(sface.facets))?;
+                pair = pair.balanced(s, w);
+            }
+            model.add_pair(pair)?;
+        }
+        Ok(Built {
+            solver,
+            model,
+            parts,
+            slaves,
+            bodies,
+        })
+    }
+}

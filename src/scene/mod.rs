@@ -1,0 +1,545 @@
+//! Scene files (TOML): generated parts, rigid bodies, boundary conditions, contact pairs and
+//! run controls, run by the explicit solver with abut's contact; `abut run SCENE` writes a CSV
+//! history and a JSON summary. `scenes/` holds one scene per verification case.
+//!
+//! ```toml
+//! title = "two blocks"
+//! reference = "VERIFICATION §1"   # what the scene is checked against (free text)
+//! [run]
+//! end_time = 30.0          # model time units
+//! safety = 0.9             # on the elements' stable increment (default 0.9)
+//! contact_safety = 0.9     # on the penalty contact's stable increment (default 0.9)
+//! # dt = 1e-3              # a fixed increment instead (stability studies)
+//! gravity = [0, 0, -9.81]  # default none
+//! damping = 0.0            # mass-proportional α, for dynamic relaxation
+//! bulk_viscosity = 0.0     # linear b1
+//! output_every = 10        # history rows every this many increments (default 1)
+//! [[material]]
+//! name = "rubber"
+//! young = 1.0
+//! poisson = 0.0
+//! density = 1.0
+//! [[part]]
+//! name = "left"
+//! shape = "block"          # block | rect | bar | plate | line | arc | sphere | points
+//! material = "rubber"
+//! origin = [0, 0, 0]
+//! size = [10, 2, 2]
+//! divisions = [40, 1, 1]
+//! grading = [1, 1, 1]      # ratio of consecutive cells; negative: finest at the far end
+//! velocity = [0.1, 0, 0]
+//! [[rigid]]                # a rigid body with an analytical surface
+//! name = "ball"
+//! surface = "sphere"       # plane | sphere | cylinder | line | circle
+//! point = [0, 0, 5]
+//! radius = 1.0
+//! mass = 2.0
+//! motion = "free"          # free | fixed | velocity
+//! [[boundary]]
+//! part = "left"
+//! face = "x-"              # x-, x+, y-, y+, z-, z+, all
+//! fix = ["y", "z"]
+//! # displacement = [0, -0.01, 0], ramp = 0.01   # smooth ramp; load = [0, 0, -1]: total force
+//! [[contact]]
+//! slave = "left"           # part whose face nodes are the slave nodes
+//! slave_face = "x+"
+//! master = "right"         # part (with master_face) or rigid body
+//! master_face = "x-"       # x-, ..., z+, or "out" for arcs and spheres
+//! enforce = "kinematic"    # or "penalty" (default)
+//! friction = 0.0           # Coulomb coefficient (penalty only)
+//! sliding = "finite"       # finite | small | infinitesimal
+//! # balanced = 0.5         # balanced master–slave weight
+//! # penalty_scale = 1.0 | stiffness = k | stiffness_per_area = eps
+//! # search_interval = 100
+//! ```
+//!
+//! Errors name the key and, for syntax and type errors, the line (toml's own messages).
+
+mod build;
+mod spec;
+
+pub use build::Built;
+pub use spec::{BoundarySpec, ContactSpec, MaterialSpec, PartSpec, RigidSpec, RunSpec, Scene};
+
+use std::collections::BTreeMap;
+use std::io::Write as _;
+use std::path::Path;
+use std::time::Instant;
+
+use serde::Serialize;
+
+use crate::contact::Contact;
+use crate::device::{Device, Traffic};
+use crate::error::{Error, Result};
+use crate::explicit::Element;
+
+/// A part's motion at the end of a run (mass-weighted means over its free nodes).
+#[derive(Clone, Debug, Serialize)]
+pub struct PartSummary {
+    /// Part name.
+    pub name: String,
+    /// Mean displacement since the start.
+    pub displacement: [f64; 3],
+    /// Mean velocity (the last half-step's).
+    pub velocity: [f64; 3],
+    /// Smallest Cauchy stress component over the part's elements: xx, yy, zz, xy, yz, zx.
+    pub stress_min: [f64; 6],
+    /// Largest.
+    pub stress_max: [f64; 6],
+}
+
+/// A rigid body's state at the end of a run.
+#[derive(Clone, Debug, Serialize)]
+pub struct BodySummary {
+    /// Body name.
+    pub name: String,
+    /// Reference point.
+    pub position: [f64; 3],
+    /// Velocity.
+    pub velocity: [f64; 3],
+}
+
+/// A slave node in contact at the end of a run.
+#[derive(Clone, Debug, Serialize)]
+pub struct ContactNode {
+    /// `[[contact]]` index (balanced pairs' reverse passes report under the same index).
+    pub contact: usize,
+    /// Model node.
+    pub node: u32,
+    /// Position.
+    pub position: [f64; 3],
+    /// Contact pressure (force over tributary area).
+    pub pressure: f64,
+    /// Normal contact force magnitude.
+    pub force: f64,
+}
+
+/// What a scene run measured (also written as summary.json).
+#[derive(Clone, Debug, Serialize)]
+pub struct Summary {
+    /// The scene's title.
+    pub title: String,
+    /// What it is checked against.
+    pub reference: Option<String>,
+    /// Where it ran.
+    pub device: String,
+    /// What the run built: elements, bodies, contact passes.
+    pub built: Vec<String>,
+    /// Increments taken.
+    pub increments: usize,
+    /// Time reached.
+    pub end_time: f64,
+    /// The first increment's wall-clock seconds (pipelines, uploads, first search).
+    pub first_increment_seconds: f64,
+    /// Wall-clock seconds per increment after the first.
+    pub seconds_per_increment: f64,
+    /// The elements' stable increment times the safety factor.
+    pub element_increment: f64,
+    /// The smallest stable increment penalty contact reported (∞ without penalty pairs).
+    pub contact_increment: f64,
+    /// First time a contact force acted (start of its increment; NaN if none).
+    pub contact_start: f64,
+    /// Last time a contact force acted (end of its increment).
+    pub contact_end: f64,
+    /// Rising edge of the contact force at half its plateau (the force of an increment
+    /// belongs to its midpoint; linear interpolation), for plateau-shaped histories.
+    pub impact_time: f64,
+    /// Falling edge at half the plateau.
+    pub release_time: f64,
+    /// Largest total contact force on the slave nodes.
+    pub peak_force: f64,
+    /// Impulse between the half-plateau edges divided by their distance.
+    pub mean_force: f64,
+    /// Impulse of the contact force on the slave nodes.
+    pub impulse: f64,
+    /// Largest overclosure met (penalty penetration; kinematic: before correction).
+    pub max_penetration: f64,
+    /// Largest energy balance error over the run.
+    pub energy_balance_error: f64,
+    /// Final kinetic energy.
+    pub kinetic: f64,
+    /// Final strain energy.
+    pub internal: f64,
+    /// Work of external forces and prescribed motions.
+    pub external_work: f64,
+    /// Work of contact forces (negative: dissipated).
+    pub contact_work: f64,
+    /// Energy dissipated by friction (penalty pairs).
+    pub frictional_dissipation: f64,
+    /// Parts at the end.
+    pub parts: Vec<PartSummary>,
+    /// Rigid bodies at the end.
+    pub bodies: Vec<BodySummary>,
+    /// Slave nodes in contact at the end, with their pressures.
+    pub contact_nodes: Vec<ContactNode>,
+    /// GPU dispatches per increment by pass, averaged over the increments after the first
+    /// (empty on the CPU path).
+    pub dispatches_per_increment: BTreeMap<String, f64>,
+    /// Bytes uploaded per increment after the first.
+    pub uploaded_bytes_per_increment: f64,
+    /// Bytes read back per increment after the first.
+    pub read_back_bytes_per_increment: f64,
+}
+
+/// Rising and falling edges of a force history (time, force per increment) at half its
+/// plateau (the mean over the middle half of the contact), by linear interpolation.
+fn half_plateau_edges(history: &[(f64, f64)]) -> (f64, f64, f64) {
+    let Some(first) = history.iter().position(|h| h.1 > 0.0) else {
+        return (f64::NAN, f64::NAN, f64::NAN);
+    };
+    let last = history
+        .iter()
+        .rposition(|h| h.1 > 0.0)
+        .expect("first exists");
+    let span = last - first;
+    let mid = &history[first + span / 4..=last - span / 4];
+    let half = 0.5 * mid.iter().map(|h| h.1).sum::<f64>() / mid.len() as f64;
+    let rise = (first..=last)
+        .find(|&n| history[n].1 >= half)
+        .expect("the mean is reached");
+    let fall = (first..=last)
+        .rev()
+        .find(|&n| history[n].1 >= half)
+        .expect("as above");
+    let lerp = |a: (f64, f64), b: (f64, f64)| {
+        if b.1 == a.1 {
+            a.0
+        } else {
+            a.0 + (b.0 - a.0) * (half - a.1) / (b.1 - a.1)
+        }
+    };
+    let t_rise = if rise == 0 {
+        history[0].0
+    } else {
+        lerp(history[rise - 1], history[rise])
+    };
+    let t_fall = if fall + 1 >= history.len() {
+        history[fall].0
+    } else {
+        lerp(history[fall], history[fall + 1])
+    };
+    let impulse: f64 = (0..history.len())
+        .map(|n| {
+            let dt = if n == 0 {
+                2.0 * history[0].0
+            } else {
+                history[n].0 - history[n - 1].0
+            };
+            history[n].1 * dt
+        })
+        .sum();
+    (t_rise, t_fall, impulse)
+}
+
+fn stress6(s: [[f64; 3]; 3]) -> [f64; 6] {
+    [s[0][0], s[1][1], s[2][2], s[0][1], s[1][2], s[2][0]]
+}
+
+/// Runs `scene` on `device`. With `output`, writes `history.csv` (time, energies, contact
+/// force, balance error every `output_every` increments) and `summary.json` there; both are
+/// written to temporary names and renamed only when the run succeeded, so a failed run leaves
+/// nothing that looks valid.
+pub fn run(scene: &Scene, device: &Device, output: Option<&Path>) -> Result<Summary> {
+    let built = scene.build()?;
+    let (mut solver, model) = (built.solver, built.model);
+    let x0 = solver.x.clone();
+    let has_contact = !model.pairs().is_empty() || !model.rigid_pairs().is_empty();
+    let mut contact = if has_contact {
+        Some(Contact::new(device, &model)?)
+    } else {
+        None
+    };
+    let mut slaves: Vec<u32> = built.slaves.iter().flatten().copied().collect();
+    slaves.sort_unstable();
+    slaves.dedup();
+    if let Some(c) = contact.as_mut() {
+        c.request_outputs(true);
+    }
+    let mut built_list = Vec::new();
+    let mut kinds = BTreeMap::<&str, usize>::new();
+    for e in &solver.elements {
+        *kinds
+            .entry(match e {
+                Element::Bar { .. } => "bar",
+                Element::Tri3 { .. } => "plane-strain triangle",
+                Element::Tet4 { .. } => "tetrahedron",
+            })
+            .or_default() += 1;
+    }
+    for (k, n) in &kinds {
+        built_list.push(format!("{n} {k} elements"));
+    }
+    if !solver.bodies.is_empty() {
+        built_list.push(format!("{} rigid bodies", solver.bodies.len()));
+    }
+    for (i, (c, p)) in scene.contact.iter().zip(&built.slaves).enumerate() {
+        built_list.push(format!(
+            "contact {i}: {} slave nodes of {} against {}, {}{}{}{}",
+            p.len(),
+            c.slave,
+            c.master,
+            c.enforce.as_deref().unwrap_or("penalty"),
+            if c.friction > 0.0 {
+                ", friction"
+            } else {
+                ", frictionless (friction compiled out)"
+            },
+            if c.balanced.is_some() {
+                ", balanced"
+            } else {
+                ""
+            },
+            match c.sliding.as_deref() {
+                Some(s) => format!(", {s} sliding"),
+                None => String::new(),
+            }
+        ));
+    }
+    let io = |e: std::io::Error| Error::BadParameter {
+        name: "output",
+        value: e.to_string(),
+        expected: "a writable directory",
+    };
+    let mut history = match output {
+        Some(dir) => {
+            std::fs::create_dir_all(dir).map_err(io)?;
+            let mut f = std::io::BufWriter::new(
+                std::fs::File::create(dir.join(".history.csv.partial")).map_err(io)?,
+            );
+            writeln!(
+                f,
+                "time,kinetic,internal,external_work,contact_work,balance_error,contact_force"
+            )
+            .map_err(io)?;
+            Some(f)
+        }
+        None => None,
+    };
+    let element_dt = solver.stable_increment();
+    let mut dt = scene.run.dt.unwrap_or(element_dt);
+    if !dt.is_finite() {
+        return Err(Error::BadParameter {
+            name: "run.dt",
+            value: "none".into(),
+            expected: "a scene without elements needs a fixed increment",
+        });
+    }
+    let (mut pen, mut worst, mut contact_dt) = (0.0f64, 0.0f64, f64::INFINITY);
+    let mut forces: Vec<(f64, f64)> = Vec::new();
+    let mut first_seconds = 0.0;
+    let mut traffic0: Option<Traffic> = None;
+    let mut t_steady = Instant::now();
+    let mut k = 0;
+    while solver.time < scene.run.end_time * (1.0 - 1e-12) {
+        let step = dt.min(scene.run.end_time - solver.time);
+        let t_step = Instant::now();
+        solver.step(step, contact.as_mut())?;
+        k += 1;
+        if k == 1 {
+            first_seconds = t_step.elapsed().as_secs_f64();
+            traffic0 = device.traffic();
+            t_steady = Instant::now();
+        }
+        if let Some(c) = contact.as_ref() {
+            if c.has_penalty_pairs() {
+                let reported = c.report().stable_dt;
+                contact_dt = contact_dt.min(reported);
+                // the increment is the smaller of the elements' and the contact's limits
+                if scene.run.dt.is_none() {
+                    dt = element_dt.min(scene.run.contact_safety * reported);
+                }
+                for (_, o) in c.outputs() {
+                    for g in &o.copen {
+                        if g.is_finite() {
+                            pen = pen.max(-g);
+                        }
+                    }
+                }
+            }
+            if c.has_kinematic_pairs() {
+                pen = pen.max(c.kinematic_report().max_overclosure);
+            }
+        }
+        let force: f64 = {
+            let mut f = [0.0; 3];
+            for &s in &slaves {
+                for a in 0..3 {
+                    f[a] += solver.contact_force[s as usize][a];
+                }
+            }
+            (f[0] * f[0] + f[1] * f[1] + f[2] * f[2]).sqrt()
+        };
+        forces.push((solver.time - 0.5 * step, force));
+        worst = worst.max(solver.balance_error());
+        if !solver.energy.balance().is_finite() {
+            return Err(Error::BadParameter {
+                name: "run",
+                value: format!("energy not finite at t = {}", solver.time),
+                expected: "a stable run (reduce run.dt or the penalty scale)",
+            });
+        }
+        if let Some(f) = history.as_mut() {
+            if k % scene.run.output_every.max(1) == 0 {
+                let e = &solver.energy;
+                writeln!(
+                    f,
+                    "{},{},{},{},{},{},{}",
+                    solver.time,
+                    e.kinetic,
+                    e.internal,
+                    e.external_work,
+                    e.contact_work,
+                    solver.balance_error(),
+                    force
+                )
+                .map_err(io)?;
+            }
+        }
+    }
+    let steady = k.saturating_sub(1).max(1) as f64;
+    let seconds = t_steady.elapsed().as_secs_f64() / steady;
+    let traffic = match (device.traffic(), traffic0) {
+        (Some(now), Some(then)) => now.since(&then),
+        _ => Traffic::default(),
+    };
+    let first = forces.iter().position(|h| h.1 > 0.0);
+    let last = forces.iter().rposition(|h| h.1 > 0.0);
+    let (impact, release, impulse) = half_plateau_edges(&forces);
+    let mut parts = Vec::new();
+    let mut el = 0;
+    for (p, spec) in built.parts.iter().zip(&scene.part) {
+        let nodes = p.base..p.base + p.count;
+        let m: f64 = nodes.clone().map(|n| solver.mass[n]).sum();
+        let mean = |f: &dyn Fn(usize) -> [f64; 3]| {
+            let mut s = [0.0; 3];
+            for n in nodes.clone() {
+                let v = f(n);
+                for a in 0..3 {
+                    s[a] += solver.mass[n] * v[a] / m;
+                }
+            }
+            s
+        };
+        let (mut lo, mut hi) = ([f64::INFINITY; 6], [f64::NEG_INFINITY; 6]);
+        for e in &solver.elements[el..el + p.elements] {
+            let s = stress6(e.stress(&solver.x));
+            for c in 0..6 {
+                lo[c] = lo[c].min(s[c]);
+                hi[c] = hi[c].max(s[c]);
+            }
+        }
+        el += p.elements;
+        if p.elements == 0 {
+            (lo, hi) = ([0.0; 6], [0.0; 6]);
+        }
+        let _ = spec;
+        parts.push(PartSummary {
+            name: p.name.clone(),
+            displacement: mean(&|n| [0, 1, 2].map(|a| solver.x[n][a] - x0[n][a])),
+            velocity: mean(&|n| solver.v[n]),
+            stress_min: lo,
+            stress_max: hi,
+        });
+    }
+    let bodies = built
+        .bodies
+        .iter()
+        .map(|(name, k)| BodySummary {
+            name: name.clone(),
+            position: solver.bodies[*k].state.position,
+            velocity: solver.bodies[*k].state.velocity,
+        })
+        .collect();
+    let mut contact_nodes = Vec::new();
+    let mut friction = 0.0;
+    if let Some(c) = contact.as_ref() {
+        let outs: Vec<(usize, &crate::contact::PairOutput)> = c
+            .outputs()
+            .into_iter()
+            .map(|(id, o)| (id.0, o))
+            .chain(
+                c.rigid_outputs()
+                    .into_iter()
+                    .map(|(id, o)| (model.pairs().len() + id.0, o)),
+            )
+            .collect();
+        for (pair, o) in outs {
+            friction += o.frictional_dissipation;
+            for (i, &n) in o.slaves.iter().enumerate() {
+                let p = o.cpress.get(i).copied().unwrap_or(0.0);
+                if p > 0.0 {
+                    let f = o
+                        .force
+                        .get(i)
+                        .map_or(0.0, |f| (f[0] * f[0] + f[1] * f[1] + f[2] * f[2]).sqrt());
+                    contact_nodes.push(ContactNode {
+                        contact: pair,
+                        node: n,
+                        position: solver.x[n as usize],
+                        pressure: p,
+                        force: f,
+                    });
+                }
+            }
+        }
+    }
+    let e = solver.energy;
+    let summary = Summary {
+        title: scene.title.clone(),
+        reference: scene.reference.clone(),
+        device: device.to_string(),
+        built: built_list,
+        increments: k,
+        end_time: solver.time,
+        first_increment_seconds: first_seconds,
+        seconds_per_increment: seconds,
+        element_increment: element_dt,
+        contact_increment: contact_dt,
+        contact_start: first.map_or(f64::NAN, |i| forces[i].0 - 0.5 * dt),
+        contact_end: last.map_or(f64::NAN, |i| forces[i].0 + 0.5 * dt),
+        impact_time: impact,
+        release_time: release,
+        peak_force: forces.iter().map(|h| h.1).fold(0.0, f64::max),
+        mean_force: if release > impact {
+            let inside: f64 = forces
+                .windows(2)
+                .filter(|w| w[1].0 > impact && w[0].0 < release)
+                .map(|w| w[1].1 * (w[1].0 - w[0].0))
+                .sum();
+            inside / (release - impact)
+        } else {
+            0.0
+        },
+        impulse,
+        max_penetration: pen,
+        energy_balance_error: worst,
+        kinetic: e.kinetic,
+        internal: e.internal,
+        external_work: e.external_work,
+        contact_work: e.contact_work,
+        frictional_dissipation: friction,
+        parts,
+        bodies,
+        contact_nodes,
+        dispatches_per_increment: traffic
+            .dispatches
+            .iter()
+            .map(|(k, v)| (k.clone(), *v as f64 / steady))
+            .collect(),
+        uploaded_bytes_per_increment: traffic.uploaded_bytes as f64 / steady,
+        read_back_bytes_per_increment: traffic.read_back_bytes as f64 / steady,
+    };
+    if let (Some(dir), Some(mut f)) = (output, history) {
+        f.flush().map_err(io)?;
+        drop(f);
+        let json = serde_json::to_string_pretty(&summary).map_err(|e| Error::BadParameter {
+            name: "summary",
+            value: e.to_string(),
+            expected: "serialisable",
+        })?;
+        std::fs::write(dir.join(".summary.json.partial"), json).map_err(io)?;
+        std::fs::rename(dir.join(".history.csv.partial"), dir.join("history.csv")).map_err(io)?;
+        std::fs::rename(dir.join(".summary.json.partial"), dir.join("summary.json")).map_err(io)?;
+    }
+    Ok(summary)
+}

@@ -1,0 +1,574 @@
+//! The scene file's tables, as serde reads them, and their checks (each error names the key).
+
+use serde::Deserialize;
+
+use crate::error::{Error, Result};
+
+/// A scene file.
+#[derive(Clone, Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Scene {
+    /// What the scene is.
+    pub title: String,
+    /// The exact solution this scene is checked against, for the summary (free text).
+    #[serde(default)]
+    pub reference: Option<String>,
+    /// Run controls.
+    pub run: RunSpec,
+    /// Materials, by name.
+    #[serde(default)]
+    pub material: Vec<MaterialSpec>,
+    /// Generated parts.
+    pub part: Vec<PartSpec>,
+    /// Rigid bodies with analytical surfaces.
+    #[serde(default)]
+    pub rigid: Vec<RigidSpec>,
+    /// Fixed, prescribed and loaded faces.
+    #[serde(default)]
+    pub boundary: Vec<BoundarySpec>,
+    /// Contact pairs.
+    #[serde(default)]
+    pub contact: Vec<ContactSpec>,
+}
+
+/// Run controls.
+#[derive(Clone, Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct RunSpec {
+    /// Time to run to.
+    pub end_time: f64,
+    /// Safety factor on the elements' stable increment (default 0.9).
+    #[serde(default = "default_safety")]
+    pub safety: f64,
+    /// Safety factor on the penalty contact's stable increment (default 0.9).
+    #[serde(default = "default_safety")]
+    pub contact_safety: f64,
+    /// A fixed increment instead of the stable one (for stability studies).
+    #[serde(default)]
+    pub dt: Option<f64>,
+    /// Gravity (acceleration).
+    #[serde(default)]
+    pub gravity: [f64; 3],
+    /// Mass-proportional damping α (force −α·m·v), for dynamic relaxation to a static state.
+    #[serde(default)]
+    pub damping: f64,
+    /// Linear bulk viscosity b1 (0 = none).
+    #[serde(default)]
+    pub bulk_viscosity: f64,
+    /// History rows every this many increments (default 1).
+    #[serde(default = "default_every")]
+    pub output_every: usize,
+}
+
+fn default_safety() -> f64 {
+    0.9
+}
+fn default_every() -> usize {
+    1
+}
+fn default_one() -> f64 {
+    1.0
+}
+fn default_grading() -> [f64; 3] {
+    [1.0; 3]
+}
+
+/// A linear elastic material.
+#[derive(Clone, Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct MaterialSpec {
+    /// Name parts refer to.
+    pub name: String,
+    /// Young's modulus.
+    pub young: f64,
+    /// Poisson's ratio.
+    pub poisson: f64,
+    /// Density.
+    pub density: f64,
+}
+
+/// The shapes a part can have.
+pub const SHAPES: &[&str] = &[
+    "block", "rect", "bar", "plate", "line", "arc", "sphere", "points",
+];
+
+/// A generated part.
+#[derive(Clone, Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct PartSpec {
+    /// Name contacts and boundaries refer to.
+    pub name: String,
+    /// Deformable: "block" (tetrahedra), "rect" (plane-strain triangles, x–y plane), "bar"
+    /// (2-node bars along one axis). Rigid and fixed: "plate" (quads in the x–y plane, normal
+    /// +z), "line" (2D segments along x, normal +y), "arc" (2D segments of a circle, normals
+    /// outward), "sphere" (triangles, normals outward). "points": point masses.
+    pub shape: String,
+    /// Material (deformable shapes).
+    #[serde(default)]
+    pub material: Option<String>,
+    /// Lower corner (block, rect, plate, line), first node (bar), centre (arc, sphere).
+    #[serde(default)]
+    pub origin: [f64; 3],
+    /// Box size (block, rect; plate and line use x and y / x); the bar's extent (one non-zero
+    /// component).
+    #[serde(default)]
+    pub size: [f64; 3],
+    /// Cells per axis (the first for bars, lines and arcs; sphere: [latitudes, longitudes]).
+    #[serde(default)]
+    pub divisions: [usize; 3],
+    /// Ratio of consecutive cell sizes per axis (1: uniform; negative: finest at the far end).
+    #[serde(default = "default_grading")]
+    pub grading: [f64; 3],
+    /// Cross-section area (bar), slave area per point (points).
+    #[serde(default = "default_one")]
+    pub area: f64,
+    /// Out-of-plane thickness (rect).
+    #[serde(default = "default_one")]
+    pub thickness: f64,
+    /// Radius (arc, sphere).
+    #[serde(default)]
+    pub radius: f64,
+    /// Start and end angles of an arc, degrees from +x, counter-clockwise.
+    #[serde(default)]
+    pub angles: [f64; 2],
+    /// Positions of point masses.
+    #[serde(default)]
+    pub points: Vec<[f64; 3]>,
+    /// Mass of each point.
+    #[serde(default)]
+    pub mass: f64,
+    /// Initial velocity.
+    #[serde(default)]
+    pub velocity: [f64; 3],
+}
+
+impl PartSpec {
+    /// Whether the part is a fixed rigid surface.
+    pub fn is_rigid(&self) -> bool {
+        matches!(self.shape.as_str(), "plate" | "line" | "arc" | "sphere")
+    }
+    /// Whether the part belongs in a 2D (plane-strain) scene.
+    pub fn is_2d(&self) -> bool {
+        matches!(self.shape.as_str(), "rect" | "line" | "arc")
+    }
+}
+
+/// A rigid body carrying an analytical surface.
+#[derive(Clone, Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct RigidSpec {
+    /// Name contacts refer to.
+    pub name: String,
+    /// "plane", "sphere", "cylinder" (3D), "line", "circle" (2D).
+    pub surface: String,
+    /// Reference point: a point of the plane or line, the centre of a sphere or circle, a
+    /// point of a cylinder's axis.
+    pub point: [f64; 3],
+    /// Outward normal (plane, line) or axis (cylinder).
+    #[serde(default)]
+    pub direction: [f64; 3],
+    /// Radius (sphere, cylinder, circle).
+    #[serde(default)]
+    pub radius: f64,
+    /// Mass.
+    pub mass: f64,
+    /// Inertia about the reference point (default: a solid sphere's 2/5·m·r² for spheres,
+    /// circles and cylinders, m·I otherwise).
+    #[serde(default)]
+    pub inertia: Option<[[f64; 3]; 3]>,
+    /// "free" (default), "fixed", or "velocity" (constant `velocity`).
+    #[serde(default)]
+    pub motion: Option<String>,
+    /// Initial (or prescribed) velocity.
+    #[serde(default)]
+    pub velocity: [f64; 3],
+}
+
+/// Fixed, prescribed or loaded nodes: the nodes of a face of a part.
+#[derive(Clone, Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct BoundarySpec {
+    /// The part.
+    pub part: String,
+    /// Its face (x-, x+, y-, y+, z-, z+, or "all").
+    pub face: String,
+    /// Directions held at zero displacement: any of "x", "y", "z".
+    #[serde(default)]
+    pub fix: Vec<String>,
+    /// Prescribed displacement per direction, reached by a smooth ramp over `ramp`.
+    #[serde(default)]
+    pub displacement: Option<[f64; 3]>,
+    /// Ramp time of `displacement`.
+    #[serde(default)]
+    pub ramp: f64,
+    /// Directions `displacement` prescribes (default: its non-zero ones).
+    #[serde(default)]
+    pub directions: Vec<String>,
+    /// Total force spread over the face's nodes in proportion to their tributary areas
+    /// (equally for faces without area).
+    #[serde(default)]
+    pub load: Option<[f64; 3]>,
+}
+
+/// A contact pair: a part's face nodes against another part's face or a rigid body.
+#[derive(Clone, Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ContactSpec {
+    /// Part whose face nodes are the slaves.
+    pub slave: String,
+    /// Face of the slave part: x-, x+, y-, y+, z-, z+, "all".
+    pub slave_face: String,
+    /// Part whose face is the master surface, or a [[rigid]] body.
+    pub master: String,
+    /// Face of the master part ("out" for arcs and spheres); none for rigid bodies.
+    #[serde(default)]
+    pub master_face: Option<String>,
+    /// "penalty" (default) or "kinematic".
+    #[serde(default)]
+    pub enforce: Option<String>,
+    /// Coulomb coefficient (penalty).
+    #[serde(default)]
+    pub friction: f64,
+    /// "finite" (default), "small", "infinitesimal".
+    #[serde(default)]
+    pub sliding: Option<String>,
+    /// Balanced master–slave weight of the slave surface's pass (e.g. 0.5); none: pure.
+    #[serde(default)]
+    pub balanced: Option<f64>,
+    /// Penalty scale factor on the automatic stiffness (default 1).
+    #[serde(default)]
+    pub penalty_scale: Option<f64>,
+    /// Penalty stiffness, force per length per slave node.
+    #[serde(default)]
+    pub stiffness: Option<f64>,
+    /// Penalty stiffness per unit area (pressure per length).
+    #[serde(default)]
+    pub stiffness_per_area: Option<f64>,
+    /// Global search every this many increments.
+    #[serde(default)]
+    pub search_interval: Option<u32>,
+}
+
+pub(crate) fn bad<T>(name: &'static str, value: String, expected: &'static str) -> Result<T> {
+    Err(Error::BadParameter {
+        name,
+        value,
+        expected,
+    })
+}
+
+pub(crate) fn axis_of(name: &str) -> Option<usize> {
+    match name {
+        "x" => Some(0),
+        "y" => Some(1),
+        "z" => Some(2),
+        _ => None,
+    }
+}
+
+const FACES: &[&str] = &["x-", "x+", "y-", "y+", "z-", "z+", "all", "out"];
+
+impl Scene {
+    /// Parses a scene from TOML text; errors name the key, and the line for syntax and type
+    /// errors (toml's own messages).
+    pub fn parse(text: &str) -> Result<Self> {
+        let scene: Scene = toml::from_str(text).map_err(|e| Error::BadParameter {
+            name: "scene file",
+            value: e.to_string(),
+            expected: "a valid scene (see abut::scene)",
+        })?;
+        scene.check()?;
+        Ok(scene)
+    }
+
+    /// Whether the scene is plane strain (2D).
+    pub fn is_2d(&self) -> bool {
+        self.part.iter().any(PartSpec::is_2d)
+    }
+
+    fn check(&self) -> Result<()> {
+        let r = &self.run;
+        if !(r.end_time.is_finite() && r.end_time > 0.0) {
+            return bad(
+                "run.end_time",
+                r.end_time.to_string(),
+                "must be finite and positive",
+            );
+        }
+        for (key, v) in [
+            ("run.safety", r.safety),
+            ("run.contact_safety", r.contact_safety),
+        ] {
+            if !(v > 0.0 && v <= 1.0) {
+                return bad(key, v.to_string(), "must lie in (0, 1]");
+            }
+        }
+        if let Some(dt) = r.dt {
+            if !(dt.is_finite() && dt > 0.0) {
+                return bad("run.dt", dt.to_string(), "must be finite and positive");
+            }
+        }
+        for (key, v) in [
+            ("run.damping", r.damping),
+            ("run.bulk_viscosity", r.bulk_viscosity),
+        ] {
+            if !(v.is_finite() && v >= 0.0) {
+                return bad(key, v.to_string(), "must be finite and not negative");
+            }
+        }
+        if self.part.is_empty() {
+            return bad("part", "none".into(), "a scene needs at least one [[part]]");
+        }
+        let two_d = self.is_2d();
+        let mut names = std::collections::HashSet::new();
+        for p in &self.part {
+            if !names.insert(p.name.as_str()) {
+                return bad("part.name", p.name.clone(), "must be unique");
+            }
+            if !SHAPES.contains(&p.shape.as_str()) {
+                return bad(
+                    "part.shape",
+                    format!("{} (part {})", p.shape, p.name),
+                    "must be block, rect, bar, plate, line, arc, sphere or points",
+                );
+            }
+            if two_d && matches!(p.shape.as_str(), "block" | "plate" | "sphere" | "bar") {
+                return bad(
+                    "part.shape",
+                    format!("{} (part {}) with 2D parts", p.shape, p.name),
+                    "a scene is either 2D (rect, line, arc, points) or 3D",
+                );
+            }
+            let axes = match p.shape.as_str() {
+                "block" => 3,
+                "rect" | "plate" => 2,
+                "bar" | "line" | "arc" => 1,
+                "sphere" => 2,
+                _ => 0,
+            };
+            if p.divisions.iter().take(axes).any(|&d| d == 0) {
+                return bad(
+                    "part.divisions",
+                    format!("{:?} (part {})", p.divisions, p.name),
+                    "must be positive for each axis the shape uses",
+                );
+            }
+            let sized = match p.shape.as_str() {
+                "block" => 3,
+                "rect" | "plate" => 2,
+                "line" => 1,
+                _ => 0,
+            };
+            if p.size
+                .iter()
+                .take(sized)
+                .any(|&s| !(s.is_finite() && s > 0.0))
+            {
+                return bad(
+                    "part.size",
+                    format!("{:?} (part {})", p.size, p.name),
+                    "must be finite and positive",
+                );
+            }
+            if p.grading.iter().any(|g| !(g.is_finite() && g.abs() > 0.0)) {
+                return bad(
+                    "part.grading",
+                    format!("{:?} (part {})", p.grading, p.name),
+                    "ratios must be finite and non-zero",
+                );
+            }
+            if p.shape == "bar" && p.size.iter().filter(|s| **s != 0.0).count() != 1 {
+                return bad(
+                    "part.size",
+                    format!("{:?} (bar {})", p.size, p.name),
+                    "a bar runs along one axis: exactly one non-zero component",
+                );
+            }
+            if matches!(p.shape.as_str(), "arc" | "sphere") && !(p.radius > 0.0) {
+                return bad(
+                    "part.radius",
+                    format!("{} (part {})", p.radius, p.name),
+                    "must be positive",
+                );
+            }
+            if p.shape == "points" && (p.points.is_empty() || !(p.mass > 0.0)) {
+                return bad(
+                    "part.points / part.mass",
+                    format!("part {}", p.name),
+                    "points need at least one position and a positive mass",
+                );
+            }
+            for (key, v) in [("part.area", p.area), ("part.thickness", p.thickness)] {
+                if !(v.is_finite() && v > 0.0) {
+                    return bad(key, format!("{v} (part {})", p.name), "must be positive");
+                }
+            }
+            let deformable = matches!(p.shape.as_str(), "block" | "rect" | "bar");
+            if deformable
+                && !self
+                    .material
+                    .iter()
+                    .any(|m| Some(&m.name) == p.material.as_ref())
+            {
+                return bad(
+                    "part.material",
+                    format!("{:?} (part {})", p.material, p.name),
+                    "must name a [[material]]",
+                );
+            }
+        }
+        for m in &self.material {
+            if !(m.young > 0.0 && m.density > 0.0 && m.poisson > -1.0 && m.poisson < 0.5) {
+                return bad(
+                    "material",
+                    m.name.clone(),
+                    "needs young > 0, density > 0 and −1 < poisson < 0.5",
+                );
+            }
+        }
+        for b in &self.rigid {
+            if !names.insert(b.name.as_str()) {
+                return bad(
+                    "rigid.name",
+                    b.name.clone(),
+                    "must be unique among parts and bodies",
+                );
+            }
+            if !["plane", "sphere", "cylinder", "line", "circle"].contains(&b.surface.as_str()) {
+                return bad(
+                    "rigid.surface",
+                    format!("{} (body {})", b.surface, b.name),
+                    "must be plane, sphere, cylinder, line or circle",
+                );
+            }
+            if !matches!(
+                b.motion.as_deref(),
+                None | Some("free" | "fixed" | "velocity")
+            ) {
+                return bad(
+                    "rigid.motion",
+                    format!("{:?} (body {})", b.motion, b.name),
+                    "must be free, fixed or velocity",
+                );
+            }
+        }
+        for b in &self.boundary {
+            let Some(p) = self.part.iter().find(|p| p.name == b.part) else {
+                return bad("boundary.part", b.part.clone(), "must name a [[part]]");
+            };
+            if !FACES.contains(&b.face.as_str()) || b.face == "out" {
+                return bad(
+                    "boundary.face",
+                    b.face.clone(),
+                    "must be x-, x+, y-, y+, z-, z+ or all",
+                );
+            }
+            if p.is_rigid() {
+                return bad(
+                    "boundary.part",
+                    b.part.clone(),
+                    "rigid parts are fixed already",
+                );
+            }
+            for d in b.fix.iter().chain(&b.directions) {
+                if axis_of(d).is_none() {
+                    return bad(
+                        "boundary.fix / boundary.directions",
+                        d.clone(),
+                        "must be x, y or z",
+                    );
+                }
+            }
+            if b.displacement.is_some() && !(b.ramp.is_finite() && b.ramp > 0.0) {
+                return bad(
+                    "boundary.ramp",
+                    format!("{} (part {})", b.ramp, b.part),
+                    "a prescribed displacement needs a positive ramp time",
+                );
+            }
+        }
+        for c in &self.contact {
+            let Some(sp) = self.part.iter().find(|p| p.name == c.slave) else {
+                return bad("contact.slave", c.slave.clone(), "must name a [[part]]");
+            };
+            if sp.is_rigid() {
+                return bad(
+                    "contact.slave",
+                    c.slave.clone(),
+                    "slave nodes must move: not a rigid part",
+                );
+            }
+            if !FACES.contains(&c.slave_face.as_str()) || c.slave_face == "out" {
+                return bad(
+                    "contact.slave_face",
+                    c.slave_face.clone(),
+                    "must be x-, x+, y-, y+, z-, z+ or all",
+                );
+            }
+            let master_part = self.part.iter().any(|p| p.name == c.master);
+            let master_body = self.rigid.iter().any(|b| b.name == c.master);
+            if !master_part && !master_body {
+                return bad(
+                    "contact.master",
+                    c.master.clone(),
+                    "must name a [[part]] or a [[rigid]] body",
+                );
+            }
+            if master_part {
+                match c.master_face.as_deref() {
+                    Some(f) if FACES.contains(&f) && f != "all" => {}
+                    _ => {
+                        return bad(
+                            "contact.master_face",
+                            format!("{:?} (master {})", c.master_face, c.master),
+                            "a part master needs a face: x-, x+, y-, y+, z-, z+, or out",
+                        )
+                    }
+                }
+            }
+            if !matches!(c.enforce.as_deref(), None | Some("penalty" | "kinematic")) {
+                return bad(
+                    "contact.enforce",
+                    format!("{:?}", c.enforce),
+                    "must be \"penalty\" or \"kinematic\"",
+                );
+            }
+            if master_body && c.enforce.as_deref() != Some("kinematic") {
+                return bad(
+                    "contact.enforce",
+                    format!("{:?} (master {})", c.enforce, c.master),
+                    "analytical rigid surfaces are enforced kinematically: set enforce = \"kinematic\"",
+                );
+            }
+            if !matches!(
+                c.sliding.as_deref(),
+                None | Some("finite" | "small" | "infinitesimal")
+            ) {
+                return bad(
+                    "contact.sliding",
+                    format!("{:?}", c.sliding),
+                    "must be finite, small or infinitesimal",
+                );
+            }
+            let stiffness_rules = [c.penalty_scale, c.stiffness, c.stiffness_per_area]
+                .iter()
+                .filter(|s| s.is_some())
+                .count();
+            if stiffness_rules > 1 {
+                return bad(
+                    "contact.penalty_scale / stiffness / stiffness_per_area",
+                    format!("master {}", c.master),
+                    "give at most one stiffness rule",
+                );
+            }
+            if !(c.friction.is_finite() && c.friction >= 0.0) {
+                return bad(
+                    "contact.friction",
+                    c.friction.to_string(),
+                    "must be finite and not negative",
+                );
+            }
+        }
+        Ok(())
+    }
+}
