@@ -204,6 +204,47 @@ impl Element {
     /// Adds the element's internal forces at positions `x` to `f` (the forces the element
     /// exerts on its nodes) and returns its strain energy.
     pub fn add_internal_forces(&self, x: &[[f64; 3]], f: &mut [[f64; 3]]) -> f64 {
+        self.add_internal_forces_with(x, f, true)
+    }
+
+    /// As [`Element::add_internal_forces`], with `nlgeom` false for small-strain kinematics
+    /// (Abaqus' NLGEOM=NO): triangles and tetrahedra use the linear strain sym(∇u) and the
+    /// reference gradients — exact for the linear theory the verification solutions assume,
+    /// wrong under large rotation. Bars are corotational either way.
+    pub fn add_internal_forces_with(
+        &self,
+        x: &[[f64; 3]],
+        f: &mut [[f64; 3]],
+        nlgeom: bool,
+    ) -> f64 {
+        if !nlgeom && !matches!(self, Element::Bar { .. }) {
+            let (sigma, w) = self.small_strain_stress(x);
+            let (grad, vol): (Vec<[f64; 3]>, f64) = match self {
+                Element::Tri3 {
+                    grad,
+                    area0,
+                    thickness,
+                    ..
+                } => (
+                    grad.iter().map(|g| [g[0], g[1], 0.0]).collect(),
+                    area0 * thickness,
+                ),
+                Element::Tet4 { grad, volume0, .. } => (grad.to_vec(), *volume0),
+                Element::Bar { .. } => unreachable!(),
+            };
+            let dims = if matches!(self, Element::Tri3 { .. }) {
+                2
+            } else {
+                3
+            };
+            for (k, &n) in self.nodes().iter().enumerate() {
+                for r in 0..dims {
+                    let s: f64 = (0..3).map(|c| sigma[r][c] * grad[k][c]).sum();
+                    f[n as usize][r] -= vol * s;
+                }
+            }
+            return w * vol;
+        }
         match self {
             Element::Bar {
                 nodes,
@@ -313,6 +354,42 @@ impl Element {
             }
         }
         ff
+    }
+
+    /// Small-strain stress C:sym(F − I) (plane strain: ε_zz = 0) and strain energy density.
+    fn small_strain_stress(&self, x: &[[f64; 3]]) -> ([[f64; 3]; 3], f64) {
+        let ff = self.deformation_gradient(x);
+        let m = match self {
+            Element::Tri3 { material, .. } | Element::Tet4 { material, .. } => material,
+            Element::Bar { .. } => unreachable!("bars are corotational"),
+        };
+        let mut eps = [[0.0; 3]; 3];
+        for r in 0..3 {
+            for c in 0..3 {
+                let id = if r == c { 1.0 } else { 0.0 };
+                eps[r][c] = 0.5 * (ff[r][c] + ff[c][r]) - id;
+            }
+        }
+        let (l, mu) = (m.lambda(), m.mu());
+        let tr = eps[0][0] + eps[1][1] + eps[2][2];
+        let mut s = [[0.0; 3]; 3];
+        let mut ee = 0.0;
+        for r in 0..3 {
+            for c in 0..3 {
+                s[r][c] = 2.0 * mu * eps[r][c] + if r == c { l * tr } else { 0.0 };
+                ee += eps[r][c] * eps[r][c];
+            }
+        }
+        (s, 0.5 * l * tr * tr + mu * ee)
+    }
+
+    /// Stress at positions `x` with small-strain kinematics (see
+    /// [`Element::add_internal_forces_with`]); bars as [`Element::stress`].
+    pub fn small_strain_stress_at(&self, x: &[[f64; 3]]) -> [[f64; 3]; 3] {
+        match self {
+            Element::Bar { .. } => self.stress(x),
+            _ => self.small_strain_stress(x).0,
+        }
     }
 
     /// Cauchy stress at positions `x` (model stress units, model frame). Plane-strain

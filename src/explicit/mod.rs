@@ -126,6 +126,9 @@ pub struct Solver {
     pub damping: f64,
     /// Linear bulk viscosity b1 (Abaqus' default is 0.06; 0 = none).
     pub bulk_viscosity: f64,
+    /// Large-strain kinematics (true, the default) or small strain (Abaqus' NLGEOM=NO, see
+    /// [`Element::add_internal_forces_with`]).
+    pub nlgeom: bool,
     /// Safety factor on the elements' stable increment.
     pub safety: f64,
     /// Time reached.
@@ -193,6 +196,7 @@ impl Solver {
             gravity: [0.0; 3],
             damping: 0.0,
             bulk_viscosity: 0.0,
+            nlgeom: true,
             safety: 0.9,
             time: 0.0,
             energy: Energy::default(),
@@ -279,13 +283,23 @@ impl Solver {
                 .fold(f64::INFINITY, f64::min)
     }
 
+    /// The Cauchy stress of element `k` now (small-strain stress with `nlgeom` off).
+    pub fn stress(&self, k: usize) -> [[f64; 3]; 3] {
+        let e = &self.elements[k];
+        if self.nlgeom {
+            e.stress(&self.x)
+        } else {
+            e.small_strain_stress_at(&self.x)
+        }
+    }
+
     /// Internal forces at the current positions, and the strain energy.
     pub fn internal_forces(&self) -> (Vec<[f64; 3]>, f64) {
         let mut f = vec![[0.0; 3]; self.x.len()];
         let w = self
             .elements
             .iter()
-            .map(|e| e.add_internal_forces(&self.x, &mut f))
+            .map(|e| e.add_internal_forces_with(&self.x, &mut f, self.nlgeom))
             .sum();
         (f, w)
     }
@@ -415,6 +429,7 @@ impl Solver {
                             b.state.angular_velocity[a] =
                                 pred[k].angular_velocity[a] + dw[a] + dv_scale * from_nodes[a];
                         }
+                        b.hold();
                         b.state.position = bodies_old[k].position;
                         b.state.rotation = bodies_old[k].rotation;
                         b.advance(dt);

@@ -32,6 +32,11 @@ pub struct SolverBody {
     pub nodes: Vec<u32>,
     /// Body-frame offsets of `nodes` from the reference point.
     pub offsets: Vec<[f64; 3]>,
+    /// Translations held at their initial velocity (x, y, z) — symmetry planes of a model
+    /// that cuts the body.
+    pub locked: [bool; 3],
+    /// Rotation held (the angular velocity stays zero).
+    pub rotation_locked: bool,
 }
 
 pub(crate) fn v3(a: [f64; 3]) -> V3<f64> {
@@ -149,6 +154,8 @@ impl SolverBody {
             motion,
             nodes,
             offsets,
+            locked: [false; 3],
+            rotation_locked: false,
         })
     }
 
@@ -172,6 +179,19 @@ impl SolverBody {
         for a in 0..3 {
             self.state.velocity[a] += h * f[a] / self.mass;
             self.state.angular_velocity[a] += h * alpha[a];
+        }
+        self.hold();
+    }
+
+    /// Zeroes the locked velocity components.
+    pub(crate) fn hold(&mut self) {
+        for a in 0..3 {
+            if self.locked[a] {
+                self.state.velocity[a] = 0.0;
+            }
+        }
+        if self.rotation_locked {
+            self.state.angular_velocity = [0.0; 3];
         }
     }
 

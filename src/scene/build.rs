@@ -44,8 +44,9 @@ enum Grid {
     Bar(usize),
     /// Quads in the x–y plane (normal +z).
     Plate([usize; 2]),
-    /// Segments and triangles as generated (normals as the surface needs).
-    Facets(Vec<Facet>),
+    /// Segments and triangles as generated (normals as the surface needs), and the name of
+    /// the one face they make.
+    Facets(Vec<Facet>, &'static str),
     /// Point masses with their slave areas.
     Points(f64),
 }
@@ -191,9 +192,8 @@ impl PartNodes {
                     }
                 }
             }
-            (Grid::Facets(f), "out" | "y+") => {
-                let is_line = matches!(f.first(), Some(Facet::Segment(_)));
-                if (face == "y+") != is_line {
+            (Grid::Facets(f, name), _) => {
+                if face != *name {
                     return wrong();
                 }
                 facets = f
@@ -359,7 +359,10 @@ impl Scene {
                             .iter()
                             .map(|q| [q[0] + p.origin[0], q[1] + p.origin[1], 0.0]),
                     );
-                    Grid::Facets(mesh.facets.iter().map(|&s| Facet::Segment(s)).collect())
+                    Grid::Facets(
+                        mesh.facets.iter().map(|&s| Facet::Segment(s)).collect(),
+                        "y+",
+                    )
                 }
                 "arc" => {
                     rigid = true;
@@ -372,13 +375,19 @@ impl Scene {
                         p.grading[0],
                     );
                     x.extend(&mesh.positions);
-                    Grid::Facets(mesh.facets.iter().map(|&s| Facet::Segment(s)).collect())
+                    Grid::Facets(
+                        mesh.facets.iter().map(|&s| Facet::Segment(s)).collect(),
+                        "out",
+                    )
                 }
                 "sphere" => {
                     rigid = true;
                     let mesh = sphere_triangles(p.divisions[0], p.divisions[1], p.radius, p.origin);
                     x.extend(&mesh.positions);
-                    Grid::Facets(mesh.facets.iter().map(|&t| Facet::Triangle(t)).collect())
+                    Grid::Facets(
+                        mesh.facets.iter().map(|&t| Facet::Triangle(t)).collect(),
+                        "out",
+                    )
                 }
                 _ => {
                     x.extend(&p.points);
@@ -425,6 +434,7 @@ impl Scene {
         solver.safety = self.run.safety;
         solver.damping = self.run.damping;
         solver.bulk_viscosity = self.run.bulk_viscosity;
+        solver.nlgeom = self.run.nlgeom;
         let part = |name: &str| {
             parts
                 .iter()
@@ -528,6 +538,12 @@ impl Scene {
             let mut body = SolverBody::new(r.mass, inertia, r.point, Vec::new(), &x, motion)?;
             if motion == BodyMotion::Free {
                 body.state.velocity = r.velocity;
+            }
+            for f in &r.fix {
+                match axis_of(f) {
+                    Some(a) => body.locked[a] = true,
+                    None => body.rotation_locked = true,
+                }
             }
             bodies.push((r.name.clone(), solver.add_body(body)?));
         }

@@ -13,6 +13,7 @@
 //! gravity = [0, 0, -9.81]  # default none
 //! damping = 0.0            # mass-proportional α, for dynamic relaxation
 //! bulk_viscosity = 0.0     # linear b1
+//! nlgeom = true            # false: small-strain kinematics (Abaqus' NLGEOM=NO)
 //! output_every = 10        # history rows every this many increments (default 1)
 //! [[material]]
 //! name = "rubber"
@@ -97,6 +98,8 @@ pub struct BodySummary {
     pub position: [f64; 3],
     /// Velocity.
     pub velocity: [f64; 3],
+    /// Displacement of the reference point when the total contact force peaked.
+    pub displacement_at_peak_force: [f64; 3],
 }
 
 /// A slave node in contact at the end of a run.
@@ -152,6 +155,8 @@ pub struct Summary {
     pub mean_force: f64,
     /// Impulse of the contact force on the slave nodes.
     pub impulse: f64,
+    /// Total contact force on the slave nodes in the last increment.
+    pub final_contact_force: [f64; 3],
     /// Largest overclosure met (penalty penetration; kinematic: before correction).
     pub max_penetration: f64,
     /// Largest energy balance error over the run.
@@ -326,6 +331,10 @@ pub fn run(scene: &Scene, device: &Device, output: Option<&Path>) -> Result<Summ
     }
     let (mut pen, mut worst, mut contact_dt) = (0.0f64, 0.0f64, f64::INFINITY);
     let mut forces: Vec<(f64, f64)> = Vec::new();
+    let mut final_force = [0.0; 3];
+    let mut peak = 0.0f64;
+    let bodies0: Vec<[f64; 3]> = solver.bodies.iter().map(|b| b.state.position).collect();
+    let mut at_peak = bodies0.clone();
     let mut first_seconds = 0.0;
     let mut traffic0: Option<Traffic> = None;
     let mut t_steady = Instant::now();
@@ -344,9 +353,12 @@ pub fn run(scene: &Scene, device: &Device, output: Option<&Path>) -> Result<Summ
             if c.has_penalty_pairs() {
                 let reported = c.report().stable_dt;
                 contact_dt = contact_dt.min(reported);
-                // the increment is the smaller of the elements' and the contact's limits
+                // a node carries its elements' and its contact springs' stiffness together:
+                // the frequencies add in square (1/dt² = 1/dt_e² + 1/dt_c²), which is
+                // smaller than either limit alone
                 if scene.run.dt.is_none() {
-                    dt = element_dt.min(scene.run.contact_safety * reported);
+                    let dt_c = scene.run.contact_safety * reported;
+                    dt = 1.0 / (1.0 / (element_dt * element_dt) + 1.0 / (dt_c * dt_c)).sqrt();
                 }
                 for (_, o) in c.outputs() {
                     for g in &o.copen {
@@ -367,8 +379,13 @@ pub fn run(scene: &Scene, device: &Device, output: Option<&Path>) -> Result<Summ
                     f[a] += solver.contact_force[s as usize][a];
                 }
             }
+            final_force = f;
             (f[0] * f[0] + f[1] * f[1] + f[2] * f[2]).sqrt()
         };
+        if force > peak {
+            peak = force;
+            at_peak = solver.bodies.iter().map(|b| b.state.position).collect();
+        }
         forces.push((solver.time - 0.5 * step, force));
         worst = worst.max(solver.balance_error());
         if !solver.energy.balance().is_finite() {
@@ -421,8 +438,8 @@ pub fn run(scene: &Scene, device: &Device, output: Option<&Path>) -> Result<Summ
             s
         };
         let (mut lo, mut hi) = ([f64::INFINITY; 6], [f64::NEG_INFINITY; 6]);
-        for e in &solver.elements[el..el + p.elements] {
-            let s = stress6(e.stress(&solver.x));
+        for k in el..el + p.elements {
+            let s = stress6(solver.stress(k));
             for c in 0..6 {
                 lo[c] = lo[c].min(s[c]);
                 hi[c] = hi[c].max(s[c]);
@@ -448,6 +465,7 @@ pub fn run(scene: &Scene, device: &Device, output: Option<&Path>) -> Result<Summ
             name: name.clone(),
             position: solver.bodies[*k].state.position,
             velocity: solver.bodies[*k].state.velocity,
+            displacement_at_peak_force: [0, 1, 2].map(|a| at_peak[*k][a] - bodies0[*k][a]),
         })
         .collect();
     let mut contact_nodes = Vec::new();
@@ -499,7 +517,7 @@ pub fn run(scene: &Scene, device: &Device, output: Option<&Path>) -> Result<Summ
         contact_end: last.map_or(f64::NAN, |i| forces[i].0 + 0.5 * dt),
         impact_time: impact,
         release_time: release,
-        peak_force: forces.iter().map(|h| h.1).fold(0.0, f64::max),
+        peak_force: peak,
         mean_force: if release > impact {
             let inside: f64 = forces
                 .windows(2)
@@ -511,6 +529,7 @@ pub fn run(scene: &Scene, device: &Device, output: Option<&Path>) -> Result<Summ
             0.0
         },
         impulse,
+        final_contact_force: final_force,
         max_penetration: pen,
         energy_balance_error: worst,
         kinetic: e.kinetic,

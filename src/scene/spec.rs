@@ -55,6 +55,9 @@ pub struct RunSpec {
     /// Linear bulk viscosity b1 (0 = none).
     #[serde(default)]
     pub bulk_viscosity: f64,
+    /// Large-strain kinematics (default true); false: small strain, Abaqus' NLGEOM=NO.
+    #[serde(default = "default_true")]
+    pub nlgeom: bool,
     /// History rows every this many increments (default 1).
     #[serde(default = "default_every")]
     pub output_every: usize,
@@ -65,6 +68,9 @@ fn default_safety() -> f64 {
 }
 fn default_every() -> usize {
     1
+}
+fn default_true() -> bool {
+    true
 }
 fn default_one() -> f64 {
     1.0
@@ -182,6 +188,10 @@ pub struct RigidSpec {
     /// Initial (or prescribed) velocity.
     #[serde(default)]
     pub velocity: [f64; 3],
+    /// Held motions of a free body: any of "x", "y", "z" (translations, at zero velocity) and
+    /// "rotation" — for bodies cut by symmetry planes.
+    #[serde(default)]
+    pub fix: Vec<String>,
 }
 
 /// Fixed, prescribed or loaded nodes: the nodes of a face of a part.
@@ -440,6 +450,13 @@ impl Scene {
                     format!("{} (body {})", b.surface, b.name),
                     "must be plane, sphere, cylinder, line or circle",
                 );
+            }
+            if let Some(f) = b
+                .fix
+                .iter()
+                .find(|f| axis_of(f).is_none() && *f != "rotation")
+            {
+                return bad("rigid.fix", f.clone(), "must be x, y, z or rotation");
             }
             if !matches!(
                 b.motion.as_deref(),
