@@ -178,7 +178,8 @@ pub struct Summary {
     /// Slave nodes in contact at the end, with their pressures.
     pub contact_nodes: Vec<ContactNode>,
     /// GPU dispatches per increment by pass, averaged over the increments after the first
-    /// (empty on the CPU path).
+    /// (empty on the CPU path). Counted on the device: work others submit to it during the
+    /// run counts too.
     pub dispatches_per_increment: BTreeMap<String, f64>,
     /// Bytes uploaded per increment after the first.
     pub uploaded_bytes_per_increment: f64,

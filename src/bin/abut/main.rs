@@ -1,4 +1,7 @@
-//! The `abut` command line: runs contact searches on built-in scenes.
+//! The `abut` command line: the verification suite (the default), scene files, and built-in
+//! search and penalty demonstrations.
+
+mod verify;
 
 use std::process::ExitCode;
 use std::time::{Duration, Instant};
@@ -21,7 +24,12 @@ struct Cli {
 
 #[derive(Subcommand)]
 enum Command {
-    /// Penalty contact end to end (the default): point masses fall onto a rigid plate of quads
+    /// The default: runs the VERIFICATION.md cases (§1 bar impacts, §2 patch test, §3 Hertz
+    /// cylinder and impact, §4 incline, §5 penalty stability) through the built-in scene files
+    /// with the explicit solver on the default adapter, and prints every measured quantity
+    /// against its exact value with the error and the tolerance. Fails when one is outside.
+    Verify(VerifyArgs),
+    /// Penalty contact end to end: point masses fall onto a rigid plate of quads
     /// and bounce, integrated with central differences. Prints the adapter, the time per
     /// increment and the error against the exact solution of a mass on a linear spring:
     /// contact duration π·√(m/k), rebound at the impact speed, peak penetration v₀·√(m/k).
@@ -52,6 +60,16 @@ struct SearchArgs {
     /// Slave nodes checked against the f64 brute-force oracle.
     #[arg(long, default_value_t = 2000)]
     check: usize,
+}
+
+#[derive(clap::Args, Clone, Default)]
+struct VerifyArgs {
+    /// Where to run.
+    #[arg(long, value_enum, default_value_t = BackendArg::Auto)]
+    backend: BackendArg,
+    /// Only these cases (bars, truss, patch, cylinder, impact, incline, stability).
+    #[arg(long = "case")]
+    cases: Vec<String>,
 }
 
 #[derive(clap::Args, Clone)]
@@ -93,9 +111,10 @@ impl Default for BounceArgs {
     }
 }
 
-#[derive(ValueEnum, Clone, Copy, PartialEq, Eq)]
+#[derive(ValueEnum, Clone, Copy, PartialEq, Eq, Default)]
 enum BackendArg {
     /// The best GPU adapter, else the CPU path.
+    #[default]
     Auto,
     /// A GPU adapter (an error if there is none).
     Gpu,
@@ -107,8 +126,13 @@ fn main() -> ExitCode {
     let cli = Cli::parse();
     let command = cli
         .command
-        .unwrap_or(Command::Bounce(BounceArgs::default()));
+        .unwrap_or(Command::Verify(VerifyArgs::default()));
     let result = match command {
+        Command::Verify(a) => match device(a.backend).and_then(|d| verify::verify(&d, &a.cases)) {
+            Ok(true) => Ok(()),
+            Ok(false) => return ExitCode::FAILURE,
+            Err(e) => Err(e),
+        },
         Command::Bounce(a) => bounce(&a),
         Command::Run(a) => run_scene(&a),
         Command::Search(a) => search(&a),
