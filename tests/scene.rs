@@ -90,3 +90,47 @@ fn a_failed_run_leaves_no_output_that_looks_valid() {
     std::fs::remove_file(&dir).unwrap();
     assert!(!dir.join("summary.json").exists());
 }
+
+/// Only what a scene needs: a kinematic scene dispatches no penalty pass, a penalty scene one
+/// penalty pass per increment and a global search only on the schedule; the CPU path reports
+/// no dispatches. Measured on a device of its own (the counters count everything on a device).
+#[test]
+fn runs_report_what_they_dispatched() {
+    let read = |name: &str| {
+        std::fs::read_to_string(format!("{}/scenes/{name}", env!("CARGO_MANIFEST_DIR"))).unwrap()
+    };
+    let kinematic = Scene::parse(&read("truss_wall.toml")).unwrap();
+    let penalty =
+        Scene::parse(&read("incline.toml").replace("end_time = 1.0", "end_time = 0.2")).unwrap();
+    let s = run(&penalty, &Device::cpu(), None).unwrap();
+    assert!(s.dispatches_per_increment.is_empty() && s.uploaded_bytes_per_increment == 0.0);
+    assert!(s
+        .built
+        .iter()
+        .any(|b| b.contains("penalty") && b.contains(", friction")));
+    let Some(Ok(own)) = Device::all_gpus().into_iter().next() else {
+        assert!(
+            common::gpus().is_empty(),
+            "an adapter was found but could not be opened"
+        );
+        return;
+    };
+    let s = run(&kinematic, &own, None).unwrap();
+    let d = &s.dispatches_per_increment;
+    assert!(!d.is_empty(), "{d:?}");
+    assert!(
+        d.keys()
+            .all(|k| !k.contains("penalty") && !k.contains("gather")),
+        "{d:?}"
+    );
+    assert!(s
+        .built
+        .iter()
+        .any(|b| b.contains("kinematic") && b.contains("compiled out")));
+    let s = run(&penalty, &own, None).unwrap();
+    let d = &s.dispatches_per_increment;
+    assert!((d["nodal_normals + penalty"] - 2.0).abs() < 1e-9, "{d:?}");
+    // the first increment searched globally; later ones track locally (interval 100)
+    assert!(d["nearest_facet"] <= 0.02, "{d:?}");
+    assert!(s.read_back_bytes_per_increment > 0.0 && s.uploaded_bytes_per_increment > 0.0);
+}
