@@ -285,10 +285,10 @@ pub fn run(scene: &Scene, device: &Device, output: Option<&Path>) -> Result<Summ
             c.slave,
             c.master,
             c.enforce.as_deref().unwrap_or("penalty"),
-            if c.friction > 0.0 {
-                ", friction"
-            } else {
-                ", frictionless (friction compiled out)"
+            match (c.friction > 0.0, c.enforce.as_deref()) {
+                (true, _) => ", friction",
+                (false, Some("kinematic")) => ", frictionless",
+                (false, _) => ", frictionless (friction compiled out of the penalty kernel)",
             },
             if c.balanced.is_some() {
                 ", balanced"
