@@ -126,7 +126,7 @@ fn runs_report_what_they_dispatched() {
     assert!(s
         .built
         .iter()
-        .any(|b| b.contains("kinematic") && b.contains("compiled out")));
+        .any(|b| b.contains("kinematic") && b.contains("frictionless")));
     let s = run(&penalty, &own, None).unwrap();
     let d = &s.dispatches_per_increment;
     assert!((d["nodal_normals + penalty"] - 2.0).abs() < 1e-9, "{d:?}");
