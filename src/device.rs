@@ -25,6 +25,9 @@ pub struct GpuContext {
     pub uncaptured: Arc<Mutex<Vec<String>>>,
     /// What the executors have dispatched and moved so far (see [`Traffic`]).
     pub traffic: Arc<Mutex<Traffic>>,
+    /// GPU timestamps around each compute pass, when switched on
+    /// ([`Device::enable_timestamps`]) on an adapter with `TIMESTAMP_QUERY`.
+    pub(crate) profiler: Mutex<Option<crate::gpu::Profiler>>,
 }
 
 /// Running totals of what the GPU executors did on one device: compute passes and their
@@ -42,6 +45,9 @@ pub struct Traffic {
     pub read_back_bytes: u64,
     /// Command submissions.
     pub submits: u64,
+    /// GPU time per compute pass, by label, in nanoseconds (timestamp queries; empty unless
+    /// [`Device::enable_timestamps`] succeeded).
+    pub pass_ns: std::collections::BTreeMap<String, f64>,
 }
 
 impl Traffic {
@@ -63,6 +69,17 @@ impl Traffic {
             uploaded_bytes: self.uploaded_bytes - earlier.uploaded_bytes,
             read_back_bytes: self.read_back_bytes - earlier.read_back_bytes,
             submits: self.submits - earlier.submits,
+            pass_ns: self
+                .pass_ns
+                .iter()
+                .map(|(k, v)| {
+                    (
+                        k.clone(),
+                        v - earlier.pass_ns.get(k).copied().unwrap_or(0.0),
+                    )
+                })
+                .filter(|(_, v)| *v > 0.0)
+                .collect(),
         }
     }
 
@@ -160,6 +177,7 @@ impl Device {
             limits,
             uncaptured,
             traffic: Arc::default(),
+            profiler: Mutex::new(None),
         }))
     }
 
@@ -182,6 +200,32 @@ impl Device {
         Self {
             kind: DeviceKind::Gpu(Arc::new(ctx)),
         }
+    }
+
+    /// Switches GPU timestamps around every compute pass on or off; their durations then
+    /// accumulate in [`Traffic::pass_ns`]. Returns whether timestamps are on: false on the CPU
+    /// path and on adapters without `TIMESTAMP_QUERY` (time by the wall clock there). Each
+    /// submission then waits for its timestamps: for measuring, not for production runs.
+    pub fn enable_timestamps(&self, on: bool) -> bool {
+        let DeviceKind::Gpu(c) = &self.kind else {
+            return false;
+        };
+        let Ok(mut p) = c.profiler.lock() else {
+            return false;
+        };
+        if !on
+            || !c
+                .device
+                .features()
+                .contains(wgpu::Features::TIMESTAMP_QUERY)
+        {
+            *p = None;
+            return false;
+        }
+        if p.is_none() {
+            *p = Some(crate::gpu::Profiler::new(&c.device, &c.queue));
+        }
+        true
     }
 
     /// A snapshot of what the GPU executors have dispatched and moved on this device so far
@@ -322,9 +366,11 @@ impl GpuContext {
     fn new(adapter: wgpu::Adapter) -> Result<Self> {
         let info = adapter.get_info();
         let limits = required_limits(&adapter.limits(), &info.name)?;
+        // timestamp queries are an optional fast path of the benchmark: asked for when there
         let desc = wgpu::DeviceDescriptor {
             label: Some("abut"),
             required_limits: limits.clone(),
+            required_features: adapter.features() & wgpu::Features::TIMESTAMP_QUERY,
             ..Default::default()
         };
         let (device, queue) =
@@ -348,6 +394,7 @@ impl GpuContext {
             limits,
             uncaptured,
             traffic: Arc::default(),
+            profiler: Mutex::new(None),
         })
     }
 

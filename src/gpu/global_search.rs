@@ -693,7 +693,7 @@ impl GpuSearch {
             label: Some("positions readback"),
         });
         enc.copy_buffer_to_buffer(buffer, 0, &staging, 0, bytes);
-        super::submit(&self.ctx, enc.finish());
+        super::submit(&self.ctx, enc);
         let raw = read_back(&self.ctx, &staging, bytes, "positions readback")?;
         let v: Vec<[f32; 4]> = bytemuck::pod_collect_to_vec(&raw);
         Ok(v.iter()
@@ -733,7 +733,7 @@ impl GpuSearch {
                 entries_bytes,
             );
         }
-        super::submit(&self.ctx, enc.finish());
+        super::submit(&self.ctx, enc);
         if let Some(e) = pollster::block_on(scope.pop()) {
             return Err(Error::Gpu {
                 during: "reading bins".into(),
@@ -783,7 +783,7 @@ impl GpuSearch {
             enc.clear_buffer(&b.status, 32, Some(2 * SEARCH_STATUS_BYTES));
         }
         let dispatch = |enc: &mut wgpu::CommandEncoder, label: &str, work: &[super::Work<'_>]| {
-            super::run_pass(&self.ctx.traffic, enc, label, work, max_dim)
+            super::run_pass(&self.ctx, enc, label, work, max_dim)
         };
         if let Some((_, _, group)) = &self.to_local_group {
             if self.device_positions.is_some() {
@@ -914,7 +914,7 @@ impl GpuSearch {
                 hits_bytes,
             );
         }
-        super::submit(&self.ctx, enc.finish());
+        super::submit(&self.ctx, enc);
         if let Some(e) = pollster::block_on(scope.pop()) {
             return Err(Error::Gpu {
                 during: "contact increment".into(),

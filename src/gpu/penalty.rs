@@ -408,7 +408,7 @@ impl AfterSearch for GpuPenalty {
         let status = self.status.as_ref().expect("prepared before encoding");
         enc.copy_buffer_to_buffer(&self.status_init, 0, status, 16, 16);
         let run = |enc: &mut wgpu::CommandEncoder, label: &str, work: &[super::Work<'_>]| {
-            super::run_pass(&self.ctx.traffic, enc, label, work, max_dim)
+            super::run_pass(&self.ctx, enc, label, work, max_dim)
         };
         run(
             enc,

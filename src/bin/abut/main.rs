@@ -1,6 +1,7 @@
 //! The `abut` command line: the verification suite (the default), scene files, and built-in
 //! search and penalty demonstrations.
 
+mod bench;
 mod verify;
 
 use std::process::ExitCode;
@@ -29,6 +30,12 @@ enum Command {
     /// with the explicit solver on the default adapter, and prints every measured quantity
     /// against its exact value with the error and the tolerance. Fails when one is outside.
     Verify(VerifyArgs),
+    /// Speed against error: a matrix of sizes (10^3–10^6 slave nodes), every adapter and the
+    /// CPU path, finite and small sliding, penalty and kinematic enforcement, global search
+    /// intervals and penalty scales, timed per increment and measured against the exact
+    /// solution and an f64 run; parry3d and a copy kernel's bandwidth as references. Writes
+    /// bench.md, bench.json and bench.svg (time against error, Pareto front) to --out.
+    Bench(bench::BenchArgs),
     /// Penalty contact end to end: point masses fall onto a rigid plate of quads
     /// and bounce, integrated with central differences. Prints the adapter, the time per
     /// increment and the error against the exact solution of a mass on a linear spring:
@@ -135,6 +142,7 @@ fn main() -> ExitCode {
         },
         Command::Bounce(a) => bounce(&a),
         Command::Run(a) => run_scene(&a),
+        Command::Bench(a) => bench::bench(&a),
         Command::Search(a) => search(&a),
     };
     match result {
