@@ -150,6 +150,25 @@ pub enum Error {
         /// What was reported.
         message: String,
     },
+    /// A file that does not parse: the file, the line (0 where the format has none) and what
+    /// was expected.
+    #[error("{file}:{line}: {message}")]
+    Parse {
+        /// The file.
+        file: String,
+        /// The line, from 1 (0: not line-oriented, e.g. binary data).
+        line: usize,
+        /// What was wrong and what was expected.
+        message: String,
+    },
+    /// A file that cannot be read or written.
+    #[error("{file}: {message}")]
+    Io {
+        /// The file.
+        file: String,
+        /// The operating system's message.
+        message: String,
+    },
     /// A surface, node set or pair id that this model did not hand out.
     #[error("{what} {id} does not exist in this model")]
     UnknownId {

@@ -8,6 +8,7 @@ pub mod error;
 pub mod explicit;
 pub mod geometry;
 pub mod gpu;
+pub mod io;
 pub mod kinematic;
 pub mod mesh;
 pub mod model;
