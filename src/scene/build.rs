@@ -1,9 +1,13 @@
 //! From a checked [`Scene`] to the solver and the contact model: generated meshes, their faces
 //! (nodes, facets and tributary areas), rigid bodies, boundary conditions and pairs.
 
+use std::collections::BTreeMap;
+
 use crate::error::{Error, Result};
 use crate::explicit::{BodyMotion, Element, Material, Motion, Prescribed, Solver, SolverBody};
 use crate::geometry::V3;
+use crate::io::inp::SurfaceDef;
+use crate::io::{ElementKind, MeshData};
 use crate::mesh::{arc_segments, block_tets_on, graded, plate_quads, rect_triangles_on};
 use crate::mesh::{polyline, sphere_triangles};
 use crate::model::{
@@ -49,6 +53,8 @@ enum Grid {
     Facets(Vec<Facet>, &'static str),
     /// Point masses with their slave areas.
     Points(f64),
+    /// A mesh read from a file (node indices local to the part), with a deck's surfaces.
+    Mesh(Box<(MeshData, BTreeMap<String, SurfaceDef>)>),
 }
 
 /// A face: its nodes, facets (outward normals) and each node's tributary area.
@@ -209,6 +215,44 @@ impl PartNodes {
             }
             (Grid::Points(area), _) => {
                 lone = Some(((base..base + self.count as u32).collect(), *area));
+            }
+            (Grid::Mesh(m), name) => {
+                let (mesh, surfaces) = (&m.0, &m.1);
+                let shift = |f: &Facet| match *f {
+                    Facet::Segment(s) => Facet::Segment(s.map(|n| n + base)),
+                    Facet::Triangle(t) => Facet::Triangle(t.map(|n| n + base)),
+                    Facet::Quad(q) => Facet::Quad(q.map(|n| n + base)),
+                };
+                if name == "all" {
+                    lone = Some(((base..base + self.count as u32).collect(), f64::NAN));
+                } else if let Some(s) = surfaces.get(&name.to_uppercase()) {
+                    match s {
+                        SurfaceDef::Faces(f) => facets = f.iter().map(shift).collect(),
+                        SurfaceDef::Nodes(n, a) => {
+                            let nodes: Vec<u32> = n.iter().map(|&k| k + base).collect();
+                            return Ok(Face {
+                                nodes,
+                                facets: Vec::new(),
+                                areas: a.clone(),
+                            });
+                        }
+                    }
+                } else if mesh.element_sets.contains_key(name) {
+                    facets = mesh.surface(name)?.iter().map(shift).collect();
+                } else if let Some(n) = mesh
+                    .node_sets
+                    .get(name)
+                    .or_else(|| mesh.node_sets.get(&name.to_uppercase()))
+                {
+                    lone = Some((n.iter().map(|&k| k + base).collect(), f64::NAN));
+                } else {
+                    return Err(Error::BadParameter {
+                        name: "face",
+                        value: format!("{name} (mesh part {})", self.name),
+                        expected:
+                            "a physical group, surface or set of the part's mesh file, or all",
+                    });
+                }
             }
             _ => return wrong(),
         }
@@ -388,6 +432,78 @@ impl Scene {
                         mesh.facets.iter().map(|&t| Facet::Triangle(t)).collect(),
                         "out",
                     )
+                }
+                "mesh" => {
+                    rigid = p.rigid;
+                    let file = p.file.as_deref().expect("checked");
+                    let path = match &self.base_dir {
+                        Some(d) if std::path::Path::new(file).is_relative() => d.join(file),
+                        _ => std::path::PathBuf::from(file),
+                    };
+                    let dim = p.dimension.unwrap_or(if two_d { 2 } else { 3 });
+                    let (mesh, surfaces) = if file.ends_with(".msh") {
+                        (crate::io::gmsh::read(&path, dim)?, BTreeMap::new())
+                    } else {
+                        let d = crate::io::inp::read(&path)?;
+                        (d.mesh, d.surfaces)
+                    };
+                    x.extend(
+                        mesh.positions
+                            .iter()
+                            .map(|q| [0, 1, 2].map(|a| q[a] + p.origin[a])),
+                    );
+                    if !rigid {
+                        let mat = material(self, p);
+                        let bad_el = |k: usize| Error::BadParameter {
+                            name: "part.file",
+                            value: format!(
+                                "element {} of {} (part {})",
+                                mesh.elements[k].label, file, p.name
+                            ),
+                            expected: "elements with positive volume or area",
+                        };
+                        for (k, e) in mesh.elements.iter().enumerate() {
+                            let n: Vec<u32> = e.nodes.iter().map(|&i| i + base as u32).collect();
+                            match e.kind {
+                                ElementKind::Tet4 => {
+                                    let t = [n[0], n[1], n[2], n[3]];
+                                    let el = Element::tet4(t, &x, mat)
+                                        .or_else(|| Element::tet4([t[0], t[2], t[1], t[3]], &x, mat))
+                                        .ok_or_else(|| bad_el(k))?;
+                                    elements.push(el);
+                                }
+                                ElementKind::Tri3In2d | ElementKind::Quad4In2d => {
+                                    let tris: Vec<[u32; 3]> = if n.len() == 3 {
+                                        vec![[n[0], n[1], n[2]]]
+                                    } else {
+                                        vec![[n[0], n[1], n[2]], [n[0], n[2], n[3]]]
+                                    };
+                                    for t in tris {
+                                        let el = Element::tri3(t, &x, p.thickness, mat)
+                                            .or_else(|| Element::tri3([t[0], t[2], t[1]], &x, p.thickness, mat))
+                                            .ok_or_else(|| bad_el(k))?;
+                                        elements.push(el);
+                                    }
+                                }
+                                ElementKind::Hex8 => {
+                                    return Err(Error::BadParameter {
+                                        name: "part.file",
+                                        value: format!("{file} (part {}) has hexahedra", p.name),
+                                        expected: "tetrahedra for a deformable mesh part (the solver's 3D element); hexahedra can be rigid or give surfaces",
+                                    })
+                                }
+                                _ => {} // boundary facets and lines: surfaces only
+                            }
+                        }
+                        if elements.len() == n_el {
+                            return Err(Error::BadParameter {
+                                name: "part.file",
+                                value: format!("{file} (part {})", p.name),
+                                expected: "a deformable mesh part needs tetrahedra (3D) or plane triangles or quadrilaterals (2D)",
+                            });
+                        }
+                    }
+                    Grid::Mesh(Box::new((mesh, surfaces)))
                 }
                 _ => {
                     x.extend(&p.points);

@@ -15,6 +15,7 @@
 //! bulk_viscosity = 0.0     # linear b1
 //! nlgeom = true            # false: small-strain kinematics (Abaqus' NLGEOM=NO)
 //! output_every = 10        # history rows every this many increments (default 1)
+//! vtk_every = 100          # a VTK frame of the contact state (vtk/contact.pvd) every 100
 //! [[material]]
 //! name = "rubber"
 //! young = 1.0
@@ -22,7 +23,9 @@
 //! density = 1.0
 //! [[part]]
 //! name = "left"
-//! shape = "block"          # block | rect | bar | plate | line | arc | sphere | points
+//! shape = "block"          # block | rect | bar | plate | line | arc | sphere | points | mesh
+//! # file = "part.msh"      # mesh parts: Gmsh .msh or Abaqus .inp, faces by physical group,
+//! # rigid = false          #   *SURFACE or set name; deformable (tets / plane elements) or rigid
 //! material = "rubber"
 //! origin = [0, 0, 0]
 //! size = [10, 2, 2]
@@ -321,6 +324,15 @@ pub fn run(scene: &Scene, device: &Device, output: Option<&Path>) -> Result<Summ
         }
         None => None,
     };
+    // VTK frames go to a hidden directory renamed only when the run succeeded
+    let mut series = match output {
+        Some(dir) if scene.run.vtk_every > 0 && contact.is_some() => {
+            let partial = dir.join(".vtk.partial");
+            let _ = std::fs::remove_dir_all(&partial);
+            Some(crate::io::vtk::Series::new(&partial, "contact")?)
+        }
+        _ => None,
+    };
     let element_dt = solver.stable_increment();
     let mut dt = scene.run.dt.unwrap_or(element_dt);
     if !dt.is_finite() {
@@ -395,6 +407,14 @@ pub fn run(scene: &Scene, device: &Device, output: Option<&Path>) -> Result<Summ
                 value: format!("energy not finite at t = {}", solver.time),
                 expected: "a stable run (reduce run.dt or the penalty scale)",
             });
+        }
+        if let (Some(s), Some(c)) = (series.as_mut(), contact.as_ref()) {
+            if k % scene.run.vtk_every == 0 {
+                s.add(
+                    solver.time,
+                    &crate::io::vtk::Frame::from_contact(&model, c, &solver.x)?,
+                )?;
+            }
         }
         if let Some(f) = history.as_mut() {
             if k % scene.run.output_every.max(1) == 0 {
@@ -560,6 +580,10 @@ pub fn run(scene: &Scene, device: &Device, output: Option<&Path>) -> Result<Summ
         std::fs::write(dir.join(".summary.json.partial"), json).map_err(io)?;
         std::fs::rename(dir.join(".history.csv.partial"), dir.join("history.csv")).map_err(io)?;
         std::fs::rename(dir.join(".summary.json.partial"), dir.join("summary.json")).map_err(io)?;
+        if series.is_some() {
+            let _ = std::fs::remove_dir_all(dir.join("vtk"));
+            std::fs::rename(dir.join(".vtk.partial"), dir.join("vtk")).map_err(io)?;
+        }
     }
     Ok(summary)
 }

@@ -29,6 +29,9 @@ pub struct Scene {
     /// Contact pairs.
     #[serde(default)]
     pub contact: Vec<ContactSpec>,
+    /// The directory mesh files are relative to (the scene file's, set by [`Scene::load`]).
+    #[serde(skip)]
+    pub base_dir: Option<std::path::PathBuf>,
 }
 
 /// Run controls.
@@ -61,6 +64,10 @@ pub struct RunSpec {
     /// History rows every this many increments (default 1).
     #[serde(default = "default_every")]
     pub output_every: usize,
+    /// A VTK frame of the contact state every this many increments (0, the default: none);
+    /// written with the other outputs, as `vtk/contact.pvd` and its `.vtu` frames.
+    #[serde(default)]
+    pub vtk_every: usize,
 }
 
 fn default_safety() -> f64 {
@@ -95,7 +102,7 @@ pub struct MaterialSpec {
 
 /// The shapes a part can have.
 pub const SHAPES: &[&str] = &[
-    "block", "rect", "bar", "plate", "line", "arc", "sphere", "points",
+    "block", "rect", "bar", "plate", "line", "arc", "sphere", "points", "mesh",
 ];
 
 /// A generated part.
@@ -107,7 +114,9 @@ pub struct PartSpec {
     /// Deformable: "block" (tetrahedra), "rect" (plane-strain triangles, x–y plane), "bar"
     /// (2-node bars along one axis). Rigid and fixed: "plate" (quads in the x–y plane, normal
     /// +z), "line" (2D segments along x, normal +y), "arc" (2D segments of a circle, normals
-    /// outward), "sphere" (triangles, normals outward). "points": point masses.
+    /// outward), "sphere" (triangles, normals outward). "points": point masses. "mesh": read
+    /// from `file` (Gmsh `.msh` or Abaqus `.inp`), deformable (its tetrahedra, or plane
+    /// triangles in a 2D scene) or, with `rigid = true`, fixed.
     pub shape: String,
     /// Material (deformable shapes).
     #[serde(default)]
@@ -146,16 +155,29 @@ pub struct PartSpec {
     /// Initial velocity.
     #[serde(default)]
     pub velocity: [f64; 3],
+    /// The mesh file of a "mesh" part, relative to the scene file's directory (or the working
+    /// directory for scenes parsed from text). Its faces are named by its physical groups
+    /// (Gmsh) or surfaces and sets (Abaqus); `origin` translates it.
+    #[serde(default)]
+    pub file: Option<String>,
+    /// A "mesh" part that is fixed and rigid (its faces are master surfaces).
+    #[serde(default)]
+    pub rigid: bool,
+    /// The dimension a "mesh" part is read in (3, or 2 for plane-strain scenes).
+    #[serde(default)]
+    pub dimension: Option<u32>,
 }
 
 impl PartSpec {
     /// Whether the part is a fixed rigid surface.
     pub fn is_rigid(&self) -> bool {
         matches!(self.shape.as_str(), "plate" | "line" | "arc" | "sphere")
+            || (self.shape == "mesh" && self.rigid)
     }
     /// Whether the part belongs in a 2D (plane-strain) scene.
     pub fn is_2d(&self) -> bool {
         matches!(self.shape.as_str(), "rect" | "line" | "arc")
+            || (self.shape == "mesh" && self.dimension == Some(2))
     }
 }
 
@@ -291,6 +313,22 @@ impl Scene {
         Ok(scene)
     }
 
+    /// Reads and parses the scene file at `path`; mesh files are then relative to its
+    /// directory. Errors name the file, and the key or line.
+    pub fn load(path: &std::path::Path) -> Result<Self> {
+        let text = std::fs::read_to_string(path).map_err(|e| Error::Io {
+            file: path.display().to_string(),
+            message: e.to_string(),
+        })?;
+        let mut s = Self::parse(&text).map_err(|e| Error::Parse {
+            file: path.display().to_string(),
+            line: 0,
+            message: e.to_string(),
+        })?;
+        s.base_dir = path.parent().map(|p| p.to_path_buf());
+        Ok(s)
+    }
+
     /// Whether the scene is plane strain (2D).
     pub fn is_2d(&self) -> bool {
         self.part.iter().any(PartSpec::is_2d)
@@ -339,7 +377,7 @@ impl Scene {
                 return bad(
                     "part.shape",
                     format!("{} (part {})", p.shape, p.name),
-                    "must be block, rect, bar, plate, line, arc, sphere or points",
+                    "must be block, rect, bar, plate, line, arc, sphere, points or mesh",
                 );
             }
             if two_d && matches!(p.shape.as_str(), "block" | "plate" | "sphere" | "bar") {
@@ -413,7 +451,27 @@ impl Scene {
                     return bad(key, format!("{v} (part {})", p.name), "must be positive");
                 }
             }
-            let deformable = matches!(p.shape.as_str(), "block" | "rect" | "bar");
+            if p.shape == "mesh" {
+                match p.file.as_deref() {
+                    Some(f) if f.ends_with(".msh") || f.ends_with(".inp") => {}
+                    _ => {
+                        return bad(
+                            "part.file",
+                            format!("{:?} (part {})", p.file, p.name),
+                            "a mesh part needs a Gmsh .msh or Abaqus .inp file",
+                        )
+                    }
+                }
+                if !matches!(p.dimension, None | Some(2) | Some(3)) {
+                    return bad(
+                        "part.dimension",
+                        format!("{:?} (part {})", p.dimension, p.name),
+                        "must be 2 or 3",
+                    );
+                }
+            }
+            let deformable = matches!(p.shape.as_str(), "block" | "rect" | "bar")
+                || (p.shape == "mesh" && !p.rigid);
             if deformable
                 && !self
                     .material
@@ -473,7 +531,7 @@ impl Scene {
             let Some(p) = self.part.iter().find(|p| p.name == b.part) else {
                 return bad("boundary.part", b.part.clone(), "must name a [[part]]");
             };
-            if !FACES.contains(&b.face.as_str()) || b.face == "out" {
+            if p.shape != "mesh" && (!FACES.contains(&b.face.as_str()) || b.face == "out") {
                 return bad(
                     "boundary.face",
                     b.face.clone(),
@@ -515,7 +573,9 @@ impl Scene {
                     "slave nodes must move: not a rigid part",
                 );
             }
-            if !FACES.contains(&c.slave_face.as_str()) || c.slave_face == "out" {
+            if sp.shape != "mesh"
+                && (!FACES.contains(&c.slave_face.as_str()) || c.slave_face == "out")
+            {
                 return bad(
                     "contact.slave_face",
                     c.slave_face.clone(),
@@ -531,8 +591,13 @@ impl Scene {
                     "must name a [[part]] or a [[rigid]] body",
                 );
             }
+            let master_mesh = self
+                .part
+                .iter()
+                .any(|p| p.name == c.master && p.shape == "mesh");
             if master_part {
                 match c.master_face.as_deref() {
+                    Some(_) if master_mesh => {}
                     Some(f) if FACES.contains(&f) && f != "all" => {}
                     _ => {
                         return bad(

@@ -163,16 +163,8 @@ fn device(b: BackendArg) -> abut::Result<Device> {
 }
 
 fn run_scene(a: &RunArgs) -> abut::Result<()> {
-    let text = std::fs::read_to_string(&a.scene).map_err(|e| abut::Error::BadParameter {
-        name: "scene file",
-        value: format!("{}: {e}", a.scene.display()),
-        expected: "a readable file",
-    })?;
-    let scene = abut::scene::Scene::parse(&text).map_err(|e| abut::Error::BadParameter {
-        name: "scene file",
-        value: format!("{}: {e}", a.scene.display()),
-        expected: "a valid scene",
-    })?;
+    // mesh files in the scene are relative to its directory
+    let scene = abut::scene::Scene::load(&a.scene)?;
     let device = device(a.backend)?;
     println!("device: {device}");
     println!("scene: {}", scene.title);
