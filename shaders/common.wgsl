@@ -4,6 +4,9 @@
 
 const NO_NODE: u32 = 0xffffffffu;
 const NO_FACET: u32 = 0xffffffffu;
+// Flag in Hit.candidates: the closest point lies on a free edge or corner of the master and the
+// slave is beside it, off the facets: no contact (Rust twin: HIT_BESIDE_FREE_EDGE).
+const HIT_BESIDE_FREE_EDGE: u32 = 0x80000000u;
 const QUAD_ITERATIONS: u32 = 8u;
 const QUAD_CONVERGED: f32 = 1e-4;   // Rust: geometry::QUAD_CONVERGED
 const COS_TENTH_DEGREE: f32 = 0.99999845; // Rust: geometry::COS_TENTH_DEGREE as f32

@@ -1,5 +1,6 @@
 // local_search.wgsl — finite-sliding tracking between global searches (seed: "Local contact
 // searches"). CPU mirror: src/cpu/local_search.rs.
+// Prelude: common.wgsl, search_common.wgsl (projection, self-contact exclusion, free edges).
 //
 // Bindings: 0 params (uniform SearchParams), 1 nodes (grid-local, in the frame of the last
 //           global search), 2 facets, 3 slaves, 4 adjacency (words 0..=n_nodes: start of each
@@ -17,6 +18,8 @@
 //             keeps its tracked node (facet = NO_FACET) so tracking resumes when it comes back;
 //             a slave with no tracked node waits for the next global search. Nothing runs when
 //             the motion budget is exceeded (the increment is run again with a global search).
+//             A slave nearest to a free edge or corner of the master and off to its side gets
+//             HIT_BESIDE_FREE_EDGE in its candidates word (as in nearest_facet.wgsl).
 
 @group(0) @binding(0) var<uniform> params: SearchParams;
 @group(0) @binding(1) var<storage, read> nodes: array<vec4<f32>>;
@@ -25,34 +28,6 @@
 @group(0) @binding(4) var<storage, read> adjacency: array<u32>;
 @group(0) @binding(5) var<storage, read_write> status: array<atomic<u32>>;
 @group(0) @binding(6) var<storage, read_write> hits: array<Hit>;
-
-fn project_facet(p: vec3<f32>, fac: vec4<u32>) -> Projection {
-    let n = facet_node_count(fac);
-    let x0 = nodes[fac.x].xyz;
-    let x1 = nodes[fac.y].xyz;
-    if (n == 2u) { return closest_on_segment(p, x0, x1); }
-    let x2 = nodes[fac.z].xyz;
-    if (n == 3u) { return closest_on_triangle(p, x0, x1, x2); }
-    return closest_on_quad(p, x0, x1, x2, nodes[fac.w].xyz);
-}
-
-// Self-contact: facet f is the slave's own or touches one of the slave's own facets.
-fn excluded(s: u32, fac: vec4<u32>) -> bool {
-    if ((params.flags & FLAG_SELF_CONTACT) == 0u) { return false; }
-    let n = facet_node_count(fac);
-    for (var j = 0u; j < n; j++) {
-        let node = fac[j];
-        if (node == s) { return true; }
-        for (var k = adjacency[s]; k < adjacency[s + 1u]; k++) {
-            let own = facets[adjacency[k]];
-            let m = facet_node_count(own);
-            for (var q = 0u; q < m; q++) {
-                if (own[q] == node) { return true; }
-            }
-        }
-    }
-    return false;
-}
 
 struct Best {
     facet: u32,
@@ -143,6 +118,9 @@ fn local_search(@builtin(workgroup_id) wg: vec3<u32>,
         hit.point_gap = vec4<f32>(b.pr.point, dot(p - b.pr.point, b.pr.normal));
         hit.normal_dist = vec4<f32>(b.pr.normal, sqrt(b.d2));
         hit.weights = b.pr.weights;
+        if (beside_free_edge(b.facet, facets[b.facet], b.pr.weights, p, b.pr.point, b.pr.normal)) {
+            hit.candidates |= HIT_BESIDE_FREE_EDGE;
+        }
     }
     hits[i] = hit;
 }

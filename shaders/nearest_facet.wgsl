@@ -1,5 +1,6 @@
 // nearest_facet.wgsl — step 5: the globally nearest active facet of each slave node.
 // CPU mirror: src/cpu/nearest_facet.rs.
+// Prelude: common.wgsl, search_common.wgsl (projection, self-contact exclusion, free edges).
 //
 // Bindings: 0 params, 1 nodes, 2 facets, 3 slaves (node id per slave), 4 starts, 5 entries,
 //           6 status (overflow skips the pass; self-contact crowding counted), 7 hits (one Hit
@@ -14,7 +15,9 @@
 //             own facets and the facets touching them are skipped, and a slave with another
 //             facet within the radius that shares no node with its nearest and faces it (its
 //             gap is more than half its distance: not a neighbour in the same plane) is counted
-//             in STATUS_CROWDED (the schedule then searches globally more often).
+//             in STATUS_CROWDED (the schedule then searches globally more often). A slave
+//             nearest to a free edge or corner of the master and off to its side gets
+//             HIT_BESIDE_FREE_EDGE in its candidates word: the master ends there.
 
 @group(0) @binding(0) var<uniform> params: SearchParams;
 @group(0) @binding(1) var<storage, read> nodes: array<vec4<f32>>;
@@ -26,25 +29,7 @@
 @group(0) @binding(7) var<storage, read_write> hits: array<Hit>;
 @group(0) @binding(8) var<storage, read> adjacency: array<u32>;
 
-// Self-contact: facet f is the slave's own or touches one of the slave's own facets
-// (twin of the one in local_search.wgsl).
-fn excluded(s: u32, fac: vec4<u32>) -> bool {
-    if ((params.flags & FLAG_SELF_CONTACT) == 0u) { return false; }
-    let n = facet_node_count(fac);
-    for (var j = 0u; j < n; j++) {
-        let node = fac[j];
-        if (node == s) { return true; }
-        for (var k = adjacency[s]; k < adjacency[s + 1u]; k++) {
-            let own = facets[adjacency[k]];
-            let m = facet_node_count(own);
-            for (var q = 0u; q < m; q++) {
-                if (own[q] == node) { return true; }
-            }
-        }
-    }
-    return false;
-}
-
+// Whether two facets share a node.
 fn share_node(a: vec4<u32>, b: vec4<u32>) -> bool {
     let na = facet_node_count(a);
     let nb = facet_node_count(b);
@@ -54,16 +39,6 @@ fn share_node(a: vec4<u32>, b: vec4<u32>) -> bool {
         }
     }
     return false;
-}
-
-fn project(p: vec3<f32>, fac: vec4<u32>) -> Projection {
-    let n = facet_node_count(fac);
-    let x0 = nodes[fac.x].xyz;
-    let x1 = nodes[fac.y].xyz;
-    if (n == 2u) { return closest_on_segment(p, x0, x1); }
-    let x2 = nodes[fac.z].xyz;
-    if (n == 3u) { return closest_on_triangle(p, x0, x1, x2); }
-    return closest_on_quad(p, x0, x1, x2, nodes[fac.w].xyz);
 }
 
 @compute @workgroup_size(64)
@@ -97,7 +72,7 @@ fn nearest_facet(@builtin(workgroup_id) wg: vec3<u32>,
         for (var k = s; k < e; k++) {
             let f = entries[k];
             if (excluded(slave, facets[f])) { continue; }
-            let pr = project(p, facets[f]);
+            let pr = project_facet(p, facets[f]);
             if (pr.dist2 < best_d2 || (best_f == NO_FACET && pr.dist2 == best_d2)) {
                 best = pr;
                 best_d2 = pr.dist2;
@@ -111,7 +86,7 @@ fn nearest_facet(@builtin(workgroup_id) wg: vec3<u32>,
                 let f = entries[k];
                 if (f == best_f || excluded(slave, facets[f]) || share_node(facets[f], facets[best_f])) { continue; }
                 // near and facing the slave (not merely beside it in its own plane)
-                let pr = project(p, facets[f]);
+                let pr = project_facet(p, facets[f]);
                 let gap = dot(p - pr.point, pr.normal);
                 if (pr.dist2 <= r2 && 4.0 * gap * gap > pr.dist2) { crowded = true; }
             }
@@ -136,6 +111,9 @@ fn nearest_facet(@builtin(workgroup_id) wg: vec3<u32>,
             hit.point_gap = vec4<f32>(best.point, dot(p - best.point, best.normal));
             hit.normal_dist = vec4<f32>(best.normal, sqrt(best.dist2));
             hit.weights = best.weights;
+            if (beside_free_edge(best_f, fac, best.weights, p, best.point, best.normal)) {
+                hit.candidates |= HIT_BESIDE_FREE_EDGE;
+            }
         }
     }
     hits[i] = hit;

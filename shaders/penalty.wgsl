@@ -12,7 +12,8 @@
 //             force on the slave is F_n·N + F_t and the master nodes get −w_j times it (gather),
 //             so momentum is conserved to round-off. The override FRICTION = false removes all
 //             friction work. Nothing runs when the search overflowed or the motion budget
-//             was used up (the increment will run again).
+//             was used up (the increment will run again). A slave whose hit carries
+//             HIT_BESIDE_FREE_EDGE is off the master's facets: open, no force.
 //             Increments are positive f32, reduced with atomicMin on their bits (order-
 //             preserving for positive floats), so the result is deterministic.
 
@@ -116,7 +117,8 @@ fn penalty(@builtin(workgroup_id) wg: vec3<u32>,
     o.dt_approach = NO_LIMIT;
     let area = state[i].tangential_area.w;
     o.dissipation = state[i].history.x;
-    if (hit.facet == NO_FACET) {
+    // no partner, or beside a free edge of the master (off its facets): no contact
+    if (hit.facet == NO_FACET || (hit.candidates & HIT_BESIDE_FREE_EDGE) != 0u) {
         state[i].tangential_area = vec4<f32>(0.0, 0.0, 0.0, area);
         out[i] = o;
         return;

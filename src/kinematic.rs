@@ -267,7 +267,12 @@ fn correct(
 
 /// The facet of each slave from a search result.
 pub fn facets_from(search: &SearchResult) -> Vec<Option<u32>> {
-    search.contacts.iter().map(|c| c.map(|c| c.facet)).collect()
+    // a slave beside a free edge of the master is off its facets: no contact
+    search
+        .contacts
+        .iter()
+        .map(|c| c.filter(|c| !c.beside_free_edge).map(|c| c.facet))
+        .collect()
 }
 
 /// Rotates a body-frame vector into the model frame.

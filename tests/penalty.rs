@@ -862,3 +862,85 @@ fn balanced_pairs_weight_both_passes() {
         assert!(sum.iter().all(|s| s.abs() <= 1e-6 * mag), "{d}: {sum:?}");
     }
 }
+
+/// §6 edges: a node beside a free edge or corner of the master (off its facets, below its
+/// plane) is not in contact — the master ends there — while one over the facet or exactly over
+/// the edge is; an interior fold (a valley: two facets sharing an edge) still holds a node in
+/// the wedge behind it, nearest to the shared edge and beside both facets. Penalty on every
+/// device, kinematic with the CPU and GPU searches.
+#[test]
+fn nodes_beside_a_free_edge_are_not_in_contact() {
+    let mut m = Model::new_3d();
+    // two quads: a flat one on [0,1]² and one folded up along x = 1 (an interior valley)
+    m.add_nodes(
+        &[
+            [0.0, 0.0, 0.0],
+            [1.0, 0.0, 0.0],
+            [1.0, 1.0, 0.0],
+            [0.0, 1.0, 0.0],
+            [2.0, 0.0, 1.0],
+            [2.0, 1.0, 1.0],
+        ],
+        &[1e12; 6],
+    )
+    .unwrap();
+    let s = m
+        .add_surface(Surface::quads(&[[0, 1, 2, 3], [1, 4, 5, 2]]))
+        .unwrap();
+    // slaves 0.01 below the plane z = 0:
+    let probes = [
+        ([0.5, 0.5, -0.01], true),      // over the flat facet
+        ([0.0, 0.5, -0.01], true),      // exactly over the free edge x = 0
+        ([-0.05, 0.5, -0.01], false),   // beside the free edge x = 0
+        ([0.5, -0.05, -0.01], false),   // beside the free edge y = 0
+        ([-0.05, -0.05, -0.01], false), // beside the free corner (0, 0)
+        ([1.01, 0.5, -0.02], true),     // behind the valley, nearest its shared edge: held
+    ];
+    let r = m.add_nodes(&probes.map(|p| p.0), &[1.0; 6]).unwrap();
+    let set = m.add_node_set(&r.to_vec()).unwrap();
+    let kin_set = m.add_node_set(&r.to_vec()).unwrap();
+    let pen = m
+        .add_pair(Pair::new(set, s).search_radius(0.2).enforce(penalty(100.0)))
+        .unwrap();
+    let _ = pen;
+    let v = vec![[0.0; 3]; m.positions().len()];
+    for d in devices() {
+        let mut c = Contact::new(&d, &m).unwrap();
+        let rep = c.penalty_step(m.positions(), &v, 1e-3).unwrap();
+        for (k, (p, expect)) in probes.iter().enumerate() {
+            let f = rep.forces[r.start as usize + k];
+            let pushed = f.iter().any(|c| c.abs() > 1e-9);
+            assert_eq!(pushed, *expect, "{d}: probe {k} at {p:?}: force {f:?}");
+        }
+    }
+    // kinematic: the same rule
+    let mut mk = Model::new_3d();
+    mk.add_nodes(&m.positions()[..6], &[1e12; 6]).unwrap();
+    let sk = mk
+        .add_surface(Surface::quads(&[[0, 1, 2, 3], [1, 4, 5, 2]]))
+        .unwrap();
+    let rk = mk.add_nodes(&probes.map(|p| p.0), &[1.0; 6]).unwrap();
+    let setk = mk.add_node_set(&rk.to_vec()).unwrap();
+    let _ = kin_set;
+    mk.add_pair(
+        Pair::new(setk, sk)
+            .search_radius(0.2)
+            .enforce(Enforce::Kinematic(Kinematic { softened: None })),
+    )
+    .unwrap();
+    for d in devices() {
+        let mut c = Contact::new(&d, &mk).unwrap();
+        let mut x = mk.positions().to_vec();
+        let mut v = vec![[0.0; 3]; x.len()];
+        c.kinematic_step(&mut x, &mut v, &mut [], 1e-3).unwrap();
+        for (k, (p, expect)) in probes.iter().enumerate() {
+            let moved = (0..3).any(|a| (x[rk.start as usize + k][a] - p[a]).abs() > 1e-9);
+            assert_eq!(
+                moved,
+                *expect,
+                "{d}: kinematic probe {k} at {p:?} → {:?}",
+                x[rk.start as usize + k]
+            );
+        }
+    }
+}

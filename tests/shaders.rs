@@ -102,6 +102,10 @@ fn wgsl_twins_match_rust() {
     let m = parse("nearest_facet");
     assert_eq!(constant_u32(&m, "ITEM_WORKGROUP"), ITEM_WORKGROUP);
     assert_eq!(constant_u32(&m, "NO_FACET"), NO_FACET);
+    assert_eq!(
+        constant_u32(&m, "HIT_BESIDE_FREE_EDGE"),
+        abut::search::layout::HIT_BESIDE_FREE_EDGE
+    );
     assert_eq!(constant_u32(&m, "NO_NODE"), abut::model::NO_NODE);
     assert_eq!(
         constant_u32(&m, "QUAD_ITERATIONS"),

@@ -67,6 +67,9 @@ pub fn brute_force(
                         gap: pr.gap(p),
                         distance: pr.dist2.sqrt(),
                         weights: pr.weights,
+                        // the oracle answers the search's question (the nearest facet); the
+                        // free-edge classification is tested against geometry directly
+                        beside_free_edge: false,
                     },
                     second_distance: second,
                 }

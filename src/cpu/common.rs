@@ -99,3 +99,85 @@ pub fn share_node(a: [u32; 4], b: [u32; 4]) -> bool {
         .iter()
         .any(|n| b[..facet_node_count(b)].contains(n))
 }
+
+/// Whether facet `f`'s edge (`a`, `b`) is shared by another active facet (WGSL: `edge_shared`;
+/// `f` and the adjacency entries are active facet indices).
+pub fn edge_shared(facets: &[[u32; 4]], adjacency: &[u32], f: u32, a: u32, b: u32) -> bool {
+    (adjacency[a as usize]..adjacency[a as usize + 1]).any(|k| {
+        let g = adjacency[k as usize];
+        let fg = facets[g as usize];
+        g != f && fg[..facet_node_count(fg)].contains(&b)
+    })
+}
+
+/// Whether node `a` ends an unshared edge (3D) or is the end of a single segment (2D)
+/// (WGSL: `vertex_free`).
+pub fn vertex_free(facets: &[[u32; 4]], adjacency: &[u32], a: u32) -> bool {
+    let (s, e) = (adjacency[a as usize], adjacency[a as usize + 1]);
+    for k in s..e {
+        let g = adjacency[k as usize];
+        let fg = facets[g as usize];
+        let ng = facet_node_count(fg);
+        if ng == 2 {
+            return e - s < 2;
+        }
+        for j in 0..ng {
+            if fg[j] == a
+                && (!edge_shared(facets, adjacency, g, a, fg[(j + 1) % ng])
+                    || !edge_shared(facets, adjacency, g, a, fg[(j + ng - 1) % ng]))
+            {
+                return true;
+            }
+        }
+    }
+    false
+}
+
+/// The slave at `p`, nearest to facet `f` (nodes `fac`) at point `c` with weights `w` and unit
+/// normal `nrm`, is beside a free boundary of the master: `c` lies on an unshared edge or on a
+/// corner of one, and `p` is off to the side of it by more than 1e-3 of the facet's size
+/// (WGSL: `beside_free_edge`).
+#[allow(clippy::too_many_arguments)]
+pub fn beside_free_edge(
+    nodes: &[[f32; 4]],
+    facets: &[[u32; 4]],
+    adjacency: &[u32],
+    f: u32,
+    fac: [u32; 4],
+    w: [f32; 4],
+    p: V3<f32>,
+    c: V3<f32>,
+    nrm: V3<f32>,
+) -> bool {
+    let n = facet_node_count(fac);
+    let mut h = 0.0f32;
+    let (mut on, mut a, mut b) = (0, NO_NODE, NO_NODE);
+    for j in 0..n {
+        h = h.max(
+            (node(nodes, fac[(j + 1) % n]) - node(nodes, fac[j]))
+                .length2()
+                .sqrt(),
+        );
+        if w[j] != 0.0 {
+            on += 1;
+            if a == NO_NODE {
+                a = fac[j];
+            } else {
+                b = fac[j];
+            }
+        }
+    }
+    if on == n {
+        return false;
+    }
+    let d = p - c;
+    let lateral = d - nrm * d.dot(nrm);
+    if lateral.length2() <= 1e-6 * h * h {
+        return false;
+    }
+    match on {
+        1 => vertex_free(facets, adjacency, a),
+        2 if n > 2 => !edge_shared(facets, adjacency, f, a, b),
+        _ => false,
+    }
+}

@@ -142,6 +142,19 @@ pub fn local_search(
             hit.point_gap = [q.x, q.y, q.z, (p - q).dot(pr.normal)];
             hit.normal_dist = [pr.normal.x, pr.normal.y, pr.normal.z, b.d2.sqrt()];
             hit.weights = pr.weights;
+            if super::common::beside_free_edge(
+                nodes,
+                facets,
+                adjacency,
+                b.facet,
+                facets[b.facet as usize],
+                pr.weights,
+                p,
+                q,
+                pr.normal,
+            ) {
+                hit.candidates |= HIT_BESIDE_FREE_EDGE;
+            }
         }
         hits[i] = hit;
     }

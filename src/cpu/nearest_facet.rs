@@ -3,7 +3,8 @@
 use super::common::{excluded, facet_node_count, node, share_node};
 use crate::geometry::{closest_on_quad, closest_on_segment, closest_on_triangle, Projection, V3};
 use crate::search::layout::{
-    GpuHit, SearchParams, FLAG_SELF_CONTACT, NO_FACET, STATUS_CROWDED, STATUS_OVERFLOW,
+    GpuHit, SearchParams, FLAG_SELF_CONTACT, HIT_BESIDE_FREE_EDGE, NO_FACET, STATUS_CROWDED,
+    STATUS_OVERFLOW,
 };
 
 /// Nearest point on a padded facet (WGSL: `project`).
@@ -99,10 +100,22 @@ pub fn nearest_facet(
             }
         }
         let q = best.point;
+        let fac = facets[best_f as usize];
+        let beside = super::common::beside_free_edge(
+            nodes,
+            facets,
+            adjacency,
+            best_f,
+            fac,
+            best.weights,
+            p,
+            q,
+            best.normal,
+        );
         hits[i] = GpuHit {
             facet: best_f,
             node: best_node,
-            candidates: e - s,
+            candidates: (e - s) | if beside { HIT_BESIDE_FREE_EDGE } else { 0 },
             slave: slaves[i],
             point_gap: [q.x, q.y, q.z, (p - q).dot(best.normal)],
             normal_dist: [

@@ -117,7 +117,9 @@ pub fn penalty(
         };
         let area = state[i].tangential_area[3];
         o.dissipation = state[i].history[0];
-        if hit.facet == NO_FACET {
+        if hit.facet == NO_FACET
+            || hit.candidates & crate::search::layout::HIT_BESIDE_FREE_EDGE != 0
+        {
             state[i].tangential_area = [0.0, 0.0, 0.0, area];
             out[i] = o;
             continue;

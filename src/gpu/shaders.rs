@@ -1,28 +1,43 @@
-//! WGSL sources, embedded at build time. Each kernel is `common.wgsl` (and, for the penalty
-//! kernels, `penalty_common.wgsl`) followed by its own file.
+//! WGSL sources, embedded at build time. Each kernel is `common.wgsl`, its prelude
+//! (`search_common.wgsl` for the search kernels that read facets and adjacency,
+//! `penalty_common.wgsl` for the penalty kernels), then its own file.
 
 /// Shared structs, constants and geometry.
 pub const COMMON: &str = include_str!("../../shaders/common.wgsl");
 
 /// Structs and constants of the penalty kernels.
 pub const PENALTY_COMMON: &str = include_str!("../../shaders/penalty_common.wgsl");
+/// Functions of the search kernels that read facets and adjacency (projection, self-contact
+/// exclusion, free boundaries).
+pub const SEARCH_COMMON: &str = include_str!("../../shaders/search_common.wgsl");
 
-/// (file stem, source, needs `penalty_common.wgsl`) of every kernel file.
+/// The prelude a kernel needs after `common.wgsl`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Prelude {
+    /// None.
+    None,
+    /// `search_common.wgsl`.
+    Search,
+    /// `penalty_common.wgsl`.
+    Penalty,
+}
+
+/// (file stem, source, prelude) of every kernel file.
 #[rustfmt::skip]
-pub const KERNELS: [(&str, &str, bool); 13] = [
-    ("bin_count", include_str!("../../shaders/bin_count.wgsl"), false),
-    ("scan", include_str!("../../shaders/scan.wgsl"), false),
-    ("bin_scatter", include_str!("../../shaders/bin_scatter.wgsl"), false),
-    ("bin_sort", include_str!("../../shaders/bin_sort.wgsl"), false),
-    ("nearest_facet", include_str!("../../shaders/nearest_facet.wgsl"), false),
-    ("local_search", include_str!("../../shaders/local_search.wgsl"), false),
-    ("motion", include_str!("../../shaders/motion.wgsl"), false),
-    ("to_local", include_str!("../../shaders/to_local.wgsl"), false),
-    ("anchor", include_str!("../../shaders/anchor.wgsl"), false),
-    ("nodal_normals", include_str!("../../shaders/nodal_normals.wgsl"), true),
-    ("penalty", include_str!("../../shaders/penalty.wgsl"), true),
-    ("contact_sort", include_str!("../../shaders/contact_sort.wgsl"), true),
-    ("gather", include_str!("../../shaders/gather.wgsl"), true),
+pub const KERNELS: [(&str, &str, Prelude); 13] = [
+    ("bin_count", include_str!("../../shaders/bin_count.wgsl"), Prelude::None),
+    ("scan", include_str!("../../shaders/scan.wgsl"), Prelude::None),
+    ("bin_scatter", include_str!("../../shaders/bin_scatter.wgsl"), Prelude::None),
+    ("bin_sort", include_str!("../../shaders/bin_sort.wgsl"), Prelude::None),
+    ("nearest_facet", include_str!("../../shaders/nearest_facet.wgsl"), Prelude::Search),
+    ("local_search", include_str!("../../shaders/local_search.wgsl"), Prelude::Search),
+    ("motion", include_str!("../../shaders/motion.wgsl"), Prelude::None),
+    ("to_local", include_str!("../../shaders/to_local.wgsl"), Prelude::None),
+    ("anchor", include_str!("../../shaders/anchor.wgsl"), Prelude::None),
+    ("nodal_normals", include_str!("../../shaders/nodal_normals.wgsl"), Prelude::Penalty),
+    ("penalty", include_str!("../../shaders/penalty.wgsl"), Prelude::Penalty),
+    ("contact_sort", include_str!("../../shaders/contact_sort.wgsl"), Prelude::Penalty),
+    ("gather", include_str!("../../shaders/gather.wgsl"), Prelude::Penalty),
 ];
 
 /// The full source of kernel file `stem` (its preludes prepended), or `None` if unknown.
@@ -30,11 +45,9 @@ pub fn source(stem: &str) -> Option<String> {
     KERNELS
         .iter()
         .find(|(s, _, _)| *s == stem)
-        .map(|(_, src, penalty)| {
-            if *penalty {
-                format!("{COMMON}\n{PENALTY_COMMON}\n{src}")
-            } else {
-                format!("{COMMON}\n{src}")
-            }
+        .map(|(_, src, prelude)| match prelude {
+            Prelude::None => format!("{COMMON}\n{src}"),
+            Prelude::Search => format!("{COMMON}\n{SEARCH_COMMON}\n{src}"),
+            Prelude::Penalty => format!("{COMMON}\n{PENALTY_COMMON}\n{src}"),
         })
 }

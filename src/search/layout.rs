@@ -9,6 +9,10 @@ pub const ITEM_WORKGROUP: u32 = 64;
 pub const SCAN_BLOCK: u32 = 1024;
 /// "No facet" in a hit (WGSL: `NO_FACET`).
 pub const NO_FACET: u32 = u32::MAX;
+/// Flag in [`GpuHit::candidates`]: the closest point lies on a free edge or corner of the master
+/// surface (an edge no other facet shares) and the slave is beside it, off the facets — the
+/// master ends there, so this is no contact whatever the gap (WGSL: `HIT_BESIDE_FREE_EDGE`).
+pub const HIT_BESIDE_FREE_EDGE: u32 = 1 << 31;
 /// Status word: non-zero when the entry buffer overflowed (WGSL: `STATUS_OVERFLOW`).
 pub const STATUS_OVERFLOW: usize = 0;
 /// Status word: the number of bin entries the pass needed (WGSL: `STATUS_NEEDED_ENTRIES`).
@@ -159,7 +163,7 @@ pub struct GpuHit {
     pub facet: u32,
     /// Tracked master node (model node id), `u32::MAX` when none.
     pub node: u32,
-    /// Facets examined for this node.
+    /// Facets examined for this node, with [`HIT_BESIDE_FREE_EDGE`] in the top bit.
     pub candidates: u32,
     /// The slave node (model node id).
     pub slave: u32,

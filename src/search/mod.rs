@@ -62,6 +62,10 @@ pub struct ContactPoint {
     pub distance: f64,
     /// Load-transfer weights of the facet's nodes at the point (sum to 1; unused slots 0).
     pub weights: [f64; 4],
+    /// The point lies on a free edge or corner of the master (an edge no other facet shares)
+    /// and the slave is beside it, off the facets: the master ends there, so enforcement treats
+    /// the slave as not in contact whatever the gap.
+    pub beside_free_edge: bool,
 }
 
 /// What one search did, for diagnostics and benchmarks.
@@ -775,7 +779,7 @@ impl GlobalSearch {
         let contacts = raw
             .iter()
             .map(|h| {
-                candidates += h.candidates as u64;
+                candidates += (h.candidates & !layout::HIT_BESIDE_FREE_EDGE) as u64;
                 (h.facet != NO_FACET).then(|| ContactPoint {
                     facet: self.master.active[h.facet as usize],
                     tracked_node: h.node,
@@ -792,6 +796,7 @@ impl GlobalSearch {
                     gap: h.point_gap[3] as f64,
                     distance: h.normal_dist[3] as f64,
                     weights: h.weights.map(|w| w as f64),
+                    beside_free_edge: h.candidates & layout::HIT_BESIDE_FREE_EDGE != 0,
                 })
             })
             .collect();

@@ -1,0 +1,92 @@
+// search_common.wgsl — functions shared by the search kernels that read facets and adjacency:
+// prepended (after common.wgsl) to nearest_facet.wgsl and local_search.wgsl, which declare
+// `params`, `nodes`, `facets` and `adjacency`. CPU mirror: src/cpu/common.rs.
+
+// Closest point of p on facet fac.
+fn project_facet(p: vec3<f32>, fac: vec4<u32>) -> Projection {
+    let n = facet_node_count(fac);
+    let x0 = nodes[fac.x].xyz;
+    let x1 = nodes[fac.y].xyz;
+    if (n == 2u) { return closest_on_segment(p, x0, x1); }
+    let x2 = nodes[fac.z].xyz;
+    if (n == 3u) { return closest_on_triangle(p, x0, x1, x2); }
+    return closest_on_quad(p, x0, x1, x2, nodes[fac.w].xyz);
+}
+
+// Self-contact: facet f is the slave's own or touches one of the slave's own facets.
+fn excluded(s: u32, fac: vec4<u32>) -> bool {
+    if ((params.flags & FLAG_SELF_CONTACT) == 0u) { return false; }
+    let n = facet_node_count(fac);
+    for (var j = 0u; j < n; j++) {
+        let node = fac[j];
+        if (node == s) { return true; }
+        for (var k = adjacency[s]; k < adjacency[s + 1u]; k++) {
+            let own = facets[adjacency[k]];
+            let m = facet_node_count(own);
+            for (var q = 0u; q < m; q++) {
+                if (own[q] == node) { return true; }
+            }
+        }
+    }
+    return false;
+}
+
+// Free boundaries (CPU mirror: cpu::common::edge_shared, vertex_free, beside_free_edge).
+// Whether facet f's edge (a, b) is shared by another facet.
+fn edge_shared(f: u32, a: u32, b: u32) -> bool {
+    for (var k = adjacency[a]; k < adjacency[a + 1u]; k++) {
+        let g = adjacency[k];
+        if (g == f) { continue; }
+        let fg = facets[g];
+        let ng = facet_node_count(fg);
+        for (var j = 0u; j < ng; j++) {
+            if (fg[j] == b) { return true; }
+        }
+    }
+    return false;
+}
+
+// Whether node a ends an unshared edge (3D) or is the end of a single segment (2D).
+fn vertex_free(a: u32) -> bool {
+    let s = adjacency[a];
+    let e = adjacency[a + 1u];
+    for (var k = s; k < e; k++) {
+        let g = adjacency[k];
+        let fg = facets[g];
+        let ng = facet_node_count(fg);
+        if (ng == 2u) { return e - s < 2u; }
+        for (var j = 0u; j < ng; j++) {
+            if (fg[j] == a) {
+                if (!edge_shared(g, a, fg[(j + 1u) % ng]) || !edge_shared(g, a, fg[(j + ng - 1u) % ng])) {
+                    return true;
+                }
+            }
+        }
+    }
+    return false;
+}
+
+// The slave at p, nearest to facet f at point c (weights w, unit normal nrm), is beside a free
+// boundary of the master: c lies on an unshared edge, or on a corner of one, and p is off to
+// the side of it (more than 1e-3 of the facet's size from the normal through c).
+fn beside_free_edge(f: u32, fac: vec4<u32>, w: vec4<f32>, p: vec3<f32>, c: vec3<f32>, nrm: vec3<f32>) -> bool {
+    let n = facet_node_count(fac);
+    var h = 0.0;
+    var on = 0u;
+    var a = NO_NODE;
+    var b = NO_NODE;
+    for (var j = 0u; j < n; j++) {
+        h = max(h, length(nodes[fac[(j + 1u) % n]].xyz - nodes[fac[j]].xyz));
+        if (w[j] != 0.0) {
+            on += 1u;
+            if (a == NO_NODE) { a = fac[j]; } else { b = fac[j]; }
+        }
+    }
+    if (on == n) { return false; }
+    let d = p - c;
+    let lateral = d - dot(d, nrm) * nrm;
+    if (dot(lateral, lateral) <= 1e-6 * h * h) { return false; }
+    if (on == 1u) { return vertex_free(a); }
+    if (on == 2u && n > 2u) { return !edge_shared(f, a, b); }
+    return false;
+}
