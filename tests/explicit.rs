@@ -2,6 +2,8 @@
 //! energy against closed forms, energy conservation over long free vibration, the stable
 //! increment, and a block dropped on a rigid plate with penalty and with kinematic contact.
 
+mod common;
+
 use abut::explicit::{Element, Material, Solver};
 use abut::mesh::{block_tets, plate_quads};
 use abut::*;
@@ -262,4 +264,146 @@ fn long_bouncing_and_sliding_run_stays_balanced() {
         early.max(late) < 0.05 && late <= early + 0.01,
         "energy balance error {early} then {late}"
     );
+}
+
+/// A rigid body carrying mesh nodes: spinning freely about a principal axis it keeps its
+/// angular velocity and its nodes stay rigidly placed; dropped with penalty contact on a fixed
+/// plate it bounces, the contact forces on its nodes acting on the body (momentum change equal to
+/// the impulse, energy balanced), on every device.
+#[test]
+fn rigid_body_carrying_nodes() {
+    use abut::explicit::{BodyMotion, SolverBody};
+    // the eight corners of a 0.2 m cube above a 1 × 1 plate of quads
+    let plate = plate_quads(4, 4, 1.0, 1.0, 0.0, 0, &|_, _| 0.0);
+    let np = plate.positions.len();
+    let mut x = plate.positions.clone();
+    let c = [0.5, 0.5, 0.15];
+    for k in 0..8 {
+        let s = |b: usize| if k >> b & 1 == 1 { 0.1 } else { -0.1 };
+        x.push([c[0] + s(0), c[1] + s(1), c[2] + s(2)]);
+    }
+    let (m, i) = (2.0, 2.0 * 0.2 * 0.2 / 6.0); // solid cube: m·a²/6
+    let inertia = [[i, 0.0, 0.0], [0.0, i, 0.0], [0.0, 0.0, i]];
+    let corners: Vec<u32> = (np as u32..np as u32 + 8).collect();
+    // free spin: ω about z stays, corners keep their distances to the centre
+    let mut s = Solver::new(x.clone(), Vec::new(), &vec![1.0; x.len()]).unwrap();
+    let mut body = SolverBody::new(m, inertia, c, corners.clone(), &x, BodyMotion::Free).unwrap();
+    body.state.angular_velocity = [0.0, 0.0, 3.0];
+    s.add_body(body).unwrap();
+    for _ in 0..2000 {
+        s.step(1e-3, None).unwrap();
+    }
+    let w = s.bodies[0].state.angular_velocity;
+    assert!((w[2] - 3.0).abs() < 1e-9 && w[0].abs() < 1e-9, "{w:?}");
+    for &n in &corners {
+        let d: f64 = (0..3)
+            .map(|a| (s.x[n as usize][a] - c[a]).powi(2))
+            .sum::<f64>()
+            .sqrt();
+        assert!((d - (3.0f64).sqrt() * 0.1).abs() < 1e-12, "corner at {d}");
+    }
+    let turned: f64 = 2.0 * 3.0; // ω·t
+    let p = s.x[corners[7] as usize];
+    let expect = [
+        c[0] + 0.1 * (turned.cos() - turned.sin()),
+        c[1] + 0.1 * (turned.sin() + turned.cos()),
+    ];
+    assert!(
+        (p[0] - expect[0]).abs() < 1e-9 && (p[1] - expect[1]).abs() < 1e-9,
+        "{p:?} {expect:?}"
+    );
+    // a drop on the plate with penalty contact
+    let mut model = Model::new_3d();
+    let mut masses = vec![1e12; np];
+    masses.extend([m / 8.0; 8]);
+    model.add_nodes(&x, &masses).unwrap();
+    let surf = model.add_surface(Surface::quads(&plate.facets)).unwrap();
+    let set = model.add_node_set(&corners).unwrap();
+    model
+        .add_pair(
+            Pair::new(set, surf)
+                .search_radius(0.1)
+                .enforce(Enforce::Penalty(Penalty {
+                    stiffness: Stiffness::Absolute(2e4),
+                    ..Default::default()
+                })),
+        )
+        .unwrap();
+    let mut devices = vec![Device::cpu()];
+    devices.extend(common::gpus().iter().cloned());
+    for d in devices {
+        let mut s = Solver::new(x.clone(), Vec::new(), &masses).unwrap();
+        for n in 0..np {
+            s.fixed[n] = [true; 3];
+        }
+        s.gravity = [0.0, 0.0, -9.81];
+        let mut body =
+            SolverBody::new(m, inertia, c, corners.clone(), &x, BodyMotion::Free).unwrap();
+        body.state.velocity = [0.0, 0.0, -1.0];
+        s.add_body(body).unwrap();
+        let mut contact = Contact::new(&d, &model).unwrap();
+        let dt = 2e-4;
+        let mut impulse = 0.0;
+        let mut touched = false;
+        for _ in 0..2000 {
+            s.step(dt, Some(&mut contact)).unwrap();
+            let fz = s.body_contact_force[0][2];
+            touched |= fz > 0.0;
+            impulse += fz * dt;
+        }
+        let v = s.bodies[0].state.velocity[2];
+        // momentum: m·v_end − m·v_0 = impulse − m·g·t (half-step velocities: t = 2000 dt)
+        let t = (2000.0 - 0.5) * dt; // the first increment moves velocities by half of one
+        let change = m * (v - (-1.0)) + m * 9.81 * t;
+        assert!(touched && v > 0.0, "{d}: the body did not bounce (v = {v})");
+        assert!(
+            (change - impulse).abs() < 1e-6 * impulse.abs().max(1.0),
+            "{d}: momentum {change} vs impulse {impulse}"
+        );
+        assert!(
+            s.balance_error() < 0.02,
+            "{d}: balance {}",
+            s.balance_error()
+        );
+        let n0 = s.x[corners[0] as usize];
+        let n7 = s.x[corners[7] as usize];
+        let diag: f64 = (0..3).map(|a| (n7[a] - n0[a]).powi(2)).sum::<f64>().sqrt();
+        assert!(
+            (diag - 0.2 * 3f64.sqrt()).abs() < 1e-12,
+            "{d}: the body deformed ({diag})"
+        );
+    }
+}
+
+/// Linear bulk viscosity only dissipates: a vibrating block loses energy, the loss is booked
+/// as damping, and the balance holds.
+#[test]
+fn bulk_viscosity_dissipates_and_is_booked() {
+    let mesh = block_tets([3, 3, 3], [0.3, 0.3, 0.3], [0.0; 3]);
+    let els: Vec<Element> = mesh
+        .facets
+        .iter()
+        .map(|t| Element::tet4(*t, &mesh.positions, SOFT).unwrap())
+        .collect();
+    let n = mesh.positions.len();
+    let mut s = Solver::new(mesh.positions.clone(), els, &vec![0.0; n]).unwrap();
+    s.bulk_viscosity = 0.06;
+    // a dilatational initial velocity field
+    for (i, p) in mesh.positions.iter().enumerate() {
+        s.v[i] = [
+            (p[0] - 0.15) * 2.0,
+            (p[1] - 0.15) * 2.0,
+            (p[2] - 0.15) * 2.0,
+        ];
+    }
+    let dt = s.stable_increment();
+    s.step(dt, None).unwrap();
+    let e0 = s.energy.kinetic + s.energy.internal;
+    for _ in 0..3000 {
+        s.step(dt, None).unwrap();
+    }
+    let e1 = s.energy.kinetic + s.energy.internal;
+    assert!(e1 < 0.7 * e0, "energy {e0} → {e1}");
+    assert!(s.energy.damping > 0.2 * e0, "booked {}", s.energy.damping);
+    assert!(s.balance_error() < 0.03, "balance {}", s.balance_error());
 }

@@ -317,11 +317,17 @@ impl Solver {
         }
         let (mut f_int, internal) = self.internal_forces();
         let n = self.x.len();
-        // bulk viscosity acts with the half-step velocities (the last ones known)
-        let mut p_bulk = 0.0;
+        // bulk viscosity acts with the half-step velocities (the last ones known); its power is
+        // booked with the velocities at this step's time, like the damping's
+        let mut bulk = vec![[0.0; 3]; n];
         if self.bulk_viscosity > 0.0 {
             for e in &self.elements {
-                p_bulk -= e.add_bulk_viscosity(&self.x, &self.v, self.bulk_viscosity, &mut f_int);
+                e.add_bulk_viscosity(&self.x, &self.v, self.bulk_viscosity, &mut bulk);
+            }
+            for i in 0..n {
+                for a in 0..3 {
+                    f_int[i][a] += bulk[i][a];
+                }
             }
         }
         let mut penalty = vec![[0.0; 3]; n];
@@ -452,7 +458,7 @@ impl Solver {
         }
         // energies at this step's time: velocities there are the mean of the half-step ones
         // around it (at the start, the initial velocity)
-        let (mut kinetic, mut p_ext, mut p_con, mut p_damp) = (0.0, 0.0, 0.0, p_bulk);
+        let (mut kinetic, mut p_ext, mut p_con, mut p_damp) = (0.0, 0.0, 0.0, 0.0);
         let now = |old: f64, new: f64| if self.started { 0.5 * (old + new) } else { old };
         for i in 0..n {
             if self.carried[i].is_some() {
@@ -463,7 +469,7 @@ impl Solver {
                 kinetic += 0.5 * self.mass[i] * v_now * v_now;
                 p_ext += ext[i][a] * v_now;
                 p_con += (penalty[i][a] + kinematic[i][a]) * v_now;
-                p_damp -= damp[i][a] * v_now;
+                p_damp -= (damp[i][a] + bulk[i][a]) * v_now;
             }
         }
         for (k, b) in self.bodies.iter().enumerate() {
@@ -500,7 +506,8 @@ impl Solver {
     }
 
     /// The energy balance error: the change of [`Energy::balance`] since the first increment,
-    /// relative to the largest of the kinetic, internal and external energies seen now.
+    /// relative to the largest of the kinetic, internal, external, contact and dissipated
+    /// energies now.
     pub fn balance_error(&self) -> f64 {
         let e = &self.energy;
         let scale = e
@@ -509,6 +516,7 @@ impl Solver {
             .max(e.internal.abs())
             .max(e.external_work.abs())
             .max(e.contact_work.abs())
+            .max(e.damping.abs())
             .max(1e-300);
         (e.balance() - self.balance0.unwrap_or(0.0)).abs() / scale
     }
