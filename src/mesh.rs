@@ -105,7 +105,15 @@ pub fn plate_triangles(
     seed: u64,
     z: &dyn Fn(f64, f64) -> f64,
 ) -> Mesh<[u32; 3]> {
-    let positions = plate_nodes(nx, ny, lx, ly, jitter, seed, z);
+    Mesh {
+        positions: plate_nodes(nx, ny, lx, ly, jitter, seed, z),
+        facets: grid_triangles(nx, ny),
+    }
+}
+
+/// The 2·nx·ny counter-clockwise triangles of an (nx+1)×(ny+1) node grid, each quad cut along
+/// alternating diagonals.
+fn grid_triangles(nx: usize, ny: usize) -> Vec<[u32; 3]> {
     let mut facets = Vec::with_capacity(2 * nx * ny);
     for j in 0..ny {
         for i in 0..nx {
@@ -124,7 +132,7 @@ pub fn plate_triangles(
             }
         }
     }
-    Mesh { positions, facets }
+    facets
 }
 
 /// A sphere of radius `r` at `centre` as a latitude–longitude quad mesh (poles as collapsed
@@ -303,25 +311,10 @@ pub fn rect_triangles_on(xs: &[f64], ys: &[f64]) -> Mesh<[u32; 3]> {
             positions.push([x, y, 0.0]);
         }
     }
-    let mut facets = Vec::with_capacity(2 * nx * (ys.len() - 1));
-    for j in 0..ys.len() - 1 {
-        for i in 0..nx {
-            let (a, b, c, d) = (
-                grid_node(i, j, nx),
-                grid_node(i + 1, j, nx),
-                grid_node(i + 1, j + 1, nx),
-                grid_node(i, j + 1, nx),
-            );
-            if (i + j) % 2 == 0 {
-                facets.push([a, b, c]);
-                facets.push([a, c, d]);
-            } else {
-                facets.push([a, b, d]);
-                facets.push([b, c, d]);
-            }
-        }
+    Mesh {
+        positions,
+        facets: grid_triangles(nx, ys.len() - 1),
     }
-    Mesh { positions, facets }
 }
 
 /// An arc of `n` segments of the circle of `radius` about `centre` (x–y plane) from angle

@@ -480,43 +480,46 @@ impl Element {
                 grad,
                 material,
             } => {
-                let rate: f64 = nodes
-                    .iter()
-                    .enumerate()
-                    .map(|(k, &n)| v[n as usize][0] * grad[k][0] + v[n as usize][1] * grad[k][1])
-                    .sum();
-                let c = material.p_wave_speed();
-                let p = b1 * material.density * c * (c_len * c) * rate;
-                let vol = area0 * thickness;
-                for (k, &n) in nodes.iter().enumerate() {
-                    for r in 0..2 {
-                        f[n as usize][r] -= vol * p * grad[k][r];
-                    }
-                }
-                -vol * p * rate
+                let g = grad.map(|g| [g[0], g[1], 0.0]);
+                volumetric_dashpot(nodes, &g, area0 * thickness, material, c_len, b1, v, f)
             }
             Element::Tet4 {
                 nodes,
                 volume0,
                 grad,
                 material,
-            } => {
-                let rate: f64 = nodes
-                    .iter()
-                    .enumerate()
-                    .map(|(k, &n)| (0..3).map(|r| v[n as usize][r] * grad[k][r]).sum::<f64>())
-                    .sum();
-                let c = material.p_wave_speed();
-                let p = b1 * material.density * c * (c_len * c) * rate;
-                for (k, &n) in nodes.iter().enumerate() {
-                    for r in 0..3 {
-                        f[n as usize][r] -= volume0 * p * grad[k][r];
-                    }
-                }
-                -volume0 * p * rate
-            }
+            } => volumetric_dashpot(nodes, grad, *volume0, material, c_len, b1, v, f),
         }
     }
+}
+
+/// Linear bulk viscosity of a continuum element of reference volume `vol`: the pressure
+/// b1·ρ·c·L·ε̇_vol, with ε̇_vol = Σ v_i·∇N_i, L = c·`c_len` the stable length, applied as
+/// −vol·p·∇N_i; returns its power (≤ 0).
+#[allow(clippy::too_many_arguments)]
+fn volumetric_dashpot(
+    nodes: &[u32],
+    grad: &[[f64; 3]],
+    vol: f64,
+    material: &Material,
+    c_len: f64,
+    b1: f64,
+    v: &[[f64; 3]],
+    f: &mut [[f64; 3]],
+) -> f64 {
+    let rate: f64 = nodes
+        .iter()
+        .zip(grad)
+        .map(|(&n, g)| (0..3).map(|r| v[n as usize][r] * g[r]).sum::<f64>())
+        .sum();
+    let c = material.p_wave_speed();
+    let p = b1 * material.density * c * (c_len * c) * rate;
+    for (&n, g) in nodes.iter().zip(grad) {
+        for r in 0..3 {
+            f[n as usize][r] -= vol * p * g[r];
+        }
+    }
+    -vol * p * rate
 }
 
 /// Second Piola–Kirchhoff stress and strain energy density of St Venant–Kirchhoff in plane
