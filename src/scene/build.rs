@@ -123,7 +123,7 @@ impl PartNodes {
             })
         };
         match (&self.grid, face) {
-            (Grid::Block(_) | Grid::Rect(..) | Grid::Bar(..) | Grid::Points(_), "all") => {
+            (_, "all") if !matches!(self.grid, Grid::Mesh(_)) => {
                 lone = Some(((base..base + self.count as u32).collect(), f64::NAN));
             }
             (Grid::Block(n), f) => {
@@ -312,6 +312,7 @@ impl Scene {
         let mut velocity = Vec::new();
         let mut fixed = Vec::new();
         let mut parts = Vec::new();
+        let mut moving_parts = Vec::new();
         for p in &self.part {
             let base = x.len();
             let n_el = elements.len();
@@ -511,8 +512,15 @@ impl Scene {
                 }
             };
             let count = x.len() - base;
+            let moving = rigid && p.motion.as_deref().is_some_and(|m| m != "fixed");
+            if moving {
+                moving_parts.push((parts.len(), base, count));
+            }
             point.extend(std::iter::repeat_n(
-                if rigid {
+                if moving {
+                    // the body's mass on every node: the effective mass contact sees
+                    p.mass
+                } else if rigid {
                     IMMOVABLE_MASS
                 } else if p.shape == "points" {
                     p.mass
@@ -525,7 +533,7 @@ impl Scene {
                 if rigid { [0.0; 3] } else { p.velocity },
                 count,
             ));
-            let mut free = [!rigid; 3];
+            let mut free = [!rigid || moving; 3];
             if two_d {
                 free[2] = false;
             }
@@ -546,6 +554,44 @@ impl Scene {
         let mut solver = Solver::new(x.clone(), elements, &point)?;
         solver.fixed = fixed;
         solver.v = velocity;
+        // rigid parts that move: bodies carrying the part's nodes (after the analytical bodies,
+        // whose indices are the contact model's)
+        let mut meshed_bodies = Vec::new();
+        for &(k, base, count) in &moving_parts {
+            let p = &self.part[k];
+            let nodes: Vec<u32> = (base as u32..(base + count) as u32).collect();
+            let mut c = [0.0; 3];
+            for &n in &nodes {
+                for a in 0..3 {
+                    c[a] += x[n as usize][a] / count as f64;
+                }
+            }
+            // inertia of the nodes as equal point masses about their centroid
+            let mut inertia = [[0.0; 3]; 3];
+            for &n in &nodes {
+                let r = [0, 1, 2].map(|a| x[n as usize][a] - c[a]);
+                let r2 = r[0] * r[0] + r[1] * r[1] + r[2] * r[2];
+                for a in 0..3 {
+                    for b in 0..3 {
+                        let d = if a == b { r2 } else { 0.0 };
+                        inertia[a][b] += p.mass / count as f64 * (d - r[a] * r[b]);
+                    }
+                }
+            }
+            // a flat part has no inertia about its normal's perpendiculars only in the limit:
+            // keep it positive definite
+            let tr = inertia[0][0] + inertia[1][1] + inertia[2][2];
+            for (a, row) in inertia.iter_mut().enumerate() {
+                row[a] += 1e-6 * tr.max(p.mass * 1e-12);
+            }
+            let motion = match p.motion.as_deref() {
+                Some("velocity") => BodyMotion::Velocity(p.velocity),
+                _ => BodyMotion::Free,
+            };
+            let mut body = SolverBody::new(p.mass, inertia, c, nodes, &x, motion)?;
+            body.state.velocity = p.velocity;
+            meshed_bodies.push((p.name.clone(), body));
+        }
         solver.gravity = self.run.gravity;
         solver.safety = self.run.safety;
         solver.damping = self.run.damping;
@@ -662,6 +708,9 @@ impl Scene {
                 }
             }
             bodies.push((r.name.clone(), solver.add_body(body)?));
+        }
+        for (name, body) in meshed_bodies {
+            bodies.push((name, solver.add_body(body)?));
         }
         let mut slaves = Vec::new();
         for c in &self.contact {

@@ -32,6 +32,8 @@
 //! divisions = [40, 1, 1]
 //! grading = [1, 1, 1]      # ratio of consecutive cells; negative: finest at the far end
 //! velocity = [0.1, 0, 0]
+//! # motion = "free"        # rigid parts (plate, line, arc, sphere, rigid mesh): fixed (default),
+//! # mass = 2.0             #   free (a rigid body carrying the part's nodes) or velocity
 //! [[rigid]]                # a rigid body with an analytical surface
 //! name = "ball"
 //! surface = "sphere"       # plane | sphere | cylinder | line | circle

@@ -166,6 +166,11 @@ pub struct PartSpec {
     /// The dimension a "mesh" part is read in (3, or 2 for plane-strain scenes).
     #[serde(default)]
     pub dimension: Option<u32>,
+    /// How a rigid part (plate, line, arc, sphere, rigid mesh) moves: "fixed" (the default),
+    /// "free" (a rigid body of `mass`, its nodes' centroid the reference point, moved by
+    /// gravity and contact from `velocity`) or "velocity" (translating at `velocity`).
+    #[serde(default)]
+    pub motion: Option<String>,
 }
 
 impl PartSpec {
@@ -451,6 +456,22 @@ impl Scene {
                     return bad(key, format!("{v} (part {})", p.name), "must be positive");
                 }
             }
+            if let Some(m) = p.motion.as_deref() {
+                if !p.is_rigid() || !["fixed", "free", "velocity"].contains(&m) {
+                    return bad(
+                        "part.motion",
+                        format!("{m} (part {})", p.name),
+                        "rigid parts only: fixed, free or velocity",
+                    );
+                }
+                if m != "fixed" && !(p.mass.is_finite() && p.mass > 0.0) {
+                    return bad(
+                        "part.mass",
+                        format!("{} (part {})", p.mass, p.name),
+                        "a moving rigid part needs a positive mass",
+                    );
+                }
+            }
             if p.shape == "mesh" {
                 match p.file.as_deref() {
                     Some(f) if f.ends_with(".msh") || f.ends_with(".inp") => {}
@@ -566,11 +587,11 @@ impl Scene {
             let Some(sp) = self.part.iter().find(|p| p.name == c.slave) else {
                 return bad("contact.slave", c.slave.clone(), "must name a [[part]]");
             };
-            if sp.is_rigid() {
+            if sp.is_rigid() && sp.motion.as_deref().is_none_or(|m| m == "fixed") {
                 return bad(
                     "contact.slave",
                     c.slave.clone(),
-                    "slave nodes must move: not a rigid part",
+                    "slave nodes must move: not a fixed rigid part",
                 );
             }
             if sp.shape != "mesh"
