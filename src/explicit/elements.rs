@@ -59,6 +59,10 @@ pub enum Element {
         area0: f64,
         /// Reference shape-function gradients (x, y) of the three nodes.
         grad: [[f64; 2]; 3],
+        /// Axisymmetric (x = radius, y = axis): the nodes' reference radii. The element is then
+        /// per radian (its "thickness" is its centroid's reference radius) and small-strain,
+        /// with the hoop strain u_r/r at the centroid.
+        hoop: Option<[f64; 3]>,
         /// Material.
         material: Material,
     },
@@ -121,7 +125,40 @@ impl Element {
             area0: area,
             grad,
             material,
+            hoop: None,
         })
+    }
+
+    /// An axisymmetric triangle (x = radius ≥ 0, y = axis), per radian of circumference,
+    /// small-strain; `None` when its reference area is not positive or it lies on the axis.
+    pub fn axi3(nodes: [u32; 3], x: &[[f64; 3]], material: Material) -> Option<Self> {
+        let r0 = nodes.map(|n| x[n as usize][0]);
+        let r_bar = (r0[0] + r0[1] + r0[2]) / 3.0;
+        if !(r_bar > 0.0) || r0.iter().any(|r| *r < 0.0) {
+            return None;
+        }
+        match Self::tri3(nodes, x, r_bar, material)? {
+            Element::Tri3 {
+                nodes,
+                thickness,
+                area0,
+                grad,
+                material,
+                ..
+            } => Some(Element::Tri3 {
+                nodes,
+                thickness,
+                area0,
+                grad,
+                material,
+                hoop: Some(r0),
+            }),
+            _ => None,
+        }
+    }
+
+    fn is_axisymmetric(&self) -> bool {
+        matches!(self, Element::Tri3 { hoop: Some(_), .. })
     }
 
     /// A tetrahedron; `None` when its reference volume is not positive.
@@ -187,8 +224,20 @@ impl Element {
             Element::Bar {
                 length0, material, ..
             } => length0 / (material.young / material.density).sqrt(),
-            Element::Tri3 { grad, material, .. } => {
-                let s: f64 = grad.iter().map(|g| g[0] * g[0] + g[1] * g[1]).sum();
+            Element::Tri3 {
+                grad,
+                material,
+                hoop,
+                thickness,
+                ..
+            } => {
+                // the hoop strain's "gradient" N_i/r̄ = 1/(3 r̄) counts like the others
+                let h = if hoop.is_some() {
+                    3.0 / (9.0 * thickness * thickness)
+                } else {
+                    0.0
+                };
+                let s: f64 = grad.iter().map(|g| g[0] * g[0] + g[1] * g[1]).sum::<f64>() + h;
                 1.0 / (s.sqrt() * material.p_wave_speed())
             }
             Element::Tet4 { grad, material, .. } => {
@@ -217,7 +266,7 @@ impl Element {
         f: &mut [[f64; 3]],
         nlgeom: bool,
     ) -> f64 {
-        if !nlgeom && !matches!(self, Element::Bar { .. }) {
+        if (!nlgeom || self.is_axisymmetric()) && !matches!(self, Element::Bar { .. }) {
             let (sigma, w) = self.small_strain_stress(x);
             let (grad, vol): (Vec<[f64; 3]>, f64) = match self {
                 Element::Tri3 {
@@ -237,11 +286,21 @@ impl Element {
             } else {
                 3
             };
+            let hoop_grad = match self {
+                Element::Tri3 {
+                    hoop: Some(_),
+                    thickness,
+                    ..
+                } => 1.0 / (3.0 * thickness),
+                _ => 0.0,
+            };
             for (k, &n) in self.nodes().iter().enumerate() {
                 for r in 0..dims {
                     let s: f64 = (0..3).map(|c| sigma[r][c] * grad[k][c]).sum();
                     f[n as usize][r] -= vol * s;
                 }
+                // axisymmetric: the hoop stress works on the radial displacement
+                f[n as usize][0] -= vol * sigma[2][2] * hoop_grad;
             }
             return w * vol;
         }
@@ -269,6 +328,7 @@ impl Element {
                 area0,
                 grad,
                 material,
+                ..
             } => {
                 // F (2×2) = Σ x_i ⊗ ∇N_i
                 let mut ff = [[0.0; 2]; 2];
@@ -370,6 +430,18 @@ impl Element {
                 eps[r][c] = 0.5 * (ff[r][c] + ff[c][r]) - id;
             }
         }
+        if let Element::Tri3 {
+            hoop: Some(r0),
+            thickness,
+            nodes,
+            ..
+        } = self
+        {
+            // ε_θθ = u_r / r at the centroid
+            eps[2][2] = (0..3)
+                .map(|i| (x[nodes[i] as usize][0] - r0[i]) / (3.0 * thickness))
+                .sum::<f64>();
+        }
         let (l, mu) = (m.lambda(), m.mu());
         let tr = eps[0][0] + eps[1][1] + eps[2][2];
         let mut s = [[0.0; 3]; 3];
@@ -395,6 +467,9 @@ impl Element {
     /// Cauchy stress at positions `x` (model stress units, model frame). Plane-strain
     /// triangles include σ_zz; a bar's stress is uniaxial along its current axis.
     pub fn stress(&self, x: &[[f64; 3]]) -> [[f64; 3]; 3] {
+        if self.is_axisymmetric() {
+            return self.small_strain_stress(x).0;
+        }
         if let Element::Bar {
             nodes,
             length0,
@@ -479,6 +554,7 @@ impl Element {
                 area0,
                 grad,
                 material,
+                ..
             } => {
                 let g = grad.map(|g| [g[0], g[1], 0.0]);
                 volumetric_dashpot(nodes, &g, area0 * thickness, material, c_len, b1, v, f)

@@ -41,6 +41,7 @@ enum Grid {
     /// Tetrahedral block: cells per axis.
     Block([usize; 3]),
     /// Plane-strain rectangle: cells per axis, thickness.
+    /// (Thickness NaN: axisymmetric, per radian.)
     Rect([usize; 2], f64),
     /// Bar along `axis` of cross-section area: four parallel chains of 2-node bars at the
     /// corners of a square section, node (cell k, corner c) at `4k + c`, corners
@@ -271,7 +272,13 @@ impl PartNodes {
         }
         let mut area_of = std::collections::BTreeMap::<u32, f64>::new();
         for f in &facets {
-            let share = facet_area(f, x, thickness) / f.nodes().len() as f64;
+            // axisymmetric (thickness NaN): per radian, the segment's length times its mid radius
+            let t = if thickness.is_nan() {
+                0.5 * f.nodes().iter().map(|&n| x[n as usize][0]).sum::<f64>()
+            } else {
+                thickness
+            };
+            let share = facet_area(f, x, t) / f.nodes().len() as f64;
             for &n in f.nodes() {
                 *area_of.entry(n).or_default() += share;
             }
@@ -340,15 +347,24 @@ impl Scene {
                     x.extend(mesh.positions.iter().map(|q| [q[0], q[1], 0.0]));
                     for t in &mesh.facets {
                         let tri = t.map(|n| n + base as u32);
-                        elements.push(Element::tri3(tri, &x, p.thickness, mat).ok_or_else(
-                            || Error::BadParameter {
-                                name: "part",
-                                value: p.name.clone(),
-                                expected: "a rectangle with positive areas",
-                            },
-                        )?);
+                        let el = if p.axisymmetric {
+                            Element::axi3(tri, &x, mat)
+                        } else {
+                            Element::tri3(tri, &x, p.thickness, mat)
+                        };
+                        elements.push(el.ok_or_else(|| Error::BadParameter {
+                            name: "part",
+                            value: p.name.clone(),
+                            expected:
+                                "a rectangle with positive areas (and x ≥ 0 when axisymmetric)",
+                        })?);
                     }
-                    Grid::Rect([p.divisions[0], p.divisions[1]], p.thickness)
+                    let t = if p.axisymmetric {
+                        f64::NAN
+                    } else {
+                        p.thickness
+                    };
+                    Grid::Rect([p.divisions[0], p.divisions[1]], t)
                 }
                 "bar" => {
                     let mat = material(self, p);

@@ -166,6 +166,10 @@ pub struct PartSpec {
     /// The dimension a "mesh" part is read in (3, or 2 for plane-strain scenes).
     #[serde(default)]
     pub dimension: Option<u32>,
+    /// A "rect" part that is axisymmetric about the y axis (x = radius ≥ 0): its triangles and
+    /// everything measured on it are per radian of circumference (forces, masses, areas).
+    #[serde(default)]
+    pub axisymmetric: bool,
     /// How a rigid part (plate, line, arc, sphere, rigid mesh) moves: "fixed" (the default),
     /// "free" (a rigid body of `mass`, its nodes' centroid the reference point, moved by
     /// gravity and contact from `velocity`) or "velocity" (translating at `velocity`).
@@ -455,6 +459,13 @@ impl Scene {
                 if !(v.is_finite() && v > 0.0) {
                     return bad(key, format!("{v} (part {})", p.name), "must be positive");
                 }
+            }
+            if p.axisymmetric && (p.shape != "rect" || p.origin[0] < 0.0) {
+                return bad(
+                    "part.axisymmetric",
+                    format!("part {}", p.name),
+                    "only a rect part with origin x ≥ 0 (x is the radius) can be axisymmetric",
+                );
             }
             if let Some(m) = p.motion.as_deref() {
                 if !p.is_rigid() || !["fixed", "free", "velocity"].contains(&m) {
