@@ -137,24 +137,11 @@ impl Element {
         if !(r_bar > 0.0) || r0.iter().any(|r| *r < 0.0) {
             return None;
         }
-        match Self::tri3(nodes, x, r_bar, material)? {
-            Element::Tri3 {
-                nodes,
-                thickness,
-                area0,
-                grad,
-                material,
-                ..
-            } => Some(Element::Tri3 {
-                nodes,
-                thickness,
-                area0,
-                grad,
-                material,
-                hoop: Some(r0),
-            }),
-            _ => None,
+        let mut el = Self::tri3(nodes, x, r_bar, material)?;
+        if let Element::Tri3 { hoop, .. } = &mut el {
+            *hoop = Some(r0);
         }
+        Some(el)
     }
 
     fn is_axisymmetric(&self) -> bool {
