@@ -50,36 +50,30 @@ pub struct Traffic {
     pub pass_ns: std::collections::BTreeMap<String, f64>,
 }
 
+/// The entries of `now` that grew since `then`, by how much.
+fn map_since<T>(
+    now: &std::collections::BTreeMap<String, T>,
+    then: &std::collections::BTreeMap<String, T>,
+) -> std::collections::BTreeMap<String, T>
+where
+    T: Copy + Default + PartialOrd + std::ops::Sub<Output = T>,
+{
+    now.iter()
+        .map(|(k, &v)| (k.clone(), v - then.get(k).copied().unwrap_or_default()))
+        .filter(|(_, v)| *v > T::default())
+        .collect()
+}
+
 impl Traffic {
     /// What happened after `earlier` (a snapshot of the same device).
     pub fn since(&self, earlier: &Traffic) -> Traffic {
         Traffic {
-            dispatches: self
-                .dispatches
-                .iter()
-                .map(|(k, v)| {
-                    (
-                        k.clone(),
-                        v - earlier.dispatches.get(k).copied().unwrap_or(0),
-                    )
-                })
-                .filter(|(_, v)| *v > 0)
-                .collect(),
+            dispatches: map_since(&self.dispatches, &earlier.dispatches),
             workgroups: self.workgroups - earlier.workgroups,
             uploaded_bytes: self.uploaded_bytes - earlier.uploaded_bytes,
             read_back_bytes: self.read_back_bytes - earlier.read_back_bytes,
             submits: self.submits - earlier.submits,
-            pass_ns: self
-                .pass_ns
-                .iter()
-                .map(|(k, v)| {
-                    (
-                        k.clone(),
-                        v - earlier.pass_ns.get(k).copied().unwrap_or(0.0),
-                    )
-                })
-                .filter(|(_, v)| *v > 0.0)
-                .collect(),
+            pass_ns: map_since(&self.pass_ns, &earlier.pass_ns),
         }
     }
 
@@ -223,7 +217,7 @@ impl Device {
             return false;
         }
         if p.is_none() {
-            *p = Some(crate::gpu::Profiler::new(&c.device, &c.queue));
+            *p = Some(crate::gpu::Profiler::new(&c.device));
         }
         true
     }

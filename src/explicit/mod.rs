@@ -139,7 +139,8 @@ pub struct Solver {
     /// corrections as the forces m·Δv/dt that would make them).
     pub contact_force: Vec<[f64; 3]>,
     /// Contact force on each rigid body in the last increment (the resultant on its nodes and
-    /// its analytical surface).
+    /// its analytical surface). Free bodies only: a fixed or moving body's kinematic reaction
+    /// is not seen here (the contact model holds it immovable); its slaves' contact forces give it.
     pub body_contact_force: Vec<[f64; 3]>,
     started: bool,
     balance0: Option<f64>,
@@ -147,8 +148,6 @@ pub struct Solver {
     last_power: Option<([f64; 3], f64)>,
     /// The body each node is carried by.
     carried: Vec<Option<u32>>,
-    /// Whether a node's degree of freedom is prescribed.
-    is_prescribed: Vec<[bool; 3]>,
 }
 
 impl Solver {
@@ -206,7 +205,6 @@ impl Solver {
             balance0: None,
             last_power: None,
             carried: vec![None; n],
-            is_prescribed: vec![[false; 3]; n],
         })
     }
 
@@ -260,7 +258,6 @@ impl Solver {
                 expected: "a node not carried by a rigid body (prescribe the body's motion)",
             });
         }
-        self.is_prescribed[n][p.dof] = true;
         self.prescribed.push(p);
         Ok(())
     }
@@ -372,10 +369,16 @@ impl Solver {
                 }
             }
         }
-        // rigid bodies: gravity, loads and penalty forces on their nodes
+        // rigid bodies: gravity, loads and penalty forces on their nodes (force and moment about
+        // the reference point, at the start of the increment)
         let mut body_ext = vec![([0.0; 3], [0.0; 3]); self.bodies.len()];
+        let body_pen: Vec<([f64; 3], [f64; 3])> = self
+            .bodies
+            .iter()
+            .map(|b| b.resultant(&self.x, &penalty))
+            .collect();
         for (k, b) in self.bodies.iter_mut().enumerate() {
-            let (fp, mp) = b.resultant(&self.x, &penalty);
+            let (fp, mp) = body_pen[k];
             let (fl, ml) = b.resultant(&self.x, &self.loads);
             let g = self.gravity.map(|g| g * b.mass);
             let f_ext = [0, 1, 2].map(|a| fl[a] + g[a]);
@@ -452,8 +455,7 @@ impl Solver {
                 self.contact_force[i][a] = penalty[i][a] + kinematic[i][a];
             }
         }
-        for (k, b) in self.bodies.iter().enumerate() {
-            let (fp, _) = b.resultant(&self.x, &penalty);
+        for (k, (fp, _)) in body_pen.iter().enumerate() {
             self.body_contact_force[k] = [0, 1, 2].map(|a| fp[a] + body_kin[k].0[a]);
         }
         // energies at this step's time: velocities there are the mean of the half-step ones
@@ -481,7 +483,7 @@ impl Solver {
                 )
             });
             kinetic += b.kinetic(v_now, w_now);
-            let (fp, mp) = b.resultant(&self.x, &penalty);
+            let (fp, mp) = body_pen[k];
             let (fk, mk) = body_kin[k];
             let (fe, me) = body_ext[k];
             for a in 0..3 {

@@ -96,7 +96,7 @@ pub(crate) struct Profiler {
 const PROFILED_PASSES: u32 = 32;
 
 impl Profiler {
-    pub(crate) fn new(device: &wgpu::Device, _queue: &wgpu::Queue) -> Self {
+    pub(crate) fn new(device: &wgpu::Device) -> Self {
         let n = 2 * PROFILED_PASSES;
         let set = device.create_query_set(&wgpu::QuerySetDescriptor {
             label: Some("abut timestamps"),

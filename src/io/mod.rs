@@ -269,16 +269,27 @@ pub fn free_faces(faces: &[Facet]) -> Vec<Facet> {
 /// The nodes of `facets` (increasing) and each one's tributary area (facet areas shared
 /// equally among their nodes; lengths in 2D).
 pub fn face_nodes_and_areas(facets: &[Facet], x: &[[f64; 3]]) -> (Vec<u32>, Vec<f64>) {
+    face_nodes_and_areas_scaled(facets, x, &|_| 1.0)
+}
+
+/// As [`face_nodes_and_areas`], each facet's area multiplied by `scale(facet)` (a segment's
+/// out-of-plane thickness, or its radius per radian when axisymmetric).
+pub fn face_nodes_and_areas_scaled(
+    facets: &[Facet],
+    x: &[[f64; 3]],
+    scale: &dyn Fn(&Facet) -> f64,
+) -> (Vec<u32>, Vec<f64>) {
     let mut area = BTreeMap::<u32, f64>::new();
     for f in facets {
         // |normal| is a segment's length, twice a triangle's area, and twice a planar quad's
-        // area (the cross product of its diagonals)
+        // area (the cross product of its diagonals; planar quads)
         let n = facet_normal(f, x).length2().sqrt();
-        let a = if matches!(f, Facet::Segment(_)) {
-            n
-        } else {
-            0.5 * n
-        };
+        let a = scale(f)
+            * if matches!(f, Facet::Segment(_)) {
+                n
+            } else {
+                0.5 * n
+            };
         for &n in f.nodes() {
             *area.entry(n).or_default() += a / f.nodes().len() as f64;
         }

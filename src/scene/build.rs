@@ -5,7 +5,6 @@ use std::collections::BTreeMap;
 
 use crate::error::{Error, Result};
 use crate::explicit::{BodyMotion, Element, Material, Motion, Prescribed, Solver, SolverBody};
-use crate::geometry::V3;
 use crate::io::inp::SurfaceDef;
 use crate::io::{ElementKind, MeshData};
 use crate::mesh::{arc_segments, block_tets_on, graded, plate_quads, rect_triangles_on};
@@ -94,18 +93,6 @@ fn material(scene: &Scene, p: &PartSpec) -> Material {
         young: m.young,
         poisson: m.poisson,
         density: m.density,
-    }
-}
-
-fn facet_area(f: &Facet, x: &[[f64; 3]], thickness: f64) -> f64 {
-    let p = |n: u32| V3::from_array(x[n as usize]);
-    match *f {
-        Facet::Segment([a, b]) => (p(b) - p(a)).length2().sqrt() * thickness,
-        Facet::Triangle([a, b, c]) => 0.5 * (p(b) - p(a)).cross(p(c) - p(a)).length2().sqrt(),
-        Facet::Quad([a, b, c, d]) => {
-            0.5 * (p(b) - p(a)).cross(p(c) - p(a)).length2().sqrt()
-                + 0.5 * (p(c) - p(a)).cross(p(d) - p(a)).length2().sqrt()
-        }
     }
 }
 
@@ -270,22 +257,18 @@ impl PartNodes {
                 areas,
             });
         }
-        let mut area_of = std::collections::BTreeMap::<u32, f64>::new();
-        for f in &facets {
-            // axisymmetric (thickness NaN): per radian, the segment's length times its mid radius
-            let t = if thickness.is_nan() {
-                0.5 * f.nodes().iter().map(|&n| x[n as usize][0]).sum::<f64>()
-            } else {
-                thickness
-            };
-            let share = facet_area(f, x, t) / f.nodes().len() as f64;
-            for &n in f.nodes() {
-                *area_of.entry(n).or_default() += share;
+        // segments carry the part's thickness; axisymmetric (thickness NaN): per radian, their
+        // mid radius
+        let (nodes, areas) = crate::io::face_nodes_and_areas_scaled(&facets, x, &|f| match f {
+            Facet::Segment([a, b]) if thickness.is_nan() => {
+                0.5 * (x[*a as usize][0] + x[*b as usize][0])
             }
-        }
+            Facet::Segment(_) => thickness,
+            _ => 1.0,
+        });
         Ok(Face {
-            nodes: area_of.keys().copied().collect(),
-            areas: area_of.values().copied().collect(),
+            nodes,
+            areas,
             facets,
         })
     }

@@ -272,6 +272,7 @@ pub fn run(scene: &Scene, device: &Device, output: Option<&Path>) -> Result<Summ
         *kinds
             .entry(match e {
                 Element::Bar { .. } => "bar",
+                Element::Tri3 { hoop: Some(_), .. } => "axisymmetric triangle",
                 Element::Tri3 { .. } => "plane-strain triangle",
                 Element::Tet4 { .. } => "tetrahedron",
             })
@@ -447,7 +448,7 @@ pub fn run(scene: &Scene, device: &Device, output: Option<&Path>) -> Result<Summ
     let (impact, release, impulse) = half_plateau_edges(&forces);
     let mut parts = Vec::new();
     let mut el = 0;
-    for (p, spec) in built.parts.iter().zip(&scene.part) {
+    for p in &built.parts {
         let nodes = p.base..p.base + p.count;
         let m: f64 = nodes.clone().map(|n| solver.mass[n]).sum();
         let mean = |f: &dyn Fn(usize) -> [f64; 3]| {
@@ -472,7 +473,6 @@ pub fn run(scene: &Scene, device: &Device, output: Option<&Path>) -> Result<Summ
         if p.elements == 0 {
             (lo, hi) = ([0.0; 6], [0.0; 6]);
         }
-        let _ = spec;
         parts.push(PartSummary {
             name: p.name.clone(),
             displacement: mean(&|n| [0, 1, 2].map(|a| solver.x[n][a] - x0[n][a])),

@@ -264,7 +264,6 @@ fn measure(device: &Device, c: &Config) -> abut::Result<Row> {
     let mut deepest = vec![0.0f64; n];
     let mut first_ms = 0.0;
     let mut traffic0 = None;
-    let t_all = Instant::now();
     let mut t_steady = Instant::now();
     for step in 0..INCREMENTS {
         let t = Instant::now();
@@ -305,7 +304,6 @@ fn measure(device: &Device, c: &Config) -> abut::Result<Row> {
             t_steady = Instant::now();
         }
     }
-    let _ = t_all;
     let steady_ms = 1e3 * t_steady.elapsed().as_secs_f64() / (INCREMENTS - 1) as f64;
     let traffic = match (device.traffic(), traffic0) {
         (Some(a), Some(b)) => a.since(&b),
