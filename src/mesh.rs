@@ -221,8 +221,18 @@ pub fn point_cloud(n: usize, lo: [f64; 3], hi: [f64; 3], seed: u64) -> Vec<[f64;
 /// times the one before it (1: uniform). A negative ratio grades from the far end: the cells
 /// are smallest at `start + length`.
 pub fn graded(start: f64, length: f64, n: usize, ratio: f64) -> Vec<f64> {
+    graded_with_core(start, length, n, ratio, 1)
+}
+
+/// As [`graded`], with the first `core` cells at the fine end all of the finest size before
+/// the sizes start to grow (`core` ≤ 1: as [`graded`]) — a uniform zone where a contact patch
+/// needs it, graded beyond.
+pub fn graded_with_core(start: f64, length: f64, n: usize, ratio: f64, core: usize) -> Vec<f64> {
     let r = ratio.abs();
-    let sizes: Vec<f64> = (0..n).map(|k| r.powi(k as i32)).collect();
+    let flat = core.max(1) - 1;
+    let sizes: Vec<f64> = (0..n)
+        .map(|k| r.powi(k.saturating_sub(flat) as i32))
+        .collect();
     let total: f64 = sizes.iter().sum();
     let mut out = Vec::with_capacity(n + 1);
     let mut acc = 0.0;

@@ -63,6 +63,7 @@ fn bad_scene_files_name_the_key_and_line() {
         ("title = \"x\"\n[run]\nend_time = -1.0\n[[part]]\nname = \"a\"\nshape = \"plate\"\norigin = [0,0,0]\nsize = [1,1,0]\ndivisions = [1,1,0]\n", "run.end_time"),
         ("title = \"x\"\n[run]\nend_time = 1.0\n[[part]]\nname = \"a\"\nshape = \"cone\"\norigin = [0,0,0]\nsize = [1,1,1]\ndivisions = [1,1,1]\n", "part.shape"),
         ("title = \"x\"\n[run]\nend_time = 1.0\n[[part]]\nname = \"a\"\nshape = \"block\"\nmaterial = \"steel\"\norigin = [0,0,0]\nsize = [1,1,1]\ndivisions = [1,1,1]\n", "part.material"),
+        ("title = \"x\"\n[run]\nend_time = 1.0\n[[part]]\nname = \"a\"\nshape = \"plate\"\norigin = [0,0,0]\nsize = [1,1,0]\ndivisions = [4,4,0]\ngrading_core = [5,1,1]\n", "part.grading_core"),
     ];
     for (text, key) in cases {
         let e = Scene::parse(text).unwrap_err().to_string();
@@ -72,6 +73,38 @@ fn bad_scene_files_name_the_key_and_line() {
         .unwrap_err()
         .to_string();
     assert!(e.contains("line 3"), "the line is named: {e}");
+}
+
+/// A graded axis with a uniform core: `core` cells of the finest size, then each `ratio` times
+/// the one before, filling the length exactly; a core of 1 is plain grading; negative ratios
+/// mirror it.
+#[test]
+fn graded_axes_keep_a_uniform_core() {
+    use abut::mesh::{graded, graded_with_core};
+    let xs = graded_with_core(1.0, 8.0, 30, 1.1, 10);
+    assert_eq!(xs.len(), 31);
+    assert_eq!(xs[0], 1.0);
+    assert!((xs[30] - 9.0).abs() < 1e-12);
+    let h: Vec<f64> = xs.windows(2).map(|w| w[1] - w[0]).collect();
+    for k in 1..10 {
+        assert!((h[k] - h[0]).abs() < 1e-12 * h[0], "{k}: {h:?}");
+    }
+    for k in 10..30 {
+        assert!((h[k] / h[k - 1] - 1.1).abs() < 1e-9, "{k}: {h:?}");
+    }
+    assert_eq!(
+        graded_with_core(0.0, 2.0, 12, 1.2, 1),
+        graded(0.0, 2.0, 12, 1.2)
+    );
+    assert_eq!(
+        graded_with_core(0.0, 2.0, 12, 1.2, 0),
+        graded(0.0, 2.0, 12, 1.2)
+    );
+    let m = graded_with_core(0.0, 8.0, 30, -1.1, 10);
+    let hm: Vec<f64> = m.windows(2).map(|w| w[1] - w[0]).collect();
+    for k in 0..30 {
+        assert!((hm[k] - h[29 - k]).abs() < 1e-12, "{k}");
+    }
 }
 
 #[test]

@@ -362,11 +362,11 @@ fn s5_penalty_stability_bound() {
 
 /// §3, Hertz sphere, force against indentation, axisymmetric (scenes/hertz_sphere.toml): the
 /// element first passes its patch test (a cylinder in uniaxial compression: uniform axial stress,
-/// no hoop or radial stress); then the indentation force at δ = 0.05 R is measured against
-/// (4/3)·E*·√R·δ^(3/2). VERIFICATION's tolerance is 2 %; this mesh gives 5.4 % (5.0 % at twice
-/// the resolution; neither the block's size nor the loading rate is the cause: constant-strain
-/// triangles converge slowly). Asserted here: within 8 % and stiffer, never softer (a softer
-/// answer would mean lost contact force), on every device.
+/// no hoop or radial stress); then the force–indentation curve over δ ∈ [δmax/2, δmax]
+/// (δmax = 0.0025 R, a = 0.05 R) is measured against (4/3)·E*·√R·δ^(3/2) within VERIFICATION's
+/// 2 %: the least-squares stiffness, every sample, and the force at δmax, on every device. The
+/// least-squares stiffness must also be stiffer than Hertz (the mesh, the finite block and the
+/// surface's inward slide all stiffen it; a softer one would mean contact force lost).
 #[test]
 fn s3_hertz_sphere_force_indentation_axisymmetric() {
     let cylinder = r#"
@@ -420,17 +420,35 @@ ramp = 10.0
         "{p:?}"
     );
     let text = scene("hertz_sphere.toml");
-    let (e, nu, r, delta): (f64, f64, f64, f64) = (1.0, 0.3, 1.0, 0.05);
-    let e_star = e / (1.0 - nu * nu);
-    let exact = 4.0 / 3.0 * e_star * r.sqrt() * delta.powf(1.5);
+    let (e, nu, r, d_max): (f64, f64, f64, f64) = (1.0, 0.3, 1.0, 0.0025);
+    let k = 4.0 / 3.0 * e / (1.0 - nu * nu) * r.sqrt();
     for d in devices() {
         let s = run_text(&text, &d);
-        let f = 2.0 * PI * s.final_contact_force[1].abs();
-        let err = f / exact - 1.0;
+        // per radian → whole circumference; indentation = the sphere's descent
+        let samples: Vec<(f64, f64)> = s
+            .curve
+            .iter()
+            .map(|c| (-c.body_displacement[0][1], 2.0 * PI * c.force[1].abs()))
+            .filter(|(x, _)| *x >= 0.5 * d_max)
+            .collect();
+        assert!(samples.len() >= 100, "{d}: {} samples", samples.len());
+        let (num, den) = samples.iter().fold((0.0, 0.0), |(n, q), (x, f)| {
+            (n + f * x.powf(1.5), q + x.powf(3.0))
+        });
+        let fit = num / den / k - 1.0;
+        let worst = samples
+            .iter()
+            .map(|(x, f)| f / (k * x.powf(1.5)) - 1.0)
+            .fold(0.0f64, |w, e| if e.abs() > w.abs() { e } else { w });
+        let last = 2.0 * PI * s.final_contact_force[1].abs() / (k * d_max.powf(1.5)) - 1.0;
         eprintln!(
-            "{d}: Hertz sphere F = {f:.6} vs {exact:.6} ({:+.2} %)",
-            100.0 * err
+            "{d}: Hertz sphere F/δ^1.5 least squares {:+.2} %, worst sample {:+.2} %, at δmax {:+.2} %",
+            100.0 * fit,
+            100.0 * worst,
+            100.0 * last
         );
-        assert!(err > 0.0 && err < 0.08, "{d}: F = {f} vs {exact}");
+        assert!(fit > 0.0 && fit < 0.02, "{d}: least squares {fit}");
+        assert!(worst.abs() < 0.02, "{d}: worst sample {worst}");
+        assert!(last.abs() < 0.02, "{d}: at δmax {last}");
     }
 }

@@ -7,7 +7,8 @@ use crate::error::{Error, Result};
 use crate::explicit::{BodyMotion, Element, Material, Motion, Prescribed, Solver, SolverBody};
 use crate::io::inp::SurfaceDef;
 use crate::io::{ElementKind, MeshData};
-use crate::mesh::{arc_segments, block_tets_on, graded, plate_quads, rect_triangles_on};
+use crate::mesh::rect_triangles_on;
+use crate::mesh::{arc_segments, block_tets_on, graded, graded_with_core, plate_quads};
 use crate::mesh::{polyline, sphere_triangles};
 use crate::model::{
     Analytical, Enforce, Facet, Friction, Kinematic, Model, Pair, Penalty, RigidBody, RigidPair,
@@ -284,11 +285,12 @@ fn face_axis(face: &str) -> Option<(usize, bool)> {
 }
 
 fn coords(p: &PartSpec, axis: usize) -> Vec<f64> {
-    graded(
+    graded_with_core(
         p.origin[axis],
         p.size[axis],
         p.divisions[axis],
         p.grading[axis],
+        p.grading_core[axis],
     )
 }
 

@@ -107,6 +107,17 @@ pub struct BodySummary {
     pub displacement_at_peak_force: [f64; 3],
 }
 
+/// One sample of a run's force–displacement curve.
+#[derive(Clone, Debug, Serialize)]
+pub struct CurveSample {
+    /// Time.
+    pub time: f64,
+    /// Total contact force on the slave nodes (per radian in axisymmetric scenes).
+    pub force: [f64; 3],
+    /// Displacement of each rigid body's reference point, in `bodies` order.
+    pub body_displacement: Vec<[f64; 3]>,
+}
+
 /// A slave node in contact at the end of a run.
 #[derive(Clone, Debug, Serialize)]
 pub struct ContactNode {
@@ -182,6 +193,9 @@ pub struct Summary {
     pub bodies: Vec<BodySummary>,
     /// Slave nodes in contact at the end, with their pressures.
     pub contact_nodes: Vec<ContactNode>,
+    /// The total contact force against the bodies' displacements every `run.output_every`
+    /// increments: a force–indentation (or crush) curve.
+    pub curve: Vec<CurveSample>,
     /// GPU dispatches per increment by pass, averaged over the increments after the first
     /// (empty on the CPU path). Counted on the device: work others submit to it during the
     /// run counts too.
@@ -347,6 +361,7 @@ pub fn run(scene: &Scene, device: &Device, output: Option<&Path>) -> Result<Summ
     }
     let (mut pen, mut worst, mut contact_dt) = (0.0f64, 0.0f64, f64::INFINITY);
     let mut forces: Vec<(f64, f64)> = Vec::new();
+    let mut curve: Vec<CurveSample> = Vec::new();
     let mut final_force = [0.0; 3];
     let mut peak = 0.0f64;
     let bodies0: Vec<[f64; 3]> = solver.bodies.iter().map(|b| b.state.position).collect();
@@ -403,6 +418,18 @@ pub fn run(scene: &Scene, device: &Device, output: Option<&Path>) -> Result<Summ
             at_peak = solver.bodies.iter().map(|b| b.state.position).collect();
         }
         forces.push((solver.time - 0.5 * step, force));
+        if k % scene.run.output_every.max(1) == 0 {
+            curve.push(CurveSample {
+                time: solver.time,
+                force: final_force,
+                body_displacement: solver
+                    .bodies
+                    .iter()
+                    .zip(&bodies0)
+                    .map(|(b, p0)| std::array::from_fn(|a| b.state.position[a] - p0[a]))
+                    .collect(),
+            });
+        }
         worst = worst.max(solver.balance_error());
         if !solver.energy.balance().is_finite() {
             return Err(Error::BadParameter {
@@ -563,6 +590,7 @@ pub fn run(scene: &Scene, device: &Device, output: Option<&Path>) -> Result<Summ
         parts,
         bodies,
         contact_nodes,
+        curve,
         dispatches_per_increment: traffic
             .dispatches
             .iter()

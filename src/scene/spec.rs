@@ -82,6 +82,9 @@ fn default_true() -> bool {
 fn default_one() -> f64 {
     1.0
 }
+fn default_core() -> [usize; 3] {
+    [1; 3]
+}
 fn default_grading() -> [f64; 3] {
     [1.0; 3]
 }
@@ -134,6 +137,11 @@ pub struct PartSpec {
     /// Ratio of consecutive cell sizes per axis (1: uniform; negative: finest at the far end).
     #[serde(default = "default_grading")]
     pub grading: [f64; 3],
+    /// Cells per axis kept at the finest size at the graded axis' fine end before the sizes
+    /// start to grow by `grading` (default 1: growth from the first cell) — a uniform zone
+    /// under a contact patch.
+    #[serde(default = "default_core")]
+    pub grading_core: [usize; 3],
     /// Cross-section area (bar), slave area per point (points).
     #[serde(default = "default_one")]
     pub area: f64,
@@ -432,6 +440,13 @@ impl Scene {
                     "part.grading",
                     format!("{:?} (part {})", p.grading, p.name),
                     "ratios must be finite and non-zero",
+                );
+            }
+            if (0..3).any(|a| p.grading_core[a] > p.divisions[a].max(1)) {
+                return bad(
+                    "part.grading_core",
+                    format!("{:?} (part {})", p.grading_core, p.name),
+                    "cannot exceed the divisions along the axis",
                 );
             }
             if p.shape == "bar" && p.size.iter().filter(|s| **s != 0.0).count() != 1 {

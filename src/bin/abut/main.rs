@@ -26,7 +26,7 @@ struct Cli {
 #[derive(Subcommand)]
 enum Command {
     /// The default: runs the VERIFICATION.md cases (§1 bar impacts, §2 patch test, §3 Hertz
-    /// cylinder and impact, §4 incline, §5 penalty stability) through the built-in scene files
+    /// cylinder, sphere and impact, §4 incline, §5 penalty stability) through the built-in scene files
     /// with the explicit solver on the default adapter, and prints every measured quantity
     /// against its exact value with the error and the tolerance. Fails when one is outside.
     Verify(VerifyArgs),
@@ -74,7 +74,7 @@ struct VerifyArgs {
     /// Where to run.
     #[arg(long, value_enum, default_value_t = BackendArg::Auto)]
     backend: BackendArg,
-    /// Only these cases (bars, truss, patch, cylinder, impact, incline, stability).
+    /// Only these cases (bars, truss, patch, cylinder, sphere, impact, incline, stability).
     #[arg(long = "case")]
     cases: Vec<String>,
 }

@@ -137,6 +137,37 @@ fn cylinder(s: &Summary) -> Vec<Check> {
     ]
 }
 
+/// The sphere's force–indentation curve over δ ∈ [δmax/2, δmax] against F = (4/3)·E*·√R·δ^1.5:
+/// the least-squares stiffness, the sample farthest from it, and the force at δmax.
+fn sphere(s: &Summary) -> Vec<Check> {
+    let (e_star, r, d_max) = (1.0 / (1.0 - 0.09), 1.0f64, 0.0025f64);
+    let k = 4.0 / 3.0 * e_star * r.sqrt();
+    // per radian → whole circumference; indentation = the sphere's descent
+    let samples: Vec<(f64, f64)> = s
+        .curve
+        .iter()
+        .map(|c| (-c.body_displacement[0][1], 2.0 * PI * c.force[1].abs()))
+        .filter(|(d, _)| *d >= 0.5 * d_max)
+        .collect();
+    let (num, den) = samples.iter().fold((0.0, 0.0), |(n, d), (x, f)| {
+        (n + f * x.powf(1.5), d + x.powf(3.0))
+    });
+    let worst = samples
+        .iter()
+        .map(|(x, f)| f / x.powf(1.5))
+        .fold(k, |w, v| if (v - k).abs() > (w - k).abs() { v } else { w });
+    vec![
+        Check::relative("F/delta^1.5, least squares", num / den, k, 0.02),
+        Check::relative("F/delta^1.5, worst sample", worst, k, 0.02),
+        Check::relative(
+            "force at delta_max",
+            2.0 * PI * s.final_contact_force[1].abs(),
+            k * d_max.powf(1.5),
+            0.02,
+        ),
+    ]
+}
+
 fn impact(s: &Summary) -> Vec<Check> {
     let (e_star, m, v) = (1.0 / (1.0 - 0.09), 4.0 * 1.6375, 0.01f64);
     let d = (15.0 * m * v * v / (16.0 * e_star)).powf(0.4);
@@ -210,6 +241,12 @@ pub const CASES: &[Case] = &[
         section: "§3",
         scene: include_str!("../../../scenes/hertz_cylinder.toml"),
         checks: cylinder,
+    },
+    Case {
+        name: "sphere",
+        section: "§3",
+        scene: include_str!("../../../scenes/hertz_sphere.toml"),
+        checks: sphere,
     },
     Case {
         name: "impact",
