@@ -150,9 +150,9 @@ pub enum Error {
         /// What was reported.
         message: String,
     },
-    /// A file that does not parse: the file, the line (0 where the format has none) and what
-    /// was expected.
-    #[error("{file}:{line}: {message}")]
+    /// A file that does not parse: the file, the line (0 where the format has none or it is
+    /// not known; then not printed) and what was expected.
+    #[error("{file}{}: {message}", line_suffix(*.line))]
     Parse {
         /// The file.
         file: String,
@@ -181,3 +181,12 @@ pub enum Error {
 
 /// Result with the library's [`Error`].
 pub type Result<T, E = Error> = std::result::Result<T, E>;
+
+/// ":line" for a known line, nothing for 0.
+fn line_suffix(line: usize) -> String {
+    if line == 0 {
+        String::new()
+    } else {
+        format!(":{line}")
+    }
+}

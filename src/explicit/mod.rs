@@ -511,15 +511,24 @@ impl Solver {
     /// relative to the largest of the kinetic, internal, external, contact and dissipated
     /// energies now.
     pub fn balance_error(&self) -> f64 {
+        self.energy_drift() / self.energy_scale().max(1e-300)
+    }
+
+    /// The change of [`Energy::balance`] since the first increment (energy units): what
+    /// [`Solver::balance_error`] divides by [`Solver::energy_scale`].
+    pub fn energy_drift(&self) -> f64 {
+        (self.energy.balance() - self.balance0.unwrap_or(0.0)).abs()
+    }
+
+    /// The largest of the kinetic, internal, external, contact and dissipated energies now
+    /// (energy units).
+    pub fn energy_scale(&self) -> f64 {
         let e = &self.energy;
-        let scale = e
-            .kinetic
+        e.kinetic
             .abs()
             .max(e.internal.abs())
             .max(e.external_work.abs())
             .max(e.contact_work.abs())
             .max(e.damping.abs())
-            .max(1e-300);
-        (e.balance() - self.balance0.unwrap_or(0.0)).abs() / scale
     }
 }

@@ -745,6 +745,7 @@ impl Scene {
                             scale: c.penalty_scale.unwrap_or(1.0),
                         },
                     },
+                    damping: c.damping.unwrap_or(0.0),
                     ..Penalty::default()
                 }),
             };

@@ -43,8 +43,13 @@ pub struct RunSpec {
     /// Safety factor on the elements' stable increment (default 0.9).
     #[serde(default = "default_safety")]
     pub safety: f64,
-    /// Safety factor on the penalty contact's stable increment (default 0.9).
-    #[serde(default = "default_safety")]
+    /// Safety factor on the penalty contact's stable increment (default 0.5). Not the
+    /// elements' 0.9: a contact spring switches on and off, and central differences near a
+    /// spring's linear limit (ω·Δt → 2) turn that switching into an energy pump — a node
+    /// pressed slowly into a stiff penalty contact chatters and runs away at 0.7–0.9
+    /// (tests/explicit.rs). At 0.5 (ω·Δt ≤ 1 for the contact) it stays quiet; so does 0.9
+    /// with 10 % of critical damping on the contact (`contact.damping`).
+    #[serde(default = "default_contact_safety")]
     pub contact_safety: f64,
     /// A fixed increment instead of the stable one (for stability studies).
     #[serde(default)]
@@ -72,6 +77,9 @@ pub struct RunSpec {
 
 fn default_safety() -> f64 {
     0.9
+}
+fn default_contact_safety() -> f64 {
+    0.5
 }
 fn default_every() -> usize {
     1
@@ -293,6 +301,11 @@ pub struct ContactSpec {
     /// Penalty stiffness per unit area (pressure per length).
     #[serde(default)]
     pub stiffness_per_area: Option<f64>,
+    /// Viscous damping of each penalty spring, a fraction of its critical damping (default 0;
+    /// penalty only). It takes energy out of impacts, and keeps contact chatter from pumping
+    /// energy into light nodes (see `run.contact_safety`).
+    #[serde(default)]
+    pub damping: Option<f64>,
     /// Global search every this many increments.
     #[serde(default)]
     pub search_interval: Option<u32>,
@@ -317,16 +330,96 @@ pub(crate) fn axis_of(name: &str) -> Option<usize> {
 
 const FACES: &[&str] = &["x-", "x+", "y-", "y+", "z-", "z+", "all", "out"];
 
+/// A check's error with the `[[section]]` entry it was found in (none: the run controls or
+/// the scene as a whole).
+struct Located {
+    error: Error,
+    entry: Option<(&'static str, usize)>,
+}
+
+impl Located {
+    /// The error with its entry named in the value ("in [[part]] 2").
+    fn named(self) -> Error {
+        match (self.error, self.entry) {
+            (
+                Error::BadParameter {
+                    name,
+                    value,
+                    expected,
+                },
+                Some((section, i)),
+            ) => Error::BadParameter {
+                name,
+                value: format!("{value}, in [[{section}]] {}", i + 1),
+                expected,
+            },
+            (e, _) => e,
+        }
+    }
+
+    /// The line the error points at in `text`: the key's line in its entry (for "a / b"
+    /// keys, the first of them present), else the entry's first line; the key's line in the
+    /// run controls.
+    fn line(&self, text: &str) -> Option<usize> {
+        use toml::de::{DeTable, DeValue};
+        let Error::BadParameter { name, .. } = &self.error else {
+            return None;
+        };
+        let doc = DeTable::parse(text).ok()?;
+        let (section, fields) = name.split_once('.').unwrap_or((name, ""));
+        let value = doc
+            .get_ref()
+            .iter()
+            .find(|(k, _)| k.get_ref() == section)?
+            .1;
+        let table = match (value.get_ref(), self.entry) {
+            (DeValue::Table(t), _) => t,
+            (DeValue::Array(a), Some((_, i))) => a.get(i)?.get_ref().as_table()?,
+            _ => return Some(line_of(text, value.span().start)),
+        };
+        let key = fields.split(" / ").find_map(|f| {
+            table
+                .iter()
+                .find(|(k, _)| k.get_ref() == f.trim())
+                .map(|(k, _)| k.span().start)
+        });
+        let first = table.iter().map(|(k, _)| k.span().start).min();
+        key.or(first).map(|at| line_of(text, at))
+    }
+}
+
+/// The line (from 1) holding byte `offset` of `text`.
+fn line_of(text: &str, offset: usize) -> usize {
+    text.as_bytes()[..offset.min(text.len())]
+        .iter()
+        .filter(|b| **b == b'\n')
+        .count()
+        + 1
+}
+
 impl Scene {
-    /// Parses a scene from TOML text; errors name the key, and the line for syntax and type
-    /// errors (toml's own messages).
+    /// Parses a scene from TOML text; errors name the key and the `[[section]]` entry, and
+    /// the line for syntax and type errors (toml's own messages). [`Scene::load`] names the
+    /// file and line of every error.
     pub fn parse(text: &str) -> Result<Self> {
-        let scene: Scene = toml::from_str(text).map_err(|e| Error::BadParameter {
-            name: "scene file",
-            value: e.to_string(),
-            expected: "a valid scene (see abut::scene)",
+        Self::parse_located(text).map_err(|(e, _)| e)
+    }
+
+    /// As [`Scene::parse`], with the line the error points at when one is known.
+    fn parse_located(text: &str) -> std::result::Result<Self, (Error, Option<usize>)> {
+        let scene: Scene = toml::from_str(text).map_err(|e| {
+            let line = e.span().map(|s| line_of(text, s.start));
+            let error = Error::BadParameter {
+                name: "scene file",
+                value: e.to_string(),
+                expected: "a valid scene (see abut::scene)",
+            };
+            (error, line)
         })?;
-        scene.check()?;
+        scene.check().map_err(|l| {
+            let line = l.line(text);
+            (l.named(), line)
+        })?;
         Ok(scene)
     }
 
@@ -337,9 +430,9 @@ impl Scene {
             file: path.display().to_string(),
             message: e.to_string(),
         })?;
-        let mut s = Self::parse(&text).map_err(|e| Error::Parse {
+        let mut s = Self::parse_located(&text).map_err(|(e, line)| Error::Parse {
             file: path.display().to_string(),
-            line: 0,
+            line: line.unwrap_or(0),
             message: e.to_string(),
         })?;
         s.base_dir = path.parent().map(|p| p.to_path_buf());
@@ -351,352 +444,408 @@ impl Scene {
         self.part.iter().any(PartSpec::is_2d)
     }
 
-    fn check(&self) -> Result<()> {
-        let r = &self.run;
-        if !(r.end_time.is_finite() && r.end_time > 0.0) {
-            return bad(
-                "run.end_time",
-                r.end_time.to_string(),
-                "must be finite and positive",
-            );
-        }
-        for (key, v) in [
-            ("run.safety", r.safety),
-            ("run.contact_safety", r.contact_safety),
-        ] {
-            if !(v > 0.0 && v <= 1.0) {
-                return bad(key, v.to_string(), "must lie in (0, 1]");
-            }
-        }
-        if let Some(dt) = r.dt {
-            if !(dt.is_finite() && dt > 0.0) {
-                return bad("run.dt", dt.to_string(), "must be finite and positive");
-            }
-        }
-        for (key, v) in [
-            ("run.damping", r.damping),
-            ("run.bulk_viscosity", r.bulk_viscosity),
-        ] {
-            if !(v.is_finite() && v >= 0.0) {
-                return bad(key, v.to_string(), "must be finite and not negative");
-            }
-        }
-        if self.part.is_empty() {
-            return bad("part", "none".into(), "a scene needs at least one [[part]]");
-        }
-        let two_d = self.is_2d();
-        let mut names = std::collections::HashSet::new();
-        for p in &self.part {
-            if !names.insert(p.name.as_str()) {
-                return bad("part.name", p.name.clone(), "must be unique");
-            }
-            if !SHAPES.contains(&p.shape.as_str()) {
+    fn check(&self) -> std::result::Result<(), Located> {
+        let run: Result<()> = (|| {
+            let r = &self.run;
+            if !(r.end_time.is_finite() && r.end_time > 0.0) {
                 return bad(
-                    "part.shape",
-                    format!("{} (part {})", p.shape, p.name),
-                    "must be block, rect, bar, plate, line, arc, sphere, points or mesh",
-                );
-            }
-            if two_d && matches!(p.shape.as_str(), "block" | "plate" | "sphere" | "bar") {
-                return bad(
-                    "part.shape",
-                    format!("{} (part {}) with 2D parts", p.shape, p.name),
-                    "a scene is either 2D (rect, line, arc, points) or 3D",
-                );
-            }
-            let axes = match p.shape.as_str() {
-                "block" => 3,
-                "rect" | "plate" => 2,
-                "bar" | "line" | "arc" => 1,
-                "sphere" => 2,
-                _ => 0,
-            };
-            if p.divisions.iter().take(axes).any(|&d| d == 0) {
-                return bad(
-                    "part.divisions",
-                    format!("{:?} (part {})", p.divisions, p.name),
-                    "must be positive for each axis the shape uses",
-                );
-            }
-            let sized = match p.shape.as_str() {
-                "block" => 3,
-                "rect" | "plate" => 2,
-                "line" => 1,
-                _ => 0,
-            };
-            if p.size
-                .iter()
-                .take(sized)
-                .any(|&s| !(s.is_finite() && s > 0.0))
-            {
-                return bad(
-                    "part.size",
-                    format!("{:?} (part {})", p.size, p.name),
+                    "run.end_time",
+                    r.end_time.to_string(),
                     "must be finite and positive",
                 );
             }
-            if p.grading.iter().any(|g| !(g.is_finite() && g.abs() > 0.0)) {
-                return bad(
-                    "part.grading",
-                    format!("{:?} (part {})", p.grading, p.name),
-                    "ratios must be finite and non-zero",
-                );
-            }
-            if (0..3).any(|a| p.grading_core[a] > p.divisions[a].max(1)) {
-                return bad(
-                    "part.grading_core",
-                    format!("{:?} (part {})", p.grading_core, p.name),
-                    "cannot exceed the divisions along the axis",
-                );
-            }
-            if p.shape == "bar" && p.size.iter().filter(|s| **s != 0.0).count() != 1 {
-                return bad(
-                    "part.size",
-                    format!("{:?} (bar {})", p.size, p.name),
-                    "a bar runs along one axis: exactly one non-zero component",
-                );
-            }
-            if matches!(p.shape.as_str(), "arc" | "sphere") && !(p.radius > 0.0) {
-                return bad(
-                    "part.radius",
-                    format!("{} (part {})", p.radius, p.name),
-                    "must be positive",
-                );
-            }
-            if p.shape == "points" && (p.points.is_empty() || !(p.mass > 0.0)) {
-                return bad(
-                    "part.points / part.mass",
-                    format!("part {}", p.name),
-                    "points need at least one position and a positive mass",
-                );
-            }
-            for (key, v) in [("part.area", p.area), ("part.thickness", p.thickness)] {
-                if !(v.is_finite() && v > 0.0) {
-                    return bad(key, format!("{v} (part {})", p.name), "must be positive");
+            for (key, v) in [
+                ("run.safety", r.safety),
+                ("run.contact_safety", r.contact_safety),
+            ] {
+                if !(v > 0.0 && v <= 1.0) {
+                    return bad(key, v.to_string(), "must lie in (0, 1]");
                 }
             }
-            if p.axisymmetric && (p.shape != "rect" || p.origin[0] < 0.0) {
-                return bad(
-                    "part.axisymmetric",
-                    format!("part {}", p.name),
-                    "only a rect part with origin x ≥ 0 (x is the radius) can be axisymmetric",
-                );
+            if let Some(dt) = r.dt {
+                if !(dt.is_finite() && dt > 0.0) {
+                    return bad("run.dt", dt.to_string(), "must be finite and positive");
+                }
             }
-            if let Some(m) = p.motion.as_deref() {
-                if !p.is_rigid() || !["fixed", "free", "velocity"].contains(&m) {
+            for (key, v) in [
+                ("run.damping", r.damping),
+                ("run.bulk_viscosity", r.bulk_viscosity),
+            ] {
+                if !(v.is_finite() && v >= 0.0) {
+                    return bad(key, v.to_string(), "must be finite and not negative");
+                }
+            }
+            if self.part.is_empty() {
+                return bad("part", "none".into(), "a scene needs at least one [[part]]");
+            }
+            Ok(())
+        })();
+        run.map_err(|error| Located { error, entry: None })?;
+        let two_d = self.is_2d();
+        let mut names = std::collections::HashSet::new();
+        for (i, p) in self.part.iter().enumerate() {
+            let r: Result<()> = (|| {
+                if !names.insert(p.name.as_str()) {
+                    return bad("part.name", p.name.clone(), "must be unique");
+                }
+                if !SHAPES.contains(&p.shape.as_str()) {
                     return bad(
-                        "part.motion",
-                        format!("{m} (part {})", p.name),
-                        "rigid parts only: fixed, free or velocity",
+                        "part.shape",
+                        format!("{} (part {})", p.shape, p.name),
+                        "must be block, rect, bar, plate, line, arc, sphere, points or mesh",
                     );
                 }
-                if m != "fixed" && !(p.mass.is_finite() && p.mass > 0.0) {
+                if two_d && matches!(p.shape.as_str(), "block" | "plate" | "sphere" | "bar") {
                     return bad(
-                        "part.mass",
-                        format!("{} (part {})", p.mass, p.name),
-                        "a moving rigid part needs a positive mass",
+                        "part.shape",
+                        format!("{} (part {}) with 2D parts", p.shape, p.name),
+                        "a scene is either 2D (rect, line, arc, points) or 3D",
                     );
                 }
-            }
-            if p.shape == "mesh" {
-                match p.file.as_deref() {
-                    Some(f) if f.ends_with(".msh") || f.ends_with(".inp") => {}
-                    _ => {
-                        return bad(
-                            "part.file",
-                            format!("{:?} (part {})", p.file, p.name),
-                            "a mesh part needs a Gmsh .msh or Abaqus .inp file",
-                        )
-                    }
-                }
-                if !matches!(p.dimension, None | Some(2) | Some(3)) {
+                let axes = match p.shape.as_str() {
+                    "block" => 3,
+                    "rect" | "plate" => 2,
+                    "bar" | "line" | "arc" => 1,
+                    "sphere" => 2,
+                    _ => 0,
+                };
+                if p.divisions.iter().take(axes).any(|&d| d == 0) {
                     return bad(
-                        "part.dimension",
-                        format!("{:?} (part {})", p.dimension, p.name),
-                        "must be 2 or 3",
+                        "part.divisions",
+                        format!("{:?} (part {})", p.divisions, p.name),
+                        "must be positive for each axis the shape uses",
                     );
                 }
-            }
-            let deformable = matches!(p.shape.as_str(), "block" | "rect" | "bar")
-                || (p.shape == "mesh" && !p.rigid);
-            if deformable
-                && !self
-                    .material
+                let sized = match p.shape.as_str() {
+                    "block" => 3,
+                    "rect" | "plate" => 2,
+                    "line" => 1,
+                    _ => 0,
+                };
+                if p.size
                     .iter()
-                    .any(|m| Some(&m.name) == p.material.as_ref())
-            {
-                return bad(
-                    "part.material",
-                    format!("{:?} (part {})", p.material, p.name),
-                    "must name a [[material]]",
-                );
-            }
-        }
-        for m in &self.material {
-            if !(m.young > 0.0 && m.density > 0.0 && m.poisson > -1.0 && m.poisson < 0.5) {
-                return bad(
-                    "material",
-                    m.name.clone(),
-                    "needs young > 0, density > 0 and −1 < poisson < 0.5",
-                );
-            }
-        }
-        for b in &self.rigid {
-            if !names.insert(b.name.as_str()) {
-                return bad(
-                    "rigid.name",
-                    b.name.clone(),
-                    "must be unique among parts and bodies",
-                );
-            }
-            if !["plane", "sphere", "cylinder", "line", "circle"].contains(&b.surface.as_str()) {
-                return bad(
-                    "rigid.surface",
-                    format!("{} (body {})", b.surface, b.name),
-                    "must be plane, sphere, cylinder, line or circle",
-                );
-            }
-            if let Some(f) = b
-                .fix
-                .iter()
-                .find(|f| axis_of(f).is_none() && *f != "rotation")
-            {
-                return bad("rigid.fix", f.clone(), "must be x, y, z or rotation");
-            }
-            if !matches!(
-                b.motion.as_deref(),
-                None | Some("free" | "fixed" | "velocity")
-            ) {
-                return bad(
-                    "rigid.motion",
-                    format!("{:?} (body {})", b.motion, b.name),
-                    "must be free, fixed or velocity",
-                );
-            }
-        }
-        for b in &self.boundary {
-            let Some(p) = self.part.iter().find(|p| p.name == b.part) else {
-                return bad("boundary.part", b.part.clone(), "must name a [[part]]");
-            };
-            if p.shape != "mesh" && (!FACES.contains(&b.face.as_str()) || b.face == "out") {
-                return bad(
-                    "boundary.face",
-                    b.face.clone(),
-                    "must be x-, x+, y-, y+, z-, z+ or all",
-                );
-            }
-            if p.is_rigid() {
-                return bad(
-                    "boundary.part",
-                    b.part.clone(),
-                    "rigid parts are fixed already",
-                );
-            }
-            for d in b.fix.iter().chain(&b.directions) {
-                if axis_of(d).is_none() {
+                    .take(sized)
+                    .any(|&s| !(s.is_finite() && s > 0.0))
+                {
                     return bad(
-                        "boundary.fix / boundary.directions",
-                        d.clone(),
-                        "must be x, y or z",
+                        "part.size",
+                        format!("{:?} (part {})", p.size, p.name),
+                        "must be finite and positive",
                     );
                 }
-            }
-            if b.displacement.is_some() && !(b.ramp.is_finite() && b.ramp > 0.0) {
-                return bad(
-                    "boundary.ramp",
-                    format!("{} (part {})", b.ramp, b.part),
-                    "a prescribed displacement needs a positive ramp time",
-                );
-            }
-        }
-        for c in &self.contact {
-            let Some(sp) = self.part.iter().find(|p| p.name == c.slave) else {
-                return bad("contact.slave", c.slave.clone(), "must name a [[part]]");
-            };
-            if sp.is_rigid() && sp.motion.as_deref().is_none_or(|m| m == "fixed") {
-                return bad(
-                    "contact.slave",
-                    c.slave.clone(),
-                    "slave nodes must move: not a fixed rigid part",
-                );
-            }
-            if sp.shape != "mesh"
-                && (!FACES.contains(&c.slave_face.as_str()) || c.slave_face == "out")
-            {
-                return bad(
-                    "contact.slave_face",
-                    c.slave_face.clone(),
-                    "must be x-, x+, y-, y+, z-, z+ or all",
-                );
-            }
-            let master_part = self.part.iter().any(|p| p.name == c.master);
-            let master_body = self.rigid.iter().any(|b| b.name == c.master);
-            if !master_part && !master_body {
-                return bad(
-                    "contact.master",
-                    c.master.clone(),
-                    "must name a [[part]] or a [[rigid]] body",
-                );
-            }
-            let master_mesh = self
-                .part
-                .iter()
-                .any(|p| p.name == c.master && p.shape == "mesh");
-            if master_part {
-                match c.master_face.as_deref() {
-                    Some(_) if master_mesh => {}
-                    Some(f) if FACES.contains(&f) && f != "all" => {}
-                    _ => {
-                        return bad(
-                            "contact.master_face",
-                            format!("{:?} (master {})", c.master_face, c.master),
-                            "a part master needs a face: x-, x+, y-, y+, z-, z+, or out",
-                        )
+                if p.grading.iter().any(|g| !(g.is_finite() && g.abs() > 0.0)) {
+                    return bad(
+                        "part.grading",
+                        format!("{:?} (part {})", p.grading, p.name),
+                        "ratios must be finite and non-zero",
+                    );
+                }
+                if (0..3).any(|a| p.grading_core[a] > p.divisions[a].max(1)) {
+                    return bad(
+                        "part.grading_core",
+                        format!("{:?} (part {})", p.grading_core, p.name),
+                        "cannot exceed the divisions along the axis",
+                    );
+                }
+                if p.shape == "bar" && p.size.iter().filter(|s| **s != 0.0).count() != 1 {
+                    return bad(
+                        "part.size",
+                        format!("{:?} (bar {})", p.size, p.name),
+                        "a bar runs along one axis: exactly one non-zero component",
+                    );
+                }
+                if matches!(p.shape.as_str(), "arc" | "sphere") && !(p.radius > 0.0) {
+                    return bad(
+                        "part.radius",
+                        format!("{} (part {})", p.radius, p.name),
+                        "must be positive",
+                    );
+                }
+                if p.shape == "points" && (p.points.is_empty() || !(p.mass > 0.0)) {
+                    return bad(
+                        "part.points / part.mass",
+                        format!("part {}", p.name),
+                        "points need at least one position and a positive mass",
+                    );
+                }
+                for (key, v) in [("part.area", p.area), ("part.thickness", p.thickness)] {
+                    if !(v.is_finite() && v > 0.0) {
+                        return bad(key, format!("{v} (part {})", p.name), "must be positive");
                     }
                 }
-            }
-            if !matches!(c.enforce.as_deref(), None | Some("penalty" | "kinematic")) {
-                return bad(
-                    "contact.enforce",
-                    format!("{:?}", c.enforce),
-                    "must be \"penalty\" or \"kinematic\"",
-                );
-            }
-            if master_body && c.enforce.as_deref() != Some("kinematic") {
-                return bad(
+                if p.axisymmetric && (p.shape != "rect" || p.origin[0] < 0.0) {
+                    return bad(
+                        "part.axisymmetric",
+                        format!("part {}", p.name),
+                        "only a rect part with origin x ≥ 0 (x is the radius) can be axisymmetric",
+                    );
+                }
+                if let Some(m) = p.motion.as_deref() {
+                    if !p.is_rigid() || !["fixed", "free", "velocity"].contains(&m) {
+                        return bad(
+                            "part.motion",
+                            format!("{m} (part {})", p.name),
+                            "rigid parts only: fixed, free or velocity",
+                        );
+                    }
+                    if m != "fixed" && !(p.mass.is_finite() && p.mass > 0.0) {
+                        return bad(
+                            "part.mass",
+                            format!("{} (part {})", p.mass, p.name),
+                            "a moving rigid part needs a positive mass",
+                        );
+                    }
+                }
+                if p.shape == "mesh" {
+                    match p.file.as_deref() {
+                        Some(f) if f.ends_with(".msh") || f.ends_with(".inp") => {}
+                        _ => {
+                            return bad(
+                                "part.file",
+                                format!("{:?} (part {})", p.file, p.name),
+                                "a mesh part needs a Gmsh .msh or Abaqus .inp file",
+                            )
+                        }
+                    }
+                    if !matches!(p.dimension, None | Some(2) | Some(3)) {
+                        return bad(
+                            "part.dimension",
+                            format!("{:?} (part {})", p.dimension, p.name),
+                            "must be 2 or 3",
+                        );
+                    }
+                }
+                let deformable = matches!(p.shape.as_str(), "block" | "rect" | "bar")
+                    || (p.shape == "mesh" && !p.rigid);
+                if deformable
+                    && !self
+                        .material
+                        .iter()
+                        .any(|m| Some(&m.name) == p.material.as_ref())
+                {
+                    return bad(
+                        "part.material",
+                        format!("{:?} (part {})", p.material, p.name),
+                        "must name a [[material]]",
+                    );
+                }
+                Ok(())
+            })();
+            r.map_err(|error| Located {
+                error,
+                entry: Some(("part", i)),
+            })?;
+        }
+        for (i, m) in self.material.iter().enumerate() {
+            let r: Result<()> = (|| {
+                if !(m.young > 0.0 && m.density > 0.0 && m.poisson > -1.0 && m.poisson < 0.5) {
+                    return bad(
+                        "material",
+                        m.name.clone(),
+                        "needs young > 0, density > 0 and −1 < poisson < 0.5",
+                    );
+                }
+                Ok(())
+            })();
+            r.map_err(|error| Located {
+                error,
+                entry: Some(("material", i)),
+            })?;
+        }
+        for (i, b) in self.rigid.iter().enumerate() {
+            let r: Result<()> = (|| {
+                if !names.insert(b.name.as_str()) {
+                    return bad(
+                        "rigid.name",
+                        b.name.clone(),
+                        "must be unique among parts and bodies",
+                    );
+                }
+                if !["plane", "sphere", "cylinder", "line", "circle"].contains(&b.surface.as_str())
+                {
+                    return bad(
+                        "rigid.surface",
+                        format!("{} (body {})", b.surface, b.name),
+                        "must be plane, sphere, cylinder, line or circle",
+                    );
+                }
+                if let Some(f) = b
+                    .fix
+                    .iter()
+                    .find(|f| axis_of(f).is_none() && *f != "rotation")
+                {
+                    return bad("rigid.fix", f.clone(), "must be x, y, z or rotation");
+                }
+                if !matches!(
+                    b.motion.as_deref(),
+                    None | Some("free" | "fixed" | "velocity")
+                ) {
+                    return bad(
+                        "rigid.motion",
+                        format!("{:?} (body {})", b.motion, b.name),
+                        "must be free, fixed or velocity",
+                    );
+                }
+                Ok(())
+            })();
+            r.map_err(|error| Located {
+                error,
+                entry: Some(("rigid", i)),
+            })?;
+        }
+        for (i, b) in self.boundary.iter().enumerate() {
+            let r: Result<()> = (|| {
+                let Some(p) = self.part.iter().find(|p| p.name == b.part) else {
+                    return bad("boundary.part", b.part.clone(), "must name a [[part]]");
+                };
+                if p.shape != "mesh" && (!FACES.contains(&b.face.as_str()) || b.face == "out") {
+                    return bad(
+                        "boundary.face",
+                        b.face.clone(),
+                        "must be x-, x+, y-, y+, z-, z+ or all",
+                    );
+                }
+                if p.is_rigid() {
+                    return bad(
+                        "boundary.part",
+                        b.part.clone(),
+                        "rigid parts are fixed already",
+                    );
+                }
+                for d in b.fix.iter().chain(&b.directions) {
+                    if axis_of(d).is_none() {
+                        return bad(
+                            "boundary.fix / boundary.directions",
+                            d.clone(),
+                            "must be x, y or z",
+                        );
+                    }
+                }
+                if b.displacement.is_some() && !(b.ramp.is_finite() && b.ramp > 0.0) {
+                    return bad(
+                        "boundary.ramp",
+                        format!("{} (part {})", b.ramp, b.part),
+                        "a prescribed displacement needs a positive ramp time",
+                    );
+                }
+                Ok(())
+            })();
+            r.map_err(|error| Located {
+                error,
+                entry: Some(("boundary", i)),
+            })?;
+        }
+        for (i, c) in self.contact.iter().enumerate() {
+            let r: Result<()> = (|| {
+                let Some(sp) = self.part.iter().find(|p| p.name == c.slave) else {
+                    return bad("contact.slave", c.slave.clone(), "must name a [[part]]");
+                };
+                if sp.is_rigid() && sp.motion.as_deref().is_none_or(|m| m == "fixed") {
+                    return bad(
+                        "contact.slave",
+                        c.slave.clone(),
+                        "slave nodes must move: not a fixed rigid part",
+                    );
+                }
+                if sp.shape != "mesh"
+                    && (!FACES.contains(&c.slave_face.as_str()) || c.slave_face == "out")
+                {
+                    return bad(
+                        "contact.slave_face",
+                        c.slave_face.clone(),
+                        "must be x-, x+, y-, y+, z-, z+ or all",
+                    );
+                }
+                let master_part = self.part.iter().any(|p| p.name == c.master);
+                let master_body = self.rigid.iter().any(|b| b.name == c.master);
+                if !master_part && !master_body {
+                    return bad(
+                        "contact.master",
+                        c.master.clone(),
+                        "must name a [[part]] or a [[rigid]] body",
+                    );
+                }
+                let master_mesh = self
+                    .part
+                    .iter()
+                    .any(|p| p.name == c.master && p.shape == "mesh");
+                if master_part {
+                    match c.master_face.as_deref() {
+                        Some(_) if master_mesh => {}
+                        Some(f) if FACES.contains(&f) && f != "all" => {}
+                        _ => {
+                            return bad(
+                                "contact.master_face",
+                                format!("{:?} (master {})", c.master_face, c.master),
+                                "a part master needs a face: x-, x+, y-, y+, z-, z+, or out",
+                            )
+                        }
+                    }
+                }
+                if !matches!(c.enforce.as_deref(), None | Some("penalty" | "kinematic")) {
+                    return bad(
+                        "contact.enforce",
+                        format!("{:?}", c.enforce),
+                        "must be \"penalty\" or \"kinematic\"",
+                    );
+                }
+                if master_body && c.enforce.as_deref() != Some("kinematic") {
+                    return bad(
                     "contact.enforce",
                     format!("{:?} (master {})", c.enforce, c.master),
                     "analytical rigid surfaces are enforced kinematically: set enforce = \"kinematic\"",
                 );
-            }
-            if !matches!(
-                c.sliding.as_deref(),
-                None | Some("finite" | "small" | "infinitesimal")
-            ) {
-                return bad(
-                    "contact.sliding",
-                    format!("{:?}", c.sliding),
-                    "must be finite, small or infinitesimal",
-                );
-            }
-            let stiffness_rules = [c.penalty_scale, c.stiffness, c.stiffness_per_area]
-                .iter()
-                .filter(|s| s.is_some())
-                .count();
-            if stiffness_rules > 1 {
-                return bad(
-                    "contact.penalty_scale / stiffness / stiffness_per_area",
-                    format!("master {}", c.master),
-                    "give at most one stiffness rule",
-                );
-            }
-            if !(c.friction.is_finite() && c.friction >= 0.0) {
-                return bad(
-                    "contact.friction",
-                    c.friction.to_string(),
-                    "must be finite and not negative",
-                );
-            }
+                }
+                if !matches!(
+                    c.sliding.as_deref(),
+                    None | Some("finite" | "small" | "infinitesimal")
+                ) {
+                    return bad(
+                        "contact.sliding",
+                        format!("{:?}", c.sliding),
+                        "must be finite, small or infinitesimal",
+                    );
+                }
+                let stiffness_rules = [c.penalty_scale, c.stiffness, c.stiffness_per_area]
+                    .iter()
+                    .filter(|s| s.is_some())
+                    .count();
+                if stiffness_rules > 1 {
+                    return bad(
+                        "contact.penalty_scale / stiffness / stiffness_per_area",
+                        format!("master {}", c.master),
+                        "give at most one stiffness rule",
+                    );
+                }
+                if !(c.friction.is_finite() && c.friction >= 0.0) {
+                    return bad(
+                        "contact.friction",
+                        c.friction.to_string(),
+                        "must be finite and not negative",
+                    );
+                }
+                if let Some(z) = c.damping {
+                    if !(z.is_finite() && (0.0..=1.0).contains(&z)) {
+                        return bad(
+                            "contact.damping",
+                            format!("{z} (master {})", c.master),
+                            "a fraction of critical damping in [0, 1]",
+                        );
+                    }
+                    if c.enforce.as_deref() == Some("kinematic") {
+                        return bad(
+                            "contact.damping",
+                            format!("{z} (master {})", c.master),
+                            "penalty contact only: kinematic contact has no springs to damp",
+                        );
+                    }
+                }
+                Ok(())
+            })();
+            r.map_err(|error| Located {
+                error,
+                entry: Some(("contact", i)),
+            })?;
         }
         Ok(())
     }
