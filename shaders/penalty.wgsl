@@ -200,6 +200,8 @@ fn penalty(@builtin(workgroup_id) wg: vec3<u32>,
         o.tangential = vec4<f32>(w * f_t, w * (o.tangential.w + lv.energy));
         atomicAdd(&status[STATUS_ACTIVE], 1u);
         if (o.status == CSTATUS_SLIP) { atomicAdd(&status[STATUS_SLIPPING], 1u); }
+        // non-negative f32 bits order as the values: an integer max is the float max
+        atomicMax(&status[STATUS_MAX_OVERCLOSURE], bitcast<u32>(max(-gap, 0.0)));
     }
     state[i].tangential_area = vec4<f32>(f_t, area);
     state[i].history = vec4<f32>(o.dissipation, 0.0, 0.0, 0.0);

@@ -12,7 +12,9 @@ use crate::model::{validate_positions, Model, PairId};
 use crate::model::{BodyId, Enforce, MasterSurface, PressureOverclosure, RigidBody, RigidPairId};
 use crate::penalty::layout::{ContactOut, CSTATUS_OPEN, CSTATUS_SLIP, CSTATUS_STICK, NO_LIMIT};
 use crate::penalty::PenaltySetup;
-use crate::search::layout::{STATUS_ACTIVE, STATUS_DT_APPROACH, STATUS_DT_STABLE, STATUS_SLIPPING};
+use crate::search::layout::{
+    STATUS_ACTIVE, STATUS_DT_APPROACH, STATUS_DT_STABLE, STATUS_MAX_OVERCLOSURE, STATUS_SLIPPING,
+};
 use crate::search::{GlobalSearch, SearchResult};
 
 /// The penalty executor of one pair, on the same device as its search.
@@ -52,6 +54,10 @@ pub struct StepReport {
     /// Half the smallest remaining gap over its closing speed: an increment beyond this could
     /// carry an approaching node through its master facet in one step; ∞ when none approaches.
     pub approach_dt: f64,
+    /// The largest overclosure (penetration, model length units, ≥ 0) of a slave node carrying
+    /// penalty force this increment, over every pair; 0 when none. Known without asking for
+    /// the output variables.
+    pub max_overclosure: f64,
     /// Slave nodes in contact.
     pub active: usize,
     /// Of which slipping.
@@ -362,6 +368,7 @@ impl Contact {
             forces: vec![[0.0; 3]; self.n_nodes],
             stable_dt: f64::INFINITY,
             approach_dt: f64::INFINITY,
+            max_overclosure: 0.0,
             active: 0,
             slipping: 0,
         };
@@ -394,6 +401,9 @@ impl Contact {
                 }
             };
             report.stable_dt = report.stable_dt.min(limit(status[STATUS_DT_STABLE]));
+            report.max_overclosure = report
+                .max_overclosure
+                .max(f32::from_bits(status[STATUS_MAX_OVERCLOSURE]) as f64);
             report.approach_dt = report.approach_dt.min(limit(status[STATUS_DT_APPROACH]));
             report.active += status[STATUS_ACTIVE] as usize;
             report.slipping += status[STATUS_SLIPPING] as usize;

@@ -134,6 +134,15 @@ fn gpu_matches_cpu_forces_and_outputs_and_conserves_momentum() {
             }
             assert!(r.stable_dt.is_finite() && r.stable_dt > 0.0);
             assert!(o.contact_energy > 0.0);
+            // the largest overclosure, reported without the outputs, is theirs exactly
+            let deepest = o
+                .copen
+                .iter()
+                .zip(&o.cstatus)
+                .filter(|(_, s)| matches!(s, Some(ContactStatus::Stick | ContactStatus::Slip)))
+                .map(|(g, _)| (-g).max(0.0))
+                .fold(0.0, f64::max);
+            assert_eq!(r.max_overclosure, deepest, "{what}: max overclosure");
         }
         for g in gpus() {
             let gpu = run_steps(g, &m, &vel, 4);
@@ -192,6 +201,12 @@ fn gpu_matches_cpu_forces_and_outputs_and_conserves_momentum() {
                     "{what}: {status_diff} statuses differ"
                 );
                 assert!((rc.stable_dt - rg.stable_dt).abs() <= 1e-5 * rc.stable_dt);
+                assert!(
+                    (rc.max_overclosure - rg.max_overclosure).abs() < 1e-5,
+                    "{what}: max overclosure {} vs {}",
+                    rc.max_overclosure,
+                    rg.max_overclosure
+                );
                 assert_eq!(rc.active, rg.active, "{what}: active");
                 assert!((oc.contact_energy - og.contact_energy).abs() <= 1e-3 * oc.contact_energy);
                 assert!(

@@ -294,12 +294,14 @@ impl CpuPenalty {
     ) {
         use crate::penalty::layout::NO_LIMIT;
         use crate::search::layout::{
-            STATUS_ACTIVE, STATUS_DT_APPROACH, STATUS_DT_STABLE, STATUS_SLIPPING,
+            STATUS_ACTIVE, STATUS_DT_APPROACH, STATUS_DT_STABLE, STATUS_MAX_OVERCLOSURE,
+            STATUS_SLIPPING,
         };
         status[STATUS_DT_STABLE] = NO_LIMIT.to_bits();
         status[STATUS_DT_APPROACH] = NO_LIMIT.to_bits();
         status[STATUS_ACTIVE] = 0;
         status[STATUS_SLIPPING] = 0;
+        status[STATUS_MAX_OVERCLOSURE] = 0;
         let n_slaves = pp.n_slaves as usize;
         let n_facets = pp.n_facets as usize;
         nodal_normals::nodal_normals(

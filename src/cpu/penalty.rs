@@ -4,8 +4,8 @@ use super::common::{facet_node_count, node};
 use crate::geometry::{tangent_directions, V3};
 use crate::penalty::layout::*;
 use crate::search::layout::{
-    GpuHit, NO_FACET, STATUS_ACTIVE, STATUS_DT_APPROACH, STATUS_DT_STABLE, STATUS_OVERFLOW,
-    STATUS_SLIPPING,
+    GpuHit, NO_FACET, STATUS_ACTIVE, STATUS_DT_APPROACH, STATUS_DT_STABLE, STATUS_MAX_OVERCLOSURE,
+    STATUS_OVERFLOW, STATUS_SLIPPING,
 };
 
 const E_MINUS_1: f32 = 1.718_281_8;
@@ -215,6 +215,8 @@ pub fn penalty(
             if o.status == CSTATUS_SLIP {
                 status[STATUS_SLIPPING] += 1;
             }
+            let w = &mut status[STATUS_MAX_OVERCLOSURE];
+            *w = (*w).max((-gap).max(0.0).to_bits());
         }
         state[i].tangential_area = [f_t.x, f_t.y, f_t.z, area];
         state[i].history = [o.dissipation, 0.0, 0.0, 0.0];

@@ -404,9 +404,12 @@ impl AfterSearch for GpuPenalty {
     fn encode(&self, enc: &mut wgpu::CommandEncoder, max_dim: u32) {
         let (_, g) = self.groups.as_ref().expect("prepared before encoding");
         let p = &self.pipelines;
-        // status words 4..8: increments start at "no limit", counts at 0
+        // status words 4..8: increments start at "no limit", counts at 0; word 14, the
+        // largest overclosure, at 0
         let status = self.status.as_ref().expect("prepared before encoding");
         enc.copy_buffer_to_buffer(&self.status_init, 0, status, 16, 16);
+        let overclosure = 4 * crate::search::layout::STATUS_MAX_OVERCLOSURE as u64;
+        enc.clear_buffer(status, overclosure, Some(4));
         let run = |enc: &mut wgpu::CommandEncoder, label: &str, work: &[super::Work<'_>]| {
             super::run_pass(&self.ctx, enc, label, work, max_dim)
         };

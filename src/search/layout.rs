@@ -43,6 +43,9 @@ pub const STATUS_ACTIVE: usize = 6;
 pub const STATUS_SLIPPING: usize = 7;
 /// Number of status words.
 pub const STATUS_WORDS: usize = 16;
+/// Status word: bits of the largest overclosure (−gap ≥ 0, a non-negative f32) of the penalty
+/// springs carrying force this increment (WGSL: `STATUS_MAX_OVERCLOSURE`).
+pub const STATUS_MAX_OVERCLOSURE: usize = 14;
 /// Status word: small sliding, slave nodes that slid more than an element length from their
 /// anchor (WGSL: `STATUS_SLID_TOO_FAR`).
 pub const STATUS_SLID_TOO_FAR: usize = 12;
