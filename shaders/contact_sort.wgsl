@@ -25,7 +25,7 @@ fn count_by_facet(@builtin(workgroup_id) wg: vec3<u32>,
                   @builtin(local_invocation_index) li: u32) {
     let i = folded_id(wg, nwg, li, ITEM_WORKGROUP);
     if (i >= pp.n_slaves) { return; }
-    if (out[i].status == CSTATUS_OPEN) { return; }
+    if ((out[i].status & CSTATUS_MASK) == CSTATUS_OPEN) { return; }
     atomicAdd(&counts[hits[i].facet], 1u);
 }
 
@@ -35,7 +35,7 @@ fn scatter_by_facet(@builtin(workgroup_id) wg: vec3<u32>,
                     @builtin(local_invocation_index) li: u32) {
     let i = folded_id(wg, nwg, li, ITEM_WORKGROUP);
     if (i >= pp.n_slaves) { return; }
-    if (out[i].status == CSTATUS_OPEN) { return; }
+    if ((out[i].status & CSTATUS_MASK) == CSTATUS_OPEN) { return; }
     let slot = atomicAdd(&cursor[hits[i].facet], 1u);
     facet_slaves[slot] = i;
 }

@@ -8,6 +8,9 @@
 // Invariants: a slave node gets its own contact force; a master node gets −w_j·f of every slave
 //             in contact with one of its facets, in increasing facet then slave order, so the
 //             sum has the same bits every run and Σ over the pair is zero to round-off.
+//             forces.w: the node's row of the node-wise frequency bound, the sum of the shares
+//             (bound_light, or bound_heavy where the spring marks the node heavy) of its own
+//             spring and of every spring in contact on its facets, in the same order.
 
 @group(0) @binding(0) var<uniform> pp: PenaltyParams;
 @group(0) @binding(1) var<storage, read> pair_nodes: array<vec4<u32>>;
@@ -27,7 +30,11 @@ fn gather(@builtin(workgroup_id) wg: vec3<u32>,
     if (i >= pp.n_pair_nodes) { return; }
     let pn = pair_nodes[i];
     var f = vec3<f32>(0.0);
-    if (pn.y != NO_SLAVE) { f = out[pn.y].force.xyz; }
+    var row = 0.0;
+    if (pn.y != NO_SLAVE) {
+        f = out[pn.y].force.xyz;
+        row = row_share(out[pn.y], HEAVY_SLAVE);
+    }
     for (var a = pn.z; a < pn.w; a++) {
         let facet = adjacency[a];
         let fac = facets[facet];
@@ -38,7 +45,13 @@ fn gather(@builtin(workgroup_id) wg: vec3<u32>,
         for (var k = starts[facet]; k < starts[facet + 1u]; k++) {
             let s = facet_slaves[k];
             f -= hits[s].weights[slot] * out[s].force.xyz;
+            row += row_share(out[s], 1u << (HEAVY_SHIFT + slot));
         }
     }
-    forces[i] = vec4<f32>(f, 0.0);
+    forces[i] = vec4<f32>(f, row);
+}
+
+// A spring's share of the bound at one of its nodes: heavy if its status has `bit`.
+fn row_share(o: ContactOut, bit: u32) -> f32 {
+    return select(o.bound_light, o.bound_heavy, (o.status & bit) != 0u);
 }

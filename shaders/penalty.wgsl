@@ -16,6 +16,9 @@
 //             HIT_BESIDE_FREE_EDGE is off the master's facets: open, no force.
 //             Increments are positive f32, reduced with atomicMin on their bits (order-
 //             preserving for positive floats), so the result is deterministic.
+//             Every spring within the search radius also writes its shares of the node-wise
+//             frequency bound (bound_light, bound_heavy, heavy bits in status; gather sums
+//             them per node; the derivation is in contact.rs).
 
 override FRICTION: bool = true;
 
@@ -113,8 +116,10 @@ fn penalty(@builtin(workgroup_id) wg: vec3<u32>,
     o.normal_gap = vec4<f32>(0.0);
     o.status = CSTATUS_OPEN;
     o.dissipation = 0.0;
-    o.dt_stable = NO_LIMIT;
-    o.dt_approach = NO_LIMIT;
+    o.bound_light = 0.0;
+    o.bound_heavy = 0.0;
+    var dt_stable = NO_LIMIT;
+    var dt_approach = NO_LIMIT;
     let area = state[i].tangential_area.w;
     o.dissipation = state[i].history.x;
     // no partner, or beside a free edge of the master (off its facets): no contact
@@ -130,12 +135,14 @@ fn penalty(@builtin(workgroup_id) wg: vec3<u32>,
     var vm = vec3<f32>(0.0);
     var inv_mm = 0.0;
     var h_facet = 0.0;
+    var share = vec4<f32>(0.0);   // |w_j|/√m_j: each master node's share of the motion
     for (var j = 0u; j < n; j++) {
         let w = hit.weights[j];
         let node = fac[j];
         nsum += w * normals[node].xyz;
         vm += w * vel[node].xyz;
         inv_mm += w * w / nodes[node].w;
+        share[j] = abs(w) / sqrt(nodes[node].w);
         h_facet = max(h_facet, length(nodes[fac[(j + 1u) % n]].xyz - nodes[node].xyz));
     }
     var nrm = normalize_or_zero(nsum);
@@ -163,11 +170,37 @@ fn penalty(@builtin(workgroup_id) wg: vec3<u32>,
     let omega = sqrt(lv.stiffness / m_eff);
     let z = pp.damping;
     if (omega > 0.0) {
-        o.dt_stable = 2.0 / omega * (sqrt(1.0 + z * z) - z);
+        dt_stable = 2.0 / omega * (sqrt(1.0 + z * z) - z);
     }
     if (gap > 0.0 && v_close > 0.0) {
-        o.dt_approach = 0.5 * gap / v_close;
+        dt_approach = 0.5 * gap / v_close;
     }
+    // node-wise bound: Cauchy–Schwarz weighted 1 at light nodes, share/cut at heavy ones
+    var k_row = pp.weight * lv.stiffness;
+    if (FRICTION) { k_row *= max(1.0, pp.stick_stiffness); }
+    let share_s = 1.0 / sqrt(nodes[s].w);
+    var top = share_s;
+    for (var j = 0u; j < n; j++) { top = max(top, share[j]); }
+    let cut = HEAVY_SHARE * top;
+    var q = 0.0;
+    var heavy = 0.0;
+    var mask = 0u;
+    if (share_s >= cut) { q += share_s * share_s; } else {
+        q += share_s * cut;
+        heavy = max(heavy, share_s);
+        mask |= HEAVY_SLAVE;
+    }
+    for (var j = 0u; j < n; j++) {
+        let u = share[j];
+        if (u == 0.0) { continue; }
+        if (u >= cut) { q += u * u; } else {
+            q += u * cut;
+            heavy = max(heavy, u);
+            mask |= 1u << (HEAVY_SHIFT + j);
+        }
+    }
+    o.bound_light = k_row * q;
+    o.bound_heavy = k_row * q * (heavy / cut);
     o.normal_gap = vec4<f32>(nrm, gap);
     var f_t = vec3<f32>(0.0);
     if (lv.force > 0.0) {
@@ -205,7 +238,8 @@ fn penalty(@builtin(workgroup_id) wg: vec3<u32>,
     }
     state[i].tangential_area = vec4<f32>(f_t, area);
     state[i].history = vec4<f32>(o.dissipation, 0.0, 0.0, 0.0);
-    atomicMin(&status[STATUS_DT_STABLE], bitcast<u32>(o.dt_stable));
-    atomicMin(&status[STATUS_DT_APPROACH], bitcast<u32>(o.dt_approach));
+    atomicMin(&status[STATUS_DT_STABLE], bitcast<u32>(dt_stable));
+    atomicMin(&status[STATUS_DT_APPROACH], bitcast<u32>(dt_approach));
+    o.status |= mask;
     out[i] = o;
 }

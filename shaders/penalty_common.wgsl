@@ -5,6 +5,10 @@ const NO_SLAVE: u32 = 0xffffffffu;
 const CSTATUS_OPEN: u32 = 0u;
 const CSTATUS_STICK: u32 = 1u;
 const CSTATUS_SLIP: u32 = 2u;
+const CSTATUS_MASK: u32 = 0xffu;      // status bits holding CSTATUS_*
+const HEAVY_SHIFT: u32 = 8u;          // status bit of facet slot j's node heavy: 1 << (8 + j)
+const HEAVY_SLAVE: u32 = 4096u;       // status bit of the slave node heavy (1 << 12)
+const HEAVY_SHARE: f32 = 0.01;        // heavy: share |c|/√m below this fraction of the largest
 const LAW_LINEAR: u32 = 0u;
 const LAW_EXPONENTIAL: u32 = 1u;
 const LAW_TABULAR: u32 = 2u;
@@ -51,8 +55,8 @@ struct ContactOut {
     force: vec4<f32>,
     tangential: vec4<f32>,
     normal_gap: vec4<f32>,
-    status: u32,
+    status: u32,          // CSTATUS_* (low byte), heavy-node bits above
     dissipation: f32,
-    dt_stable: f32,
-    dt_approach: f32,
+    bound_light: f32,     // ω² share of the spring at its light nodes
+    bound_heavy: f32,     // and at its heavy ones
 }

@@ -10,7 +10,9 @@ use crate::kinematic::{
 };
 use crate::model::{validate_positions, Model, PairId};
 use crate::model::{BodyId, Enforce, MasterSurface, PressureOverclosure, RigidBody, RigidPairId};
-use crate::penalty::layout::{ContactOut, CSTATUS_OPEN, CSTATUS_SLIP, CSTATUS_STICK, NO_LIMIT};
+use crate::penalty::layout::{
+    ContactOut, CSTATUS_MASK, CSTATUS_OPEN, CSTATUS_SLIP, CSTATUS_STICK, NO_LIMIT,
+};
 use crate::penalty::PenaltySetup;
 use crate::search::layout::{
     STATUS_ACTIVE, STATUS_DT_APPROACH, STATUS_DT_STABLE, STATUS_MAX_OVERCLOSURE, STATUS_SLIPPING,
@@ -39,17 +41,15 @@ pub enum ContactStatus {
 pub struct StepReport {
     /// Contact force on every model node (model force units), summed over the pairs.
     pub forces: Vec<[f64; 3]>,
-    /// The largest increment the penalty springs allow (central differences; with the weights'
-    /// share of the master masses and the damping), over contacts within the search radius;
-    /// ∞ when there is none. A linear limit, 2/ω per spring: a spring that switches on and off
-    /// near it pumps energy into a node pressed into contact (central differences), so take at
-    /// most about half of it for contact that persists, unless the contact is damped (10 % of
-    /// critical lets 0.9 of it hold; tests/scene.rs). Per spring, so exact for one spring; a
-    /// deformable node shared by several springs (a master node under several slaves, both
-    /// passes of a balanced pair) can need less: the springs together have ω² no larger than
-    /// the largest sum, over the nodes, of the ω² of the springs meeting at a node. The half
-    /// taken above has covered that in every case measured (the patch test, balanced, at ε_N
-    /// up to 1e4·E/H, which runs away at 0.9).
+    /// The largest increment the penalty springs allow under central differences, with the
+    /// damping: the smaller of each spring's own limit (with the weights' share of the master
+    /// masses; springs within the search radius) and a node-wise bound on all the springs in
+    /// contact together, which covers nodes shared by several springs (a master node under
+    /// several slaves, both passes of a balanced pair) and is the exact limit for one spring
+    /// (to 1e-4); ∞ when there is none. A linear limit: a spring that switches on and off near
+    /// it pumps energy into a node pressed into contact, so take at most about half of it for
+    /// contact that persists, unless the contact is damped (10 % of critical lets 0.9 of it
+    /// hold; tests/scene.rs).
     pub stable_dt: f64,
     /// Half the smallest remaining gap over its closing speed: an increment beyond this could
     /// carry an approaching node through its master facet in one step; ∞ when none approaches.
@@ -169,6 +169,10 @@ pub struct Contact {
     dt_ref: Option<f64>,
     want_outputs: bool,
     report: StepReport,
+    /// Per model node, the row of the node-wise frequency bound being summed over the pairs
+    /// (zero between increments), and the nodes touched this increment.
+    bound_rows: Vec<f64>,
+    bound_touched: Vec<u32>,
 }
 
 impl Contact {
@@ -316,7 +320,32 @@ impl Contact {
             dt_ref: None,
             want_outputs: false,
             report: StepReport::default(),
+            bound_rows: vec![0.0; n_nodes],
+            bound_touched: Vec::new(),
         })
+    }
+
+    /// The node-wise bound on the highest frequency of all penalty springs together (ω², 1/s²)
+    /// from the rows summed this increment, which it clears.
+    ///
+    /// Each spring s adds k_s·(u_s·x)² to xᵀKx, where x are the nodes' mass-scaled
+    /// displacements and u_s its nodes' shares: 1/√m for the slave, |w_j|/√m_j for a master
+    /// node. Weighted Cauchy–Schwarz, (u·x)² ≤ (Σ_n u_n²/α_n)·(Σ_n α_n·|x_n|²) for any α > 0,
+    /// with α = 1 at the spring's light nodes and α = u_n/cut at its heavy ones (share below
+    /// `HEAVY_SHARE` of its largest, `cut`), gives xᵀKx ≤ Σ_n |x_n|²·Λ_n, Λ_n the sum over the
+    /// springs at node n of k_s·q_s·α_n with q_s = Σ u²/α. So ω² ≤ max_n Λ_n. One spring alone
+    /// gets its exact k·Σu² (to the heavy nodes' 1e-4 or less); a rigid node (u ≈ 1e-6 of the
+    /// slave's) takes only ~1e-4 of each spring it carries. The kernels compute each spring's
+    /// share (penalty) and sum them per node (gather); the pairs' rows are summed here.
+    fn take_bound_rows(&mut self) -> f64 {
+        let mut top = 0.0f64;
+        for &n in &self.bound_touched {
+            let row = &mut self.bound_rows[n as usize];
+            top = top.max(*row);
+            *row = 0.0;
+        }
+        self.bound_touched.clear();
+        top
     }
 
     /// Asks for the contact output variables ([`Contact::outputs`]) to be computed and read
@@ -364,6 +393,7 @@ impl Contact {
             .iter()
             .map(|v| [v[0] as f32, v[1] as f32, v[2] as f32, 0.0])
             .collect();
+        let mut damping = 0.0f64;
         let mut report = StepReport {
             forces: vec![[0.0; 3]; self.n_nodes],
             stable_dt: f64::INFINITY,
@@ -391,7 +421,15 @@ impl Contact {
                 for a in 0..3 {
                     r[a] += f[a] as f64;
                 }
+                if f[3] > 0.0 {
+                    let row = &mut self.bound_rows[pn.node as usize];
+                    if *row == 0.0 {
+                        self.bound_touched.push(pn.node);
+                    }
+                    *row += f[3] as f64;
+                }
             }
+            damping = damping.max(pp.damping as f64);
             let limit = |bits: u32| {
                 let v = f32::from_bits(bits);
                 if v >= NO_LIMIT {
@@ -414,6 +452,13 @@ impl Contact {
                 };
                 fill_output(&mut pr.output, outs, &pr.setup.areas, result);
             }
+        }
+        let omega2 = self.take_bound_rows();
+        if omega2 > 0.0 {
+            let z = damping;
+            report.stable_dt = report
+                .stable_dt
+                .min(2.0 / omega2.sqrt() * ((1.0 + z * z).sqrt() - z));
         }
         self.report = report;
         Ok(&self.report)
@@ -873,14 +918,15 @@ fn fill_output(o: &mut PairOutput, outs: &[ContactOut], areas: &[f32], search: S
     o.frictional_dissipation = 0.0;
     for (k, c) in outs.iter().enumerate().take(n) {
         let found = search.contacts.get(k).is_some_and(|h| h.is_some());
-        o.cstatus.push(found.then_some(match c.status {
-            CSTATUS_STICK => ContactStatus::Stick,
-            CSTATUS_SLIP => ContactStatus::Slip,
-            s => {
-                debug_assert_eq!(s, CSTATUS_OPEN);
-                ContactStatus::Open
-            }
-        }));
+        o.cstatus
+            .push(found.then_some(match c.status & CSTATUS_MASK {
+                CSTATUS_STICK => ContactStatus::Stick,
+                CSTATUS_SLIP => ContactStatus::Slip,
+                s => {
+                    debug_assert_eq!(s, CSTATUS_OPEN);
+                    ContactStatus::Open
+                }
+            }));
         let area = areas[k] as f64;
         let nrm = [c.normal_gap[0], c.normal_gap[1], c.normal_gap[2]];
         let (t1, t2) = crate::cpu::penalty::tangents(nrm);

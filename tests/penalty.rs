@@ -382,6 +382,104 @@ fn stable_increment_two_bodies_and_mass_ratios() {
     }
 }
 
+/// Springs sharing nodes: three slaves (mass 1) pressed into one free segment (nodes of mass
+/// m_m) at a quarter, half and three quarters of it. Each spring alone allows more than the
+/// three together (their frequencies add on the segment's nodes): the per-spring limit is 24 %
+/// (m_m = 1) and 41 % (m_m = ¼) above the system's exact 2/ω_max, and central differences at
+/// it blow up. The reported increment must stay at or below the exact one (the node-wise
+/// bound), not far below it, and hold at 0.99 of itself.
+#[test]
+fn stable_increment_springs_sharing_master_nodes() {
+    let (k, ms, ts) = (100.0f64, 1.0f64, [0.25f64, 0.5, 0.75]);
+    for mm in [1.0f64, 0.25] {
+        let mut m = Model::new_2d();
+        m.add_nodes_2d(&[[1.0, 0.0], [-1.0, 0.0]], &[mm, mm])
+            .unwrap();
+        let s = m.add_surface(Surface::segments(&[[0, 1]])).unwrap(); // normal +y
+        let f = 1e-3 * k;
+        // slave at fraction t from node 1 (x = −1) towards node 0 (x = +1), 10 % off its
+        // equilibrium penetration f/k
+        let slaves: Vec<[f64; 2]> = ts.iter().map(|t| [2.0 * t - 1.0, -1.1e-3]).collect();
+        let r = m.add_nodes_2d(&slaves, &[ms; 3]).unwrap();
+        let set = m.add_node_set(&r.to_vec()).unwrap();
+        m.add_pair(Pair::new(set, s).search_radius(0.5).enforce(penalty(k)))
+            .unwrap();
+        // the slaves (below, inside) pushed down, the segment's nodes up: contact holds them
+        let mut ext = vec![[0.0, 1.5 * f, 0.0]; 2];
+        ext.extend([[0.0, -f, 0.0]; 3]);
+        // the exact highest frequency: the y-dofs' K = Σ k·c·cᵀ scaled by the masses
+        let mass = [mm, mm, ms, ms, ms];
+        let mut kk = [[0.0f64; 5]; 5];
+        for (i, t) in ts.iter().enumerate() {
+            let mut c = [0.0; 5];
+            c[0] = -t;
+            c[1] = -(1.0 - t);
+            c[2 + i] = 1.0;
+            for a in 0..5 {
+                for b in 0..5 {
+                    kk[a][b] += k * c[a] * c[b] / (mass[a] * mass[b]).sqrt();
+                }
+            }
+        }
+        let mut v = [1.0, -0.7, 0.3, 0.9, -0.2];
+        let mut omega2 = 0.0;
+        for _ in 0..2000 {
+            let w: Vec<f64> = (0..5)
+                .map(|a| (0..5).map(|b| kk[a][b] * v[b]).sum())
+                .collect();
+            let norm = w.iter().map(|x| x * x).sum::<f64>().sqrt();
+            omega2 = w.iter().zip(&v).map(|(a, b)| a * b).sum::<f64>()
+                / v.iter().map(|x| x * x).sum::<f64>();
+            for a in 0..5 {
+                v[a] = w[a] / norm;
+            }
+        }
+        let exact = 2.0 / omega2.sqrt();
+        let per_spring = ts
+            .iter()
+            .map(|t| 2.0 / (k * (1.0 / ms + (t * t + (1.0 - t) * (1.0 - t)) / mm)).sqrt())
+            .fold(f64::INFINITY, f64::min);
+        assert!(
+            per_spring > 1.2 * exact,
+            "the case must need the node-wise bound"
+        );
+        // how fast the springs' gaps change (the free rigid motions of the segment and the
+        // slaves along it leave the gaps alone)
+        let gap =
+            |x: &[[f64; 3]], i: usize| x[2 + i][1] - (ts[i] * x[0][1] + (1.0 - ts[i]) * x[1][1]);
+        let speed = |hist: &[Vec<[f64; 3]>], dt: f64, from: usize, to: usize| {
+            (from.max(1)..to)
+                .flat_map(|n| (0..3).map(move |i| (n, i)))
+                .map(|(n, i)| (gap(&hist[n], i) - gap(&hist[n - 1], i)).abs() / dt)
+                .fold(0.0, f64::max)
+        };
+        for d in devices() {
+            let (_, dts) = integrate(&d, &m, &ext, 1e-3 * exact, 1);
+            let dt = dts[0];
+            assert!(
+                dt <= exact * (1.0 + 1e-5) && dt >= 0.6 * exact,
+                "{d} m_m = {mm}: reported {dt} vs exact {exact} (per spring {per_spring})"
+            );
+            let (hist, _) = integrate(&d, &m, &ext, 0.99 * dt, 3000);
+
+            let (early, late) = (
+                speed(&hist, 0.99 * dt, 0, 1000),
+                speed(&hist, 0.99 * dt, 2000, 3000),
+            );
+            assert!(
+                late <= 1.5 * early,
+                "{d} m_m = {mm}: 0.99× reported not bounded: {early} then {late}"
+            );
+            let (hist, _) = integrate(&d, &m, &ext, 0.99 * per_spring, 400);
+            let dt_old = 0.99 * per_spring;
+            assert!(
+                speed(&hist, dt_old, 300, 400) > 100.0 * early,
+                "{d} m_m = {mm}: at the per-spring limit it was expected to blow up"
+            );
+        }
+    }
+}
+
 /// A flat rigid plate of quads over [x0, x1] × [-1, 1] at z = 0 (nodes of mass 1e12), as
 /// nodes 0.. of a new 3D model; returns the model and the surface.
 fn rigid_plate(x0: f64, x1: f64, nx: usize) -> (Model, SurfaceId) {

@@ -1,12 +1,12 @@
 //! CPU mirror of `shaders/contact_sort.wgsl`: slaves in contact grouped by facet, in order.
 
-use crate::penalty::layout::{ContactOut, PenaltyParams, CSTATUS_OPEN};
+use crate::penalty::layout::{ContactOut, PenaltyParams, CSTATUS_MASK, CSTATUS_OPEN};
 use crate::search::layout::GpuHit;
 
 /// Counts the slaves in contact with each facet (WGSL: `count_by_facet`).
 pub fn count_by_facet(pp: &PenaltyParams, hits: &[GpuHit], out: &[ContactOut], counts: &mut [u32]) {
     for i in 0..pp.n_slaves as usize {
-        if out[i].status != CSTATUS_OPEN {
+        if out[i].status & CSTATUS_MASK != CSTATUS_OPEN {
             counts[hits[i].facet as usize] += 1;
         }
     }
@@ -21,7 +21,7 @@ pub fn scatter_by_facet(
     facet_slaves: &mut [u32],
 ) {
     for i in 0..pp.n_slaves as usize {
-        if out[i].status != CSTATUS_OPEN {
+        if out[i].status & CSTATUS_MASK != CSTATUS_OPEN {
             let f = hits[i].facet as usize;
             facet_slaves[cursor[f] as usize] = i as u32;
             cursor[f] += 1;

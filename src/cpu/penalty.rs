@@ -83,6 +83,35 @@ pub fn law(pp: &PenaltyParams, h: f32, k: f32, area: f32) -> LawValue {
     r
 }
 
+/// A spring's shares of the node-wise frequency bound at its light and heavy nodes, and the
+/// heavy-node bits of its status, from its row stiffness, the slave's share 1/√m_s and the
+/// master nodes' shares |w_j|/√m_j (WGSL: inline in `penalty`).
+fn row_shares(k_row: f32, share_s: f32, share: &[f32]) -> ([f32; 2], u32) {
+    let top = share.iter().fold(share_s, |a, &u| a.max(u));
+    let cut = HEAVY_SHARE * top;
+    let (mut q, mut heavy, mut mask) = (0.0f32, 0.0f32, 0u32);
+    if share_s >= cut {
+        q += share_s * share_s;
+    } else {
+        q += share_s * cut;
+        heavy = heavy.max(share_s);
+        mask |= HEAVY_SLAVE;
+    }
+    for (j, &u) in share.iter().enumerate() {
+        if u == 0.0 {
+            continue;
+        }
+        if u >= cut {
+            q += u * u;
+        } else {
+            q += u * cut;
+            heavy = heavy.max(u);
+            mask |= 1 << (HEAVY_SHIFT + j as u32);
+        }
+    }
+    ([k_row * q, k_row * q * (heavy / cut)], mask)
+}
+
 fn min_bits(word: &mut u32, v: f32) {
     *word = (*word).min(v.to_bits());
 }
@@ -112,9 +141,10 @@ pub fn penalty(
             normal_gap: [0.0; 4],
             status: CSTATUS_OPEN,
             dissipation: 0.0,
-            dt_stable: NO_LIMIT,
-            dt_approach: NO_LIMIT,
+            bound_light: 0.0,
+            bound_heavy: 0.0,
         };
+        let (mut dt_stable, mut dt_approach) = (NO_LIMIT, NO_LIMIT);
         let area = state[i].tangential_area[3];
         o.dissipation = state[i].history[0];
         if hit.facet == NO_FACET
@@ -129,6 +159,7 @@ pub fn penalty(
         let n = facet_node_count(fac);
         let (mut nsum, mut vm) = (V3::<f32>::zero(), V3::<f32>::zero());
         let (mut inv_mm, mut h_facet) = (0.0f32, 0.0f32);
+        let mut share = [0.0f32; 4];
         for j in 0..n {
             let w = hit.weights[j];
             let id = fac[j];
@@ -137,6 +168,7 @@ pub fn penalty(
             let v = vel[id as usize];
             vm = vm + V3::new(v[0], v[1], v[2]) * w;
             inv_mm += w * w / nodes[id as usize][3];
+            share[j] = w.abs() / nodes[id as usize][3].sqrt();
             h_facet = h_facet.max(
                 (node(nodes, fac[(j + 1) % n]) - node(nodes, id))
                     .length2()
@@ -170,11 +202,18 @@ pub fn penalty(
         let omega = (lv.stiffness / m_eff).sqrt();
         let z = pp.damping;
         if omega > 0.0 {
-            o.dt_stable = 2.0 / omega * ((1.0 + z * z).sqrt() - z);
+            dt_stable = 2.0 / omega * ((1.0 + z * z).sqrt() - z);
         }
         if gap > 0.0 && v_close > 0.0 {
-            o.dt_approach = 0.5 * gap / v_close;
+            dt_approach = 0.5 * gap / v_close;
         }
+        let mut k_row = pp.weight * lv.stiffness;
+        if friction {
+            k_row *= pp.stick_stiffness.max(1.0);
+        }
+        let (bound, mask) = row_shares(k_row, 1.0 / nodes[s as usize][3].sqrt(), &share[..n]);
+        o.bound_light = bound[0];
+        o.bound_heavy = bound[1];
         o.normal_gap = [nrm.x, nrm.y, nrm.z, gap];
         let mut f_t = V3::<f32>::zero();
         if lv.force > 0.0 {
@@ -220,8 +259,9 @@ pub fn penalty(
         }
         state[i].tangential_area = [f_t.x, f_t.y, f_t.z, area];
         state[i].history = [o.dissipation, 0.0, 0.0, 0.0];
-        min_bits(&mut status[STATUS_DT_STABLE], o.dt_stable);
-        min_bits(&mut status[STATUS_DT_APPROACH], o.dt_approach);
+        min_bits(&mut status[STATUS_DT_STABLE], dt_stable);
+        min_bits(&mut status[STATUS_DT_APPROACH], dt_approach);
+        o.status |= mask;
         out[i] = o;
     }
 }

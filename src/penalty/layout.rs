@@ -11,6 +11,18 @@ pub const CSTATUS_STICK: u32 = 1;
 /// Contact status: closed and slipping (frictionless contact is always slipping)
 /// (WGSL: `CSTATUS_SLIP`).
 pub const CSTATUS_SLIP: u32 = 2;
+/// The bits of [`ContactOut::status`] that hold the `CSTATUS_*` value (WGSL: `CSTATUS_MASK`);
+/// the bits above say which of the spring's nodes are heavy in the stable-increment bound.
+pub const CSTATUS_MASK: u32 = 0xff;
+/// [`ContactOut::status`] bit of facet slot j's node being heavy: `1 << (HEAVY_SHIFT + j)`
+/// (WGSL: `HEAVY_SHIFT`).
+pub const HEAVY_SHIFT: u32 = 8;
+/// [`ContactOut::status`] bit of the slave node being heavy (WGSL: `HEAVY_SLAVE`).
+pub const HEAVY_SLAVE: u32 = 1 << 12;
+/// A node of a spring is heavy when its share of the spring's motion, |c|/√m (c: 1 for the
+/// slave, the weight for a master node), is below this fraction of the largest share — a rigid
+/// or immovable node (WGSL: `HEAVY_SHARE`).
+pub const HEAVY_SHARE: f32 = 0.01;
 /// Linear law (WGSL: `LAW_LINEAR`).
 pub const LAW_LINEAR: u32 = 0;
 /// Exponential law (WGSL: `LAW_EXPONENTIAL`).
@@ -102,14 +114,16 @@ pub struct ContactOut {
     pub tangential: [f32; 4],
     /// Contact normal used (xyz, smoothed) and the signed gap along it, COPEN (w).
     pub normal_gap: [f32; 4],
-    /// `CSTATUS_*`.
+    /// `CSTATUS_*` in the low byte ([`CSTATUS_MASK`]); above it, the heavy nodes of the
+    /// spring ([`HEAVY_SHIFT`], [`HEAVY_SLAVE`]).
     pub status: u32,
     /// Frictional dissipation of this slave since the start.
     pub dissipation: f32,
-    /// Stable increment of this contact spring (NO_LIMIT when none).
-    pub dt_stable: f32,
-    /// Half the gap over the closing speed for an open approaching node (NO_LIMIT otherwise).
-    pub dt_approach: f32,
+    /// This spring's share of the node-wise bound on the contact's highest frequency, ω²
+    /// (1/s²), at each of its light nodes (0 when there is no spring). See `contact.rs`.
+    pub bound_light: f32,
+    /// Its share at each of its heavy nodes (at most `bound_light`).
+    pub bound_heavy: f32,
 }
 const _: () = assert!(std::mem::size_of::<ContactOut>() == 64);
 

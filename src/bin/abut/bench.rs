@@ -489,8 +489,10 @@ fn kernel_bytes() -> Vec<(&'static str, f64)> {
         ("penalty", hit + 2.0 * node + 8.0 * node + 2.0 * 32.0 + out),
         // counts, scan, scatter and per-facet sort of the slaves in contact
         ("contact_sort", 4.0 * 4.0 + 2.0 * 4.0 + per_master * 8.0),
-        // each node's force out; each master node reads its slaves' forces
-        ("gather", node + per_master * 4.0 * 4.0 * node / 4.0),
+        // each node's force and bound row out; each slave node reads its own output's force,
+        // status and bound shares (28 B), and each master node its slaves' (4 facets × 4
+        // slaves, a quarter of them per master node)
+        ("gather", node + 28.0 + per_master * 4.0 * 4.0 * 28.0 / 4.0),
     ]
 }
 
