@@ -169,9 +169,23 @@ fn run_scene(a: &RunArgs) -> abut::Result<()> {
     println!("device: {device}");
     println!("scene: {}", scene.title);
     let summary = abut::scene::run(&scene, &device, a.output.as_deref())?;
+    // the per-node and per-sample lists go to summary.json only: here, how many there are
+    let mut shown = serde_json::to_value(&summary).unwrap_or_default();
+    for key in ["contact_nodes", "curve"] {
+        if let Some(n) = shown.get(key).and_then(|v| v.as_array()).map(Vec::len) {
+            shown[key] = serde_json::Value::String(format!(
+                "{n} entries{}",
+                if a.output.is_some() {
+                    " (in summary.json)"
+                } else {
+                    " (written to summary.json with --output)"
+                }
+            ));
+        }
+    }
     println!(
         "{}",
-        serde_json::to_string_pretty(&summary).unwrap_or_default()
+        serde_json::to_string_pretty(&shown).unwrap_or_default()
     );
     Ok(())
 }
