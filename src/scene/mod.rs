@@ -8,7 +8,7 @@
 //! [run]
 //! end_time = 30.0          # model time units
 //! safety = 0.9             # on the elements' stable increment (default 0.9)
-//! contact_safety = 0.9     # on the penalty contact's stable increment (default 0.9)
+//! contact_safety = 0.5     # on the penalty contact's stable increment (default 0.5)
 //! # dt = 1e-3              # a fixed increment instead (stability studies)
 //! gravity = [0, 0, -9.81]  # default none
 //! damping = 0.0            # mass-proportional α, for dynamic relaxation
@@ -31,6 +31,7 @@
 //! size = [10, 2, 2]
 //! divisions = [40, 1, 1]
 //! grading = [1, 1, 1]      # ratio of consecutive cells; negative: finest at the far end
+//! # grading_core = [1, 1, 1]  # cells kept at the finest size before the growth starts
 //! velocity = [0.1, 0, 0]
 //! # motion = "free"        # rigid parts (plate, line, arc, sphere, rigid mesh): fixed (default),
 //! # mass = 2.0             #   free (a rigid body carrying the part's nodes) or velocity
@@ -56,10 +57,13 @@
 //! sliding = "finite"       # finite | small | infinitesimal
 //! # balanced = 0.5         # balanced master–slave weight
 //! # penalty_scale = 1.0 | stiffness = k | stiffness_per_area = eps
+//! # damping = 0.1         # of each penalty spring's critical damping
 //! # search_interval = 100
 //! ```
 //!
-//! Errors name the key and, for syntax and type errors, the line (toml's own messages).
+//! Errors name the key and the `[[section]]` entry; from a file (`Scene::load`) also the file
+//! and line. A few checks need the built geometry (a master face with no facets) and come from
+//! `run`, naming the key and part but no line.
 
 mod build;
 mod spec;

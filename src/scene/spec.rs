@@ -47,7 +47,7 @@ pub struct RunSpec {
     /// elements' 0.9: a contact spring switches on and off, and central differences near a
     /// spring's linear limit (ω·Δt → 2) turn that switching into an energy pump — a node
     /// pressed slowly into a stiff penalty contact chatters and runs away at 0.7–0.9
-    /// (tests/explicit.rs). At 0.5 (ω·Δt ≤ 1 for the contact) it stays quiet; so does 0.9
+    /// (tests/scene.rs). At 0.5 (ω·Δt ≤ 1 for the contact) it stays quiet; so does 0.9
     /// with 10 % of critical damping on the contact (`contact.damping`).
     #[serde(default = "default_contact_safety")]
     pub contact_safety: f64,
