@@ -1,7 +1,7 @@
 //! Criterion benches of abut's kernels, on every adapter found and the CPU mirror: the global
 //! search (bin_count → scan → bin_scatter → bin_sort → nearest_facet), a tracked increment
 //! (motion + local_search) and a penalty increment (search, then nodal_normals + penalty,
-//! contact_sort and gather), on a plate of 2,500 quads with 10,000 slave nodes around it.
+//! scatter_forces and gather), on a plate of 2,500 quads with 10,000 slave nodes around it.
 //! The speed-against-error report is `abut bench`; this is the statistics of single kernels.
 //!
 //! `cargo bench --bench kernels` (criterion's options follow `--`).

@@ -63,6 +63,8 @@ const STATUS_DT_APPROACH: u32 = 5u;    // bits of the smallest approach limit (p
 const STATUS_ACTIVE: u32 = 6u;         // slave nodes in contact
 const STATUS_SLIPPING: u32 = 7u;       // of which slipping
 const STATUS_MAX_OVERCLOSURE: u32 = 14u; // bits of the largest overclosure in contact (f32 ≥ 0)
+const STATUS_FORCE_SCALE: u32 = 16u;  // bits of the largest |force component| of a spring in contact
+const STATUS_ROW_SCALE: u32 = 17u;    // bits of the largest bound share of a spring in contact
 
 // Flat invocation id of a dispatch folded into 2D (x up to 65,535 workgroups, then y).
 fn folded_id(wg: vec3<u32>, nwg: vec3<u32>, local: u32, size: u32) -> u32 {

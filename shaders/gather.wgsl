@@ -1,26 +1,116 @@
-// gather.wgsl — the contact force on every node of the pair, summed in a fixed order.
+// gather.wgsl — the contact force on every node of the pair, summed exactly in fixed point so that
+// the result has the same bits every run whatever the order of the additions (no float atomics,
+// no sort, and no loop whose length the data decides).
 // CPU mirror: src/cpu/gather.rs.
 //
+// Fixed point: each sum is a 64-bit two's-complement integer held as two u32 words (low, high),
+// added with two 32-bit atomics and a carry. Integer addition is associative, so the sum does not
+// depend on the order in which invocations run. The scale 2^E is chosen per increment from the
+// largest magnitude the penalty pass met (status words STATUS_FORCE_SCALE, STATUS_ROW_SCALE) and
+// the number of terms, so that no sum can leave ±2^62: see `fixed_exponent`.
+//
 // Bindings: 0 pp (uniform PenaltyParams), 1 pair_nodes (node, slave index, adjacency start,
-//           end), 2 adjacency, 3 facets, 4 starts (facet → slaves, from contact_sort),
-//           5 facet_slaves, 6 hits, 7 out (ContactOut), 8 forces (vec4 per pair node).
-// Dispatch: one invocation per pair node, ITEM_WORKGROUP per workgroup, folded into 2D.
+//           end), 2 facet_nodes (pair-node index of each active facet's nodes, NO_NODE padded),
+//           3 hits, 4 out (ContactOut), 5 status (read: the two scale words), 6 acc (8 words per
+//           pair node: fx, fy, fz, row as (low, high) pairs; zeroed before scatter_forces),
+//           7 forces (vec4 per pair node).
+// Dispatch: scatter_forces one invocation per slave, gather one per pair node; ITEM_WORKGROUP per
+//           workgroup, folded into 2D. Each invocation does at most 4 × 4 atomic pairs (scatter)
+//           or reads 8 words (gather): bounded whatever the number of slaves on one facet.
 // Invariants: a slave node gets its own contact force; a master node gets −w_j·f of every slave
-//             in contact with one of its facets, in increasing facet then slave order, so the
-//             sum has the same bits every run and Σ over the pair is zero to round-off.
-//             forces.w: the node's row of the node-wise frequency bound, the sum of the shares
-//             (bound_light, or bound_heavy where the spring marks the node heavy) of its own
-//             spring and of every spring in contact on its facets, in the same order.
+//             in contact with one of its facets (j its slot in the facet), summed exactly at the
+//             fixed-point resolution (2^−E, at most 2^−58 of the largest possible sum) and rounded
+//             once to f32, so Σ over the pair is zero to f32 round-off and two identical
+//             increments give the same bits. forces.w: the node's row of the node-wise frequency
+//             bound, the sum of the shares (bound_light, or bound_heavy where the spring marks the
+//             node heavy) of its own spring and of every spring in contact on its facets.
 
 @group(0) @binding(0) var<uniform> pp: PenaltyParams;
 @group(0) @binding(1) var<storage, read> pair_nodes: array<vec4<u32>>;
-@group(0) @binding(2) var<storage, read> adjacency: array<u32>;
-@group(0) @binding(3) var<storage, read> facets: array<vec4<u32>>;
-@group(0) @binding(4) var<storage, read> starts: array<u32>;
-@group(0) @binding(5) var<storage, read> facet_slaves: array<u32>;
-@group(0) @binding(6) var<storage, read> hits: array<Hit>;
-@group(0) @binding(7) var<storage, read> out: array<ContactOut>;
-@group(0) @binding(8) var<storage, read_write> forces: array<vec4<f32>>;
+@group(0) @binding(2) var<storage, read> facet_nodes: array<vec4<u32>>;
+@group(0) @binding(3) var<storage, read> hits: array<Hit>;
+@group(0) @binding(4) var<storage, read> out: array<ContactOut>;
+@group(0) @binding(5) var<storage, read> status: array<u32>;
+@group(0) @binding(6) var<storage, read_write> acc: array<atomic<u32>>;
+@group(0) @binding(7) var<storage, read_write> forces: array<vec4<f32>>;
+
+// Bits below the sign that a fixed-point sum may use (2 bits of headroom for weights up to 4).
+const FIXED_BITS: i32 = 60;
+const TWO_32: f32 = 4294967296.0;
+
+// 2^e for e in [−126, 127], built from its bits (exact; the mirror builds it the same way).
+fn pow2(e: i32) -> f32 {
+    return bitcast<f32>(u32(e + 127) << 23u);
+}
+
+// The exponent E of the fixed-point scale for sums of at most 4·n_terms terms, each at most the
+// f32 whose bits are max_bits in magnitude: 4·n_terms · max · 2^E ≤ 2^FIXED_BITS.
+fn fixed_exponent(max_bits: u32, n_terms: u32) -> i32 {
+    let e = i32((max_bits >> 23u) & 0xffu) - 126; // max < 2^e
+    let k = i32(32u - countLeadingZeros(max(n_terms, 1u) - 1u)) + 2; // 4·n_terms ≤ 2^k
+    return clamp(FIXED_BITS - e - k, -126, 126);
+}
+
+// −a in 64-bit two's complement.
+fn negate(a: vec2<u32>) -> vec2<u32> {
+    let lo = ~a.x + 1u;
+    return vec2<u32>(lo, ~a.y + select(0u, 1u, lo == 0u));
+}
+
+// v · scale as a 64-bit integer (low, high), truncated toward zero; |v · scale| < 2^62.
+fn to_fixed(v: f32, scale: f32) -> vec2<u32> {
+    let x = min(abs(v) * scale, 4.0e18);
+    let hi = floor(x * (1.0 / TWO_32));
+    let lo = x - hi * TWO_32; // exact: the bits of x below 2^32
+    var r = vec2<u32>(u32(lo), u32(hi));
+    if (v < 0.0) { r = negate(r); }
+    return r;
+}
+
+// The 64-bit integer a divided by the scale (inv_scale = 1 / scale), rounded to f32.
+fn from_fixed(a: vec2<u32>, inv_scale: f32) -> f32 {
+    let neg = (a.y & 0x80000000u) != 0u;
+    var m = a;
+    if (neg) { m = negate(a); }
+    let x = (f32(m.y) * TWO_32 + f32(m.x)) * inv_scale;
+    return select(x, -x, neg);
+}
+
+// Adds a to the sum at words 2w, 2w + 1: the low word's wrap, seen by the one addition that
+// caused it, carries into the high word.
+fn add_fixed(w: u32, a: vec2<u32>) {
+    let old = atomicAdd(&acc[2u * w], a.x);
+    let carry = select(0u, 1u, old + a.x < old);
+    atomicAdd(&acc[2u * w + 1u], a.y + carry);
+}
+
+// A spring's share of the bound at one of its nodes: heavy if its status has `bit`.
+fn row_share(o: ContactOut, bit: u32) -> f32 {
+    return select(o.bound_light, o.bound_heavy, (o.status & bit) != 0u);
+}
+
+@compute @workgroup_size(64)
+fn scatter_forces(@builtin(workgroup_id) wg: vec3<u32>,
+                  @builtin(num_workgroups) nwg: vec3<u32>,
+                  @builtin(local_invocation_index) li: u32) {
+    let i = folded_id(wg, nwg, li, ITEM_WORKGROUP);
+    if (i >= pp.n_slaves) { return; }
+    let o = out[i];
+    if ((o.status & CSTATUS_MASK) == CSTATUS_OPEN) { return; }
+    let hit = hits[i];
+    let fac = facet_nodes[hit.facet];
+    let n = facet_node_count(fac);
+    let sf = pow2(fixed_exponent(status[STATUS_FORCE_SCALE], pp.n_slaves));
+    let sr = pow2(fixed_exponent(status[STATUS_ROW_SCALE], pp.n_slaves));
+    for (var j = 0u; j < n; j++) {
+        let w = hit.weights[j];
+        let base = 4u * fac[j];
+        add_fixed(base, to_fixed(-w * o.force.x, sf));
+        add_fixed(base + 1u, to_fixed(-w * o.force.y, sf));
+        add_fixed(base + 2u, to_fixed(-w * o.force.z, sf));
+        add_fixed(base + 3u, to_fixed(row_share(o, 1u << (HEAVY_SHIFT + j)), sr));
+    }
+}
 
 @compute @workgroup_size(64)
 fn gather(@builtin(workgroup_id) wg: vec3<u32>,
@@ -35,23 +125,13 @@ fn gather(@builtin(workgroup_id) wg: vec3<u32>,
         f = out[pn.y].force.xyz;
         row = row_share(out[pn.y], HEAVY_SLAVE);
     }
-    for (var a = pn.z; a < pn.w; a++) {
-        let facet = adjacency[a];
-        let fac = facets[facet];
-        var slot = 0u;
-        for (var j = 1u; j < 4u; j++) {
-            if (fac[j] == pn.x) { slot = j; }
-        }
-        for (var k = starts[facet]; k < starts[facet + 1u]; k++) {
-            let s = facet_slaves[k];
-            f -= hits[s].weights[slot] * out[s].force.xyz;
-            row += row_share(out[s], 1u << (HEAVY_SHIFT + slot));
-        }
+    let inv_f = pow2(-fixed_exponent(status[STATUS_FORCE_SCALE], pp.n_slaves));
+    let inv_r = pow2(-fixed_exponent(status[STATUS_ROW_SCALE], pp.n_slaves));
+    var sum: array<f32, 4>;
+    for (var c = 0u; c < 4u; c++) {
+        let w = 2u * (4u * i + c);
+        let a = vec2<u32>(atomicLoad(&acc[w]), atomicLoad(&acc[w + 1u]));
+        sum[c] = from_fixed(a, select(inv_f, inv_r, c == 3u));
     }
-    forces[i] = vec4<f32>(f, row);
-}
-
-// A spring's share of the bound at one of its nodes: heavy if its status has `bit`.
-fn row_share(o: ContactOut, bit: u32) -> f32 {
-    return select(o.bound_light, o.bound_heavy, (o.status & bit) != 0u);
+    forces[i] = vec4<f32>(f + vec3<f32>(sum[0], sum[1], sum[2]), row + sum[3]);
 }

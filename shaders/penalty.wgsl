@@ -18,7 +18,9 @@
 //             preserving for positive floats), so the result is deterministic.
 //             Every spring within the search radius also writes its shares of the node-wise
 //             frequency bound (bound_light, bound_heavy, heavy bits in status; gather sums
-//             them per node; the derivation is in contact.rs).
+//             them per node; the derivation is in contact.rs). A spring in contact raises
+//             STATUS_FORCE_SCALE and STATUS_ROW_SCALE to its largest force component and bound
+//             share (integer max of non-negative f32 bits): the gather's fixed-point scales.
 
 override FRICTION: bool = true;
 
@@ -241,5 +243,11 @@ fn penalty(@builtin(workgroup_id) wg: vec3<u32>,
     atomicMin(&status[STATUS_DT_STABLE], bitcast<u32>(dt_stable));
     atomicMin(&status[STATUS_DT_APPROACH], bitcast<u32>(dt_approach));
     o.status |= mask;
+    if ((o.status & CSTATUS_MASK) != CSTATUS_OPEN) {
+        // the fixed-point scales of the gather: the largest magnitudes it will sum
+        let a = abs(o.force.xyz);
+        atomicMax(&status[STATUS_FORCE_SCALE], bitcast<u32>(max(a.x, max(a.y, a.z))));
+        atomicMax(&status[STATUS_ROW_SCALE], bitcast<u32>(max(o.bound_light, o.bound_heavy)));
+    }
     out[i] = o;
 }

@@ -1,47 +1,71 @@
-//! CPU mirror of `shaders/gather.wgsl`: the contact force on every node of the pair.
+//! CPU mirror of `shaders/gather.wgsl`: the contact force on every node of the pair, summed
+//! exactly in 64-bit fixed point (two u32 words with a carry, as the shader does).
 
+use super::common::facet_node_count;
 use crate::penalty::layout::{
-    ContactOut, PairNode, PenaltyParams, HEAVY_SHIFT, HEAVY_SLAVE, NO_SLAVE,
+    ContactOut, PairNode, PenaltyParams, CSTATUS_MASK, CSTATUS_OPEN, HEAVY_SHIFT, HEAVY_SLAVE,
+    NO_SLAVE,
 };
-use crate::search::layout::GpuHit;
+use crate::search::layout::{GpuHit, STATUS_FORCE_SCALE, STATUS_ROW_SCALE};
 
-/// One "invocation" per pair node, summing in increasing facet then slave order.
-#[allow(clippy::too_many_arguments)]
-pub fn gather(
-    pp: &PenaltyParams,
-    pair_nodes: &[PairNode],
-    adjacency: &[u32],
-    facets: &[[u32; 4]],
-    starts: &[u32],
-    facet_slaves: &[u32],
-    hits: &[GpuHit],
-    out: &[ContactOut],
-    forces: &mut [[f32; 4]],
-) {
-    for (i, pn) in pair_nodes[..pp.n_pair_nodes as usize].iter().enumerate() {
-        let mut f = [0.0f32; 3];
-        let mut row = 0.0f32;
-        if pn.slave != NO_SLAVE {
-            let o = out[pn.slave as usize].force;
-            f = [o[0], o[1], o[2]];
-            row = row_share(&out[pn.slave as usize], HEAVY_SLAVE);
-        }
-        for a in pn.adj_start..pn.adj_end {
-            let facet = adjacency[a as usize] as usize;
-            let fac = facets[facet];
-            let slot = (1..4).filter(|&j| fac[j] == pn.node).last().unwrap_or(0);
-            for k in starts[facet]..starts[facet + 1] {
-                let s = facet_slaves[k as usize] as usize;
-                let w = hits[s].weights[slot];
-                let o = out[s].force;
-                for c in 0..3 {
-                    f[c] -= w * o[c];
-                }
-                row += row_share(&out[s], 1 << (HEAVY_SHIFT + slot as u32));
-            }
-        }
-        forces[i] = [f[0], f[1], f[2], row];
+/// Bits below the sign that a fixed-point sum may use (WGSL: `FIXED_BITS`).
+pub const FIXED_BITS: i32 = 60;
+const TWO_32: f32 = 4_294_967_296.0;
+
+/// Words of the fixed-point accumulator per pair node: fx, fy, fz and the bound row, each as a
+/// (low, high) pair (WGSL: `acc`).
+pub const ACC_WORDS_PER_NODE: usize = 8;
+
+/// 2^e for e in [−126, 127], built from its bits (WGSL: `pow2`).
+pub fn pow2(e: i32) -> f32 {
+    f32::from_bits(((e + 127) as u32) << 23)
+}
+
+/// The exponent E of the fixed-point scale for sums of at most 4·n_terms terms, each at most the
+/// f32 whose bits are `max_bits` in magnitude (WGSL: `fixed_exponent`).
+pub fn fixed_exponent(max_bits: u32, n_terms: u32) -> i32 {
+    let e = ((max_bits >> 23) & 0xff) as i32 - 126;
+    let k = (32 - (n_terms.max(1) - 1).leading_zeros()) as i32 + 2;
+    (FIXED_BITS - e - k).clamp(-126, 126)
+}
+
+/// −a in 64-bit two's complement (WGSL: `negate`).
+pub fn negate(a: [u32; 2]) -> [u32; 2] {
+    let lo = (!a[0]).wrapping_add(1);
+    [lo, (!a[1]).wrapping_add(u32::from(lo == 0))]
+}
+
+/// v · scale as a 64-bit integer (low, high), truncated toward zero (WGSL: `to_fixed`).
+pub fn to_fixed(v: f32, scale: f32) -> [u32; 2] {
+    let x = (v.abs() * scale).min(4.0e18);
+    let hi = (x * (1.0 / TWO_32)).floor();
+    let lo = x - hi * TWO_32;
+    let r = [lo as u32, hi as u32];
+    if v < 0.0 {
+        negate(r)
+    } else {
+        r
     }
+}
+
+/// The 64-bit integer `a` times `inv_scale`, rounded to f32 (WGSL: `from_fixed`).
+pub fn from_fixed(a: [u32; 2], inv_scale: f32) -> f32 {
+    let neg = a[1] & 0x8000_0000 != 0;
+    let m = if neg { negate(a) } else { a };
+    let x = (m[1] as f32 * TWO_32 + m[0] as f32) * inv_scale;
+    if neg {
+        -x
+    } else {
+        x
+    }
+}
+
+/// Adds `a` to the sum at words 2w, 2w + 1 of `acc` with the carry (WGSL: `add_fixed`).
+fn add_fixed(acc: &mut [u32], w: usize, a: [u32; 2]) {
+    let old = acc[2 * w];
+    acc[2 * w] = old.wrapping_add(a[0]);
+    let carry = u32::from(old.wrapping_add(a[0]) < old);
+    acc[2 * w + 1] = acc[2 * w + 1].wrapping_add(a[1].wrapping_add(carry));
 }
 
 /// A spring's share of the node-wise bound at one of its nodes: heavy if its status has `bit`
@@ -51,5 +75,111 @@ fn row_share(o: &ContactOut, bit: u32) -> f32 {
         o.bound_heavy
     } else {
         o.bound_light
+    }
+}
+
+/// One "invocation" per slave in contact: −w_j·f and the bound share onto each facet node's
+/// fixed-point sums (WGSL: `scatter_forces`). `acc` must be zeroed first.
+pub fn scatter_forces(
+    pp: &PenaltyParams,
+    facet_nodes: &[[u32; 4]],
+    hits: &[GpuHit],
+    out: &[ContactOut],
+    status: &[u32],
+    acc: &mut [u32],
+) {
+    let sf = pow2(fixed_exponent(status[STATUS_FORCE_SCALE], pp.n_slaves));
+    let sr = pow2(fixed_exponent(status[STATUS_ROW_SCALE], pp.n_slaves));
+    for i in 0..pp.n_slaves as usize {
+        let o = &out[i];
+        if o.status & CSTATUS_MASK == CSTATUS_OPEN {
+            continue;
+        }
+        let hit = &hits[i];
+        let fac = facet_nodes[hit.facet as usize];
+        let n = facet_node_count(fac);
+        for (j, &node) in fac.iter().enumerate().take(n) {
+            let w = hit.weights[j];
+            let base = 4 * node as usize;
+            for c in 0..3 {
+                add_fixed(acc, base + c, to_fixed(-w * o.force[c], sf));
+            }
+            let share = row_share(o, 1 << (HEAVY_SHIFT + j as u32));
+            add_fixed(acc, base + 3, to_fixed(share, sr));
+        }
+    }
+}
+
+/// One "invocation" per pair node: its own contact force (a slave) plus the decoded sums of the
+/// springs on its facets (WGSL: `gather`).
+pub fn gather(
+    pp: &PenaltyParams,
+    pair_nodes: &[PairNode],
+    out: &[ContactOut],
+    status: &[u32],
+    acc: &[u32],
+    forces: &mut [[f32; 4]],
+) {
+    let inv_f = pow2(-fixed_exponent(status[STATUS_FORCE_SCALE], pp.n_slaves));
+    let inv_r = pow2(-fixed_exponent(status[STATUS_ROW_SCALE], pp.n_slaves));
+    for (i, pn) in pair_nodes[..pp.n_pair_nodes as usize].iter().enumerate() {
+        let mut f = [0.0f32; 3];
+        let mut row = 0.0f32;
+        if pn.slave != NO_SLAVE {
+            let o = out[pn.slave as usize].force;
+            f = [o[0], o[1], o[2]];
+            row = row_share(&out[pn.slave as usize], HEAVY_SLAVE);
+        }
+        let mut sum = [0.0f32; 4];
+        for (c, s) in sum.iter_mut().enumerate() {
+            let w = 2 * (4 * i + c);
+            let inv = if c == 3 { inv_r } else { inv_f };
+            *s = from_fixed([acc[w], acc[w + 1]], inv);
+        }
+        forces[i] = [f[0] + sum[0], f[1] + sum[1], f[2] + sum[2], row + sum[3]];
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The fixed-point sum of many terms in any order equals the exact (f64) sum to f32 round-off
+    /// of the result, and two orders give the same bits.
+    #[test]
+    fn fixed_point_sums_are_exact_and_order_free() {
+        let terms: Vec<f32> = (0..100_000)
+            .map(|k| ((k as f32) * 0.618_034).sin() * 10f32.powi((k % 7) as i32 - 3))
+            .collect();
+        let max = terms.iter().fold(0.0f32, |m, v| m.max(v.abs()));
+        let e = fixed_exponent(max.to_bits(), terms.len() as u32);
+        let (scale, inv) = (pow2(e), pow2(-e));
+        let mut a = [0u32; 2];
+        let mut b = [0u32; 2];
+        for &t in &terms {
+            add_fixed(&mut a, 0, to_fixed(t, scale));
+        }
+        for &t in terms.iter().rev() {
+            add_fixed(&mut b, 0, to_fixed(t, scale));
+        }
+        assert_eq!(a, b);
+        let exact: f64 = terms.iter().map(|&t| t as f64).sum();
+        let got = from_fixed(a, inv) as f64;
+        // quantisation: at most one unit 2^-E per term; rounding: half an ulp of the result
+        let tol = terms.len() as f64 * inv as f64 + exact.abs() * 2f64.powi(-23);
+        assert!((got - exact).abs() <= tol, "{got} vs {exact}");
+        // negative totals and cancellation to exactly zero
+        let mut z = [0u32; 2];
+        for &t in &terms {
+            add_fixed(&mut z, 0, to_fixed(t, scale));
+            add_fixed(&mut z, 0, to_fixed(-t, scale));
+        }
+        assert_eq!(z, [0, 0]);
+        assert_eq!(from_fixed(to_fixed(-3.5, 2.0), 0.5), -3.5);
+        assert_eq!(
+            from_fixed(to_fixed(-3.5, 1.0), 1.0),
+            -3.0,
+            "truncated toward zero"
+        );
     }
 }

@@ -8,10 +8,8 @@
 pub mod anchor;
 pub mod bin_count;
 pub mod bin_scatter;
-pub mod bin_sort;
 pub mod brute_force;
 pub mod common;
-pub mod contact_sort;
 pub mod gather;
 pub mod local_search;
 pub mod motion;
@@ -42,6 +40,10 @@ pub struct CpuWorkspace {
     pub hits: Vec<GpuHit>,
     /// Positions at the last global search (motion budget).
     pub reference: Vec<[f32; 4]>,
+    /// Nearest-facet work items: each slave's chunk count, scanned to its first item.
+    pub work: Vec<u32>,
+    /// Nearest-facet record per slave (`nearest_facet::BEST_WORDS` words).
+    pub best: Vec<u32>,
 }
 
 /// The CPU executor of the global search.
@@ -234,18 +236,46 @@ pub fn run_step(
                 &mut ws.status,
             )
         }
-        Step::BinSort => bin_sort::bin_sort(params, &ws.scan[..=n_cells], &mut ws.entries),
-        Step::NearestFacet => nearest_facet::nearest_facet(
-            params,
-            &prep.nodes,
-            &prep.facets,
-            &prep.slaves,
-            &ws.scan[..=n_cells],
-            &ws.entries,
-            &mut ws.status,
-            &mut ws.hits,
-            &prep.adjacency,
-        ),
+        Step::NearestFacet => {
+            let n = params.n_slaves as usize;
+            let work_levels = ScanLevels::new(params.n_slaves + 1);
+            ws.work.clear();
+            ws.work.resize(work_levels.words as usize, 0);
+            ws.best.clear();
+            ws.best.resize(n * nearest_facet::BEST_WORDS, 0);
+            nearest_facet::nearest_count(
+                params,
+                &prep.nodes,
+                &prep.slaves,
+                &ws.scan[..=n_cells],
+                &ws.status,
+                &mut ws.work,
+                &mut ws.best,
+            );
+            scan::scan(&work_levels, &mut ws.work);
+            let c = nearest_facet::Candidates {
+                params,
+                nodes: &prep.nodes,
+                facets: &prep.facets,
+                slaves: &prep.slaves,
+                starts: &ws.scan[..=n_cells],
+                entries: &ws.entries,
+                adjacency: &prep.adjacency,
+            };
+            nearest_facet::nearest_chunks(&c, &ws.work, &mut ws.best);
+            nearest_facet::nearest_ties(&c, &ws.work, &mut ws.best);
+            nearest_facet::nearest_crowded(&c, &ws.work, &mut ws.best);
+            nearest_facet::nearest_facet(
+                params,
+                &prep.nodes,
+                &prep.facets,
+                &prep.slaves,
+                &mut ws.status,
+                &mut ws.hits,
+                &prep.adjacency,
+                &ws.best,
+            );
+        }
     }
 }
 
@@ -258,12 +288,8 @@ pub struct CpuPenalty {
     pub normals: Vec<[f32; 4]>,
     /// Result per slave.
     pub out: Vec<crate::penalty::layout::ContactOut>,
-    /// Facet counts, then starts (all scan levels).
-    pub counts: Vec<u32>,
-    /// Scatter cursors.
-    pub cursor: Vec<u32>,
-    /// Slaves grouped by facet.
-    pub facet_slaves: Vec<u32>,
+    /// Fixed-point force sums per pair node (gather's accumulator).
+    pub acc: Vec<u32>,
     /// Force per pair node.
     pub forces: Vec<[f32; 4]>,
 }
@@ -275,14 +301,12 @@ impl CpuPenalty {
             state: setup.initial_state(),
             normals: vec![[0.0; 4]; n_nodes],
             out: Vec::new(),
-            counts: Vec::new(),
-            cursor: Vec::new(),
-            facet_slaves: Vec::new(),
+            acc: Vec::new(),
             forces: Vec::new(),
         }
     }
 
-    /// Runs nodal_normals, penalty, contact_sort (with the scan) and gather.
+    /// Runs nodal_normals, penalty and gather (scatter_forces, gather).
     pub fn run(
         &mut self,
         setup: &crate::penalty::PenaltySetup,
@@ -294,16 +318,17 @@ impl CpuPenalty {
     ) {
         use crate::penalty::layout::NO_LIMIT;
         use crate::search::layout::{
-            STATUS_ACTIVE, STATUS_DT_APPROACH, STATUS_DT_STABLE, STATUS_MAX_OVERCLOSURE,
-            STATUS_SLIPPING,
+            STATUS_ACTIVE, STATUS_DT_APPROACH, STATUS_DT_STABLE, STATUS_FORCE_SCALE,
+            STATUS_MAX_OVERCLOSURE, STATUS_ROW_SCALE, STATUS_SLIPPING,
         };
         status[STATUS_DT_STABLE] = NO_LIMIT.to_bits();
         status[STATUS_DT_APPROACH] = NO_LIMIT.to_bits();
         status[STATUS_ACTIVE] = 0;
         status[STATUS_SLIPPING] = 0;
         status[STATUS_MAX_OVERCLOSURE] = 0;
+        status[STATUS_FORCE_SCALE] = 0;
+        status[STATUS_ROW_SCALE] = 0;
         let n_slaves = pp.n_slaves as usize;
-        let n_facets = pp.n_facets as usize;
         nodal_normals::nodal_normals(
             pp,
             &prep.nodes,
@@ -325,32 +350,24 @@ impl CpuPenalty {
             &mut self.out,
             status,
         );
-        let levels = ScanLevels::new(pp.n_facets + 1);
-        self.counts.clear();
-        self.counts.resize(levels.words as usize, 0);
-        contact_sort::count_by_facet(pp, hits, &self.out, &mut self.counts);
-        scan::scan(&levels, &mut self.counts);
-        self.cursor.clear();
-        self.cursor.extend_from_slice(&self.counts[..=n_facets]);
-        self.facet_slaves.resize(n_slaves.max(1), 0);
-        contact_sort::scatter_by_facet(
+        self.acc.clear();
+        self.acc
+            .resize(setup.pair_nodes.len() * gather::ACC_WORDS_PER_NODE, 0);
+        gather::scatter_forces(
             pp,
+            &setup.facet_nodes,
             hits,
             &self.out,
-            &mut self.cursor,
-            &mut self.facet_slaves,
+            status,
+            &mut self.acc,
         );
-        contact_sort::sort_by_facet(pp, &self.counts[..=n_facets], &mut self.facet_slaves);
         self.forces.resize(setup.pair_nodes.len(), [0.0; 4]);
         gather::gather(
             pp,
             &setup.pair_nodes,
-            &setup.adjacency,
-            &prep.facets,
-            &self.counts[..=n_facets],
-            &self.facet_slaves,
-            hits,
             &self.out,
+            status,
+            &self.acc,
             &mut self.forces,
         );
     }

@@ -22,74 +22,217 @@ pub fn project(nodes: &[[f32; 4]], p: V3<f32>, fac: [u32; 4]) -> Projection<f32>
     closest_on_quad(p, [x0, x1, x2, node(nodes, fac[3])])
 }
 
-/// One "invocation" per slave node; writes `hits[i]`. Skipped when the binning overflowed.
-#[allow(clippy::too_many_arguments)]
+/// Candidates one work item projects at most (WGSL: `CANDIDATE_CHUNK`).
+pub const CANDIDATE_CHUNK: u32 = 64;
+
+/// Words of a slave's `best` record: distance² bits, facet, crowded, candidates.
+pub const BEST_WORDS: usize = 4;
+
+/// The range of bin entries of the cell holding p; (0, 0) outside the grid (WGSL: `cell_range`).
+fn cell_range(params: &SearchParams, starts: &[u32], p: V3<f32>) -> (u32, u32) {
+    let g = [
+        p.x * params.inv_cell_size,
+        p.y * params.inv_cell_size,
+        p.z * params.inv_cell_size,
+    ];
+    let dims = [params.dims_x, params.dims_y, params.dims_z];
+    if !(0..3).all(|a| g[a] >= 0.0 && g[a] < dims[a] as f32) {
+        return (0, 0);
+    }
+    let c = super::common::cell_index(params, [g[0] as u32, g[1] as u32, g[2] as u32]) as usize;
+    (starts[c], starts[c + 1])
+}
+
+/// The slave of work item t: the largest i with work[i] ≤ t (WGSL: `work_slave`).
+fn work_slave(params: &SearchParams, work: &[u32], t: u32) -> usize {
+    let (mut lo, mut hi) = (0u32, params.n_slaves);
+    let mut step = 0;
+    while step < 32 && hi - lo > 1 {
+        let mid = (lo + hi) / 2;
+        if work[mid as usize] <= t {
+            lo = mid;
+        } else {
+            hi = mid;
+        }
+        step += 1;
+    }
+    lo as usize
+}
+
+/// The inputs every work-item pass reads.
+#[derive(Clone, Copy)]
+pub struct Candidates<'a> {
+    /// Uniform parameters.
+    pub params: &'a SearchParams,
+    /// Grid-local node positions.
+    pub nodes: &'a [[f32; 4]],
+    /// Active facets, padded.
+    pub facets: &'a [[u32; 4]],
+    /// Node id per slave.
+    pub slaves: &'a [u32],
+    /// Cell starts (scanned counts).
+    pub starts: &'a [u32],
+    /// Bin entries.
+    pub entries: &'a [u32],
+    /// Node→facet adjacency.
+    pub adjacency: &'a [u32],
+}
+
+/// The nearest facet (distance², id) of slave i among its work item t's candidates, within the
+/// radius, ties to the lowest id (WGSL: `chunk_best`).
+fn chunk_best(c: &Candidates<'_>, work: &[u32], i: usize, t: u32) -> (f32, u32) {
+    let slave = c.slaves[i];
+    let p = node(c.nodes, slave);
+    let (s, e) = cell_range(c.params, c.starts, p);
+    let k0 = s + (t - work[i]) * CANDIDATE_CHUNK;
+    let k1 = e.min(k0 + CANDIDATE_CHUNK);
+    let mut b = (c.params.radius * c.params.radius, NO_FACET);
+    for k in k0..k1 {
+        let f = c.entries[k as usize];
+        if excluded(c.params, c.facets, c.adjacency, slave, c.facets[f as usize]) {
+            continue;
+        }
+        let d2 = project(c.nodes, p, c.facets[f as usize]).dist2;
+        if d2 < b.0 || (d2 == b.0 && f < b.1) {
+            b = (d2, f);
+        }
+    }
+    b
+}
+
+/// One "invocation" per slave: candidate count, chunk count into `work` (word n_slaves set to 0
+/// for the scan), `best` reset (WGSL: `nearest_count`).
+pub fn nearest_count(
+    params: &SearchParams,
+    nodes: &[[f32; 4]],
+    slaves: &[u32],
+    starts: &[u32],
+    status: &[u32],
+    work: &mut [u32],
+    best: &mut [u32],
+) {
+    let n = params.n_slaves as usize;
+    if n > 0 {
+        work[n] = 0;
+    }
+    for i in 0..n {
+        let mut count = 0;
+        if status[STATUS_OVERFLOW] == 0 {
+            let (s, e) = cell_range(params, starts, node(nodes, slaves[i]));
+            count = e - s;
+        }
+        work[i] = count.div_ceil(CANDIDATE_CHUNK);
+        best[BEST_WORDS * i..BEST_WORDS * (i + 1)].copy_from_slice(&[
+            (params.radius * params.radius).to_bits(),
+            NO_FACET,
+            0,
+            count,
+        ]);
+    }
+}
+
+/// The number of work items, from the scanned `work` (WGSL: `nearest_args`, which writes the
+/// indirect dispatch instead).
+pub fn nearest_args(params: &SearchParams, work: &[u32]) -> u32 {
+    work[params.n_slaves as usize]
+}
+
+/// One "invocation" per work item: the chunk's nearest facet (WGSL: `nearest_chunks`).
+pub fn nearest_chunks(c: &Candidates<'_>, work: &[u32], best: &mut [u32]) {
+    for t in 0..nearest_args(c.params, work) {
+        let i = work_slave(c.params, work, t);
+        let (d2, f) = chunk_best(c, work, i, t);
+        if f == NO_FACET {
+            continue;
+        }
+        if work[i + 1] - work[i] == 1 {
+            best[BEST_WORDS * i] = d2.to_bits();
+            best[BEST_WORDS * i + 1] = f;
+        } else {
+            best[BEST_WORDS * i] = best[BEST_WORDS * i].min(d2.to_bits());
+        }
+    }
+}
+
+/// One "invocation" per work item of slaves with several chunks: the lowest id at the best
+/// distance (WGSL: `nearest_ties`).
+pub fn nearest_ties(c: &Candidates<'_>, work: &[u32], best: &mut [u32]) {
+    for t in 0..nearest_args(c.params, work) {
+        let i = work_slave(c.params, work, t);
+        if work[i + 1] - work[i] == 1 {
+            continue;
+        }
+        let (d2, f) = chunk_best(c, work, i, t);
+        if f != NO_FACET && d2.to_bits() == best[BEST_WORDS * i] {
+            best[BEST_WORDS * i + 1] = best[BEST_WORDS * i + 1].min(f);
+        }
+    }
+}
+
+/// One "invocation" per work item, self-contact only: flags a slave with another facet near and
+/// facing it (WGSL: `nearest_crowded`).
+pub fn nearest_crowded(c: &Candidates<'_>, work: &[u32], best: &mut [u32]) {
+    if c.params.flags & FLAG_SELF_CONTACT == 0 {
+        return;
+    }
+    let r2 = c.params.radius * c.params.radius;
+    for t in 0..nearest_args(c.params, work) {
+        let i = work_slave(c.params, work, t);
+        let best_f = best[BEST_WORDS * i + 1];
+        if best_f == NO_FACET {
+            continue;
+        }
+        let slave = c.slaves[i];
+        let p = node(c.nodes, slave);
+        let (s, e) = cell_range(c.params, c.starts, p);
+        let k0 = s + (t - work[i]) * CANDIDATE_CHUNK;
+        let k1 = e.min(k0 + CANDIDATE_CHUNK);
+        for k in k0..k1 {
+            let f = c.entries[k as usize];
+            if f == best_f
+                || excluded(c.params, c.facets, c.adjacency, slave, c.facets[f as usize])
+                || share_node(c.facets[f as usize], c.facets[best_f as usize])
+            {
+                continue;
+            }
+            let pr = project(c.nodes, p, c.facets[f as usize]);
+            let gap = (p - pr.point).dot(pr.normal);
+            if pr.dist2 <= r2 && 4.0 * gap * gap > pr.dist2 {
+                best[BEST_WORDS * i + 2] = 1;
+                break;
+            }
+        }
+    }
+}
+
+/// One "invocation" per slave node: the hit from the winning facet; writes `hits[i]`. Skipped
+/// when the binning overflowed (WGSL: `nearest_facet`).
 pub fn nearest_facet(
     params: &SearchParams,
     nodes: &[[f32; 4]],
     facets: &[[u32; 4]],
     slaves: &[u32],
-    starts: &[u32],
-    entries: &[u32],
     status: &mut [u32],
     hits: &mut [GpuHit],
     adjacency: &[u32],
+    best: &[u32],
 ) {
     if status[STATUS_OVERFLOW] != 0 {
         return;
     }
     for i in 0..params.n_slaves as usize {
         let p = node(nodes, slaves[i]);
-        let g = [
-            p.x * params.inv_cell_size,
-            p.y * params.inv_cell_size,
-            p.z * params.inv_cell_size,
-        ];
-        let dims = [params.dims_x, params.dims_y, params.dims_z];
-        let inside = (0..3).all(|a| g[a] >= 0.0 && g[a] < dims[a] as f32);
-        if !inside {
-            hits[i] = GpuHit::miss(slaves[i], 0);
+        let candidates = best[BEST_WORDS * i + 3];
+        let best_f = best[BEST_WORDS * i + 1];
+        if best_f == NO_FACET {
+            hits[i] = GpuHit::miss(slaves[i], candidates);
             continue;
         }
-        let c = super::common::cell_index(params, [g[0] as u32, g[1] as u32, g[2] as u32]) as usize;
-        let (s, e) = (starts[c], starts[c + 1]);
-        let mut best: Option<Projection<f32>> = None;
-        let mut best_f = NO_FACET;
-        let mut best_d2 = params.radius * params.radius;
-        let slave = slaves[i];
-        for k in s..e {
-            let f = entries[k as usize];
-            if excluded(params, facets, adjacency, slave, facets[f as usize]) {
-                continue;
-            }
-            let pr = project(nodes, p, facets[f as usize]);
-            if pr.dist2 < best_d2 || (best_f == NO_FACET && pr.dist2 == best_d2) {
-                best = Some(pr);
-                best_d2 = pr.dist2;
-                best_f = f;
-            }
+        if best[BEST_WORDS * i + 2] != 0 {
+            status[STATUS_CROWDED] += 1;
         }
-        if best_f != NO_FACET && params.flags & FLAG_SELF_CONTACT != 0 {
-            let r2 = params.radius * params.radius;
-            let crowded = (s..e).map(|k| entries[k as usize]).any(|f| {
-                f != best_f
-                    && !excluded(params, facets, adjacency, slave, facets[f as usize])
-                    && !share_node(facets[f as usize], facets[best_f as usize])
-                    && {
-                        let pr = project(nodes, p, facets[f as usize]);
-                        let gap = (p - pr.point).dot(pr.normal);
-                        pr.dist2 <= r2 && 4.0 * gap * gap > pr.dist2
-                    }
-            });
-            if crowded {
-                status[STATUS_CROWDED] += 1;
-            }
-        }
-        let Some(best) = best else {
-            hits[i] = GpuHit::miss(slaves[i], e - s);
-            continue;
-        };
         let fac = facets[best_f as usize];
+        let best = project(nodes, p, fac);
         let mut best_node = u32::MAX;
         let mut best_nd2 = 0.0f32;
         for &id in &fac[..facet_node_count(fac)] {
@@ -100,7 +243,6 @@ pub fn nearest_facet(
             }
         }
         let q = best.point;
-        let fac = facets[best_f as usize];
         let beside = super::common::beside_free_edge(
             nodes,
             facets,
@@ -115,7 +257,7 @@ pub fn nearest_facet(
         hits[i] = GpuHit {
             facet: best_f,
             node: best_node,
-            candidates: (e - s) | if beside { HIT_BESIDE_FREE_EDGE } else { 0 },
+            candidates: candidates | if beside { HIT_BESIDE_FREE_EDGE } else { 0 },
             slave: slaves[i],
             point_gap: [q.x, q.y, q.z, (p - q).dot(best.normal)],
             normal_dist: [

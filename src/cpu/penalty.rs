@@ -4,8 +4,8 @@ use super::common::{facet_node_count, node};
 use crate::geometry::{tangent_directions, V3};
 use crate::penalty::layout::*;
 use crate::search::layout::{
-    GpuHit, NO_FACET, STATUS_ACTIVE, STATUS_DT_APPROACH, STATUS_DT_STABLE, STATUS_MAX_OVERCLOSURE,
-    STATUS_OVERFLOW, STATUS_SLIPPING,
+    GpuHit, NO_FACET, STATUS_ACTIVE, STATUS_DT_APPROACH, STATUS_DT_STABLE, STATUS_FORCE_SCALE,
+    STATUS_MAX_OVERCLOSURE, STATUS_OVERFLOW, STATUS_ROW_SCALE, STATUS_SLIPPING,
 };
 
 const E_MINUS_1: f32 = 1.718_281_8;
@@ -262,6 +262,14 @@ pub fn penalty(
         min_bits(&mut status[STATUS_DT_STABLE], dt_stable);
         min_bits(&mut status[STATUS_DT_APPROACH], dt_approach);
         o.status |= mask;
+        if o.status & CSTATUS_MASK != CSTATUS_OPEN {
+            // the fixed-point scales of the gather: the largest magnitudes it will sum
+            let a = o.force[0].abs().max(o.force[1].abs().max(o.force[2].abs()));
+            let w = &mut status[STATUS_FORCE_SCALE];
+            *w = (*w).max(a.to_bits());
+            let w = &mut status[STATUS_ROW_SCALE];
+            *w = (*w).max(o.bound_light.max(o.bound_heavy).to_bits());
+        }
         out[i] = o;
     }
 }

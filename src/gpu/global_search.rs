@@ -51,7 +51,11 @@ struct Pipelines {
     scan_blocks: wgpu::ComputePipeline,
     scan_add: wgpu::ComputePipeline,
     bin_scatter: wgpu::ComputePipeline,
-    bin_sort: wgpu::ComputePipeline,
+    nearest_count: wgpu::ComputePipeline,
+    nearest_args: wgpu::ComputePipeline,
+    nearest_chunks: wgpu::ComputePipeline,
+    nearest_ties: wgpu::ComputePipeline,
+    nearest_crowded: wgpu::ComputePipeline,
     nearest_facet: wgpu::ComputePipeline,
     local_search: wgpu::ComputePipeline,
     motion: wgpu::ComputePipeline,
@@ -67,7 +71,13 @@ struct BindGroups {
     scan_blocks: Vec<wgpu::BindGroup>,
     scan_add: Vec<wgpu::BindGroup>,
     bin_scatter: wgpu::BindGroup,
-    bin_sort: wgpu::BindGroup,
+    nearest_count: wgpu::BindGroup,
+    work_scan_blocks: Vec<wgpu::BindGroup>,
+    work_scan_add: Vec<wgpu::BindGroup>,
+    nearest_args: wgpu::BindGroup,
+    nearest_chunks: wgpu::BindGroup,
+    nearest_ties: wgpu::BindGroup,
+    nearest_crowded: wgpu::BindGroup,
     nearest_facet: wgpu::BindGroup,
 }
 
@@ -87,6 +97,14 @@ struct Buffers {
     adjacency: GrowBuffer,
     motion_nodes: GrowBuffer,
     anchors: GrowBuffer,
+    /// Nearest-facet work items: chunk counts per slave, scanned (all scan levels).
+    work: GrowBuffer,
+    /// Scan parameters of each level of `work`.
+    work_scan_params: GrowBuffer,
+    /// Nearest-facet record per slave (4 words).
+    best: GrowBuffer,
+    /// The indirect dispatch of the nearest-facet work items (x, y, z).
+    args: wgpu::Buffer,
 }
 
 /// The global search on one GPU device; its buffers grow as needed and are reused.
@@ -97,6 +115,8 @@ pub struct GpuSearch {
     bind_groups: Option<BindGroups>,
     /// Number of scan levels the bind groups were built for.
     scan_levels: usize,
+    /// Number of work-item scan levels the bind groups were built for.
+    work_levels: usize,
     entry_capacity: u32,
     presize: bool,
     /// Workgroups per dispatch dimension before folding into y (the device limit, or lower
@@ -147,13 +167,18 @@ impl GpuSearch {
             })
         };
         let scan = module("scan");
+        let nearest = module("nearest_facet");
         let pipelines = Pipelines {
             bin_count: pipeline(&module("bin_count"), "bin_count"),
             scan_blocks: pipeline(&scan, "scan_blocks"),
             scan_add: pipeline(&scan, "scan_add"),
             bin_scatter: pipeline(&module("bin_scatter"), "bin_scatter"),
-            bin_sort: pipeline(&module("bin_sort"), "bin_sort"),
-            nearest_facet: pipeline(&module("nearest_facet"), "nearest_facet"),
+            nearest_count: pipeline(&nearest, "nearest_count"),
+            nearest_args: pipeline(&nearest, "nearest_args"),
+            nearest_chunks: pipeline(&nearest, "nearest_chunks"),
+            nearest_ties: pipeline(&nearest, "nearest_ties"),
+            nearest_crowded: pipeline(&nearest, "nearest_crowded"),
+            nearest_facet: pipeline(&nearest, "nearest_facet"),
             local_search: pipeline(&module("local_search"), "local_search"),
             motion: pipeline(&module("motion"), "motion"),
             to_local: pipeline(&module("to_local"), "to_local"),
@@ -197,6 +222,20 @@ impl GpuSearch {
             adjacency: GrowBuffer::new(device, "node facets", 0, storage),
             motion_nodes: GrowBuffer::new(device, "motion nodes", 0, storage),
             anchors: GrowBuffer::new(device, "anchors", 0, storage),
+            work: GrowBuffer::new(device, "nearest-facet work items", 0, storage),
+            work_scan_params: GrowBuffer::new(
+                device,
+                "work scan params",
+                4 * UNIFORM_STRIDE,
+                U::UNIFORM | U::COPY_DST,
+            ),
+            best: GrowBuffer::new(device, "nearest-facet records", 0, storage),
+            args: device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some("nearest-facet dispatch"),
+                size: 16,
+                usage: U::STORAGE | U::INDIRECT,
+                mapped_at_creation: false,
+            }),
         };
         Ok(Self {
             ctx,
@@ -204,6 +243,7 @@ impl GpuSearch {
             buffers,
             bind_groups: None,
             scan_levels: 0,
+            work_levels: 0,
             entry_capacity: 0,
             presize: true,
             max_workgroups_per_dim: ctx_limit,
@@ -288,15 +328,28 @@ impl GpuSearch {
         replaced |= b
             .motion_nodes
             .ensure(d, l, (prep.motion_nodes.len() * 4) as u64)?;
+        let work = work_levels(prep);
+        replaced |= b.work.ensure(d, l, work.words as u64 * 4)?;
+        replaced |= b
+            .work_scan_params
+            .ensure(d, l, work.levels.len() as u64 * UNIFORM_STRIDE)?;
+        replaced |= b.best.ensure(
+            d,
+            l,
+            (prep.slaves.len() * crate::cpu::nearest_facet::BEST_WORDS * 4) as u64,
+        )?;
         b.readback.ensure(d, l, READBACK_HITS_OFFSET + hits_bytes)?;
         self.static_dirty |= replaced;
-        if replaced || self.scan_levels != levels.levels.len() {
+        if replaced
+            || self.scan_levels != levels.levels.len()
+            || self.work_levels != work.levels.len()
+        {
             self.bind_groups = None;
         }
         Ok(())
     }
 
-    fn bind_groups(&self, levels: &ScanLevels) -> BindGroups {
+    fn bind_groups(&self, levels: &ScanLevels, prep: &Prepared) -> BindGroups {
         let d = &self.ctx.device;
         let b = &self.buffers;
         let p = &self.pipelines;
@@ -312,6 +365,43 @@ impl GpuSearch {
             })
         };
         let n_levels = levels.levels.len();
+        let group_at = |pipe: &wgpu::ComputePipeline, bufs: &[(u32, wgpu::BindingResource)]| {
+            super::bind_group_at(d, pipe, bufs)
+        };
+        let work_level = |i: usize| {
+            wgpu::BindingResource::Buffer(wgpu::BufferBinding {
+                buffer: &b.work_scan_params.buffer,
+                offset: i as u64 * UNIFORM_STRIDE,
+                size: wgpu::BufferSize::new(std::mem::size_of::<ScanParams>() as u64),
+            })
+        };
+        let n_work_levels = work_levels(prep).levels.len();
+        // the bindings of nearest_facet.wgsl: every entry point binds the subset it uses
+        let nodes = || (1, b.nodes.buffer.as_entire_binding());
+        let facets = || (2, b.facets.buffer.as_entire_binding());
+        let slaves = || (3, b.slaves.buffer.as_entire_binding());
+        let starts = || (4, b.scan.buffer.as_entire_binding());
+        let entries = || (5, b.entries.buffer.as_entire_binding());
+        let status = || (6, b.status.as_entire_binding());
+        let adjacency = || (8, b.adjacency.buffer.as_entire_binding());
+        let work = || (9, b.work.buffer.as_entire_binding());
+        let best = || (10, b.best.buffer.as_entire_binding());
+        let chunk_group = |pipe: &wgpu::ComputePipeline| {
+            group_at(
+                pipe,
+                &[
+                    (0, params.clone()),
+                    nodes(),
+                    facets(),
+                    slaves(),
+                    starts(),
+                    entries(),
+                    adjacency(),
+                    work(),
+                    best(),
+                ],
+            )
+        };
         BindGroups {
             anchor: group(
                 &p.anchor,
@@ -386,26 +476,56 @@ impl GpuSearch {
                     b.status.as_entire_binding(),
                 ],
             ),
-            bin_sort: group(
-                &p.bin_sort,
+            nearest_count: group_at(
+                &p.nearest_count,
                 &[
-                    params.clone(),
-                    b.scan.buffer.as_entire_binding(),
-                    b.entries.buffer.as_entire_binding(),
+                    (0, params.clone()),
+                    nodes(),
+                    slaves(),
+                    starts(),
+                    status(),
+                    work(),
+                    best(),
                 ],
             ),
-            nearest_facet: group(
+            work_scan_blocks: (0..n_work_levels)
+                .map(|i| {
+                    group(
+                        &p.scan_blocks,
+                        &[work_level(i), b.work.buffer.as_entire_binding()],
+                    )
+                })
+                .collect(),
+            work_scan_add: (0..n_work_levels)
+                .map(|i| {
+                    group(
+                        &p.scan_add,
+                        &[work_level(i), b.work.buffer.as_entire_binding()],
+                    )
+                })
+                .collect(),
+            nearest_args: group_at(
+                &p.nearest_args,
+                &[
+                    (0, params.clone()),
+                    work(),
+                    (11, b.args.as_entire_binding()),
+                ],
+            ),
+            nearest_chunks: chunk_group(&p.nearest_chunks),
+            nearest_ties: chunk_group(&p.nearest_ties),
+            nearest_crowded: chunk_group(&p.nearest_crowded),
+            nearest_facet: group_at(
                 &p.nearest_facet,
                 &[
-                    params,
-                    b.nodes.buffer.as_entire_binding(),
-                    b.facets.buffer.as_entire_binding(),
-                    b.slaves.buffer.as_entire_binding(),
-                    b.scan.buffer.as_entire_binding(),
-                    b.entries.buffer.as_entire_binding(),
-                    b.status.as_entire_binding(),
-                    b.hits.buffer.as_entire_binding(),
-                    b.adjacency.buffer.as_entire_binding(),
+                    (0, params),
+                    nodes(),
+                    facets(),
+                    slaves(),
+                    status(),
+                    (7, b.hits.buffer.as_entire_binding()),
+                    adjacency(),
+                    best(),
                 ],
             ),
         }
@@ -548,6 +668,15 @@ impl GpuSearch {
                 bytemuck::bytes_of(&sp),
             );
         }
+        let work = work_levels(prep);
+        for i in 0..work.levels.len() {
+            super::upload(
+                &self.ctx,
+                &self.buffers.work_scan_params.buffer,
+                i as u64 * UNIFORM_STRIDE,
+                bytemuck::bytes_of(&work.params(i)),
+            );
+        }
         if let Some(ws) = preload {
             super::upload(
                 &self.ctx,
@@ -571,8 +700,9 @@ impl GpuSearch {
         let mut regrowths = 0;
         loop {
             if self.bind_groups.is_none() {
-                self.bind_groups = Some(self.bind_groups(&levels));
+                self.bind_groups = Some(self.bind_groups(&levels, prep));
                 self.scan_levels = levels.levels.len();
+                self.work_levels = work_levels(prep).levels.len();
                 self.generation += 1;
             }
             if let Some(src) = self.device_positions.clone() {
@@ -862,21 +992,57 @@ impl GpuSearch {
                         )],
                     );
                 }
-                Step::BinSort => dispatch(
-                    &mut enc,
-                    "bin_sort",
-                    &[(&p.bin_sort, &bg.bin_sort, params.n_cells, ITEM_WORKGROUP)],
-                ),
-                Step::NearestFacet => dispatch(
-                    &mut enc,
-                    "nearest_facet",
-                    &[(
-                        &p.nearest_facet,
-                        &bg.nearest_facet,
+                Step::NearestFacet => {
+                    let work = work_levels(prep);
+                    let mut seq = vec![(
+                        &p.nearest_count,
+                        &bg.nearest_count,
                         params.n_slaves,
                         ITEM_WORKGROUP,
-                    )],
-                ),
+                    )];
+                    for i in 0..work.levels.len() {
+                        seq.push((
+                            &p.scan_blocks,
+                            &bg.work_scan_blocks[i],
+                            work.levels[i].1,
+                            SCAN_BLOCK,
+                        ));
+                    }
+                    for i in (0..work.levels.len().saturating_sub(1)).rev() {
+                        seq.push((
+                            &p.scan_add,
+                            &bg.work_scan_add[i],
+                            work.levels[i].1,
+                            SCAN_BLOCK,
+                        ));
+                    }
+                    seq.push((&p.nearest_args, &bg.nearest_args, 1, 1));
+                    dispatch(&mut enc, "nearest_facet: count + scan", &seq);
+                    let mut chunks = vec![
+                        (&p.nearest_chunks, &bg.nearest_chunks),
+                        (&p.nearest_ties, &bg.nearest_ties),
+                    ];
+                    if params.flags & crate::search::layout::FLAG_SELF_CONTACT != 0 {
+                        chunks.push((&p.nearest_crowded, &bg.nearest_crowded));
+                    }
+                    super::run_indirect_pass(
+                        &self.ctx,
+                        &mut enc,
+                        "nearest_facet: chunks",
+                        &chunks,
+                        &b.args,
+                    );
+                    dispatch(
+                        &mut enc,
+                        "nearest_facet",
+                        &[(
+                            &p.nearest_facet,
+                            &bg.nearest_facet,
+                            params.n_slaves,
+                            ITEM_WORKGROUP,
+                        )],
+                    );
+                }
             }
         }
         if !local && first < STEPS.len() {
@@ -940,4 +1106,9 @@ impl GpuSearch {
         self.ctx.take_uncaptured("contact increment")?;
         Ok((status, total, hits))
     }
+}
+
+/// The scan levels of the nearest-facet work items: one chunk count per slave and the total.
+fn work_levels(prep: &Prepared) -> ScanLevels {
+    ScanLevels::new(prep.slaves.len() as u32 + 1)
 }

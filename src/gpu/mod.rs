@@ -45,6 +45,34 @@ pub(crate) fn run_pass(
     }
 }
 
+/// Records one compute pass running each (pipeline, bind group) in order with the workgroup
+/// counts the device wrote into `args` (x, y, z: an indirect dispatch, decided on the device).
+pub(crate) fn run_indirect_pass(
+    ctx: &crate::device::GpuContext,
+    enc: &mut wgpu::CommandEncoder,
+    label: &str,
+    work: &[(&wgpu::ComputePipeline, &wgpu::BindGroup)],
+    args: &wgpu::Buffer,
+) {
+    if let Ok(mut t) = ctx.traffic.lock() {
+        *t.dispatches.entry(label.to_string()).or_default() += work.len() as u64;
+    }
+    let mut profiler = ctx.profiler.lock().ok();
+    let writes = profiler
+        .as_mut()
+        .and_then(|p| p.as_mut())
+        .and_then(|p| p.next(label));
+    let mut pass = enc.begin_compute_pass(&wgpu::ComputePassDescriptor {
+        label: Some(label),
+        timestamp_writes: writes,
+    });
+    for &(pipe, group) in work {
+        pass.set_pipeline(pipe);
+        pass.set_bind_group(0, group, &[]);
+        pass.dispatch_workgroups_indirect(args, 0);
+    }
+}
+
 /// Writes `data` into `buffer` at `offset` through the queue, counting the bytes.
 pub(crate) fn upload(
     ctx: &crate::device::GpuContext,

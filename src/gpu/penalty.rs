@@ -1,5 +1,5 @@
 //! The GPU executor of the penalty passes of one pair, run after the search in the same
-//! command encoder: nodal_normals, penalty, contact_sort (with scan) and gather.
+//! command encoder: nodal_normals, penalty and gather (scatter_forces, gather).
 
 use std::sync::Arc;
 
@@ -10,30 +10,20 @@ use crate::device::GpuContext;
 use crate::error::{Error, Result};
 use crate::penalty::layout::{ContactOut, PenaltyParams, NO_LIMIT};
 use crate::penalty::PenaltySetup;
-use crate::search::layout::{ScanLevels, ScanParams, ITEM_WORKGROUP, SCAN_BLOCK};
+use crate::search::layout::ITEM_WORKGROUP;
 use wgpu::BufferUsages as U;
-
-const UNIFORM_STRIDE: u64 = 256;
 
 struct Pipelines {
     nodal_normals: wgpu::ComputePipeline,
     penalty: wgpu::ComputePipeline,
-    count: wgpu::ComputePipeline,
     scatter: wgpu::ComputePipeline,
-    sort: wgpu::ComputePipeline,
-    scan_blocks: wgpu::ComputePipeline,
-    scan_add: wgpu::ComputePipeline,
     gather: wgpu::ComputePipeline,
 }
 
 struct Groups {
     nodal_normals: wgpu::BindGroup,
     penalty: wgpu::BindGroup,
-    count: wgpu::BindGroup,
     scatter: wgpu::BindGroup,
-    sort: wgpu::BindGroup,
-    scan_blocks: Vec<wgpu::BindGroup>,
-    scan_add: Vec<wgpu::BindGroup>,
     gather: wgpu::BindGroup,
 }
 
@@ -43,25 +33,21 @@ pub struct GpuPenalty {
     pipelines: Pipelines,
     params: wgpu::Buffer,
     status_init: wgpu::Buffer,
-    scan_params: wgpu::Buffer,
     vel: GrowBuffer,
     normals: GrowBuffer,
     pair_nodes: wgpu::Buffer,
     adjacency: wgpu::Buffer,
     state: wgpu::Buffer,
     out: wgpu::Buffer,
-    counts: wgpu::Buffer,
-    cursor: wgpu::Buffer,
-    facet_slaves: wgpu::Buffer,
+    facet_nodes: wgpu::Buffer,
+    acc: wgpu::Buffer,
     forces: wgpu::Buffer,
     staging: wgpu::Buffer,
-    levels: ScanLevels,
     groups: Option<(u64, Groups)>,
     /// The search's status buffer (bound at prepare), whose words 4..8 these passes own.
     status: Option<wgpu::Buffer>,
     n_slaves: u32,
     n_pair_nodes: u32,
-    n_facets: u32,
     read_outputs: bool,
     /// Force per pair node after the last increment.
     pub forces_out: Vec<[f32; 4]>,
@@ -111,17 +97,12 @@ impl GpuPenalty {
                 cache: None,
             })
         };
-        let sort = module("contact_sort");
-        let scan = module("scan");
+        let gather = module("gather");
         let pipelines = Pipelines {
             nodal_normals: pipeline(&module("nodal_normals"), "nodal_normals", &[]),
             penalty: pipeline(&module("penalty"), "penalty", &friction),
-            count: pipeline(&sort, "count_by_facet", &[]),
-            scatter: pipeline(&sort, "scatter_by_facet", &[]),
-            sort: pipeline(&sort, "sort_by_facet", &[]),
-            scan_blocks: pipeline(&scan, "scan_blocks", &[]),
-            scan_add: pipeline(&scan, "scan_add", &[]),
-            gather: pipeline(&module("gather"), "gather", &[]),
+            scatter: pipeline(&gather, "scatter_forces", &[]),
+            gather: pipeline(&gather, "gather", &[]),
         };
         if let Some(e) = pollster::block_on(scope.pop()) {
             return Err(Error::Gpu {
@@ -131,8 +112,6 @@ impl GpuPenalty {
         }
         let n_slaves = setup.areas.len() as u32;
         let n_pair_nodes = setup.pair_nodes.len() as u32;
-        let n_facets = setup.params.n_facets;
-        let levels = ScanLevels::new(n_facets + 1);
         let check = |what: &str, bytes: u64| -> Result<u64> {
             let allowed = limits
                 .max_storage_buffer_binding_size
@@ -185,20 +164,22 @@ impl GpuPenalty {
             0,
             bytemuck::cast_slice(&[NO_LIMIT.to_bits(), NO_LIMIT.to_bits(), 0u32, 0u32]),
         );
-        let scan_params = d.create_buffer(&wgpu::BufferDescriptor {
-            label: Some("facet scan params"),
-            size: levels.levels.len() as u64 * UNIFORM_STRIDE,
-            usage: U::UNIFORM | U::COPY_DST,
-            mapped_at_creation: false,
-        });
-        for i in 0..levels.levels.len() {
-            super::upload(
-                &ctx,
-                &scan_params,
-                i as u64 * UNIFORM_STRIDE,
-                bytemuck::bytes_of(&levels.params(i)),
-            );
-        }
+        let facet_nodes = storage(
+            d,
+            "facet pair nodes",
+            check("facet pair nodes", setup.facet_nodes.len() as u64 * 16)?,
+            U::empty(),
+        );
+        super::upload(
+            &ctx,
+            &facet_nodes,
+            0,
+            bytemuck::cast_slice(&setup.facet_nodes),
+        );
+        let acc_bytes = check(
+            "fixed-point force sums",
+            n_pair_nodes as u64 * (4 * crate::cpu::gather::ACC_WORDS_PER_NODE) as u64,
+        )?;
         Ok(Self {
             params: d.create_buffer(&wgpu::BufferDescriptor {
                 label: Some("penalty params"),
@@ -207,7 +188,6 @@ impl GpuPenalty {
                 mapped_at_creation: false,
             }),
             status_init,
-            scan_params,
             vel: GrowBuffer::new(
                 d,
                 "velocities",
@@ -224,9 +204,8 @@ impl GpuPenalty {
             adjacency,
             state,
             out: storage(d, "contact outputs", out_bytes, U::COPY_SRC),
-            counts: storage(d, "facet counts", levels.words as u64 * 4, U::COPY_SRC),
-            cursor: storage(d, "facet cursors", (n_facets as u64 + 1) * 4, U::empty()),
-            facet_slaves: storage(d, "facet slaves", n_slaves as u64 * 4, U::empty()),
+            facet_nodes,
+            acc: storage(d, "fixed-point force sums", acc_bytes, U::empty()),
             forces: storage(d, "pair forces", n_pair_nodes as u64 * 16, U::COPY_SRC),
             staging: d.create_buffer(&wgpu::BufferDescriptor {
                 label: Some("penalty readback"),
@@ -235,12 +214,10 @@ impl GpuPenalty {
                 mapped_at_creation: false,
             }),
             pipelines,
-            levels,
             groups: None,
             status: None,
             n_slaves,
             n_pair_nodes,
-            n_facets,
             read_outputs: false,
             forces_out: Vec::new(),
             outputs: Vec::new(),
@@ -283,7 +260,7 @@ impl GpuPenalty {
 
     fn build_groups(&self, s: &SharedBuffers<'_>) -> Groups {
         let d = &self.ctx.device;
-        // bindings numbered in order, except where an entry point leaves some out (contact_sort)
+        // bindings numbered in order, except where an entry point leaves some out (gather.wgsl)
         let group_at = |pipe: &wgpu::ComputePipeline, bufs: &[(u32, wgpu::BindingResource)]| {
             super::bind_group_at(d, pipe, bufs)
         };
@@ -292,14 +269,6 @@ impl GpuPenalty {
         };
         let p = &self.pipelines;
         let pp = self.params.as_entire_binding();
-        let level = |i: usize| {
-            wgpu::BindingResource::Buffer(wgpu::BufferBinding {
-                buffer: &self.scan_params,
-                offset: i as u64 * UNIFORM_STRIDE,
-                size: wgpu::BufferSize::new(std::mem::size_of::<ScanParams>() as u64),
-            })
-        };
-        let n = self.levels.levels.len();
         Groups {
             nodal_normals: group(
                 &p.nodal_normals,
@@ -326,51 +295,26 @@ impl GpuPenalty {
                     s.status.as_entire_binding(),
                 ],
             ),
-            count: group(
-                &p.count,
-                &[
-                    pp.clone(),
-                    s.hits.as_entire_binding(),
-                    self.out.as_entire_binding(),
-                    self.counts.as_entire_binding(),
-                ],
-            ),
             scatter: group_at(
                 &p.scatter,
                 &[
                     (0, pp.clone()),
-                    (1, s.hits.as_entire_binding()),
-                    (2, self.out.as_entire_binding()),
-                    (4, self.cursor.as_entire_binding()),
-                    (5, self.facet_slaves.as_entire_binding()),
+                    (2, self.facet_nodes.as_entire_binding()),
+                    (3, s.hits.as_entire_binding()),
+                    (4, self.out.as_entire_binding()),
+                    (5, s.status.as_entire_binding()),
+                    (6, self.acc.as_entire_binding()),
                 ],
             ),
-            sort: group_at(
-                &p.sort,
-                &[
-                    (0, pp.clone()),
-                    (3, self.counts.as_entire_binding()),
-                    (5, self.facet_slaves.as_entire_binding()),
-                ],
-            ),
-            scan_blocks: (0..n)
-                .map(|i| group(&p.scan_blocks, &[level(i), self.counts.as_entire_binding()]))
-                .collect(),
-            scan_add: (0..n)
-                .map(|i| group(&p.scan_add, &[level(i), self.counts.as_entire_binding()]))
-                .collect(),
-            gather: group(
+            gather: group_at(
                 &p.gather,
                 &[
-                    pp,
-                    self.pair_nodes.as_entire_binding(),
-                    self.adjacency.as_entire_binding(),
-                    s.facets.as_entire_binding(),
-                    self.counts.as_entire_binding(),
-                    self.facet_slaves.as_entire_binding(),
-                    s.hits.as_entire_binding(),
-                    self.out.as_entire_binding(),
-                    self.forces.as_entire_binding(),
+                    (0, pp),
+                    (1, self.pair_nodes.as_entire_binding()),
+                    (4, self.out.as_entire_binding()),
+                    (5, s.status.as_entire_binding()),
+                    (6, self.acc.as_entire_binding()),
+                    (7, self.forces.as_entire_binding()),
                 ],
             ),
         }
@@ -405,11 +349,13 @@ impl AfterSearch for GpuPenalty {
         let (_, g) = self.groups.as_ref().expect("prepared before encoding");
         let p = &self.pipelines;
         // status words 4..8: increments start at "no limit", counts at 0; word 14, the
-        // largest overclosure, at 0
+        // largest overclosure, at 0; words 16..20, the gather's fixed-point scales, at 0
         let status = self.status.as_ref().expect("prepared before encoding");
         enc.copy_buffer_to_buffer(&self.status_init, 0, status, 16, 16);
         let overclosure = 4 * crate::search::layout::STATUS_MAX_OVERCLOSURE as u64;
         enc.clear_buffer(status, overclosure, Some(4));
+        let scales = 4 * crate::search::layout::STATUS_FORCE_SCALE as u64;
+        enc.clear_buffer(status, scales, Some(16));
         let run = |enc: &mut wgpu::CommandEncoder, label: &str, work: &[super::Work<'_>]| {
             super::run_pass(&self.ctx, enc, label, work, max_dim)
         };
@@ -426,38 +372,12 @@ impl AfterSearch for GpuPenalty {
                 (&p.penalty, &g.penalty, self.n_slaves, ITEM_WORKGROUP),
             ],
         );
-        enc.clear_buffer(&self.counts, 0, Some(self.levels.words as u64 * 4));
-        let mut work = vec![(&p.count, &g.count, self.n_slaves, ITEM_WORKGROUP)];
-        for i in 0..self.levels.levels.len() {
-            work.push((
-                &p.scan_blocks,
-                &g.scan_blocks[i],
-                self.levels.levels[i].1,
-                SCAN_BLOCK,
-            ));
-        }
-        for i in (0..self.levels.levels.len().saturating_sub(1)).rev() {
-            work.push((
-                &p.scan_add,
-                &g.scan_add[i],
-                self.levels.levels[i].1,
-                SCAN_BLOCK,
-            ));
-        }
-        run(enc, "count + scan", &work);
-        enc.copy_buffer_to_buffer(
-            &self.counts,
-            0,
-            &self.cursor,
-            0,
-            (self.n_facets as u64 + 1) * 4,
-        );
+        enc.clear_buffer(&self.acc, 0, None);
         run(
             enc,
-            "scatter, sort, gather",
+            "scatter_forces + gather",
             &[
                 (&p.scatter, &g.scatter, self.n_slaves, ITEM_WORKGROUP),
-                (&p.sort, &g.sort, self.n_facets, ITEM_WORKGROUP),
                 (&p.gather, &g.gather, self.n_pair_nodes, ITEM_WORKGROUP),
             ],
         );

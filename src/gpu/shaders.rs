@@ -24,11 +24,10 @@ pub enum Prelude {
 
 /// (file stem, source, prelude) of every kernel file.
 #[rustfmt::skip]
-pub const KERNELS: [(&str, &str, Prelude); 13] = [
+pub const KERNELS: [(&str, &str, Prelude); 11] = [
     ("bin_count", include_str!("../../shaders/bin_count.wgsl"), Prelude::None),
     ("scan", include_str!("../../shaders/scan.wgsl"), Prelude::None),
     ("bin_scatter", include_str!("../../shaders/bin_scatter.wgsl"), Prelude::None),
-    ("bin_sort", include_str!("../../shaders/bin_sort.wgsl"), Prelude::None),
     ("nearest_facet", include_str!("../../shaders/nearest_facet.wgsl"), Prelude::Search),
     ("local_search", include_str!("../../shaders/local_search.wgsl"), Prelude::Search),
     ("motion", include_str!("../../shaders/motion.wgsl"), Prelude::None),
@@ -36,7 +35,6 @@ pub const KERNELS: [(&str, &str, Prelude); 13] = [
     ("anchor", include_str!("../../shaders/anchor.wgsl"), Prelude::None),
     ("nodal_normals", include_str!("../../shaders/nodal_normals.wgsl"), Prelude::Penalty),
     ("penalty", include_str!("../../shaders/penalty.wgsl"), Prelude::Penalty),
-    ("contact_sort", include_str!("../../shaders/contact_sort.wgsl"), Prelude::Penalty),
     ("gather", include_str!("../../shaders/gather.wgsl"), Prelude::Penalty),
 ];
 

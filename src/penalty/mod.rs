@@ -1,6 +1,5 @@
 //! Penalty enforcement of a contact pair: the static data its kernels need, and the
-//! parameters of one increment. The kernels are `shaders/{nodal_normals,penalty,contact_sort,
-//! gather}.wgsl` (GPU, [`crate::gpu::GpuPenalty`]) and their mirrors in [`crate::cpu`].
+//! parameters of one increment. The kernels are `shaders/{nodal_normals,penalty,gather}.wgsl` (GPU, [`crate::gpu::GpuPenalty`]) and their mirrors in [`crate::cpu`].
 
 pub mod layout;
 
@@ -17,6 +16,9 @@ pub struct PenaltySetup {
     pub pair_nodes: Vec<PairNode>,
     /// Active facet indices adjacent to each pair node, increasing.
     pub adjacency: Vec<u32>,
+    /// The pair-node index of each node of each active facet (`u32::MAX` pads segments and
+    /// triangles): where the gather sums a contact's reaction.
+    pub facet_nodes: Vec<[u32; 4]>,
     /// Tributary area of each slave node (length in 2D).
     pub areas: Vec<f32>,
     /// Whether friction work is compiled in.
@@ -108,6 +110,24 @@ impl PenaltySetup {
                 push(n, NO_SLAVE, &mut adjacency);
             }
         }
+        let pair_index: std::collections::HashMap<u32, u32> = pair_nodes
+            .iter()
+            .enumerate()
+            .map(|(i, pn)| (pn.node, i as u32))
+            .collect();
+        let facet_nodes = master
+            .active
+            .iter()
+            .map(|&f| {
+                master.facets[f as usize].padded().map(|n| {
+                    if n == u32::MAX {
+                        n
+                    } else {
+                        pair_index[&n]
+                    }
+                })
+            })
+            .collect();
         let mut params = base_params(pen, &pair.friction, slaves.len(), master.active.len());
         params.weight = weight as f32;
         if pair.sliding != crate::model::Sliding::Finite {
@@ -116,6 +136,7 @@ impl PenaltySetup {
         Ok(Self {
             pair_nodes,
             adjacency,
+            facet_nodes,
             areas,
             friction: !matches!(pair.friction, Friction::Frictionless),
             params,

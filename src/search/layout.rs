@@ -42,7 +42,14 @@ pub const STATUS_ACTIVE: usize = 6;
 /// Status word: slave nodes slipping (WGSL: `STATUS_SLIPPING`).
 pub const STATUS_SLIPPING: usize = 7;
 /// Number of status words.
-pub const STATUS_WORDS: usize = 16;
+pub const STATUS_WORDS: usize = 20;
+/// Status word: bits of the largest force component magnitude of a penalty spring in contact
+/// this increment (a non-negative f32): the gather's fixed-point force scale
+/// (WGSL: `STATUS_FORCE_SCALE`).
+pub const STATUS_FORCE_SCALE: usize = 16;
+/// Status word: bits of the largest bound share of a penalty spring in contact this increment:
+/// the gather's fixed-point row scale (WGSL: `STATUS_ROW_SCALE`).
+pub const STATUS_ROW_SCALE: usize = 17;
 /// Status word: bits of the largest overclosure (−gap ≥ 0, a non-negative f32) of the penalty
 /// springs carrying force this increment (WGSL: `STATUS_MAX_OVERCLOSURE`).
 pub const STATUS_MAX_OVERCLOSURE: usize = 14;

@@ -30,18 +30,16 @@ pub enum Step {
     Scan,
     /// Write facet ids into their cells (`bin_scatter`); detects overflow.
     BinScatter,
-    /// Order each cell's facets by id (`bin_sort`).
-    BinSort,
-    /// Nearest facet per slave node (`nearest_facet`).
+    /// Nearest facet per slave node (`nearest_facet.wgsl`: its candidates cut into chunks of
+    /// bounded size, the chunks' results combined by atomic minima, ties to the lowest id).
     NearestFacet,
 }
 
 /// All steps of a global search, in order.
-pub const STEPS: [Step; 5] = [
+pub const STEPS: [Step; 4] = [
     Step::BinCount,
     Step::Scan,
     Step::BinScatter,
-    Step::BinSort,
     Step::NearestFacet,
 ];
 

@@ -487,12 +487,16 @@ fn kernel_bytes() -> Vec<(&'static str, f64)> {
         ),
         // hit, node, velocity, the facet's 4 nodes and normals, state in/out, output out
         ("penalty", hit + 2.0 * node + 8.0 * node + 2.0 * 32.0 + out),
-        // counts, scan, scatter and per-facet sort of the slaves in contact
-        ("contact_sort", 4.0 * 4.0 + 2.0 * 4.0 + per_master * 8.0),
-        // each node's force and bound row out; each slave node reads its own output's force,
-        // status and bound shares (28 B), and each master node its slaves' (4 facets × 4
-        // slaves, a quarter of them per master node)
-        ("gather", node + 28.0 + per_master * 4.0 * 4.0 * 28.0 / 4.0),
+        // each slave in contact: its output's force, status and bound shares (28 B), its hit's
+        // weights and facet (20 B), the facet's pair nodes, and a read and write of the 32 B
+        // fixed-point sums of each of the facet's 4 nodes
+        ("scatter_forces", 28.0 + 20.0 + facet + 4.0 * 2.0 * 32.0),
+        // each pair node: its pair-node record, its sums in and its force and bound row out;
+        // a slave node also reads its own output (28 B)
+        (
+            "gather",
+            (node + 32.0 + node + 28.0) + per_master * (node + 32.0 + node),
+        ),
     ]
 }
 
@@ -500,8 +504,7 @@ fn kernel_bytes() -> Vec<(&'static str, f64)> {
 const PASSES: &[(&str, &[&str])] = &[
     ("motion + local_search", &["motion", "local_search"]),
     ("nodal_normals + penalty", &["nodal_normals", "penalty"]),
-    ("count + scan", &["contact_sort"]),
-    ("scatter, sort, gather", &["gather"]),
+    ("scatter_forces + gather", &["scatter_forces", "gather"]),
 ];
 
 /// The bandwidth of a copy kernel on `device` (bytes read + written per second), or of a host
