@@ -27,7 +27,7 @@ struct Anchor {
 }
 
 const ANCHOR_FROZEN: u32 = 1u;
-const COS_10_DEGREES: f32 = 0.98480775;
+const COS_10_DEGREES: f32 = 0.9848077;
 
 @group(0) @binding(0) var<uniform> params: SearchParams;
 @group(0) @binding(1) var<storage, read> nodes: array<vec4<f32>>;

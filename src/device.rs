@@ -33,7 +33,8 @@ pub struct GpuContext {
 /// Running totals of what the GPU executors did on one device: compute passes and their
 /// dispatches, workgroups, and bytes moved between host and device. Take a snapshot before
 /// and after a stretch of work ([`Device::traffic`]) and subtract ([`Traffic::since`]).
-#[derive(Clone, Debug, Default, PartialEq, serde::Serialize)]
+#[derive(Clone, Debug, Default, PartialEq)]
+#[cfg_attr(feature = "solver", derive(serde::Serialize))]
 pub struct Traffic {
     /// Dispatches per compute pass, by the pass's label.
     pub dispatches: std::collections::BTreeMap<String, u64>,

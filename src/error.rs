@@ -179,7 +179,7 @@ pub enum Error {
     },
 }
 
-/// Result with the library's [`Error`].
+/// Result with the library's [`Error`](enum@Error).
 pub type Result<T, E = Error> = std::result::Result<T, E>;
 
 /// ":line" for a known line, nothing for 0.

@@ -5,14 +5,17 @@ pub mod contact;
 pub mod cpu;
 pub mod device;
 pub mod error;
+#[cfg(feature = "solver")]
 pub mod explicit;
 pub mod geometry;
 pub mod gpu;
+#[cfg(feature = "solver")]
 pub mod io;
 pub mod kinematic;
 pub mod mesh;
 pub mod model;
 pub mod penalty;
+#[cfg(feature = "solver")]
 pub mod scene;
 pub mod search;
 

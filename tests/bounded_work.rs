@@ -129,7 +129,8 @@ fn hundred_thousand_facets_in_one_search_cell() {
     use abut::cpu::brute_force::brute_force;
     use abut::mesh::plate_triangles;
     use common::{assert_same_search, tolerance};
-    let shapes: [(&str, &dyn Fn(f64, f64) -> f64); 2] = [
+    type Shape<'a> = (&'a str, &'a dyn Fn(f64, f64) -> f64);
+    let shapes: [Shape; 2] = [
         ("tilted", &|x, y| 0.2 * x - 0.1 * y),
         ("wavy", &|x, y| 0.01 * (40.0 * x).sin() * (30.0 * y).cos()),
     ];

@@ -18,6 +18,9 @@ fn kinematic(softened: Option<PressureOverclosure>) -> Enforce {
     Enforce::Kinematic(Kinematic { softened })
 }
 
+/// A spring between nodes i and j: (i, j, stiffness k, rest length L0).
+type Spring = (usize, usize, f64, f64);
+
 /// A lumped-mass bar as a chain of nodes along x from `x0`: `n` elements of length `h`, total
 /// mass `mass`, axial stiffness `ea`. Returns the node ids and the springs (i, j, k, L0).
 fn chain(
@@ -29,7 +32,7 @@ fn chain(
     mass: f64,
     ea: f64,
     two_d: bool,
-) -> (Vec<u32>, Vec<(usize, usize, f64, f64)>) {
+) -> (Vec<u32>, Vec<Spring>) {
     let pos: Vec<[f64; 3]> = (0..=n).map(|i| [x0 + i as f64 * h, y, 0.0]).collect();
     let me = mass / n as f64;
     let masses: Vec<f64> = (0..=n)

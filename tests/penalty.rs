@@ -561,7 +561,8 @@ fn laws_and_stiffness_rules() {
     let h = 0.004;
     let area = 0.3;
     let e = std::f64::consts::E;
-    let cases: Vec<(Penalty, Box<dyn Fn(f64, f64) -> f64>)> = vec![
+    type Expected<'a> = Box<dyn Fn(f64, f64) -> f64 + 'a>;
+    let cases: Vec<(Penalty, Expected<'_>)> = vec![
         (
             Penalty {
                 stiffness: Stiffness::Absolute(250.0),

@@ -4,7 +4,7 @@ use super::common::{facet_node_count, node};
 use crate::geometry::V3;
 use crate::search::layout::*;
 
-const COS_10_DEGREES: f32 = 0.984_807_75;
+const COS_10_DEGREES: f32 = 0.984_807_7;
 
 /// The facet's normal at the point with weights `w` (WGSL: `facet_normal_at`).
 pub fn facet_normal_at(nodes: &[[f32; 4]], fac: [u32; 4], w: [f32; 4]) -> V3<f32> {

@@ -23,7 +23,7 @@ pub struct LawValue {
 
 fn table_point(pp: &PenaltyParams, k: u32) -> (f32, f32) {
     let v = pp.table[(k / 2) as usize];
-    if k % 2 == 0 {
+    if k.is_multiple_of(2) {
         (v[0], v[1])
     } else {
         (v[2], v[3])

@@ -651,7 +651,7 @@ fn parse_lines(lines: &[Line]) -> Result<Deck> {
                         clearance: values[0],
                         pressure: values[1],
                     },
-                    "TABULAR" if values.len() >= 4 && values.len() % 2 == 0 => {
+                    "TABULAR" if values.len() >= 4 && values.len().is_multiple_of(2) => {
                         Behavior::Tabular(values.chunks(2).map(|c| (c[0], c[1])).collect())
                     }
                     "LINEAR" | "EXPONENTIAL" | "TABULAR" => {

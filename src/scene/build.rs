@@ -80,7 +80,7 @@ pub struct Built {
     pub parts: Vec<PartNodes>,
     /// Each contact's slave nodes, in `[[contact]]` order.
     pub slaves: Vec<Vec<u32>>,
-    /// Each [[rigid]] body's solver index.
+    /// Each `[[rigid]]` body's solver index.
     pub bodies: Vec<(String, usize)>,
 }
 

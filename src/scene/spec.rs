@@ -275,7 +275,7 @@ pub struct ContactSpec {
     pub slave: String,
     /// Face of the slave part: x-, x+, y-, y+, z-, z+, "all".
     pub slave_face: String,
-    /// Part whose face is the master surface, or a [[rigid]] body.
+    /// Part whose face is the master surface, or a `[[rigid]]` body.
     pub master: String,
     /// Face of the master part ("out" for arcs and spheres); none for rigid bodies.
     #[serde(default)]

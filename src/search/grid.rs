@@ -55,7 +55,7 @@ impl Grid {
             origin[a] = ((lo[a] - radius) / q).floor() * q;
             extent[a] = hi[a] + radius - origin[a];
         }
-        let budget = ((8 * n_facets as u64).max(4096)).min(MAX_CELLS) as f64;
+        let budget = (8 * n_facets as u64).clamp(4096, MAX_CELLS) as f64;
         let mut h = (0.5 * (facet_extent + 2.0 * radius)).max(facet_extent);
         let cells = |h: f64| -> f64 {
             (0..axes)

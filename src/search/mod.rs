@@ -221,6 +221,7 @@ pub struct GlobalSearch {
     anchors: Option<Vec<layout::Anchor>>,
 }
 
+#[allow(clippy::large_enum_variant)] // one per search: its size does not matter
 enum Executor {
     Gpu(Box<GpuSearch>),
     Cpu(CpuSearch),

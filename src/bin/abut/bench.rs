@@ -543,7 +543,7 @@ fn copy_bandwidth(device: &Device) -> f64 {
         compilation_options: Default::default(),
         cache: None,
     });
-    let size = (BYTES as u64).min(d.limits().max_storage_buffer_binding_size as u64 / 16 * 16);
+    let size = (BYTES as u64).min(d.limits().max_storage_buffer_binding_size / 16 * 16);
     let buf = |usage| {
         d.create_buffer(&wgpu::BufferDescriptor {
             label: None,
