@@ -7,8 +7,8 @@
 // Dispatch: one invocation per active facet, ITEM_WORKGROUP per workgroup, folded into 2D.
 // Invariants: when the total exceeds entry_capacity nothing is written; STATUS_OVERFLOW is set
 //             and STATUS_NEEDED_ENTRIES holds the total, so the host grows the buffer and runs
-//             the search again. The order within a cell depends on scheduling here; bin_sort
-//             restores facet-id order, which makes the whole sort stable and deterministic.
+//             the search again. The order within a cell depends on scheduling here; nothing
+//             downstream depends on it (nearest_facet breaks ties by facet id).
 
 @group(0) @binding(0) var<uniform> params: SearchParams;
 @group(0) @binding(1) var<storage, read> nodes: array<vec4<f32>>;

@@ -131,6 +131,33 @@ fn wgsl_twins_match_rust() {
         STATUS_NEEDED_ENTRIES
     );
     assert_eq!(
+        constant_u32(&m, "CANDIDATE_CHUNK"),
+        abut::cpu::nearest_facet::CANDIDATE_CHUNK
+    );
+    assert_eq!(
+        constant_u32(&m, "STATUS_CROWDED") as usize,
+        abut::search::layout::STATUS_CROWDED
+    );
+    let g = parse("gather");
+    for (name, word) in [
+        (
+            "STATUS_FORCE_SCALE",
+            abut::search::layout::STATUS_FORCE_SCALE,
+        ),
+        ("STATUS_ROW_SCALE", abut::search::layout::STATUS_ROW_SCALE),
+    ] {
+        assert_eq!(constant_u32(&g, name) as usize, word, "{name}");
+    }
+    let (_, bits) = g
+        .constants
+        .iter()
+        .find(|(_, c)| c.name.as_deref() == Some("FIXED_BITS"))
+        .expect("FIXED_BITS in gather.wgsl");
+    assert!(matches!(
+        g.global_expressions[bits.init],
+        naga::Expression::Literal(naga::Literal::I32(v)) if v == abut::cpu::gather::FIXED_BITS
+    ));
+    assert_eq!(
         struct_size(&m, "SearchParams") as usize,
         std::mem::size_of::<SearchParams>()
     );

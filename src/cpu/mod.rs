@@ -157,7 +157,7 @@ impl CpuSearch {
         Ok(&self.ws)
     }
 
-    /// The bins of the last search: cell starts and sorted entries.
+    /// The bins of the last search: cell starts and entries (in the scatter's order within a cell).
     pub fn bins(&self) -> Bins {
         let n = self.n_cells as usize;
         let total = self.ws.scan.get(n).copied().unwrap_or(0) as usize;

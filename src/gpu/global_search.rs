@@ -831,7 +831,7 @@ impl GpuSearch {
             .collect())
     }
 
-    /// Reads back the bins of the last search: cell starts (n_cells + 1 words) and the sorted
+    /// Reads back the bins of the last search: cell starts (n_cells + 1 words) and the
     /// entries. A debugging and testing aid (it allocates and waits).
     pub fn bins(&self) -> Result<Bins> {
         let Some((_, n_cells, total)) = self.last else {
