@@ -14,9 +14,6 @@ use crate::penalty::layout::{
     ContactOut, CSTATUS_MASK, CSTATUS_OPEN, CSTATUS_SLIP, CSTATUS_STICK, NO_LIMIT,
 };
 use crate::penalty::PenaltySetup;
-use crate::search::layout::{
-    STATUS_ACTIVE, STATUS_DT_APPROACH, STATUS_DT_STABLE, STATUS_MAX_OVERCLOSURE, STATUS_SLIPPING,
-};
 use crate::search::{GlobalSearch, SearchResult};
 
 /// The penalty executor of one pair, on the same device as its search.
@@ -430,21 +427,19 @@ impl Contact {
                 }
             }
             damping = damping.max(pp.damping as f64);
-            let limit = |bits: u32| {
-                let v = f32::from_bits(bits);
+            let status = crate::status::Status(status);
+            let limit = |v: f32| {
                 if v >= NO_LIMIT {
                     f64::INFINITY
                 } else {
                     v as f64
                 }
             };
-            report.stable_dt = report.stable_dt.min(limit(status[STATUS_DT_STABLE]));
-            report.max_overclosure = report
-                .max_overclosure
-                .max(f32::from_bits(status[STATUS_MAX_OVERCLOSURE]) as f64);
-            report.approach_dt = report.approach_dt.min(limit(status[STATUS_DT_APPROACH]));
-            report.active += status[STATUS_ACTIVE] as usize;
-            report.slipping += status[STATUS_SLIPPING] as usize;
+            report.stable_dt = report.stable_dt.min(limit(status.dt_stable()));
+            report.max_overclosure = report.max_overclosure.max(status.max_overclosure() as f64);
+            report.approach_dt = report.approach_dt.min(limit(status.dt_approach()));
+            report.active += status.active() as usize;
+            report.slipping += status.slipping() as usize;
             if self.want_outputs {
                 let outs: &[ContactOut] = match &pr.exec {
                     PenaltyExec::Gpu(g) => &g.outputs,

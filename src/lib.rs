@@ -14,10 +14,12 @@ pub mod io;
 pub mod kinematic;
 pub mod mesh;
 pub mod model;
+pub mod passes;
 pub mod penalty;
 #[cfg(feature = "solver")]
 pub mod scene;
 pub mod search;
+pub mod status;
 
 pub use contact::{
     Contact, ContactStatus, KinematicReport, OverclosureReport, PairOutput, StepReport,

@@ -237,3 +237,65 @@ fn penalty_twins_match_rust() {
         1
     );
 }
+
+/// Every declared pass (`abut::passes`) matches its WGSL entry point as naga reflects it: the same
+/// bindings (numbers, uniform or storage, read or read-write) and nothing else used, and a
+/// workgroup covering the declared items; and every entry point of every kernel is declared.
+#[test]
+fn pass_declarations_match_the_shaders() {
+    use abut::passes::{Access, Items, PASSES};
+    for pass in &PASSES {
+        let what = format!("{}::{}", pass.stem, pass.entry);
+        let (m, info) = parse_with_info(pass.stem);
+        let k = m
+            .entry_points
+            .iter()
+            .position(|e| e.name == pass.entry)
+            .unwrap_or_else(|| panic!("{what}: no such entry point"));
+        let uses = info.get_entry_point(k);
+        let mut used: Vec<(u32, Access)> = m
+            .global_variables
+            .iter()
+            .filter(|(h, _)| !uses[*h].is_empty())
+            .filter_map(|(_, v)| {
+                let rb = v.binding.as_ref()?;
+                assert_eq!(rb.group, 0, "{what}: group {}", rb.group);
+                let access = match v.space {
+                    naga::AddressSpace::Uniform => Access::Uniform,
+                    naga::AddressSpace::Storage { access } => {
+                        if access.contains(naga::StorageAccess::STORE) {
+                            Access::ReadWrite
+                        } else {
+                            Access::Read
+                        }
+                    }
+                    ref s => panic!("{what}: binding {} in {s:?}", rb.binding),
+                };
+                Some((rb.binding, access))
+            })
+            .collect();
+        used.sort_by_key(|u| u.0);
+        let declared: Vec<(u32, Access)> =
+            pass.bindings.iter().map(|b| (b.index, b.access)).collect();
+        assert_eq!(
+            used, declared,
+            "{what}: bindings used by the WGSL vs declared"
+        );
+        let [x, y, z] = m.entry_points[k].workgroup_size;
+        let per = match pass.items {
+            Items::ScanBlocks => x * y * z * 4,
+            _ => x * y * z,
+        };
+        assert_eq!(per, pass.per_workgroup, "{what}: items per workgroup");
+    }
+    for (stem, _, _) in KERNELS {
+        let m = parse(stem);
+        for ep in &m.entry_points {
+            assert!(
+                PASSES.iter().any(|p| p.stem == stem && p.entry == ep.name),
+                "{stem}::{} is not declared in abut::passes",
+                ep.name
+            );
+        }
+    }
+}

@@ -100,7 +100,7 @@ impl CpuSearch {
                 expected: "a global search first",
             });
         }
-        let mut status = [0u32; STATUS_WORDS];
+        let mut status = crate::status::reset_image();
         if let Some(anchors) = &self.anchors {
             anchor::anchor(
                 &prep.params,
@@ -150,7 +150,7 @@ impl CpuSearch {
         let levels = ScanLevels::new(params.n_cells + 1);
         self.ws.scan.iter_mut().for_each(|w| *w = 0);
         self.ws.entries.iter_mut().for_each(|w| *w = 0);
-        self.ws.status = [0; STATUS_WORDS];
+        crate::status::reset(&mut self.ws.status, crate::status::Owner::Search);
         for step in &STEPS[..first] {
             run_step(*step, &params, &levels, prep, &mut self.ws);
         }
@@ -180,7 +180,7 @@ impl CpuSearch {
             let levels = ScanLevels::new(params.n_cells + 1);
             self.ws.scan.clear();
             self.ws.scan.resize(levels.words as usize, 0);
-            self.ws.status = [0; STATUS_WORDS];
+            crate::status::reset(&mut self.ws.status, crate::status::Owner::Search);
             self.ws.entries.resize(self.entry_capacity as usize, 0);
             self.ws.hits.resize(prep.slaves.len(), GpuHit::miss(0, 0));
             for step in STEPS {
@@ -316,18 +316,7 @@ impl CpuPenalty {
         hits: &[GpuHit],
         status: &mut [u32; STATUS_WORDS],
     ) {
-        use crate::penalty::layout::NO_LIMIT;
-        use crate::search::layout::{
-            STATUS_ACTIVE, STATUS_DT_APPROACH, STATUS_DT_STABLE, STATUS_FORCE_SCALE,
-            STATUS_MAX_OVERCLOSURE, STATUS_ROW_SCALE, STATUS_SLIPPING,
-        };
-        status[STATUS_DT_STABLE] = NO_LIMIT.to_bits();
-        status[STATUS_DT_APPROACH] = NO_LIMIT.to_bits();
-        status[STATUS_ACTIVE] = 0;
-        status[STATUS_SLIPPING] = 0;
-        status[STATUS_MAX_OVERCLOSURE] = 0;
-        status[STATUS_FORCE_SCALE] = 0;
-        status[STATUS_ROW_SCALE] = 0;
+        crate::status::reset(status, crate::status::Owner::Penalty);
         let n_slaves = pp.n_slaves as usize;
         nodal_normals::nodal_normals(
             pp,

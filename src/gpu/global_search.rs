@@ -3,21 +3,20 @@
 use std::sync::Arc;
 
 use super::buffers::{read_back, GrowBuffer};
-use super::shaders;
 use crate::cpu::CpuWorkspace;
 use crate::cpu::{grown_capacity, presized_capacity};
 use crate::device::GpuContext;
 use crate::error::{Error, Result};
+use crate::passes::{self, Buf};
 use crate::search::layout::{
     Anchor, FrameParams, GpuHit, ScanLevels, ScanParams, SearchParams, ITEM_WORKGROUP, SCAN_BLOCK,
     STATUS_NEEDED_ENTRIES, STATUS_OVERFLOW, STATUS_WORDS,
 };
 use crate::search::{Bins, Prepared, Step, STEPS};
+use crate::status::{owned_runs, Owner};
 use wgpu::BufferUsages as U;
 
 const STATUS_BYTES: u64 = (STATUS_WORDS * 4) as u64;
-/// The status words the search owns and clears (the rest belong to later passes).
-const SEARCH_STATUS_BYTES: u64 = 16;
 
 /// The search's buffers that later passes of the same increment bind.
 pub struct SharedBuffers<'a> {
@@ -29,6 +28,8 @@ pub struct SharedBuffers<'a> {
     pub hits: &'a wgpu::Buffer,
     /// Status words.
     pub status: &'a wgpu::Buffer,
+    /// Every status word at its reset value (`status::reset_image`): owners copy their runs.
+    pub status_reset: &'a wgpu::Buffer,
 }
 
 /// Passes that run after the search in the same command encoder (the penalty passes).
@@ -91,6 +92,7 @@ struct Buffers {
     cursor: GrowBuffer,
     entries: GrowBuffer,
     status: wgpu::Buffer,
+    status_reset: wgpu::Buffer,
     hits: GrowBuffer,
     readback: GrowBuffer,
     reference: GrowBuffer,
@@ -149,40 +151,36 @@ impl GpuSearch {
             mapped_at_creation: false,
         });
         let scope = device.push_error_scope(wgpu::ErrorFilter::Validation);
-        let module = |stem: &str| {
-            let src = shaders::source(stem).expect("kernel file listed in shaders::KERNELS");
-            device.create_shader_module(wgpu::ShaderModuleDescriptor {
-                label: Some(stem),
-                source: wgpu::ShaderSource::Wgsl(src.into()),
-            })
-        };
-        let pipeline = |m: &wgpu::ShaderModule, entry: &str| {
-            device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
-                label: Some(entry),
-                layout: None,
-                module: m,
-                entry_point: Some(entry),
-                compilation_options: Default::default(),
-                cache: None,
-            })
-        };
-        let scan = module("scan");
-        let nearest = module("nearest_facet");
+        let mut modules = std::collections::HashMap::new();
+        for pass in [
+            &passes::BIN_COUNT,
+            &passes::SCAN_BLOCKS,
+            &passes::BIN_SCATTER,
+            &passes::NEAREST_COUNT,
+            &passes::LOCAL_SEARCH,
+            &passes::MOTION,
+            &passes::TO_LOCAL,
+            &passes::ANCHOR,
+        ] {
+            modules.insert(pass.stem, super::module(device, pass.stem)?);
+        }
+        let pipeline =
+            |pass: &passes::Pass| super::pipeline(device, &modules[pass.stem], pass, &[]);
         let pipelines = Pipelines {
-            bin_count: pipeline(&module("bin_count"), "bin_count"),
-            scan_blocks: pipeline(&scan, "scan_blocks"),
-            scan_add: pipeline(&scan, "scan_add"),
-            bin_scatter: pipeline(&module("bin_scatter"), "bin_scatter"),
-            nearest_count: pipeline(&nearest, "nearest_count"),
-            nearest_args: pipeline(&nearest, "nearest_args"),
-            nearest_chunks: pipeline(&nearest, "nearest_chunks"),
-            nearest_ties: pipeline(&nearest, "nearest_ties"),
-            nearest_crowded: pipeline(&nearest, "nearest_crowded"),
-            nearest_facet: pipeline(&nearest, "nearest_facet"),
-            local_search: pipeline(&module("local_search"), "local_search"),
-            motion: pipeline(&module("motion"), "motion"),
-            to_local: pipeline(&module("to_local"), "to_local"),
-            anchor: pipeline(&module("anchor"), "anchor"),
+            bin_count: pipeline(&passes::BIN_COUNT),
+            scan_blocks: pipeline(&passes::SCAN_BLOCKS),
+            scan_add: pipeline(&passes::SCAN_ADD),
+            bin_scatter: pipeline(&passes::BIN_SCATTER),
+            nearest_count: pipeline(&passes::NEAREST_COUNT),
+            nearest_args: pipeline(&passes::NEAREST_ARGS),
+            nearest_chunks: pipeline(&passes::NEAREST_CHUNKS),
+            nearest_ties: pipeline(&passes::NEAREST_TIES),
+            nearest_crowded: pipeline(&passes::NEAREST_CROWDED),
+            nearest_facet: pipeline(&passes::NEAREST_FACET),
+            local_search: pipeline(&passes::LOCAL_SEARCH),
+            motion: pipeline(&passes::MOTION),
+            to_local: pipeline(&passes::TO_LOCAL),
+            anchor: pipeline(&passes::ANCHOR),
         };
         if let Some(e) = pollster::block_on(scope.pop()) {
             return Err(Error::Gpu {
@@ -216,6 +214,12 @@ impl GpuSearch {
                 usage: storage | U::COPY_SRC,
                 mapped_at_creation: false,
             }),
+            status_reset: device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some("status reset image"),
+                size: STATUS_BYTES,
+                usage: U::COPY_SRC | U::COPY_DST,
+                mapped_at_creation: false,
+            }),
             hits: GrowBuffer::new(device, "hits", 0, U::STORAGE | U::COPY_SRC),
             readback: GrowBuffer::new(device, "readback", 0, U::MAP_READ | U::COPY_DST),
             reference: GrowBuffer::new(device, "reference positions", 0, storage),
@@ -237,6 +241,12 @@ impl GpuSearch {
                 mapped_at_creation: false,
             }),
         };
+        super::upload(
+            &ctx,
+            &buffers.status_reset,
+            0,
+            bytemuck::cast_slice(&crate::status::reset_image()),
+        );
         Ok(Self {
             ctx,
             pipelines,
@@ -349,186 +359,98 @@ impl GpuSearch {
         Ok(())
     }
 
-    fn bind_groups(&self, levels: &ScanLevels, prep: &Prepared) -> BindGroups {
+    /// The buffer this search holds for each role a pass binds (the scan's are per level).
+    fn resource(&self, buf: Buf) -> Option<wgpu::BindingResource<'_>> {
+        let b = &self.buffers;
+        Some(match buf {
+            Buf::SearchParams => b.params.as_entire_binding(),
+            Buf::FrameParams => self.frame.as_entire_binding(),
+            Buf::Nodes => b.nodes.buffer.as_entire_binding(),
+            Buf::Facets => b.facets.buffer.as_entire_binding(),
+            Buf::Slaves => b.slaves.buffer.as_entire_binding(),
+            Buf::Adjacency => b.adjacency.buffer.as_entire_binding(),
+            Buf::Cells => b.scan.buffer.as_entire_binding(),
+            Buf::Cursor => b.cursor.buffer.as_entire_binding(),
+            Buf::Entries => b.entries.buffer.as_entire_binding(),
+            Buf::Status => b.status.as_entire_binding(),
+            Buf::Hits => b.hits.buffer.as_entire_binding(),
+            Buf::Reference => b.reference.buffer.as_entire_binding(),
+            Buf::MotionNodes => b.motion_nodes.buffer.as_entire_binding(),
+            Buf::Anchors => b.anchors.buffer.as_entire_binding(),
+            Buf::Work => b.work.buffer.as_entire_binding(),
+            Buf::Best => b.best.buffer.as_entire_binding(),
+            Buf::Args => b.args.as_entire_binding(),
+            _ => return None,
+        })
+    }
+
+    fn bind_groups(&self, levels: &ScanLevels, prep: &Prepared) -> Result<BindGroups> {
         let d = &self.ctx.device;
         let b = &self.buffers;
         let p = &self.pipelines;
-        let group = |pipe: &wgpu::ComputePipeline, bufs: &[wgpu::BindingResource]| {
-            super::bind_group(d, pipe, bufs)
+        let group = |pipe: &wgpu::ComputePipeline, pass: &passes::Pass| {
+            super::bind(d, pipe, pass, |buf| self.resource(buf))
         };
-        let params = b.params.as_entire_binding();
-        let scan_level = |i: usize| {
-            wgpu::BindingResource::Buffer(wgpu::BufferBinding {
-                buffer: &b.scan_params.buffer,
-                offset: i as u64 * UNIFORM_STRIDE,
-                size: wgpu::BufferSize::new(std::mem::size_of::<ScanParams>() as u64),
-            })
+        let scan = |pipe: &wgpu::ComputePipeline,
+                    pass: &passes::Pass,
+                    params: &wgpu::Buffer,
+                    data: &wgpu::Buffer,
+                    n: usize|
+         -> Result<Vec<wgpu::BindGroup>> {
+            (0..n)
+                .map(|i| {
+                    super::bind(d, pipe, pass, |buf| match buf {
+                        Buf::ScanParams => Some(scan_level(params, i)),
+                        Buf::ScanData => Some(data.as_entire_binding()),
+                        _ => None,
+                    })
+                })
+                .collect()
         };
         let n_levels = levels.levels.len();
-        let group_at = |pipe: &wgpu::ComputePipeline, bufs: &[(u32, wgpu::BindingResource)]| {
-            super::bind_group_at(d, pipe, bufs)
-        };
-        let work_level = |i: usize| {
-            wgpu::BindingResource::Buffer(wgpu::BufferBinding {
-                buffer: &b.work_scan_params.buffer,
-                offset: i as u64 * UNIFORM_STRIDE,
-                size: wgpu::BufferSize::new(std::mem::size_of::<ScanParams>() as u64),
-            })
-        };
         let n_work_levels = work_levels(prep).levels.len();
-        // the bindings of nearest_facet.wgsl: every entry point binds the subset it uses
-        let nodes = || (1, b.nodes.buffer.as_entire_binding());
-        let facets = || (2, b.facets.buffer.as_entire_binding());
-        let slaves = || (3, b.slaves.buffer.as_entire_binding());
-        let starts = || (4, b.scan.buffer.as_entire_binding());
-        let entries = || (5, b.entries.buffer.as_entire_binding());
-        let status = || (6, b.status.as_entire_binding());
-        let adjacency = || (8, b.adjacency.buffer.as_entire_binding());
-        let work = || (9, b.work.buffer.as_entire_binding());
-        let best = || (10, b.best.buffer.as_entire_binding());
-        let chunk_group = |pipe: &wgpu::ComputePipeline| {
-            group_at(
-                pipe,
-                &[
-                    (0, params.clone()),
-                    nodes(),
-                    facets(),
-                    slaves(),
-                    starts(),
-                    entries(),
-                    adjacency(),
-                    work(),
-                    best(),
-                ],
-            )
-        };
-        BindGroups {
-            anchor: group(
-                &p.anchor,
-                &[
-                    params.clone(),
-                    b.nodes.buffer.as_entire_binding(),
-                    b.facets.buffer.as_entire_binding(),
-                    b.slaves.buffer.as_entire_binding(),
-                    b.anchors.buffer.as_entire_binding(),
-                    b.status.as_entire_binding(),
-                    b.hits.buffer.as_entire_binding(),
-                    b.adjacency.buffer.as_entire_binding(),
-                ],
-            ),
-            local_search: group(
-                &p.local_search,
-                &[
-                    params.clone(),
-                    b.nodes.buffer.as_entire_binding(),
-                    b.facets.buffer.as_entire_binding(),
-                    b.slaves.buffer.as_entire_binding(),
-                    b.adjacency.buffer.as_entire_binding(),
-                    b.status.as_entire_binding(),
-                    b.hits.buffer.as_entire_binding(),
-                ],
-            ),
-            motion: group(
-                &p.motion,
-                &[
-                    params.clone(),
-                    b.nodes.buffer.as_entire_binding(),
-                    b.reference.buffer.as_entire_binding(),
-                    b.motion_nodes.buffer.as_entire_binding(),
-                    b.status.as_entire_binding(),
-                    b.hits.buffer.as_entire_binding(),
-                ],
-            ),
-            bin_count: group(
-                &p.bin_count,
-                &[
-                    params.clone(),
-                    b.nodes.buffer.as_entire_binding(),
-                    b.facets.buffer.as_entire_binding(),
-                    b.scan.buffer.as_entire_binding(),
-                ],
-            ),
-            scan_blocks: (0..n_levels)
-                .map(|i| {
-                    group(
-                        &p.scan_blocks,
-                        &[scan_level(i), b.scan.buffer.as_entire_binding()],
-                    )
-                })
-                .collect(),
-            scan_add: (0..n_levels)
-                .map(|i| {
-                    group(
-                        &p.scan_add,
-                        &[scan_level(i), b.scan.buffer.as_entire_binding()],
-                    )
-                })
-                .collect(),
-            bin_scatter: group(
-                &p.bin_scatter,
-                &[
-                    params.clone(),
-                    b.nodes.buffer.as_entire_binding(),
-                    b.facets.buffer.as_entire_binding(),
-                    b.scan.buffer.as_entire_binding(),
-                    b.cursor.buffer.as_entire_binding(),
-                    b.entries.buffer.as_entire_binding(),
-                    b.status.as_entire_binding(),
-                ],
-            ),
-            nearest_count: group_at(
-                &p.nearest_count,
-                &[
-                    (0, params.clone()),
-                    nodes(),
-                    slaves(),
-                    starts(),
-                    status(),
-                    work(),
-                    best(),
-                ],
-            ),
-            work_scan_blocks: (0..n_work_levels)
-                .map(|i| {
-                    group(
-                        &p.scan_blocks,
-                        &[work_level(i), b.work.buffer.as_entire_binding()],
-                    )
-                })
-                .collect(),
-            work_scan_add: (0..n_work_levels)
-                .map(|i| {
-                    group(
-                        &p.scan_add,
-                        &[work_level(i), b.work.buffer.as_entire_binding()],
-                    )
-                })
-                .collect(),
-            nearest_args: group_at(
-                &p.nearest_args,
-                &[
-                    (0, params.clone()),
-                    work(),
-                    (11, b.args.as_entire_binding()),
-                ],
-            ),
-            nearest_chunks: chunk_group(&p.nearest_chunks),
-            nearest_ties: chunk_group(&p.nearest_ties),
-            nearest_crowded: chunk_group(&p.nearest_crowded),
-            nearest_facet: group_at(
-                &p.nearest_facet,
-                &[
-                    (0, params),
-                    nodes(),
-                    facets(),
-                    slaves(),
-                    status(),
-                    (7, b.hits.buffer.as_entire_binding()),
-                    adjacency(),
-                    best(),
-                ],
-            ),
-        }
+        let (cells, work) = (&b.scan.buffer, &b.work.buffer);
+        Ok(BindGroups {
+            anchor: group(&p.anchor, &passes::ANCHOR)?,
+            local_search: group(&p.local_search, &passes::LOCAL_SEARCH)?,
+            motion: group(&p.motion, &passes::MOTION)?,
+            bin_count: group(&p.bin_count, &passes::BIN_COUNT)?,
+            scan_blocks: scan(
+                &p.scan_blocks,
+                &passes::SCAN_BLOCKS,
+                &b.scan_params.buffer,
+                cells,
+                n_levels,
+            )?,
+            scan_add: scan(
+                &p.scan_add,
+                &passes::SCAN_ADD,
+                &b.scan_params.buffer,
+                cells,
+                n_levels,
+            )?,
+            bin_scatter: group(&p.bin_scatter, &passes::BIN_SCATTER)?,
+            nearest_count: group(&p.nearest_count, &passes::NEAREST_COUNT)?,
+            work_scan_blocks: scan(
+                &p.scan_blocks,
+                &passes::SCAN_BLOCKS,
+                &b.work_scan_params.buffer,
+                work,
+                n_work_levels,
+            )?,
+            work_scan_add: scan(
+                &p.scan_add,
+                &passes::SCAN_ADD,
+                &b.work_scan_params.buffer,
+                work,
+                n_work_levels,
+            )?,
+            nearest_args: group(&p.nearest_args, &passes::NEAREST_ARGS)?,
+            nearest_chunks: group(&p.nearest_chunks, &passes::NEAREST_CHUNKS)?,
+            nearest_ties: group(&p.nearest_ties, &passes::NEAREST_TIES)?,
+            nearest_crowded: group(&p.nearest_crowded, &passes::NEAREST_CROWDED)?,
+            nearest_facet: group(&p.nearest_facet, &passes::NEAREST_FACET)?,
+        })
     }
 
     /// Runs the search; on overflow grows the entry buffer and runs again.
@@ -700,7 +622,7 @@ impl GpuSearch {
         let mut regrowths = 0;
         loop {
             if self.bind_groups.is_none() {
-                self.bind_groups = Some(self.bind_groups(&levels, prep));
+                self.bind_groups = Some(self.bind_groups(&levels, prep)?);
                 self.scan_levels = levels.levels.len();
                 self.work_levels = work_levels(prep).levels.len();
                 self.generation += 1;
@@ -708,39 +630,15 @@ impl GpuSearch {
             if let Some(src) = self.device_positions.clone() {
                 let fresh = matches!(&self.to_local_group, Some((b, g, _)) if *b == src && *g == self.generation);
                 if !fresh {
-                    let group = self
-                        .ctx
-                        .device
-                        .create_bind_group(&wgpu::BindGroupDescriptor {
-                            label: Some("to_local"),
-                            layout: &self.pipelines.to_local.get_bind_group_layout(0),
-                            entries: &[
-                                wgpu::BindGroupEntry {
-                                    binding: 0,
-                                    resource: self.buffers.params.as_entire_binding(),
-                                },
-                                wgpu::BindGroupEntry {
-                                    binding: 1,
-                                    resource: self.frame.as_entire_binding(),
-                                },
-                                wgpu::BindGroupEntry {
-                                    binding: 2,
-                                    resource: src.as_entire_binding(),
-                                },
-                                wgpu::BindGroupEntry {
-                                    binding: 3,
-                                    resource: self.buffers.nodes.buffer.as_entire_binding(),
-                                },
-                                wgpu::BindGroupEntry {
-                                    binding: 4,
-                                    resource: self.buffers.adjacency.buffer.as_entire_binding(),
-                                },
-                                wgpu::BindGroupEntry {
-                                    binding: 5,
-                                    resource: self.buffers.status.as_entire_binding(),
-                                },
-                            ],
-                        });
+                    let group = super::bind(
+                        &self.ctx.device,
+                        &self.pipelines.to_local,
+                        &passes::TO_LOCAL,
+                        |buf| match buf {
+                            Buf::Positions => Some(src.as_entire_binding()),
+                            other => self.resource(other),
+                        },
+                    )?;
                     self.to_local_group = Some((src, self.generation, group));
                 }
             }
@@ -798,6 +696,7 @@ impl GpuSearch {
             facets: &self.buffers.facets.buffer,
             hits: &self.buffers.hits.buffer,
             status: &self.buffers.status,
+            status_reset: &self.buffers.status_reset,
         }
     }
 
@@ -909,8 +808,7 @@ impl GpuSearch {
             enc.clear_buffer(&b.scan.buffer, 0, Some(levels.words as u64 * 4));
         }
         if first == 0 {
-            enc.clear_buffer(&b.status, 0, Some(SEARCH_STATUS_BYTES));
-            enc.clear_buffer(&b.status, 32, Some(2 * SEARCH_STATUS_BYTES));
+            reset_status(&mut enc, &b.status_reset, &b.status, Owner::Search);
         }
         let dispatch = |enc: &mut wgpu::CommandEncoder, label: &str, work: &[super::Work<'_>]| {
             super::run_pass(&self.ctx, enc, label, work, max_dim)
@@ -1111,4 +1009,26 @@ impl GpuSearch {
 /// The scan levels of the nearest-facet work items: one chunk count per slave and the total.
 fn work_levels(prep: &Prepared) -> ScanLevels {
     ScanLevels::new(prep.slaves.len() as u32 + 1)
+}
+
+/// Scan level `i`'s parameters in `params` (one uniform block every `UNIFORM_STRIDE` bytes).
+fn scan_level(params: &wgpu::Buffer, i: usize) -> wgpu::BindingResource<'_> {
+    wgpu::BindingResource::Buffer(wgpu::BufferBinding {
+        buffer: params,
+        offset: i as u64 * UNIFORM_STRIDE,
+        size: wgpu::BufferSize::new(std::mem::size_of::<ScanParams>() as u64),
+    })
+}
+
+/// Copies the reset values of the status words `owner` resets from `image` into `status`.
+pub(crate) fn reset_status(
+    enc: &mut wgpu::CommandEncoder,
+    image: &wgpu::Buffer,
+    status: &wgpu::Buffer,
+    owner: Owner,
+) {
+    for (first, n) in owned_runs(owner) {
+        let (offset, bytes) = (4 * first as u64, 4 * n as u64);
+        enc.copy_buffer_to_buffer(image, offset, status, offset, bytes);
+    }
 }

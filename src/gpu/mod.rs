@@ -196,37 +196,64 @@ impl Profiler {
     }
 }
 
-/// A bind group for group 0 of `pipeline` with `resources` at the given binding numbers.
-pub(crate) fn bind_group_at(
+/// Compiles the pipeline of `pass` from `module` (its stem's source), with the pipeline-
+/// overridable `constants`.
+pub(crate) fn pipeline(
     device: &wgpu::Device,
-    pipeline: &wgpu::ComputePipeline,
-    resources: &[(u32, wgpu::BindingResource<'_>)],
-) -> wgpu::BindGroup {
-    let entries: Vec<wgpu::BindGroupEntry> = resources
-        .iter()
-        .map(|(i, r)| wgpu::BindGroupEntry {
-            binding: *i,
-            resource: r.clone(),
-        })
-        .collect();
-    device.create_bind_group(&wgpu::BindGroupDescriptor {
-        label: None,
-        layout: &pipeline.get_bind_group_layout(0),
-        entries: &entries,
+    module: &wgpu::ShaderModule,
+    pass: &crate::passes::Pass,
+    constants: &[(&str, f64)],
+) -> wgpu::ComputePipeline {
+    device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
+        label: Some(pass.entry),
+        layout: None,
+        module,
+        entry_point: Some(pass.entry),
+        compilation_options: wgpu::PipelineCompilationOptions {
+            constants,
+            ..Default::default()
+        },
+        cache: None,
     })
 }
 
-/// A bind group for group 0 of `pipeline` with `resources` at bindings 0, 1, 2, …
-pub(crate) fn bind_group(
+/// Compiles the shader module of kernel file `stem` (preludes prepended).
+pub(crate) fn module(
+    device: &wgpu::Device,
+    stem: &str,
+) -> crate::error::Result<wgpu::ShaderModule> {
+    let src = shaders::source(stem).ok_or_else(|| crate::error::Error::Gpu {
+        during: "compiling the pipelines".into(),
+        message: format!("no kernel file '{stem}'"),
+    })?;
+    Ok(device.create_shader_module(wgpu::ShaderModuleDescriptor {
+        label: Some(stem),
+        source: wgpu::ShaderSource::Wgsl(src.into()),
+    }))
+}
+
+/// The bind group of `pass` on `pipeline`: each declared binding gets the buffer `resource`
+/// gives for its role; a role the executor does not hold is an error naming it.
+pub(crate) fn bind<'a>(
     device: &wgpu::Device,
     pipeline: &wgpu::ComputePipeline,
-    resources: &[wgpu::BindingResource<'_>],
-) -> wgpu::BindGroup {
-    let numbered: Vec<(u32, wgpu::BindingResource)> = resources
-        .iter()
-        .cloned()
-        .enumerate()
-        .map(|(i, r)| (i as u32, r))
-        .collect();
-    bind_group_at(device, pipeline, &numbered)
+    pass: &crate::passes::Pass,
+    resource: impl Fn(crate::passes::Buf) -> Option<wgpu::BindingResource<'a>>,
+) -> crate::error::Result<wgpu::BindGroup> {
+    let mut entries = Vec::with_capacity(pass.bindings.len());
+    for b in pass.bindings {
+        let r = resource(b.buf).ok_or_else(|| crate::error::Error::Gpu {
+            during: format!("binding the buffers of {}", pass.entry),
+            message: format!("no buffer for {:?} at binding {}", b.buf, b.index),
+        })?;
+        entries.push(wgpu::BindGroupEntry {
+            binding: b.index,
+            resource: r,
+        });
+    }
+    Ok(device.create_bind_group(&wgpu::BindGroupDescriptor {
+        label: Some(pass.entry),
+        layout: &pipeline.get_bind_group_layout(0),
+        entries: &entries,
+    }))
 }

@@ -5,10 +5,10 @@ use std::sync::Arc;
 
 use super::buffers::{read_back, GrowBuffer};
 use super::global_search::{AfterSearch, SharedBuffers};
-use super::shaders;
 use crate::device::GpuContext;
 use crate::error::{Error, Result};
-use crate::penalty::layout::{ContactOut, PenaltyParams, NO_LIMIT};
+use crate::passes::{self, Buf};
+use crate::penalty::layout::{ContactOut, PenaltyParams};
 use crate::penalty::PenaltySetup;
 use crate::search::layout::ITEM_WORKGROUP;
 use wgpu::BufferUsages as U;
@@ -32,7 +32,6 @@ pub struct GpuPenalty {
     ctx: Arc<GpuContext>,
     pipelines: Pipelines,
     params: wgpu::Buffer,
-    status_init: wgpu::Buffer,
     vel: GrowBuffer,
     normals: GrowBuffer,
     pair_nodes: wgpu::Buffer,
@@ -44,8 +43,9 @@ pub struct GpuPenalty {
     forces: wgpu::Buffer,
     staging: wgpu::Buffer,
     groups: Option<(u64, Groups)>,
-    /// The search's status buffer (bound at prepare), whose words 4..8 these passes own.
-    status: Option<wgpu::Buffer>,
+    /// The search's status buffer and its reset image (bound at prepare); these passes reset
+    /// the words the status table gives them.
+    status: Option<(wgpu::Buffer, wgpu::Buffer)>,
     n_slaves: u32,
     n_pair_nodes: u32,
     read_outputs: bool,
@@ -75,34 +75,15 @@ impl GpuPenalty {
         let d = &ctx.device;
         let limits = &ctx.limits;
         let scope = d.push_error_scope(wgpu::ErrorFilter::Validation);
-        let module = |stem: &str| {
-            d.create_shader_module(wgpu::ShaderModuleDescriptor {
-                label: Some(stem),
-                source: wgpu::ShaderSource::Wgsl(
-                    shaders::source(stem).expect("listed kernel").into(),
-                ),
-            })
-        };
         let friction = [("FRICTION", if setup.friction { 1.0 } else { 0.0 })];
-        let pipeline = |m: &wgpu::ShaderModule, entry: &str, constants: &[(&str, f64)]| {
-            d.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
-                label: Some(entry),
-                layout: None,
-                module: m,
-                entry_point: Some(entry),
-                compilation_options: wgpu::PipelineCompilationOptions {
-                    constants,
-                    ..Default::default()
-                },
-                cache: None,
-            })
-        };
-        let gather = module("gather");
+        let normals = super::module(d, passes::NODAL_NORMALS.stem)?;
+        let penalty = super::module(d, passes::PENALTY.stem)?;
+        let gather = super::module(d, passes::GATHER.stem)?;
         let pipelines = Pipelines {
-            nodal_normals: pipeline(&module("nodal_normals"), "nodal_normals", &[]),
-            penalty: pipeline(&module("penalty"), "penalty", &friction),
-            scatter: pipeline(&gather, "scatter_forces", &[]),
-            gather: pipeline(&gather, "gather", &[]),
+            nodal_normals: super::pipeline(d, &normals, &passes::NODAL_NORMALS, &[]),
+            penalty: super::pipeline(d, &penalty, &passes::PENALTY, &friction),
+            scatter: super::pipeline(d, &gather, &passes::SCATTER_FORCES, &[]),
+            gather: super::pipeline(d, &gather, &passes::GATHER, &[]),
         };
         if let Some(e) = pollster::block_on(scope.pop()) {
             return Err(Error::Gpu {
@@ -152,18 +133,6 @@ impl GpuPenalty {
             0,
             bytemuck::cast_slice(&setup.initial_state()),
         );
-        let status_init = d.create_buffer(&wgpu::BufferDescriptor {
-            label: Some("status init"),
-            size: 16,
-            usage: U::COPY_SRC | U::COPY_DST,
-            mapped_at_creation: false,
-        });
-        super::upload(
-            &ctx,
-            &status_init,
-            0,
-            bytemuck::cast_slice(&[NO_LIMIT.to_bits(), NO_LIMIT.to_bits(), 0u32, 0u32]),
-        );
         let facet_nodes = storage(
             d,
             "facet pair nodes",
@@ -187,7 +156,6 @@ impl GpuPenalty {
                 usage: U::UNIFORM | U::COPY_DST,
                 mapped_at_creation: false,
             }),
-            status_init,
             vel: GrowBuffer::new(
                 d,
                 "velocities",
@@ -258,66 +226,38 @@ impl GpuPenalty {
         Ok(())
     }
 
-    fn build_groups(&self, s: &SharedBuffers<'_>) -> Groups {
+    fn build_groups(&self, s: &SharedBuffers<'_>) -> Result<Groups> {
         let d = &self.ctx.device;
-        // bindings numbered in order, except where an entry point leaves some out (gather.wgsl)
-        let group_at = |pipe: &wgpu::ComputePipeline, bufs: &[(u32, wgpu::BindingResource)]| {
-            super::bind_group_at(d, pipe, bufs)
-        };
-        let group = |pipe: &wgpu::ComputePipeline, bufs: &[wgpu::BindingResource]| {
-            super::bind_group(d, pipe, bufs)
-        };
         let p = &self.pipelines;
-        let pp = self.params.as_entire_binding();
-        Groups {
-            nodal_normals: group(
-                &p.nodal_normals,
-                &[
-                    pp.clone(),
-                    s.nodes.as_entire_binding(),
-                    s.facets.as_entire_binding(),
-                    self.pair_nodes.as_entire_binding(),
-                    self.adjacency.as_entire_binding(),
-                    self.normals.buffer.as_entire_binding(),
-                ],
-            ),
-            penalty: group(
-                &p.penalty,
-                &[
-                    pp.clone(),
-                    s.nodes.as_entire_binding(),
-                    self.vel.buffer.as_entire_binding(),
-                    s.facets.as_entire_binding(),
-                    s.hits.as_entire_binding(),
-                    self.normals.buffer.as_entire_binding(),
-                    self.state.as_entire_binding(),
-                    self.out.as_entire_binding(),
-                    s.status.as_entire_binding(),
-                ],
-            ),
-            scatter: group_at(
-                &p.scatter,
-                &[
-                    (0, pp.clone()),
-                    (2, self.facet_nodes.as_entire_binding()),
-                    (3, s.hits.as_entire_binding()),
-                    (4, self.out.as_entire_binding()),
-                    (5, s.status.as_entire_binding()),
-                    (6, self.acc.as_entire_binding()),
-                ],
-            ),
-            gather: group_at(
-                &p.gather,
-                &[
-                    (0, pp),
-                    (1, self.pair_nodes.as_entire_binding()),
-                    (4, self.out.as_entire_binding()),
-                    (5, s.status.as_entire_binding()),
-                    (6, self.acc.as_entire_binding()),
-                    (7, self.forces.as_entire_binding()),
-                ],
-            ),
-        }
+        // the buffer of each role: the pair's own, or the search's shared ones
+        let resource = |buf: Buf| {
+            Some(match buf {
+                Buf::PenaltyParams => self.params.as_entire_binding(),
+                Buf::Nodes => s.nodes.as_entire_binding(),
+                Buf::Facets => s.facets.as_entire_binding(),
+                Buf::Hits => s.hits.as_entire_binding(),
+                Buf::Status => s.status.as_entire_binding(),
+                Buf::Velocities => self.vel.buffer.as_entire_binding(),
+                Buf::Normals => self.normals.buffer.as_entire_binding(),
+                Buf::PairNodes => self.pair_nodes.as_entire_binding(),
+                Buf::PairAdjacency => self.adjacency.as_entire_binding(),
+                Buf::FacetNodes => self.facet_nodes.as_entire_binding(),
+                Buf::State => self.state.as_entire_binding(),
+                Buf::Out => self.out.as_entire_binding(),
+                Buf::Acc => self.acc.as_entire_binding(),
+                Buf::Forces => self.forces.as_entire_binding(),
+                _ => return None,
+            })
+        };
+        let group = |pipe: &wgpu::ComputePipeline, pass: &passes::Pass| {
+            super::bind(d, pipe, pass, resource)
+        };
+        Ok(Groups {
+            nodal_normals: group(&p.nodal_normals, &passes::NODAL_NORMALS)?,
+            penalty: group(&p.penalty, &passes::PENALTY)?,
+            scatter: group(&p.scatter, &passes::SCATTER_FORCES)?,
+            gather: group(&p.gather, &passes::GATHER)?,
+        })
     }
 
     fn pair_bytes(&self) -> u64 {
@@ -339,8 +279,8 @@ impl AfterSearch for GpuPenalty {
                     message: e.to_string(),
                 });
             }
-            self.groups = Some((generation, groups));
-            self.status = Some(search.status.clone());
+            self.groups = Some((generation, groups?));
+            self.status = Some((search.status.clone(), search.status_reset.clone()));
         }
         Ok(())
     }
@@ -348,14 +288,8 @@ impl AfterSearch for GpuPenalty {
     fn encode(&self, enc: &mut wgpu::CommandEncoder, max_dim: u32) {
         let (_, g) = self.groups.as_ref().expect("prepared before encoding");
         let p = &self.pipelines;
-        // status words 4..8: increments start at "no limit", counts at 0; word 14, the
-        // largest overclosure, at 0; words 16..20, the gather's fixed-point scales, at 0
-        let status = self.status.as_ref().expect("prepared before encoding");
-        enc.copy_buffer_to_buffer(&self.status_init, 0, status, 16, 16);
-        let overclosure = 4 * crate::search::layout::STATUS_MAX_OVERCLOSURE as u64;
-        enc.clear_buffer(status, overclosure, Some(4));
-        let scales = 4 * crate::search::layout::STATUS_FORCE_SCALE as u64;
-        enc.clear_buffer(status, scales, Some(16));
+        let (status, image) = self.status.as_ref().expect("prepared before encoding");
+        super::global_search::reset_status(enc, image, status, crate::status::Owner::Penalty);
         let run = |enc: &mut wgpu::CommandEncoder, label: &str, work: &[super::Work<'_>]| {
             super::run_pass(&self.ctx, enc, label, work, max_dim)
         };

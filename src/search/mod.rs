@@ -17,6 +17,7 @@ use crate::gpu::GpuSearch;
 use crate::model::{validate_positions, MasterSurface, Model, PairId};
 use crate::penalty::layout::PenaltyParams;
 use crate::penalty::PenaltySetup;
+use crate::status::Status;
 use grid::Grid;
 use layout::{GpuHit, SearchParams, NO_FACET};
 use std::sync::Arc;
@@ -460,7 +461,7 @@ impl GlobalSearch {
                     (hits, entries, regrowths, status)
                 }
             };
-            if local && status[layout::STATUS_BUDGET_EXCEEDED] != 0 {
+            if local && Status(status).budget_exceeded() {
                 global = Some(Trigger::Budget);
                 continue;
             }
@@ -468,7 +469,7 @@ impl GlobalSearch {
                 Some(_) => {
                     self.frame = Some((prepared.grid, prepared.params));
                     self.since_global = 0;
-                    self.crowded = status[layout::STATUS_CROWDED] > 0;
+                    self.crowded = Status(status).crowded() > 0;
                 }
                 None => self.since_global += 1,
             }
@@ -536,18 +537,18 @@ impl GlobalSearch {
             let run = g.run_mode(&prepared, local, None, read_hits);
             g.set_device_positions(None);
             let (raw, entries, regrowths, status) = run?;
-            if status[layout::STATUS_FRAME_STALE] != 0 {
+            if Status(status).frame_stale() {
                 let host = g.read_positions(positions, prepared.n_nodes)?;
                 return Ok(self.execute(&host, Some(Trigger::Frame), None)?.0);
             }
-            if local && status[layout::STATUS_BUDGET_EXCEEDED] != 0 {
+            if local && Status(status).budget_exceeded() {
                 global = Some(Trigger::Budget);
                 continue;
             }
             match global {
                 Some(_) => {
                     self.since_global = 0;
-                    self.crowded = status[layout::STATUS_CROWDED] > 0;
+                    self.crowded = Status(status).crowded() > 0;
                 }
                 None => self.since_global += 1,
             }
@@ -805,11 +806,11 @@ impl GlobalSearch {
             raw,
             stats: SearchStats {
                 trigger,
-                local_iterations: status[layout::STATUS_LOCAL_ITERATIONS],
-                slid_too_far: status[layout::STATUS_SLID_TOO_FAR],
-                plane_off: status[layout::STATUS_PLANE_OFF],
-                local_capped: status[layout::STATUS_LOCAL_CAPPED],
-                motion: f32::from_bits(status[layout::STATUS_MOTION]) as f64,
+                local_iterations: Status(*status).local_iterations(),
+                slid_too_far: Status(*status).slid_too_far(),
+                plane_off: Status(*status).plane_off(),
+                local_capped: Status(*status).local_capped(),
+                motion: Status(*status).motion() as f64,
                 grid: prepared.grid,
                 entries,
                 candidates,

@@ -469,6 +469,7 @@ fn search_rows(devices: &[Device], slaves: usize) -> abut::Result<Vec<SearchRow>
 /// `ContactOut`, a quad facet touches 4 nodes; a plate node has 4 facets; there are about 4
 /// slaves per facet and per master node (the scene's ratio).
 fn kernel_bytes() -> Vec<(&'static str, f64)> {
+    use abut::passes;
     // (kernel, bytes per slave); the passes that run them are in PASSES
     let node = 16.0;
     let hit = std::mem::size_of::<abut::search::layout::GpuHit>() as f64;
@@ -477,24 +478,36 @@ fn kernel_bytes() -> Vec<(&'static str, f64)> {
     let per_master = 0.25; // master nodes (or facets) per slave
     vec![
         // positions now and at the last global search, of slaves and master nodes
-        ("motion", (2.0 * node) * (1.0 + per_master) + 4.0),
+        (
+            passes::MOTION.entry,
+            (2.0 * node) * (1.0 + per_master) + 4.0,
+        ),
         // the hit in and out, the tracked node's 4 facets with their 4 nodes
-        ("local_search", 2.0 * hit + 4.0 * (facet + 4.0 * node) + 4.0),
+        (
+            passes::LOCAL_SEARCH.entry,
+            2.0 * hit + 4.0 * (facet + 4.0 * node) + 4.0,
+        ),
         // per master node: its facets and their nodes, the normal out
         (
-            "nodal_normals",
+            passes::NODAL_NORMALS.entry,
             per_master * (4.0 * (facet + 4.0 * node) + node),
         ),
         // hit, node, velocity, the facet's 4 nodes and normals, state in/out, output out
-        ("penalty", hit + 2.0 * node + 8.0 * node + 2.0 * 32.0 + out),
+        (
+            passes::PENALTY.entry,
+            hit + 2.0 * node + 8.0 * node + 2.0 * 32.0 + out,
+        ),
         // each slave in contact: its output's force, status and bound shares (28 B), its hit's
         // weights and facet (20 B), the facet's pair nodes, and a read and write of the 32 B
         // fixed-point sums of each of the facet's 4 nodes
-        ("scatter_forces", 28.0 + 20.0 + facet + 4.0 * 2.0 * 32.0),
+        (
+            passes::SCATTER_FORCES.entry,
+            28.0 + 20.0 + facet + 4.0 * 2.0 * 32.0,
+        ),
         // each pair node: its pair-node record, its sums in and its force and bound row out;
         // a slave node also reads its own output (28 B)
         (
-            "gather",
+            passes::GATHER.entry,
             (node + 32.0 + node + 28.0) + per_master * (node + 32.0 + node),
         ),
     ]

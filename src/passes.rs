@@ -1,0 +1,435 @@
+//! Every compute pass of abut declared once: its shader file, entry point, bindings and how many
+//! items a workgroup covers. The GPU executors build their pipelines and bind groups from these
+//! declarations, the benchmark takes its pass names from them, and `tests/shaders.rs` checks each
+//! one against naga's reflection of its WGSL (binding numbers, address spaces, access, workgroup
+//! size), so a binding cannot be changed in one place and not in the other.
+
+use crate::search::layout::{ITEM_WORKGROUP, SCAN_BLOCK};
+
+/// A buffer a pass binds, named by what it holds (one of each per search or penalty pair).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum Buf {
+    /// Uniform `SearchParams` (grid, radius, counts, flags).
+    SearchParams,
+    /// Uniform `ScanParams` of one scan level.
+    ScanParams,
+    /// Uniform `FrameParams` (the grid frame of positions kept on the device).
+    FrameParams,
+    /// Uniform `PenaltyParams`.
+    PenaltyParams,
+    /// The caller's positions (vec4<f32> per model node, model frame).
+    Positions,
+    /// Grid-local node positions (xyz) and masses (w).
+    Nodes,
+    /// Active master facets, node ids padded with `NO_NODE`.
+    Facets,
+    /// The model node id of each slave.
+    Slaves,
+    /// The model's node→facet adjacency (CSR over active facets).
+    Adjacency,
+    /// The array a scan level works on: the cell counts (search) or the work items
+    /// (nearest facet), with all their levels.
+    ScanData,
+    /// Cell counts, then cell starts after the scan (the search's scan buffer).
+    Cells,
+    /// The scatter's cursors (a copy of the cell starts, bumped atomically).
+    Cursor,
+    /// Bin entries: facet ids grouped by cell.
+    Entries,
+    /// The status words (`STATUS_*`).
+    Status,
+    /// One `Hit` per slave.
+    Hits,
+    /// Grid-local positions at the last global search (the motion budget's reference).
+    Reference,
+    /// The nodes whose motion the budget watches.
+    MotionNodes,
+    /// Small sliding: one `Anchor` per slave.
+    Anchors,
+    /// Nearest-facet work items: chunk counts per slave, scanned.
+    Work,
+    /// Nearest-facet record per slave (distance² bits, facet, crowded, candidates).
+    Best,
+    /// Indirect dispatch arguments (x, y, z).
+    Args,
+    /// Node velocities (vec4<f32> per model node).
+    Velocities,
+    /// Smoothed nodal normals (vec4<f32> per model node).
+    Normals,
+    /// The pair's nodes (node, slave index, adjacency start, end).
+    PairNodes,
+    /// The pair's node→facet adjacency.
+    PairAdjacency,
+    /// Pair-node index of each active facet's nodes.
+    FacetNodes,
+    /// Per-slave penalty state (friction force, area, dissipation).
+    State,
+    /// Per-slave penalty results (`ContactOut`).
+    Out,
+    /// The gather's fixed-point sums (8 words per pair node).
+    Acc,
+    /// Contact force and bound row per pair node.
+    Forces,
+}
+
+/// How a shader declares a binding.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Access {
+    /// `var<uniform>`.
+    Uniform,
+    /// `var<storage, read>`.
+    Read,
+    /// `var<storage, read_write>` (atomics included).
+    ReadWrite,
+}
+
+/// One binding of group 0.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Binding {
+    /// `@binding(n)`.
+    pub index: u32,
+    /// The buffer bound there.
+    pub buf: Buf,
+    /// Its declared access.
+    pub access: Access,
+}
+
+/// What a pass's invocations are one of.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Items {
+    /// One per slave node.
+    Slaves,
+    /// One per active facet.
+    Facets,
+    /// One per watched node (motion budget).
+    MotionNodes,
+    /// One per model node.
+    Nodes,
+    /// One per node of a penalty pair.
+    PairNodes,
+    /// One invocation in all.
+    One,
+    /// One per nearest-facet work item, dispatched indirectly from `Buf::Args`.
+    WorkItems,
+    /// One workgroup per block of `SCAN_BLOCK` words of a scan level.
+    ScanBlocks,
+}
+
+/// A compute pass: one entry point of one shader file.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Pass {
+    /// The shader file's stem (`shaders/<stem>.wgsl`, preludes per `gpu::shaders`).
+    pub stem: &'static str,
+    /// The entry point, also the pass's name in counters and benchmarks.
+    pub entry: &'static str,
+    /// Its bindings, increasing.
+    pub bindings: &'static [Binding],
+    /// What its invocations are one of.
+    pub items: Items,
+    /// Items a workgroup covers (the workgroup size, or `SCAN_BLOCK` words for a scan).
+    pub per_workgroup: u32,
+}
+
+const fn b(index: u32, buf: Buf, access: Access) -> Binding {
+    Binding { index, buf, access }
+}
+
+use Access::{Read as R, ReadWrite as RW, Uniform as U};
+use Buf::*;
+
+/// `bin_count.wgsl`: each facet counts itself into the cells it overlaps.
+pub const BIN_COUNT: Pass = Pass {
+    stem: "bin_count",
+    entry: "bin_count",
+    bindings: &[
+        b(0, SearchParams, U),
+        b(1, Nodes, R),
+        b(2, Facets, R),
+        b(3, Cells, RW),
+    ],
+    items: Items::Facets,
+    per_workgroup: ITEM_WORKGROUP,
+};
+
+const SCAN_BINDINGS: &[Binding] = &[b(0, ScanParams, U), b(1, ScanData, RW)];
+
+/// `scan.wgsl`: one level's blocks scanned, their totals to the next level.
+pub const SCAN_BLOCKS: Pass = Pass {
+    stem: "scan",
+    entry: "scan_blocks",
+    bindings: SCAN_BINDINGS,
+    items: Items::ScanBlocks,
+    per_workgroup: SCAN_BLOCK,
+};
+
+/// `scan.wgsl`: the next level's scanned totals added back.
+pub const SCAN_ADD: Pass = Pass {
+    stem: "scan",
+    entry: "scan_add",
+    bindings: SCAN_BINDINGS,
+    items: Items::ScanBlocks,
+    per_workgroup: SCAN_BLOCK,
+};
+
+/// `bin_scatter.wgsl`: facet ids into their cells; overflow raised.
+pub const BIN_SCATTER: Pass = Pass {
+    stem: "bin_scatter",
+    entry: "bin_scatter",
+    bindings: &[
+        b(0, SearchParams, U),
+        b(1, Nodes, R),
+        b(2, Facets, R),
+        b(3, Cells, R),
+        b(4, Cursor, RW),
+        b(5, Entries, RW),
+        b(6, Status, RW),
+    ],
+    items: Items::Facets,
+    per_workgroup: ITEM_WORKGROUP,
+};
+
+/// The bindings of the nearest-facet passes that read a work item's candidates.
+const CHUNK_BINDINGS: &[Binding] = &[
+    b(0, SearchParams, U),
+    b(1, Nodes, R),
+    b(2, Facets, R),
+    b(3, Slaves, R),
+    b(4, Cells, R),
+    b(5, Entries, R),
+    b(8, Adjacency, R),
+    b(9, Work, RW),
+    b(10, Best, RW),
+];
+
+/// `nearest_facet.wgsl`: candidate and chunk counts per slave, records reset.
+pub const NEAREST_COUNT: Pass = Pass {
+    stem: "nearest_facet",
+    entry: "nearest_count",
+    bindings: &[
+        b(0, SearchParams, U),
+        b(1, Nodes, R),
+        b(3, Slaves, R),
+        b(4, Cells, R),
+        b(6, Status, RW),
+        b(9, Work, RW),
+        b(10, Best, RW),
+    ],
+    items: Items::Slaves,
+    per_workgroup: ITEM_WORKGROUP,
+};
+
+/// `nearest_facet.wgsl`: the indirect dispatch of the work items.
+pub const NEAREST_ARGS: Pass = Pass {
+    stem: "nearest_facet",
+    entry: "nearest_args",
+    bindings: &[b(0, SearchParams, U), b(9, Work, RW), b(11, Args, RW)],
+    items: Items::One,
+    per_workgroup: 1,
+};
+
+/// `nearest_facet.wgsl`: each chunk's nearest facet, the best distance per slave.
+pub const NEAREST_CHUNKS: Pass = Pass {
+    stem: "nearest_facet",
+    entry: "nearest_chunks",
+    bindings: CHUNK_BINDINGS,
+    items: Items::WorkItems,
+    per_workgroup: ITEM_WORKGROUP,
+};
+
+/// `nearest_facet.wgsl`: the lowest facet id at the best distance.
+pub const NEAREST_TIES: Pass = Pass {
+    stem: "nearest_facet",
+    entry: "nearest_ties",
+    bindings: CHUNK_BINDINGS,
+    items: Items::WorkItems,
+    per_workgroup: ITEM_WORKGROUP,
+};
+
+/// `nearest_facet.wgsl`: self-contact crowding per chunk.
+pub const NEAREST_CROWDED: Pass = Pass {
+    stem: "nearest_facet",
+    entry: "nearest_crowded",
+    bindings: CHUNK_BINDINGS,
+    items: Items::WorkItems,
+    per_workgroup: ITEM_WORKGROUP,
+};
+
+/// `nearest_facet.wgsl`: the hit of each slave from its winning facet.
+pub const NEAREST_FACET: Pass = Pass {
+    stem: "nearest_facet",
+    entry: "nearest_facet",
+    bindings: &[
+        b(0, SearchParams, U),
+        b(1, Nodes, R),
+        b(2, Facets, R),
+        b(3, Slaves, R),
+        b(6, Status, RW),
+        b(7, Hits, RW),
+        b(8, Adjacency, R),
+        b(10, Best, RW),
+    ],
+    items: Items::Slaves,
+    per_workgroup: ITEM_WORKGROUP,
+};
+
+/// `motion.wgsl`: the largest motion since the last global search against the budget.
+pub const MOTION: Pass = Pass {
+    stem: "motion",
+    entry: "motion",
+    bindings: &[
+        b(0, SearchParams, U),
+        b(1, Nodes, R),
+        b(2, Reference, R),
+        b(3, MotionNodes, R),
+        b(4, Status, RW),
+        b(5, Hits, R),
+    ],
+    items: Items::MotionNodes,
+    per_workgroup: ITEM_WORKGROUP,
+};
+
+/// `local_search.wgsl`: each slave's walk from its tracked node.
+pub const LOCAL_SEARCH: Pass = Pass {
+    stem: "local_search",
+    entry: "local_search",
+    bindings: &[
+        b(0, SearchParams, U),
+        b(1, Nodes, R),
+        b(2, Facets, R),
+        b(3, Slaves, R),
+        b(4, Adjacency, R),
+        b(5, Status, RW),
+        b(6, Hits, RW),
+    ],
+    items: Items::Slaves,
+    per_workgroup: ITEM_WORKGROUP,
+};
+
+/// `to_local.wgsl`: the caller's positions into the grid's frame; a master node outside it
+/// raised.
+pub const TO_LOCAL: Pass = Pass {
+    stem: "to_local",
+    entry: "to_local",
+    bindings: &[
+        b(0, SearchParams, U),
+        b(1, FrameParams, U),
+        b(2, Positions, R),
+        b(3, Nodes, RW),
+        b(4, Adjacency, R),
+        b(5, Status, RW),
+    ],
+    items: Items::Nodes,
+    per_workgroup: ITEM_WORKGROUP,
+};
+
+/// `anchor.wgsl`: small sliding's anchors evaluated on the deformed master.
+pub const ANCHOR: Pass = Pass {
+    stem: "anchor",
+    entry: "anchor",
+    bindings: &[
+        b(0, SearchParams, U),
+        b(1, Nodes, R),
+        b(2, Facets, R),
+        b(3, Slaves, R),
+        b(4, Anchors, R),
+        b(5, Status, RW),
+        b(6, Hits, RW),
+        b(7, Adjacency, R),
+    ],
+    items: Items::Slaves,
+    per_workgroup: ITEM_WORKGROUP,
+};
+
+/// `nodal_normals.wgsl`: smoothed normals of the pair's nodes.
+pub const NODAL_NORMALS: Pass = Pass {
+    stem: "nodal_normals",
+    entry: "nodal_normals",
+    bindings: &[
+        b(0, PenaltyParams, U),
+        b(1, Nodes, R),
+        b(2, Facets, R),
+        b(3, PairNodes, R),
+        b(4, PairAdjacency, R),
+        b(5, Normals, RW),
+    ],
+    items: Items::PairNodes,
+    per_workgroup: ITEM_WORKGROUP,
+};
+
+/// `penalty.wgsl`: force, friction, outputs and limits of each slave.
+pub const PENALTY: Pass = Pass {
+    stem: "penalty",
+    entry: "penalty",
+    bindings: &[
+        b(0, PenaltyParams, U),
+        b(1, Nodes, R),
+        b(2, Velocities, R),
+        b(3, Facets, R),
+        b(4, Hits, R),
+        b(5, Normals, R),
+        b(6, State, RW),
+        b(7, Out, RW),
+        b(8, Status, RW),
+    ],
+    items: Items::Slaves,
+    per_workgroup: ITEM_WORKGROUP,
+};
+
+/// `gather.wgsl`: each contact's reaction onto its facet's nodes in fixed point.
+pub const SCATTER_FORCES: Pass = Pass {
+    stem: "gather",
+    entry: "scatter_forces",
+    bindings: &[
+        b(0, PenaltyParams, U),
+        b(2, FacetNodes, R),
+        b(3, Hits, R),
+        b(4, Out, R),
+        b(5, Status, R),
+        b(6, Acc, RW),
+    ],
+    items: Items::Slaves,
+    per_workgroup: ITEM_WORKGROUP,
+};
+
+/// `gather.wgsl`: each pair node's force from its own contact and its sums.
+pub const GATHER: Pass = Pass {
+    stem: "gather",
+    entry: "gather",
+    bindings: &[
+        b(0, PenaltyParams, U),
+        b(1, PairNodes, R),
+        b(4, Out, R),
+        b(5, Status, R),
+        b(6, Acc, RW),
+        b(7, Forces, RW),
+    ],
+    items: Items::PairNodes,
+    per_workgroup: ITEM_WORKGROUP,
+};
+
+/// Every pass, in the order an increment may run them.
+pub const PASSES: [Pass; 18] = [
+    TO_LOCAL,
+    ANCHOR,
+    MOTION,
+    LOCAL_SEARCH,
+    BIN_COUNT,
+    SCAN_BLOCKS,
+    SCAN_ADD,
+    BIN_SCATTER,
+    NEAREST_COUNT,
+    NEAREST_ARGS,
+    NEAREST_CHUNKS,
+    NEAREST_TIES,
+    NEAREST_CROWDED,
+    NEAREST_FACET,
+    NODAL_NORMALS,
+    PENALTY,
+    SCATTER_FORCES,
+    GATHER,
+];
+
+/// The pass whose entry point is `entry`, if declared.
+pub fn by_entry(entry: &str) -> Option<&'static Pass> {
+    PASSES.iter().find(|p| p.entry == entry)
+}

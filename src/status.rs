@@ -1,0 +1,251 @@
+//! The status words the kernels raise, in one table: each word's index, what it holds, which
+//! passes own it (and so reset it at the start of their part of an increment) and the value they
+//! reset it to; and [`Status`], the words read back after an increment with typed readers. The
+//! indices are the `STATUS_*` constants of [`crate::search::layout`] (WGSL twins in
+//! `shaders/common.wgsl`).
+
+use crate::search::layout::*;
+
+/// Which part of an increment resets a status word.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Owner {
+    /// The search passes (global or local, anchors, positions from the device).
+    Search,
+    /// The penalty passes.
+    Penalty,
+    /// No pass writes it.
+    Unused,
+}
+
+/// One status word.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct StatusWord {
+    /// Its index in the status buffer.
+    pub index: usize,
+    /// What it holds.
+    pub name: &'static str,
+    /// Who resets it.
+    pub owner: Owner,
+    /// The value it is reset to (an f32's bits for the increments).
+    pub reset: u32,
+}
+
+const fn w(index: usize, name: &'static str, owner: Owner, reset: u32) -> StatusWord {
+    StatusWord {
+        index,
+        name,
+        owner,
+        reset,
+    }
+}
+
+/// The bits of `NO_LIMIT` (the largest finite f32), the reset value of the increments.
+const NO_LIMIT_BITS: u32 = 0x7f7f_ffff;
+
+/// Every status word, in index order.
+pub const STATUS_TABLE: [StatusWord; STATUS_WORDS] = [
+    w(STATUS_OVERFLOW, "bin entries overflowed", Owner::Search, 0),
+    w(
+        STATUS_NEEDED_ENTRIES,
+        "bin entries needed",
+        Owner::Search,
+        0,
+    ),
+    w(
+        STATUS_BUDGET_EXCEEDED,
+        "motion budget used up",
+        Owner::Search,
+        0,
+    ),
+    w(
+        STATUS_LOCAL_ITERATIONS,
+        "most local-search iterations",
+        Owner::Search,
+        0,
+    ),
+    w(
+        STATUS_DT_STABLE,
+        "smallest stable increment (f32 bits)",
+        Owner::Penalty,
+        NO_LIMIT_BITS,
+    ),
+    w(
+        STATUS_DT_APPROACH,
+        "smallest approach limit (f32 bits)",
+        Owner::Penalty,
+        NO_LIMIT_BITS,
+    ),
+    w(STATUS_ACTIVE, "slaves in contact", Owner::Penalty, 0),
+    w(STATUS_SLIPPING, "slaves slipping", Owner::Penalty, 0),
+    w(
+        STATUS_MOTION,
+        "largest motion since the global search (f32 bits)",
+        Owner::Search,
+        0,
+    ),
+    w(
+        STATUS_LOCAL_CAPPED,
+        "local walks at the iteration cap",
+        Owner::Search,
+        0,
+    ),
+    w(
+        STATUS_CROWDED,
+        "self-contact slaves crowded",
+        Owner::Search,
+        0,
+    ),
+    w(
+        STATUS_FRAME_STALE,
+        "a master node left the grid's box",
+        Owner::Search,
+        0,
+    ),
+    w(
+        STATUS_SLID_TOO_FAR,
+        "anchors slid beyond an element",
+        Owner::Search,
+        0,
+    ),
+    w(
+        STATUS_PLANE_OFF,
+        "anchor planes off the facet",
+        Owner::Search,
+        0,
+    ),
+    w(
+        STATUS_MAX_OVERCLOSURE,
+        "largest overclosure (f32 bits)",
+        Owner::Penalty,
+        0,
+    ),
+    w(15, "unused", Owner::Unused, 0),
+    w(
+        STATUS_FORCE_SCALE,
+        "gather's force scale (f32 bits)",
+        Owner::Penalty,
+        0,
+    ),
+    w(
+        STATUS_ROW_SCALE,
+        "gather's row scale (f32 bits)",
+        Owner::Penalty,
+        0,
+    ),
+    w(18, "unused", Owner::Unused, 0),
+    w(19, "unused", Owner::Unused, 0),
+];
+
+/// Every word at its reset value (the image the GPU executors copy resets from).
+pub fn reset_image() -> [u32; STATUS_WORDS] {
+    STATUS_TABLE.map(|w| w.reset)
+}
+
+/// The runs of consecutive words `owner` resets, as (first word, number of words).
+pub fn owned_runs(owner: Owner) -> Vec<(usize, usize)> {
+    let mut runs: Vec<(usize, usize)> = Vec::new();
+    for w in STATUS_TABLE.iter().filter(|w| w.owner == owner) {
+        match runs.last_mut() {
+            Some((s, n)) if *s + *n == w.index => *n += 1,
+            _ => runs.push((w.index, 1)),
+        }
+    }
+    runs
+}
+
+/// Sets the words `owner` resets to their reset values.
+pub fn reset(status: &mut [u32; STATUS_WORDS], owner: Owner) {
+    for w in STATUS_TABLE.iter().filter(|w| w.owner == owner) {
+        status[w.index] = w.reset;
+    }
+}
+
+/// The status words after an increment, read by name.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Status(pub [u32; STATUS_WORDS]);
+
+impl Status {
+    fn f32(&self, i: usize) -> f32 {
+        f32::from_bits(self.0[i])
+    }
+    /// The bin entries overflowed: nothing was binned, the search must run again.
+    pub fn overflowed(&self) -> bool {
+        self.0[STATUS_OVERFLOW] != 0
+    }
+    /// Bin entries the binning needed (when it overflowed).
+    pub fn needed_entries(&self) -> u32 {
+        self.0[STATUS_NEEDED_ENTRIES]
+    }
+    /// The motion since the last global search used up the budget.
+    pub fn budget_exceeded(&self) -> bool {
+        self.0[STATUS_BUDGET_EXCEEDED] != 0
+    }
+    /// The most local-search iterations any slave took.
+    pub fn local_iterations(&self) -> u32 {
+        self.0[STATUS_LOCAL_ITERATIONS]
+    }
+    /// Slaves whose local walk hit the iteration cap.
+    pub fn local_capped(&self) -> u32 {
+        self.0[STATUS_LOCAL_CAPPED]
+    }
+    /// The largest motion since the last global search (grid units of length).
+    pub fn motion(&self) -> f32 {
+        self.f32(STATUS_MOTION)
+    }
+    /// Self-contact slaves with unconnected facets near and facing them.
+    pub fn crowded(&self) -> u32 {
+        self.0[STATUS_CROWDED]
+    }
+    /// A master node left the grid's box (positions on the device).
+    pub fn frame_stale(&self) -> bool {
+        self.0[STATUS_FRAME_STALE] != 0
+    }
+    /// Small sliding: anchors slid more than an element length.
+    pub fn slid_too_far(&self) -> u32 {
+        self.0[STATUS_SLID_TOO_FAR]
+    }
+    /// Small sliding: anchor planes more than 10° off the deformed facet.
+    pub fn plane_off(&self) -> u32 {
+        self.0[STATUS_PLANE_OFF]
+    }
+    /// The smallest stable increment of the penalty springs (`NO_LIMIT` when none).
+    pub fn dt_stable(&self) -> f32 {
+        self.f32(STATUS_DT_STABLE)
+    }
+    /// The smallest approach limit (`NO_LIMIT` when none).
+    pub fn dt_approach(&self) -> f32 {
+        self.f32(STATUS_DT_APPROACH)
+    }
+    /// Slave nodes in contact.
+    pub fn active(&self) -> u32 {
+        self.0[STATUS_ACTIVE]
+    }
+    /// Slave nodes slipping.
+    pub fn slipping(&self) -> u32 {
+        self.0[STATUS_SLIPPING]
+    }
+    /// The largest overclosure of a penalty spring carrying force (model length, ≥ 0).
+    pub fn max_overclosure(&self) -> f32 {
+        self.f32(STATUS_MAX_OVERCLOSURE)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_table_is_in_index_order_and_resets_by_owner() {
+        for (i, w) in STATUS_TABLE.iter().enumerate() {
+            assert_eq!(w.index, i, "{}", w.name);
+        }
+        assert_eq!(NO_LIMIT_BITS, crate::penalty::layout::NO_LIMIT.to_bits());
+        assert_eq!(owned_runs(Owner::Penalty), vec![(4, 4), (14, 1), (16, 2)]);
+        let mut s = [7u32; STATUS_WORDS];
+        reset(&mut s, Owner::Penalty);
+        assert_eq!(Status(s).dt_stable(), crate::penalty::layout::NO_LIMIT);
+        assert_eq!(s[STATUS_OVERFLOW], 7, "the search's words are left alone");
+        reset(&mut s, Owner::Search);
+        assert_eq!(s[STATUS_OVERFLOW], 0);
+    }
+}
