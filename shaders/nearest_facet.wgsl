@@ -55,8 +55,10 @@
 @group(0) @binding(10) var<storage, read_write> best: array<atomic<u32>>;
 @group(0) @binding(11) var<storage, read_write> args: array<u32>;
 
-// Candidates one work item projects at most (Rust twin: CANDIDATE_CHUNK).
-const CANDIDATE_CHUNK: u32 = 64u;
+// Candidates one work item projects at most (Rust twin: CANDIDATE_CHUNK): large enough that
+// a slave of an ordinary grid cell is one work item (the ties pass then costs nothing), far below
+// the 65,535 iterations where Mesa stops a loop.
+const CANDIDATE_CHUNK: u32 = 1024u;
 // Workgroups per dimension of the indirect dispatch before folding into y (WebGPU's default).
 const MAX_GROUPS_PER_DIM: u32 = 65535u;
 

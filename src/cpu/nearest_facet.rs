@@ -23,7 +23,7 @@ pub fn project(nodes: &[[f32; 4]], p: V3<f32>, fac: [u32; 4]) -> Projection<f32>
 }
 
 /// Candidates one work item projects at most (WGSL: `CANDIDATE_CHUNK`).
-pub const CANDIDATE_CHUNK: u32 = 64;
+pub const CANDIDATE_CHUNK: u32 = 1024;
 
 /// Words of a slave's `best` record: distance² bits, facet, crowded, candidates.
 pub const BEST_WORDS: usize = 4;
