@@ -498,11 +498,12 @@ fn kernel_bytes() -> Vec<(&'static str, f64)> {
             hit + 2.0 * node + 8.0 * node + 2.0 * 32.0 + out,
         ),
         // each slave in contact: its output's force, status and bound shares (28 B), its hit's
-        // weights and facet (20 B), the facet's pair nodes, and a read and write of the 32 B
-        // fixed-point sums of each of the facet's 4 nodes
+        // weights and facet (20 B) and the facet's pair nodes; the 32 B fixed-point sums of each
+        // master node read and written once (the atomics of the slaves sharing a node meet in
+        // cache)
         (
             passes::SCATTER_FORCES.entry,
-            28.0 + 20.0 + facet + 4.0 * 2.0 * 32.0,
+            28.0 + 20.0 + facet + per_master * 2.0 * 32.0,
         ),
         // each pair node: its pair-node record, its sums in and its force and bound row out;
         // a slave node also reads its own output (28 B)
