@@ -17,7 +17,7 @@ pub enum Buf {
     FrameParams,
     /// Uniform `PenaltyParams`.
     PenaltyParams,
-    /// The caller's positions (vec4<f32> per model node, model frame).
+    /// The caller's positions (`vec4<f32>` per model node, model frame).
     Positions,
     /// Grid-local node positions (xyz) and masses (w).
     Nodes,
@@ -52,9 +52,9 @@ pub enum Buf {
     Best,
     /// Indirect dispatch arguments (x, y, z).
     Args,
-    /// Node velocities (vec4<f32> per model node).
+    /// Node velocities (`vec4<f32>` per model node).
     Velocities,
-    /// Smoothed nodal normals (vec4<f32> per model node).
+    /// Smoothed nodal normals (`vec4<f32>` per model node).
     Normals,
     /// The pair's nodes (node, slave index, adjacency start, end).
     PairNodes,

@@ -858,17 +858,7 @@ impl GpuSearch {
                 ),
                 Step::Scan => {
                     let mut work = Vec::new();
-                    for i in 0..levels.levels.len() {
-                        work.push((
-                            &p.scan_blocks,
-                            &bg.scan_blocks[i],
-                            levels.levels[i].1,
-                            SCAN_BLOCK,
-                        ));
-                    }
-                    for i in (0..levels.levels.len().saturating_sub(1)).rev() {
-                        work.push((&p.scan_add, &bg.scan_add[i], levels.levels[i].1, SCAN_BLOCK));
-                    }
+                    scan_work(p, levels, &bg.scan_blocks, &bg.scan_add, &mut work);
                     dispatch(&mut enc, "scan", &work);
                 }
                 Step::BinScatter => {
@@ -898,22 +888,7 @@ impl GpuSearch {
                         params.n_slaves,
                         ITEM_WORKGROUP,
                     )];
-                    for i in 0..work.levels.len() {
-                        seq.push((
-                            &p.scan_blocks,
-                            &bg.work_scan_blocks[i],
-                            work.levels[i].1,
-                            SCAN_BLOCK,
-                        ));
-                    }
-                    for i in (0..work.levels.len().saturating_sub(1)).rev() {
-                        seq.push((
-                            &p.scan_add,
-                            &bg.work_scan_add[i],
-                            work.levels[i].1,
-                            SCAN_BLOCK,
-                        ));
-                    }
+                    scan_work(p, &work, &bg.work_scan_blocks, &bg.work_scan_add, &mut seq);
                     seq.push((&p.nearest_args, &bg.nearest_args, 1, 1));
                     dispatch(&mut enc, "nearest_facet: count + scan", &seq);
                     let mut chunks = vec![
@@ -1030,5 +1005,22 @@ pub(crate) fn reset_status(
     for (first, n) in owned_runs(owner) {
         let (offset, bytes) = (4 * first as u64, 4 * n as u64);
         enc.copy_buffer_to_buffer(image, offset, status, offset, bytes);
+    }
+}
+
+/// Appends the dispatches of a multi-level scan over `levels` (its bind groups per level): each
+/// level's blocks upward, then the block sums added back downward.
+fn scan_work<'a>(
+    p: &'a Pipelines,
+    levels: &ScanLevels,
+    blocks: &'a [wgpu::BindGroup],
+    add: &'a [wgpu::BindGroup],
+    work: &mut Vec<super::Work<'a>>,
+) {
+    for (i, level) in levels.levels.iter().enumerate() {
+        work.push((&p.scan_blocks, &blocks[i], level.1, SCAN_BLOCK));
+    }
+    for i in (0..levels.levels.len().saturating_sub(1)).rev() {
+        work.push((&p.scan_add, &add[i], levels.levels[i].1, SCAN_BLOCK));
     }
 }

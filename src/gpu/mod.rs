@@ -29,14 +29,7 @@ pub(crate) fn run_pass(
             .sum::<u64>();
     }
     let mut profiler = ctx.profiler.lock().ok();
-    let writes = profiler
-        .as_mut()
-        .and_then(|p| p.as_mut())
-        .and_then(|p| p.next(label));
-    let mut pass = enc.begin_compute_pass(&wgpu::ComputePassDescriptor {
-        label: Some(label),
-        timestamp_writes: writes,
-    });
+    let mut pass = begin_pass(&mut profiler, enc, label);
     for &(pipe, group, n, per) in work {
         let (x, y) = crate::search::layout::fold_dispatch(n, per, max_dim);
         pass.set_pipeline(pipe);
@@ -58,19 +51,28 @@ pub(crate) fn run_indirect_pass(
         *t.dispatches.entry(label.to_string()).or_default() += work.len() as u64;
     }
     let mut profiler = ctx.profiler.lock().ok();
-    let writes = profiler
-        .as_mut()
-        .and_then(|p| p.as_mut())
-        .and_then(|p| p.next(label));
-    let mut pass = enc.begin_compute_pass(&wgpu::ComputePassDescriptor {
-        label: Some(label),
-        timestamp_writes: writes,
-    });
+    let mut pass = begin_pass(&mut profiler, enc, label);
     for &(pipe, group) in work {
         pass.set_pipeline(pipe);
         pass.set_bind_group(0, group, &[]);
         pass.dispatch_workgroups_indirect(args, 0);
     }
+}
+
+/// Begins compute pass `label`, with timestamps around it when the profiler has room.
+fn begin_pass<'e>(
+    profiler: &mut Option<std::sync::MutexGuard<'_, Option<Profiler>>>,
+    enc: &'e mut wgpu::CommandEncoder,
+    label: &str,
+) -> wgpu::ComputePass<'e> {
+    let writes = profiler
+        .as_mut()
+        .and_then(|p| p.as_mut())
+        .and_then(|p| p.next(label));
+    enc.begin_compute_pass(&wgpu::ComputePassDescriptor {
+        label: Some(label),
+        timestamp_writes: writes,
+    })
 }
 
 /// Writes `data` into `buffer` at `offset` through the queue, counting the bytes.
