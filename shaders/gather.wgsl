@@ -24,6 +24,8 @@
 //             increments give the same bits. forces.w: the node's row of the node-wise frequency
 //             bound, the sum of the shares (bound_light, or bound_heavy where the spring marks the
 //             node heavy) of its own spring and of every spring in contact on its facets.
+//             Nothing is scattered when the search overflowed or the motion budget was used up
+//             (the penalty pass did not run, the increment runs again).
 
 @group(0) @binding(0) var<uniform> pp: PenaltyParams;
 @group(0) @binding(1) var<storage, read> pair_nodes: array<vec4<u32>>;
@@ -95,9 +97,11 @@ fn scatter_forces(@builtin(workgroup_id) wg: vec3<u32>,
                   @builtin(local_invocation_index) li: u32) {
     let i = folded_id(wg, nwg, li, ITEM_WORKGROUP);
     if (i >= pp.n_slaves) { return; }
+    // the penalty pass did not run (the increment will run again): its outputs are stale
+    if (status[STATUS_OVERFLOW] != 0u || status[STATUS_BUDGET_EXCEEDED] != 0u) { return; }
     let o = out[i];
-    if ((o.status & CSTATUS_MASK) == CSTATUS_OPEN) { return; }
     let hit = hits[i];
+    if ((o.status & CSTATUS_MASK) == CSTATUS_OPEN || hit.facet >= pp.n_facets) { return; }
     let fac = facet_nodes[hit.facet];
     let n = facet_node_count(fac);
     let sf = pow2(fixed_exponent(status[STATUS_FORCE_SCALE], pp.n_slaves));

@@ -6,7 +6,9 @@ use crate::penalty::layout::{
     ContactOut, PairNode, PenaltyParams, CSTATUS_MASK, CSTATUS_OPEN, HEAVY_SHIFT, HEAVY_SLAVE,
     NO_SLAVE,
 };
-use crate::search::layout::{GpuHit, STATUS_FORCE_SCALE, STATUS_ROW_SCALE};
+use crate::search::layout::{
+    GpuHit, STATUS_BUDGET_EXCEEDED, STATUS_FORCE_SCALE, STATUS_OVERFLOW, STATUS_ROW_SCALE,
+};
 
 /// Bits below the sign that a fixed-point sum may use (WGSL: `FIXED_BITS`).
 pub const FIXED_BITS: i32 = 60;
@@ -90,12 +92,16 @@ pub fn scatter_forces(
 ) {
     let sf = pow2(fixed_exponent(status[STATUS_FORCE_SCALE], pp.n_slaves));
     let sr = pow2(fixed_exponent(status[STATUS_ROW_SCALE], pp.n_slaves));
+    // the penalty pass did not run (the increment will run again): its outputs are stale
+    if status[STATUS_OVERFLOW] != 0 || status[STATUS_BUDGET_EXCEEDED] != 0 {
+        return;
+    }
     for i in 0..pp.n_slaves as usize {
         let o = &out[i];
-        if o.status & CSTATUS_MASK == CSTATUS_OPEN {
+        let hit = &hits[i];
+        if o.status & CSTATUS_MASK == CSTATUS_OPEN || hit.facet >= pp.n_facets {
             continue;
         }
-        let hit = &hits[i];
         let fac = facet_nodes[hit.facet as usize];
         let n = facet_node_count(fac);
         for (j, &node) in fac.iter().enumerate().take(n) {

@@ -504,8 +504,8 @@ impl GlobalSearch {
     /// One increment like [`GlobalSearch::step`], with the positions read from the caller's own
     /// buffer on this search's GPU (one `vec4<f32>` per model node, model frame; usage
     /// STORAGE, and COPY_SRC for the rare refit below): nothing is uploaded, and the hits are
-    /// read back only when `read_hits` (otherwise `contacts` is empty; the status words, 48
-    /// bytes, always come back). The frame is the last global search's grid: the first
+    /// read back only when `read_hits` (otherwise `contacts` is empty; the status words and the
+    /// bin total, 96 bytes, always come back). The frame is the last global search's grid: the first
     /// increment must be a host one ([`GlobalSearch::step`] or `run`). If a master node leaves
     /// the grid's box, the buffer is read back once, the grid refitted and the increment run
     /// again (`Trigger::Frame`). Needs a GPU device made with [`Device::from_wgpu`] on the
