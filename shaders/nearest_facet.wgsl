@@ -95,6 +95,13 @@ fn work_slave(t: u32) -> u32 {
     return lo;
 }
 
+// The bin entries work item t of slave i (at p) covers: at most CANDIDATE_CHUNK of its cell's.
+fn chunk_range(i: u32, t: u32, p: vec3<f32>) -> vec2<u32> {
+    let r = cell_range(p);
+    let k0 = r.x + (t - work[i]) * CANDIDATE_CHUNK;
+    return vec2<u32>(k0, min(r.y, k0 + CANDIDATE_CHUNK));
+}
+
 struct ChunkBest {
     d2: f32,
     f: u32,
@@ -105,13 +112,11 @@ struct ChunkBest {
 fn chunk_best(i: u32, t: u32) -> ChunkBest {
     let slave = slaves[i];
     let p = nodes[slave].xyz;
-    let r = cell_range(p);
-    let k0 = r.x + (t - work[i]) * CANDIDATE_CHUNK;
-    let k1 = min(r.y, k0 + CANDIDATE_CHUNK);
+    let r = chunk_range(i, t, p);
     var b: ChunkBest;
     b.d2 = params.radius * params.radius;
     b.f = NO_FACET;
-    for (var k = k0; k < k1; k++) {
+    for (var k = r.x; k < r.y; k++) {
         let f = entries[k];
         if (excluded(slave, facets[f])) { continue; }
         let d2 = project_facet(p, facets[f]).dist2;
@@ -193,11 +198,9 @@ fn nearest_crowded(@builtin(workgroup_id) wg: vec3<u32>,
     if (best_f == NO_FACET) { return; }
     let slave = slaves[i];
     let p = nodes[slave].xyz;
-    let r = cell_range(p);
-    let k0 = r.x + (t - work[i]) * CANDIDATE_CHUNK;
-    let k1 = min(r.y, k0 + CANDIDATE_CHUNK);
+    let r = chunk_range(i, t, p);
     let r2 = params.radius * params.radius;
-    for (var k = k0; k < k1; k++) {
+    for (var k = r.x; k < r.y; k++) {
         let f = entries[k];
         if (f == best_f || excluded(slave, facets[f]) || share_node(facets[f], facets[best_f])) { continue; }
         // near and facing the slave (not merely beside it in its own plane)

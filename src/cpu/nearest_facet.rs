@@ -78,14 +78,20 @@ pub struct Candidates<'a> {
     pub adjacency: &'a [u32],
 }
 
+/// The bin entries work item t of slave i (at p) covers: at most `CANDIDATE_CHUNK` of its
+/// cell's (WGSL: `chunk_range`).
+fn chunk_range(c: &Candidates<'_>, work: &[u32], i: usize, t: u32, p: V3<f32>) -> (u32, u32) {
+    let (s, e) = cell_range(c.params, c.starts, p);
+    let k0 = s + (t - work[i]) * CANDIDATE_CHUNK;
+    (k0, e.min(k0 + CANDIDATE_CHUNK))
+}
+
 /// The nearest facet (distance², id) of slave i among its work item t's candidates, within the
 /// radius, ties to the lowest id (WGSL: `chunk_best`).
 fn chunk_best(c: &Candidates<'_>, work: &[u32], i: usize, t: u32) -> (f32, u32) {
     let slave = c.slaves[i];
     let p = node(c.nodes, slave);
-    let (s, e) = cell_range(c.params, c.starts, p);
-    let k0 = s + (t - work[i]) * CANDIDATE_CHUNK;
-    let k1 = e.min(k0 + CANDIDATE_CHUNK);
+    let (k0, k1) = chunk_range(c, work, i, t, p);
     let mut b = (c.params.radius * c.params.radius, NO_FACET);
     for k in k0..k1 {
         let f = c.entries[k as usize];
@@ -184,9 +190,7 @@ pub fn nearest_crowded(c: &Candidates<'_>, work: &[u32], best: &mut [u32]) {
         }
         let slave = c.slaves[i];
         let p = node(c.nodes, slave);
-        let (s, e) = cell_range(c.params, c.starts, p);
-        let k0 = s + (t - work[i]) * CANDIDATE_CHUNK;
-        let k1 = e.min(k0 + CANDIDATE_CHUNK);
+        let (k0, k1) = chunk_range(c, work, i, t, p);
         for k in k0..k1 {
             let f = c.entries[k as usize];
             if f == best_f

@@ -162,7 +162,13 @@ impl GpuSearch {
             &passes::TO_LOCAL,
             &passes::ANCHOR,
         ] {
-            modules.insert(pass.stem, super::module(device, pass.stem)?);
+            match super::module(device, pass.stem) {
+                Ok(m) => modules.insert(pass.stem, m),
+                Err(e) => {
+                    let _ = pollster::block_on(scope.pop());
+                    return Err(e);
+                }
+            };
         }
         let pipeline =
             |pass: &passes::Pass| super::pipeline(device, &modules[pass.stem], pass, &[]);
@@ -391,60 +397,39 @@ impl GpuSearch {
         let group = |pipe: &wgpu::ComputePipeline, pass: &passes::Pass| {
             super::bind(d, pipe, pass, |buf| self.resource(buf))
         };
-        let scan = |pipe: &wgpu::ComputePipeline,
-                    pass: &passes::Pass,
-                    params: &wgpu::Buffer,
-                    data: &wgpu::Buffer,
-                    n: usize|
-         -> Result<Vec<wgpu::BindGroup>> {
-            (0..n)
-                .map(|i| {
-                    super::bind(d, pipe, pass, |buf| match buf {
-                        Buf::ScanParams => Some(scan_level(params, i)),
-                        Buf::ScanData => Some(data.as_entire_binding()),
-                        _ => None,
-                    })
+        // the bind groups of every level of a scan (blocks, then add) over `data`
+        let scan = |params: &wgpu::Buffer, data: &wgpu::Buffer, n: usize| {
+            let level = |pipe: &wgpu::ComputePipeline, pass: &passes::Pass, i: usize| {
+                super::bind(d, pipe, pass, |buf| match buf {
+                    Buf::ScanParams => Some(scan_level(params, i)),
+                    Buf::ScanData => Some(data.as_entire_binding()),
+                    _ => None,
                 })
-                .collect()
+            };
+            let blocks = (0..n)
+                .map(|i| level(&p.scan_blocks, &passes::SCAN_BLOCKS, i))
+                .collect::<Result<Vec<_>>>()?;
+            let add = (0..n)
+                .map(|i| level(&p.scan_add, &passes::SCAN_ADD, i))
+                .collect::<Result<Vec<_>>>()?;
+            Ok::<_, Error>((blocks, add))
         };
         let n_levels = levels.levels.len();
         let n_work_levels = work_levels(prep).levels.len();
-        let (cells, work) = (&b.scan.buffer, &b.work.buffer);
+        let (scan_blocks, scan_add) = scan(&b.scan_params.buffer, &b.scan.buffer, n_levels)?;
+        let (work_scan_blocks, work_scan_add) =
+            scan(&b.work_scan_params.buffer, &b.work.buffer, n_work_levels)?;
         Ok(BindGroups {
             anchor: group(&p.anchor, &passes::ANCHOR)?,
             local_search: group(&p.local_search, &passes::LOCAL_SEARCH)?,
             motion: group(&p.motion, &passes::MOTION)?,
             bin_count: group(&p.bin_count, &passes::BIN_COUNT)?,
-            scan_blocks: scan(
-                &p.scan_blocks,
-                &passes::SCAN_BLOCKS,
-                &b.scan_params.buffer,
-                cells,
-                n_levels,
-            )?,
-            scan_add: scan(
-                &p.scan_add,
-                &passes::SCAN_ADD,
-                &b.scan_params.buffer,
-                cells,
-                n_levels,
-            )?,
+            scan_blocks,
+            scan_add,
             bin_scatter: group(&p.bin_scatter, &passes::BIN_SCATTER)?,
             nearest_count: group(&p.nearest_count, &passes::NEAREST_COUNT)?,
-            work_scan_blocks: scan(
-                &p.scan_blocks,
-                &passes::SCAN_BLOCKS,
-                &b.work_scan_params.buffer,
-                work,
-                n_work_levels,
-            )?,
-            work_scan_add: scan(
-                &p.scan_add,
-                &passes::SCAN_ADD,
-                &b.work_scan_params.buffer,
-                work,
-                n_work_levels,
-            )?,
+            work_scan_blocks,
+            work_scan_add,
             nearest_args: group(&p.nearest_args, &passes::NEAREST_ARGS)?,
             nearest_chunks: group(&p.nearest_chunks, &passes::NEAREST_CHUNKS)?,
             nearest_ties: group(&p.nearest_ties, &passes::NEAREST_TIES)?,

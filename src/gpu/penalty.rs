@@ -76,9 +76,19 @@ impl GpuPenalty {
         let limits = &ctx.limits;
         let scope = d.push_error_scope(wgpu::ErrorFilter::Validation);
         let friction = [("FRICTION", if setup.friction { 1.0 } else { 0.0 })];
-        let normals = super::module(d, passes::NODAL_NORMALS.stem)?;
-        let penalty = super::module(d, passes::PENALTY.stem)?;
-        let gather = super::module(d, passes::GATHER.stem)?;
+        let modules = [&passes::NODAL_NORMALS, &passes::PENALTY, &passes::GATHER]
+            .map(|pass| super::module(d, pass.stem));
+        let [normals, penalty, gather] = match modules {
+            [Ok(n), Ok(p), Ok(g)] => [n, p, g],
+            modules => {
+                let _ = pollster::block_on(scope.pop());
+                let e = modules.into_iter().find_map(|m| m.err());
+                return Err(e.unwrap_or_else(|| Error::Gpu {
+                    during: "compiling the penalty pipelines".into(),
+                    message: "a shader module could not be made".into(),
+                }));
+            }
+        };
         let pipelines = Pipelines {
             nodal_normals: super::pipeline(d, &normals, &passes::NODAL_NORMALS, &[]),
             penalty: super::pipeline(d, &penalty, &passes::PENALTY, &friction),
