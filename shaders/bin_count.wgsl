@@ -5,7 +5,9 @@
 //           2 facets (active facets, padded node ids), 3 counts (n_cells + 1 words, zeroed
 //           by the host before the pass; word n_cells stays 0 so the scan's last entry is the
 //           total).
-// Dispatch: one invocation per active facet, ITEM_WORKGROUP per workgroup, folded into 2D.
+// Dispatch: one invocation per active facet, ITEM_WORKGROUP per workgroup, folded into 2D;
+//           clear_counts (device-resident increments, instead of the host's clear) one per
+//           word of counts up to cell_capacity + 1, indirect from the plan.
 // Invariants: a facet is counted once in every cell its bounding box, grown by bin_margin
 //             (≥ the search radius), overlaps; counts are order-independent integers, so the
 //             result is deterministic.
@@ -37,4 +39,13 @@ fn bin_count(@builtin(workgroup_id) wg: vec3<u32>,
             }
         }
     }
+}
+
+@compute @workgroup_size(64)
+fn clear_counts(@builtin(workgroup_id) wg: vec3<u32>,
+                @builtin(num_workgroups) nwg: vec3<u32>,
+                @builtin(local_invocation_index) li: u32) {
+    let c = folded_id(wg, nwg, li, ITEM_WORKGROUP);
+    if (c > params.cell_capacity) { return; }
+    atomicStore(&counts[c], 0u);
 }

@@ -13,7 +13,7 @@ const COS_TENTH_DEGREE: f32 = 0.99999845; // Rust: geometry::COS_TENTH_DEGREE as
 // Invocations per workgroup of the one-item-per-invocation kernels (Rust: ITEM_WORKGROUP).
 const ITEM_WORKGROUP: u32 = 64u;
 
-// Rust twin: SearchParams (src/search/layout.rs), 64 bytes.
+// Rust twin: SearchParams (src/search/layout.rs), 96 bytes.
 struct SearchParams {
     cell_size: f32,
     inv_cell_size: f32,
@@ -31,10 +31,24 @@ struct SearchParams {
     flags: u32,
     budget: f32,
     n_motion_nodes: u32,
+    grid_lo_x: f32,      // lower corner of cell (0, 0, 0) in the local frame
+    grid_lo_y: f32,
+    grid_lo_z: f32,
+    base_cell: f32,      // the cell size a grid fitted on the device starts from
+    cell_capacity: u32,  // cells the buffers hold (a fitted grid has at most this many)
+    _pad0: u32,
+    _pad1: u32,
+    _pad2: u32,
+}
+
+// Lower corner of the grid in the local frame.
+fn grid_lo(p: SearchParams) -> vec3<f32> {
+    return vec3<f32>(p.grid_lo_x, p.grid_lo_y, p.grid_lo_z);
 }
 
 const FLAG_WIDE_LOCAL: u32 = 1u;
 const FLAG_SELF_CONTACT: u32 = 2u;
+const FLAG_RESIDENT: u32 = 4u;       // a device-resident increment: a spill is not an overflow
 
 // Rust twin: GpuHit (src/search/layout.rs), 64 bytes. One per slave node.
 struct Hit {
@@ -65,6 +79,49 @@ const STATUS_SLIPPING: u32 = 7u;       // of which slipping
 const STATUS_MAX_OVERCLOSURE: u32 = 14u; // bits of the largest overclosure in contact (f32 ≥ 0)
 const STATUS_FORCE_SCALE: u32 = 16u;  // bits of the largest |force component| of a spring in contact
 const STATUS_ROW_SCALE: u32 = 17u;    // bits of the largest bound share of a spring in contact
+const STATUS_SPILLED: u32 = 18u;      // facets whose bin entries did not fit (spilled: every slave sees them)
+
+// The plan of a device-resident increment: one buffer per search, u32 words (Rust twins:
+// PLAN_* in src/search/layout.rs). Words 0..16 the schedule's state, 16..40 the SearchParams
+// the schedule fitted (copied into the uniform), then PLAN_SLOT_WORDS per dispatch slot: the
+// live indirect arguments (x, y, z, 0), then the full-size ones (x, y, z, kind).
+const PLAN_SINCE_GLOBAL: u32 = 0u;  // increments since the last global search
+const PLAN_SEARCHED: u32 = 1u;      // 1 once a global search has run
+const PLAN_CROWDED: u32 = 2u;       // self-contact slaves crowded at the last global search
+const PLAN_FORCE: u32 = 3u;         // the host asks for a global search next increment
+const PLAN_GLOBAL: u32 = 4u;        // this increment searches globally
+const PLAN_TRIGGER: u32 = 5u;       // why (TRIGGER_*)
+const PLAN_INTERVAL: u32 = 6u;      // the schedule's interval
+const PLAN_N_SLOTS: u32 = 7u;       // dispatch slots in use
+const PLAN_NONFINITE: u32 = 8u;     // lowest node with a non-finite coordinate, NO_NODE if none
+const PLAN_FIT_FAILED: u32 = 9u;    // the grid could not be fitted (the old one was kept)
+const PLAN_BOX: u32 = 10u;          // 6 words: order-preserving bits of the master box, min then max
+const PLAN_PARAMS: u32 = 16u;       // 24 words: the fitted SearchParams
+const PLAN_SLOTS: u32 = 40u;
+const PLAN_SLOT_WORDS: u32 = 8u;
+const SLOT_GLOBAL: u32 = 1u;        // slot kind: dispatched in global increments
+const SLOT_LOCAL: u32 = 2u;         // slot kind: dispatched in local increments
+const TRIGGER_LOCAL: u32 = 0u;
+const TRIGGER_FIRST: u32 = 1u;
+const TRIGGER_INTERVAL: u32 = 2u;
+const TRIGGER_BUDGET: u32 = 3u;
+const TRIGGER_CROWDED: u32 = 4u;
+const TRIGGER_REQUESTED: u32 = 5u;
+
+// f32 bits as a u32 whose unsigned order is the floats' order (for atomicMin/Max of any sign).
+fn ordered_bits(x: f32) -> u32 {
+    let b = bitcast<u32>(x);
+    return select(b | 0x80000000u, ~b, (b & 0x80000000u) != 0u);
+}
+
+fn from_ordered_bits(u: u32) -> f32 {
+    return bitcast<f32>(select(~u, u & 0x7fffffffu, (u & 0x80000000u) != 0u));
+}
+
+// Whether x is NaN or infinite (by its bits: compilers may assume finite arithmetic).
+fn non_finite(x: f32) -> bool {
+    return (bitcast<u32>(x) & 0x7f800000u) == 0x7f800000u;
+}
 
 // Flat invocation id of a dispatch folded into 2D (x up to 65,535 workgroups, then y).
 fn folded_id(wg: vec3<u32>, nwg: vec3<u32>, local: u32, size: u32) -> u32 {
@@ -94,8 +151,8 @@ fn facet_cells(p: SearchParams, x0: vec3<f32>, x1: vec3<f32>, x2: vec3<f32>, x3:
     var hi = max(x0, x1);
     if (n >= 3u) { lo = min(lo, x2); hi = max(hi, x2); }
     if (n == 4u) { lo = min(lo, x3); hi = max(hi, x3); }
-    lo = lo - vec3<f32>(p.bin_margin);
-    hi = hi + vec3<f32>(p.bin_margin);
+    lo = lo - grid_lo(p) - vec3<f32>(p.bin_margin);
+    hi = hi - grid_lo(p) + vec3<f32>(p.bin_margin);
     var r: CellRange;
     r.lo = vec3<u32>(cell_coord(lo.x, p.inv_cell_size, p.dims_x),
                      cell_coord(lo.y, p.inv_cell_size, p.dims_y),

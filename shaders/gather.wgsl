@@ -13,8 +13,11 @@
 //           end), 2 facet_nodes (pair-node index of each active facet's nodes, NO_NODE padded),
 //           3 hits, 4 out (ContactOut), 5 status (read: the two scale words), 6 acc (8 words per
 //           pair node: fx, fy, fz, row as (low, high) pairs; zeroed before scatter_forces),
-//           7 forces (vec4 per pair node).
-// Dispatch: scatter_forces one invocation per slave, gather one per pair node; ITEM_WORKGROUP per
+//           7 forces (vec4 per pair node), 8 host_forces (the caller's force buffer: vec4<f32>
+//           per model node, xyz summed into, w left alone), 9 rows (f32 per model node: the
+//           node-wise bound's rows summed over the pairs of the increment).
+// Dispatch: scatter_forces one invocation per slave, gather and add_forces one per pair node
+//           (add_forces: device-resident increments, after gather); ITEM_WORKGROUP per
 //           workgroup, folded into 2D. Each invocation does at most 4 × 4 atomic pairs (scatter)
 //           or reads 8 words (gather): bounded whatever the number of slaves on one facet.
 // Invariants: a slave node gets its own contact force; a master node gets −w_j·f of every slave
@@ -23,7 +26,9 @@
 //             once to f32, so Σ over the pair is zero to f32 round-off and two identical
 //             increments give the same bits. forces.w: the node's row of the node-wise frequency
 //             bound, the sum of the shares (bound_light, or bound_heavy where the spring marks the
-//             node heavy) of its own spring and of every spring in contact on its facets.
+//             node heavy) of its own spring and of every spring in contact on its facets whose
+//             weight at the node is not zero (a node the contact point does not weigh is not in
+//             that spring; giving it a share would make the bound jump with round-off).
 //             Nothing is scattered when the search overflowed or the motion budget was used up
 //             (the penalty pass did not run, the increment runs again).
 
@@ -35,6 +40,8 @@
 @group(0) @binding(5) var<storage, read> status: array<u32>;
 @group(0) @binding(6) var<storage, read_write> acc: array<atomic<u32>>;
 @group(0) @binding(7) var<storage, read_write> forces: array<vec4<f32>>;
+@group(0) @binding(8) var<storage, read_write> host_forces: array<vec4<f32>>;
+@group(0) @binding(9) var<storage, read_write> rows: array<f32>;
 
 // Bits below the sign that a fixed-point sum may use (2 bits of headroom for weights up to 4).
 const FIXED_BITS: i32 = 60;
@@ -112,7 +119,9 @@ fn scatter_forces(@builtin(workgroup_id) wg: vec3<u32>,
         add_fixed(base, to_fixed(-w * o.force.x, sf));
         add_fixed(base + 1u, to_fixed(-w * o.force.y, sf));
         add_fixed(base + 2u, to_fixed(-w * o.force.z, sf));
-        add_fixed(base + 3u, to_fixed(row_share(o, 1u << (HEAVY_SHIFT + j)), sr));
+        // a node the contact point does not weigh (w = 0) is not in the spring: no share
+        let share = select(0.0, row_share(o, 1u << (HEAVY_SHIFT + j)), w != 0.0);
+        add_fixed(base + 3u, to_fixed(share, sr));
     }
 }
 
@@ -138,4 +147,19 @@ fn gather(@builtin(workgroup_id) wg: vec3<u32>,
         sum[c] = from_fixed(a, select(inv_f, inv_r, c == 3u));
     }
     forces[i] = vec4<f32>(f + vec3<f32>(sum[0], sum[1], sum[2]), row + sum[3]);
+}
+
+// Adds each pair node's force into the caller's buffer and its bound row into `rows`: one
+// invocation per pair node, and a node is one pair node of a pair, so no two invocations of a
+// dispatch touch the same node (the pairs' passes run one after another: a fixed order).
+@compute @workgroup_size(64)
+fn add_forces(@builtin(workgroup_id) wg: vec3<u32>,
+              @builtin(num_workgroups) nwg: vec3<u32>,
+              @builtin(local_invocation_index) li: u32) {
+    let i = folded_id(wg, nwg, li, ITEM_WORKGROUP);
+    if (i >= pp.n_pair_nodes) { return; }
+    let node = pair_nodes[i].x;
+    let f = forces[i];
+    host_forces[node] = host_forces[node] + vec4<f32>(f.xyz, 0.0);
+    rows[node] = rows[node] + f.w;
 }

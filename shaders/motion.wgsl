@@ -5,7 +5,9 @@
 //           search), 2 reference (positions at the last global search, same frame),
 //           3 motion_nodes (the slave nodes, in slave order, then the master surface's other
 //           nodes), 4 status, 5 hits (the tracked node of each slave).
-// Dispatch: one invocation per motion node, ITEM_WORKGROUP per workgroup, folded into 2D.
+// Dispatch: motion and set_reference one invocation per motion node, ITEM_WORKGROUP per
+//           workgroup, folded into 2D (set_reference indirect from the plan: global increments
+//           of a device-resident increment make their positions the new reference).
 // Invariants: tracked slaves are followed by the local search whatever they move, so only
 //             the untracked slaves (no facet within the radius at the last global search) and
 //             the master nodes count: if twice one of their displacements reaches the budget —
@@ -16,7 +18,7 @@
 
 @group(0) @binding(0) var<uniform> params: SearchParams;
 @group(0) @binding(1) var<storage, read> nodes: array<vec4<f32>>;
-@group(0) @binding(2) var<storage, read> reference: array<vec4<f32>>;
+@group(0) @binding(2) var<storage, read_write> reference: array<vec4<f32>>;
 @group(0) @binding(3) var<storage, read> motion_nodes: array<u32>;
 @group(0) @binding(4) var<storage, read_write> status: array<atomic<u32>>;
 @group(0) @binding(5) var<storage, read> hits: array<Hit>;
@@ -34,4 +36,14 @@ fn motion(@builtin(workgroup_id) wg: vec3<u32>,
     if (2.0 * d >= params.budget) {
         atomicStore(&status[STATUS_BUDGET_EXCEEDED], 1u);
     }
+}
+
+@compute @workgroup_size(64)
+fn set_reference(@builtin(workgroup_id) wg: vec3<u32>,
+                 @builtin(num_workgroups) nwg: vec3<u32>,
+                 @builtin(local_invocation_index) li: u32) {
+    let k = folded_id(wg, nwg, li, ITEM_WORKGROUP);
+    if (k >= params.n_motion_nodes) { return; }
+    let id = motion_nodes[k];
+    reference[id] = nodes[id];
 }

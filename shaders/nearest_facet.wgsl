@@ -3,7 +3,8 @@
 // CPU mirror: src/cpu/nearest_facet.rs.
 // Prelude: common.wgsl, search_common.wgsl (projection, self-contact exclusion, free edges).
 //
-// A slave's candidates are the facets binned in its cell; they are cut into chunks of
+// A slave's candidates are the facets binned in its cell (as far as the entry buffer holds
+// them) and the spill (facets whose entries did not fit: bin_scatter.wgsl); they are cut into chunks of
 // CANDIDATE_CHUNK, and each (slave, chunk) pair is one work item. The passes, in order:
 //   nearest_count    one invocation per slave: its cell's candidate count, its chunk count into
 //                    `work` (then scanned by scan.wgsl into each slave's first work item), and its
@@ -22,7 +23,7 @@
 //           passes one per work item through the indirect arguments; ITEM_WORKGROUP per
 //           workgroup, folded into 2D.
 // Bindings: 0 params, 1 nodes, 2 facets, 3 slaves (node id per slave), 4 starts (cell starts),
-//           5 entries, 6 status (overflow skips the search; self-contact crowding counted), 7 hits
+//           5 entries (bins, then the spill), 6 status (self-contact crowding counted), 7 hits
 //           (one Hit per slave), 8 adjacency (as in local_search.wgsl; self-contact and free
 //           edges), 9 work (chunk counts, scanned to first work items; word n_slaves: total),
 //           10 best (4 words per slave: distance² bits, facet, crowded, candidates), 11 args
@@ -74,14 +75,35 @@ fn share_node(a: vec4<u32>, b: vec4<u32>) -> bool {
     return false;
 }
 
-// The range of bin entries of the cell holding p, (start, end); (0, 0) outside the grid.
-fn cell_range(p: vec3<f32>) -> vec2<u32> {
-    let g = p * params.inv_cell_size;
+// The candidates of a node: the written bin entries of its cell, then the spill.
+struct Candidates {
+    start: u32,   // first bin entry of the cell
+    in_cell: u32, // written entries of the cell (those within entry_capacity)
+    n: u32,       // in_cell + the spill
+}
+
+// The candidates of a node at p; none outside the grid (no facet within the radius there).
+fn candidates(p: vec3<f32>) -> Candidates {
+    var r: Candidates;
+    r.start = 0u;
+    r.in_cell = 0u;
+    r.n = 0u;
+    let g = (p - grid_lo(params)) * params.inv_cell_size;
     let inside = g.x >= 0.0 && g.y >= 0.0 && g.z >= 0.0
         && g.x < f32(params.dims_x) && g.y < f32(params.dims_y) && g.z < f32(params.dims_z);
-    if (!inside) { return vec2<u32>(0u, 0u); }
+    if (!inside) { return r; }
     let c = cell_index(params, vec3<u32>(u32(g.x), u32(g.y), u32(g.z)));
-    return vec2<u32>(starts[c], starts[c + 1u]);
+    let cap = params.entry_capacity;
+    r.start = min(starts[c], cap);
+    r.in_cell = min(starts[c + 1u], cap) - r.start;
+    r.n = r.in_cell + entries[cap];
+    return r;
+}
+
+// Candidate k of a node's candidates c: a facet id.
+fn candidate(c: Candidates, k: u32) -> u32 {
+    if (k < c.in_cell) { return entries[c.start + k]; }
+    return entries[params.entry_capacity + 1u + k - c.in_cell];
 }
 
 // The slave of work item t: the largest i with work[i] ≤ t (work is its first item).
@@ -95,11 +117,10 @@ fn work_slave(t: u32) -> u32 {
     return lo;
 }
 
-// The bin entries work item t of slave i (at p) covers: at most CANDIDATE_CHUNK of its cell's.
-fn chunk_range(i: u32, t: u32, p: vec3<f32>) -> vec2<u32> {
-    let r = cell_range(p);
-    let k0 = r.x + (t - work[i]) * CANDIDATE_CHUNK;
-    return vec2<u32>(k0, min(r.y, k0 + CANDIDATE_CHUNK));
+// The candidates work item t of slave i (candidates c) covers: at most CANDIDATE_CHUNK.
+fn chunk_range(i: u32, t: u32, c: Candidates) -> vec2<u32> {
+    let k0 = (t - work[i]) * CANDIDATE_CHUNK;
+    return vec2<u32>(k0, min(c.n, k0 + CANDIDATE_CHUNK));
 }
 
 struct ChunkBest {
@@ -112,12 +133,13 @@ struct ChunkBest {
 fn chunk_best(i: u32, t: u32) -> ChunkBest {
     let slave = slaves[i];
     let p = nodes[slave].xyz;
-    let r = chunk_range(i, t, p);
+    let c = candidates(p);
+    let r = chunk_range(i, t, c);
     var b: ChunkBest;
     b.d2 = params.radius * params.radius;
     b.f = NO_FACET;
     for (var k = r.x; k < r.y; k++) {
-        let f = entries[k];
+        let f = candidate(c, k);
         if (excluded(slave, facets[f])) { continue; }
         let d2 = project_facet(p, facets[f]).dist2;
         if (d2 < b.d2 || (d2 == b.d2 && f < b.f)) {
@@ -135,11 +157,7 @@ fn nearest_count(@builtin(workgroup_id) wg: vec3<u32>,
     let i = folded_id(wg, nwg, li, ITEM_WORKGROUP);
     if (i >= params.n_slaves) { return; }
     if (i == 0u) { work[params.n_slaves] = 0u; }
-    var count = 0u;
-    if (atomicLoad(&status[STATUS_OVERFLOW]) == 0u) {
-        let r = cell_range(nodes[slaves[i]].xyz);
-        count = r.y - r.x;
-    }
+    let count = candidates(nodes[slaves[i]].xyz).n;
     work[i] = (count + CANDIDATE_CHUNK - 1u) / CANDIDATE_CHUNK;
     atomicStore(&best[4u * i], bitcast<u32>(params.radius * params.radius));
     atomicStore(&best[4u * i + 1u], NO_FACET);
@@ -198,10 +216,11 @@ fn nearest_crowded(@builtin(workgroup_id) wg: vec3<u32>,
     if (best_f == NO_FACET) { return; }
     let slave = slaves[i];
     let p = nodes[slave].xyz;
-    let r = chunk_range(i, t, p);
+    let c = candidates(p);
+    let r = chunk_range(i, t, c);
     let r2 = params.radius * params.radius;
     for (var k = r.x; k < r.y; k++) {
-        let f = entries[k];
+        let f = candidate(c, k);
         if (f == best_f || excluded(slave, facets[f]) || share_node(facets[f], facets[best_f])) { continue; }
         // near and facing the slave (not merely beside it in its own plane)
         let pr = project_facet(p, facets[f]);
@@ -219,7 +238,6 @@ fn nearest_facet(@builtin(workgroup_id) wg: vec3<u32>,
                  @builtin(local_invocation_index) li: u32) {
     let i = folded_id(wg, nwg, li, ITEM_WORKGROUP);
     if (i >= params.n_slaves) { return; }
-    if (atomicLoad(&status[STATUS_OVERFLOW]) != 0u) { return; }
     var hit: Hit;
     hit.facet = NO_FACET;
     hit.node = NO_NODE;

@@ -16,6 +16,9 @@ use crate::penalty::layout::{
 use crate::penalty::PenaltySetup;
 use crate::search::{GlobalSearch, SearchResult};
 
+mod resident;
+pub use resident::ResidentIo;
+
 /// The penalty executor of one pair, on the same device as its search.
 pub(crate) enum PenaltyExec {
     Gpu(Box<GpuPenalty>),
@@ -170,6 +173,12 @@ pub struct Contact {
     /// (zero between increments), and the nodes touched this increment.
     bound_rows: Vec<f64>,
     bound_touched: Vec<u32>,
+    /// The model's positions (the frame and anchors of device-resident increments).
+    initial_positions: Vec<[f64; 3]>,
+    /// Device-resident increments: rows, statistics and their ring.
+    resident: Option<resident::Resident>,
+    /// Device-resident increments: bin entries to grow to at the next one (a spill was seen).
+    grow_to: Option<u32>,
 }
 
 impl Contact {
@@ -319,6 +328,9 @@ impl Contact {
             report: StepReport::default(),
             bound_rows: vec![0.0; n_nodes],
             bound_touched: Vec::new(),
+            initial_positions: model.positions().to_vec(),
+            resident: None,
+            grow_to: None,
         })
     }
 
@@ -370,6 +382,13 @@ impl Contact {
         dt: f64,
     ) -> Result<&StepReport> {
         positive_dt(dt)?;
+        if self.resident.is_some() {
+            return Err(Error::BadParameter {
+                name: "penalty_step",
+                value: "a Contact running device-resident increments".into(),
+                expected: "one kind of increment per Contact (make another for host arrays)",
+            });
+        }
         if velocities.len() != self.n_nodes {
             return Err(Error::LengthMismatch {
                 what: "velocities (one per model node)",
@@ -457,6 +476,15 @@ impl Contact {
         }
         self.report = report;
         Ok(&self.report)
+    }
+
+    /// Caps the bin entry buffers' starting size (words) of every penalty pair's search; a
+    /// host-array search grows on overflow, a device-resident one spills and grows after its
+    /// statistics are read. Meant for tests of those paths.
+    pub fn set_entry_capacity(&mut self, words: u32) {
+        for pr in &mut self.pairs {
+            pr.search.set_entry_capacity(words);
+        }
     }
 
     /// Whether any pair is enforced by penalty.

@@ -46,6 +46,11 @@ pub struct Traffic {
     pub read_back_bytes: u64,
     /// Command submissions.
     pub submits: u64,
+    /// Times the host blocked until the device finished (a readback's map, a timestamp read).
+    pub waits: u64,
+    /// Bytes read from the lagged statistics ring of device-resident increments (mapped a few
+    /// increments late, never waited for).
+    pub lagged_read_bytes: u64,
     /// GPU time per compute pass, by label, in nanoseconds (timestamp queries; empty unless
     /// [`Device::enable_timestamps`] succeeded).
     pub pass_ns: std::collections::BTreeMap<String, f64>,
@@ -74,6 +79,8 @@ impl Traffic {
             uploaded_bytes: self.uploaded_bytes - earlier.uploaded_bytes,
             read_back_bytes: self.read_back_bytes - earlier.read_back_bytes,
             submits: self.submits - earlier.submits,
+            waits: self.waits - earlier.waits,
+            lagged_read_bytes: self.lagged_read_bytes - earlier.lagged_read_bytes,
             pass_ns: map_since(&self.pass_ns, &earlier.pass_ns),
         }
     }

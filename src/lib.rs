@@ -22,7 +22,7 @@ pub mod search;
 pub mod status;
 
 pub use contact::{
-    Contact, ContactStatus, KinematicReport, OverclosureReport, PairOutput, StepReport,
+    Contact, ContactStatus, KinematicReport, OverclosureReport, PairOutput, ResidentIo, StepReport,
 };
 pub use device::{Device, Traffic};
 pub use error::{Error, Result};
@@ -32,4 +32,5 @@ pub use model::{
     PairId, Penalty, PressureOverclosure, RigidBody, RigidPair, RigidPairId, Sliding, Stiffness,
     Surface, SurfaceId,
 };
+pub use search::layout::IncrementStats;
 pub use search::{ContactPoint, GlobalSearch, SearchResult, SearchStats};

@@ -70,6 +70,14 @@ pub enum Buf {
     Acc,
     /// Contact force and bound row per pair node.
     Forces,
+    /// The device-resident plan of a search (schedule state, the fitted grid, dispatch slots).
+    Plan,
+    /// The caller's force buffer (`vec4<f32>` per model node) of a device-resident increment.
+    HostForces,
+    /// The node-wise bound's rows per model node, summed over the pairs of an increment.
+    Rows,
+    /// The statistics of a device-resident increment (`IncrementStats`).
+    Stats,
 }
 
 /// How a shader declares a binding.
@@ -111,6 +119,8 @@ pub enum Items {
     One,
     /// One per nearest-facet work item, dispatched indirectly from `Buf::Args`.
     WorkItems,
+    /// One per word of the cell counts, up to the cell capacity.
+    CellWords,
     /// One workgroup per block of `SCAN_BLOCK` words of a scan level.
     ScanBlocks,
 }
@@ -151,6 +161,15 @@ pub const BIN_COUNT: Pass = Pass {
     per_workgroup: ITEM_WORKGROUP,
 };
 
+/// `bin_count.wgsl`: the cell counts zeroed (device-resident increments).
+pub const CLEAR_COUNTS: Pass = Pass {
+    stem: "bin_count",
+    entry: "clear_counts",
+    bindings: &[b(0, SearchParams, U), b(3, Cells, RW)],
+    items: Items::CellWords,
+    per_workgroup: ITEM_WORKGROUP,
+};
+
 const SCAN_BINDINGS: &[Binding] = &[b(0, ScanParams, U), b(1, ScanData, RW)];
 
 /// `scan.wgsl`: one level's blocks scanned, their totals to the next level.
@@ -171,7 +190,21 @@ pub const SCAN_ADD: Pass = Pass {
     per_workgroup: SCAN_BLOCK,
 };
 
-/// `bin_scatter.wgsl`: facet ids into their cells; overflow raised.
+/// `bin_scatter.wgsl`: the scatter's cursors from the cell starts, the spill emptied.
+pub const COPY_STARTS: Pass = Pass {
+    stem: "bin_scatter",
+    entry: "copy_starts",
+    bindings: &[
+        b(0, SearchParams, U),
+        b(3, Cells, R),
+        b(4, Cursor, RW),
+        b(5, Entries, RW),
+    ],
+    items: Items::CellWords,
+    per_workgroup: ITEM_WORKGROUP,
+};
+
+/// `bin_scatter.wgsl`: facet ids into their cells; what does not fit spills.
 pub const BIN_SCATTER: Pass = Pass {
     stem: "bin_scatter",
     entry: "bin_scatter",
@@ -210,7 +243,7 @@ pub const NEAREST_COUNT: Pass = Pass {
         b(1, Nodes, R),
         b(3, Slaves, R),
         b(4, Cells, R),
-        b(6, Status, RW),
+        b(5, Entries, R),
         b(9, Work, RW),
         b(10, Best, RW),
     ],
@@ -279,13 +312,42 @@ pub const MOTION: Pass = Pass {
     bindings: &[
         b(0, SearchParams, U),
         b(1, Nodes, R),
-        b(2, Reference, R),
+        b(2, Reference, RW),
         b(3, MotionNodes, R),
         b(4, Status, RW),
         b(5, Hits, R),
     ],
     items: Items::MotionNodes,
     per_workgroup: ITEM_WORKGROUP,
+};
+
+/// `motion.wgsl`: the watched nodes' positions become the budget's reference (global
+/// increments of a device-resident increment).
+pub const SET_REFERENCE: Pass = Pass {
+    stem: "motion",
+    entry: "set_reference",
+    bindings: &[
+        b(0, SearchParams, U),
+        b(1, Nodes, R),
+        b(2, Reference, RW),
+        b(3, MotionNodes, R),
+    ],
+    items: Items::MotionNodes,
+    per_workgroup: ITEM_WORKGROUP,
+};
+
+/// `schedule.wgsl`: global or local, the fitted grid and the dispatch sizes, on the device.
+pub const SCHEDULE: Pass = Pass {
+    stem: "schedule",
+    entry: "schedule",
+    bindings: &[
+        b(0, SearchParams, U),
+        b(1, Plan, RW),
+        b(2, Status, RW),
+        b(3, Args, RW),
+    ],
+    items: Items::One,
+    per_workgroup: 1,
 };
 
 /// `local_search.wgsl`: each slave's walk from its tracked node.
@@ -317,6 +379,7 @@ pub const TO_LOCAL: Pass = Pass {
         b(3, Nodes, RW),
         b(4, Adjacency, R),
         b(5, Status, RW),
+        b(6, Plan, RW),
     ],
     items: Items::Nodes,
     per_workgroup: ITEM_WORKGROUP,
@@ -407,15 +470,60 @@ pub const GATHER: Pass = Pass {
     per_workgroup: ITEM_WORKGROUP,
 };
 
+/// `gather.wgsl`: each pair node's force into the caller's buffer, its row into the rows.
+pub const ADD_FORCES: Pass = Pass {
+    stem: "gather",
+    entry: "add_forces",
+    bindings: &[
+        b(0, PenaltyParams, U),
+        b(1, PairNodes, R),
+        b(7, Forces, RW),
+        b(8, HostForces, RW),
+        b(9, Rows, RW),
+    ],
+    items: Items::PairNodes,
+    per_workgroup: ITEM_WORKGROUP,
+};
+
+/// `stats.wgsl`: a pair's status words into the increment's statistics.
+pub const PAIR_STATS: Pass = Pass {
+    stem: "stats",
+    entry: "pair_stats",
+    bindings: &[b(0, Status, R), b(1, Plan, RW), b(2, Stats, RW)],
+    items: Items::One,
+    per_workgroup: 1,
+};
+
+/// `stats.wgsl`: the largest row of the node-wise bound among a pair's nodes.
+pub const BOUND_MAX: Pass = Pass {
+    stem: "stats",
+    entry: "bound_max",
+    bindings: &[b(2, Stats, RW), b(3, PairNodes, R), b(4, Rows, R)],
+    items: Items::PairNodes,
+    per_workgroup: ITEM_WORKGROUP,
+};
+
+/// `stats.wgsl`: the stable increment from the bound, the increment counted.
+pub const FINISH_STATS: Pass = Pass {
+    stem: "stats",
+    entry: "finish_stats",
+    bindings: &[b(2, Stats, RW)],
+    items: Items::One,
+    per_workgroup: 1,
+};
+
 /// Every pass, in the order an increment may run them.
-pub const PASSES: [Pass; 18] = [
+pub const PASSES: [Pass; 26] = [
     TO_LOCAL,
     ANCHOR,
     MOTION,
+    SCHEDULE,
     LOCAL_SEARCH,
+    CLEAR_COUNTS,
     BIN_COUNT,
     SCAN_BLOCKS,
     SCAN_ADD,
+    COPY_STARTS,
     BIN_SCATTER,
     NEAREST_COUNT,
     NEAREST_ARGS,
@@ -427,6 +535,11 @@ pub const PASSES: [Pass; 18] = [
     PENALTY,
     SCATTER_FORCES,
     GATHER,
+    SET_REFERENCE,
+    ADD_FORCES,
+    PAIR_STATS,
+    BOUND_MAX,
+    FINISH_STATS,
 ];
 
 /// The pass whose entry point is `entry`, if declared.

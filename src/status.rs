@@ -132,7 +132,12 @@ pub const STATUS_TABLE: [StatusWord; STATUS_WORDS] = [
         Owner::Penalty,
         0,
     ),
-    w(18, "unused", Owner::Unused, 0),
+    w(
+        STATUS_SPILLED,
+        "facets spilled from the bins",
+        Owner::Search,
+        0,
+    ),
     w(19, "unused", Owner::Unused, 0),
 ];
 

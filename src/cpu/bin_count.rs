@@ -15,3 +15,10 @@ pub fn bin_count(
         for_each_cell(params, lo, hi, |c| counts[c as usize] += 1);
     }
 }
+
+/// One "invocation" per word of the counts up to the cell capacity: zeroed
+/// (WGSL: `clear_counts`).
+pub fn clear_counts(params: &SearchParams, counts: &mut [u32]) {
+    let n = (params.cell_capacity as usize + 1).min(counts.len());
+    counts[..n].iter_mut().for_each(|c| *c = 0);
+}

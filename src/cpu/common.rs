@@ -44,8 +44,16 @@ pub fn facet_cells(p: &SearchParams, nodes: &[[f32; 4]], fac: [u32; 4]) -> ([u32
     let mut clo = [0u32; 3];
     let mut chi = [0u32; 3];
     for a in 0..3 {
-        clo[a] = cell_coord(lo[a] - p.bin_margin, p.inv_cell_size, dims[a]);
-        chi[a] = cell_coord(hi[a] + p.bin_margin, p.inv_cell_size, dims[a]);
+        clo[a] = cell_coord(
+            lo[a] - p.grid_lo[a] - p.bin_margin,
+            p.inv_cell_size,
+            dims[a],
+        );
+        chi[a] = cell_coord(
+            hi[a] - p.grid_lo[a] + p.bin_margin,
+            p.inv_cell_size,
+            dims[a],
+        );
     }
     (clo, chi)
 }

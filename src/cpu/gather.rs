@@ -110,7 +110,11 @@ pub fn scatter_forces(
             for c in 0..3 {
                 add_fixed(acc, base + c, to_fixed(-w * o.force[c], sf));
             }
-            let share = row_share(o, 1 << (HEAVY_SHIFT + j as u32));
+            let share = if w != 0.0 {
+                row_share(o, 1 << (HEAVY_SHIFT + j as u32))
+            } else {
+                0.0
+            };
             add_fixed(acc, base + 3, to_fixed(share, sr));
         }
     }
@@ -143,6 +147,25 @@ pub fn gather(
             *s = from_fixed([acc[w], acc[w + 1]], inv);
         }
         forces[i] = [f[0] + sum[0], f[1] + sum[1], f[2] + sum[2], row + sum[3]];
+    }
+}
+
+/// One "invocation" per pair node: its force into the caller's array (xyz; w left alone) and
+/// its bound row into `rows` (WGSL: `add_forces`).
+pub fn add_forces(
+    pp: &PenaltyParams,
+    pair_nodes: &[PairNode],
+    forces: &[[f32; 4]],
+    host_forces: &mut [[f32; 4]],
+    rows: &mut [f32],
+) {
+    for i in 0..pp.n_pair_nodes as usize {
+        let node = pair_nodes[i].node as usize;
+        let f = forces[i];
+        for a in 0..3 {
+            host_forces[node][a] += f[a];
+        }
+        rows[node] += f[3];
     }
 }
 

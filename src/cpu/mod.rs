@@ -16,7 +16,10 @@ pub mod motion;
 pub mod nearest_facet;
 pub mod nodal_normals;
 pub mod penalty;
+mod resident;
 pub mod scan;
+pub mod schedule;
+pub mod stats;
 pub mod to_local;
 
 use crate::error::Result;
@@ -56,6 +59,8 @@ pub struct CpuSearch {
     presize: bool,
     /// Cells of the last search.
     n_cells: u32,
+    /// Device-resident increments: the plan and the nodes they keep.
+    resident: Option<Box<resident::CpuResident>>,
 }
 
 impl Default for CpuSearch {
@@ -66,6 +71,7 @@ impl Default for CpuSearch {
             entry_capacity: 0,
             presize: true,
             n_cells: 0,
+            resident: None,
         }
     }
 }
@@ -181,7 +187,9 @@ impl CpuSearch {
             self.ws.scan.clear();
             self.ws.scan.resize(levels.words as usize, 0);
             crate::status::reset(&mut self.ws.status, crate::status::Owner::Search);
-            self.ws.entries.resize(self.entry_capacity as usize, 0);
+            self.ws
+                .entries
+                .resize(entry_words(self.entry_capacity, prep.facets.len()), 0);
             self.ws.hits.resize(prep.slaves.len(), GpuHit::miss(0, 0));
             for step in STEPS {
                 run_step(step, &params, &levels, prep, &mut self.ws);
@@ -204,6 +212,12 @@ pub fn presized_capacity(prep: &Prepared, current: u32) -> u32 {
     want.clamp(current as u64, u32::MAX as u64) as u32
 }
 
+/// Words of an entry buffer of `capacity` bin entries for `n_facets` facets: the bins, the
+/// spill's count, and room for every facet to spill.
+pub fn entry_words(capacity: u32, n_facets: usize) -> usize {
+    capacity as usize + 1 + n_facets
+}
+
 /// Capacity after an overflow that needed `needed` words: a quarter more, for headroom.
 pub fn grown_capacity(needed: u32) -> u32 {
     (needed as u64 + needed as u64 / 4 + 64).min(u32::MAX as u64) as u32
@@ -224,8 +238,8 @@ pub fn run_step(
         }
         Step::Scan => scan::scan(levels, &mut ws.scan),
         Step::BinScatter => {
-            ws.cursor.clear();
-            ws.cursor.extend_from_slice(&ws.scan[..=n_cells]);
+            ws.cursor.resize(ws.cursor.len().max(n_cells + 1), 0);
+            bin_scatter::copy_starts(params, &ws.scan, &mut ws.cursor, &mut ws.entries);
             bin_scatter::bin_scatter(
                 params,
                 &prep.nodes,
@@ -248,7 +262,7 @@ pub fn run_step(
                 &prep.nodes,
                 &prep.slaves,
                 &ws.scan[..=n_cells],
-                &ws.status,
+                &ws.entries,
                 &mut ws.work,
                 &mut ws.best,
             );

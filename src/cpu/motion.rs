@@ -27,3 +27,16 @@ pub fn motion(
         }
     }
 }
+
+/// One "invocation" per motion node: its position becomes the budget's reference
+/// (WGSL: `set_reference`).
+pub fn set_reference(
+    params: &SearchParams,
+    nodes: &[[f32; 4]],
+    reference: &mut [[f32; 4]],
+    motion_nodes: &[u32],
+) {
+    for &id in &motion_nodes[..params.n_motion_nodes as usize] {
+        reference[id as usize] = nodes[id as usize];
+    }
+}

@@ -4,7 +4,6 @@ use super::common::{excluded, facet_node_count, node, share_node};
 use crate::geometry::{closest_on_quad, closest_on_segment, closest_on_triangle, Projection, V3};
 use crate::search::layout::{
     GpuHit, SearchParams, FLAG_SELF_CONTACT, HIT_BESIDE_FREE_EDGE, NO_FACET, STATUS_CROWDED,
-    STATUS_OVERFLOW,
 };
 
 /// Nearest point on a padded facet (WGSL: `project`).
@@ -28,19 +27,57 @@ pub const CANDIDATE_CHUNK: u32 = 1024;
 /// Words of a slave's `best` record: distance² bits, facet, crowded, candidates.
 pub const BEST_WORDS: usize = 4;
 
-/// The range of bin entries of the cell holding p; (0, 0) outside the grid (WGSL: `cell_range`).
-fn cell_range(params: &SearchParams, starts: &[u32], p: V3<f32>) -> (u32, u32) {
+/// The candidates of a node (WGSL: `Candidates`): the written bin entries of its cell, then
+/// the spill.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+struct NodeCandidates {
+    /// First bin entry of the cell.
+    start: u32,
+    /// Written entries of the cell (those within the entry capacity).
+    in_cell: u32,
+    /// `in_cell` plus the spill.
+    n: u32,
+}
+
+/// The candidates of a node at p; none outside the grid (WGSL: `candidates`).
+fn candidates(
+    params: &SearchParams,
+    starts: &[u32],
+    entries: &[u32],
+    p: V3<f32>,
+) -> NodeCandidates {
+    let none = NodeCandidates {
+        start: 0,
+        in_cell: 0,
+        n: 0,
+    };
     let g = [
-        p.x * params.inv_cell_size,
-        p.y * params.inv_cell_size,
-        p.z * params.inv_cell_size,
+        (p.x - params.grid_lo[0]) * params.inv_cell_size,
+        (p.y - params.grid_lo[1]) * params.inv_cell_size,
+        (p.z - params.grid_lo[2]) * params.inv_cell_size,
     ];
     let dims = [params.dims_x, params.dims_y, params.dims_z];
     if !(0..3).all(|a| g[a] >= 0.0 && g[a] < dims[a] as f32) {
-        return (0, 0);
+        return none;
     }
     let c = super::common::cell_index(params, [g[0] as u32, g[1] as u32, g[2] as u32]) as usize;
-    (starts[c], starts[c + 1])
+    let cap = params.entry_capacity;
+    let start = starts[c].min(cap);
+    let in_cell = starts[c + 1].min(cap) - start;
+    NodeCandidates {
+        start,
+        in_cell,
+        n: in_cell + entries[cap as usize],
+    }
+}
+
+/// Candidate k of a node's candidates: a facet id (WGSL: `candidate`).
+fn candidate(params: &SearchParams, entries: &[u32], c: NodeCandidates, k: u32) -> u32 {
+    if k < c.in_cell {
+        entries[(c.start + k) as usize]
+    } else {
+        entries[(params.entry_capacity + 1 + k - c.in_cell) as usize]
+    }
 }
 
 /// The slave of work item t: the largest i with work[i] ≤ t (WGSL: `work_slave`).
@@ -78,12 +115,11 @@ pub struct Candidates<'a> {
     pub adjacency: &'a [u32],
 }
 
-/// The bin entries work item t of slave i (at p) covers: at most `CANDIDATE_CHUNK` of its
-/// cell's (WGSL: `chunk_range`).
-fn chunk_range(c: &Candidates<'_>, work: &[u32], i: usize, t: u32, p: V3<f32>) -> (u32, u32) {
-    let (s, e) = cell_range(c.params, c.starts, p);
-    let k0 = s + (t - work[i]) * CANDIDATE_CHUNK;
-    (k0, e.min(k0 + CANDIDATE_CHUNK))
+/// The candidates work item t of slave i (candidates `nc`) covers: at most `CANDIDATE_CHUNK`
+/// (WGSL: `chunk_range`).
+fn chunk_range(work: &[u32], i: usize, t: u32, nc: NodeCandidates) -> (u32, u32) {
+    let k0 = (t - work[i]) * CANDIDATE_CHUNK;
+    (k0, nc.n.min(k0 + CANDIDATE_CHUNK))
 }
 
 /// The nearest facet (distance², id) of slave i among its work item t's candidates, within the
@@ -91,10 +127,11 @@ fn chunk_range(c: &Candidates<'_>, work: &[u32], i: usize, t: u32, p: V3<f32>) -
 fn chunk_best(c: &Candidates<'_>, work: &[u32], i: usize, t: u32) -> (f32, u32) {
     let slave = c.slaves[i];
     let p = node(c.nodes, slave);
-    let (k0, k1) = chunk_range(c, work, i, t, p);
+    let nc = candidates(c.params, c.starts, c.entries, p);
+    let (k0, k1) = chunk_range(work, i, t, nc);
     let mut b = (c.params.radius * c.params.radius, NO_FACET);
     for k in k0..k1 {
-        let f = c.entries[k as usize];
+        let f = candidate(c.params, c.entries, nc, k);
         if excluded(c.params, c.facets, c.adjacency, slave, c.facets[f as usize]) {
             continue;
         }
@@ -113,7 +150,7 @@ pub fn nearest_count(
     nodes: &[[f32; 4]],
     slaves: &[u32],
     starts: &[u32],
-    status: &[u32],
+    entries: &[u32],
     work: &mut [u32],
     best: &mut [u32],
 ) {
@@ -122,11 +159,7 @@ pub fn nearest_count(
         work[n] = 0;
     }
     for i in 0..n {
-        let mut count = 0;
-        if status[STATUS_OVERFLOW] == 0 {
-            let (s, e) = cell_range(params, starts, node(nodes, slaves[i]));
-            count = e - s;
-        }
+        let count = candidates(params, starts, entries, node(nodes, slaves[i])).n;
         work[i] = count.div_ceil(CANDIDATE_CHUNK);
         best[BEST_WORDS * i..BEST_WORDS * (i + 1)].copy_from_slice(&[
             (params.radius * params.radius).to_bits(),
@@ -190,9 +223,10 @@ pub fn nearest_crowded(c: &Candidates<'_>, work: &[u32], best: &mut [u32]) {
         }
         let slave = c.slaves[i];
         let p = node(c.nodes, slave);
-        let (k0, k1) = chunk_range(c, work, i, t, p);
+        let nc = candidates(c.params, c.starts, c.entries, p);
+        let (k0, k1) = chunk_range(work, i, t, nc);
         for k in k0..k1 {
-            let f = c.entries[k as usize];
+            let f = candidate(c.params, c.entries, nc, k);
             if f == best_f
                 || excluded(c.params, c.facets, c.adjacency, slave, c.facets[f as usize])
                 || share_node(c.facets[f as usize], c.facets[best_f as usize])
@@ -209,8 +243,8 @@ pub fn nearest_crowded(c: &Candidates<'_>, work: &[u32], best: &mut [u32]) {
     }
 }
 
-/// One "invocation" per slave node: the hit from the winning facet; writes `hits[i]`. Skipped
-/// when the binning overflowed (WGSL: `nearest_facet`).
+/// One "invocation" per slave node: the hit from the winning facet; writes `hits[i]`
+/// (WGSL: `nearest_facet`).
 pub fn nearest_facet(
     params: &SearchParams,
     nodes: &[[f32; 4]],
@@ -221,9 +255,6 @@ pub fn nearest_facet(
     adjacency: &[u32],
     best: &[u32],
 ) {
-    if status[STATUS_OVERFLOW] != 0 {
-        return;
-    }
     for i in 0..params.n_slaves as usize {
         let p = node(nodes, slaves[i]);
         let candidates = best[BEST_WORDS * i + 3];

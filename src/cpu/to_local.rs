@@ -1,9 +1,11 @@
 //! CPU mirror of `shaders/to_local.wgsl`: model-frame f32 positions into the local frame.
 
-use crate::search::layout::{FrameParams, SearchParams, STATUS_FRAME_STALE};
+use crate::search::layout::{
+    ordered_bits, FrameParams, SearchParams, PLAN_BOX, PLAN_NONFINITE, STATUS_FRAME_STALE,
+};
 
-/// One "invocation" per model node; keeps each node's mass (w) and flags a master node outside
-/// the grid's box.
+/// One "invocation" per model node; keeps each node's mass (w), flags a master node outside
+/// the grid's box, widens the plan's master box and names the lowest non-finite node.
 pub fn to_local(
     params: &SearchParams,
     frame: &FrameParams,
@@ -11,6 +13,7 @@ pub fn to_local(
     nodes: &mut [[f32; 4]],
     adjacency: &[u32],
     status: &mut [u32],
+    plan: &mut [u32],
 ) {
     let top = [
         params.dims_x as f32 * params.cell_size,
@@ -21,10 +24,23 @@ pub fn to_local(
         for a in 0..3 {
             nodes[i][a] = positions[i][a] - frame.origin[a];
         }
-        if adjacency[i] != adjacency[i + 1]
-            && !(0..3).all(|a| nodes[i][a] >= 0.0 && nodes[i][a] <= top[a])
-        {
-            status[STATUS_FRAME_STALE] = 1;
+        let x = nodes[i];
+        if x[..3].iter().any(|v| !v.is_finite()) {
+            plan[PLAN_NONFINITE] = plan[PLAN_NONFINITE].min(i as u32);
+            continue;
+        }
+        if adjacency[i] != adjacency[i + 1] {
+            let inside = (0..3).all(|a| {
+                let g = x[a] - params.grid_lo[a];
+                g >= 0.0 && g <= top[a]
+            });
+            if !inside {
+                status[STATUS_FRAME_STALE] = 1;
+            }
+            for a in 0..3 {
+                plan[PLAN_BOX + a] = plan[PLAN_BOX + a].min(ordered_bits(x[a]));
+                plan[PLAN_BOX + 3 + a] = plan[PLAN_BOX + 3 + a].max(ordered_bits(x[a]));
+            }
         }
     }
 }

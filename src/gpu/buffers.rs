@@ -90,6 +90,7 @@ pub fn read_back(
 ) -> Result<Vec<u8>> {
     if let Ok(mut t) = ctx.traffic.lock() {
         t.read_back_bytes += bytes;
+        t.waits += 1;
     }
     let device = &ctx.device;
     let slice = buffer.slice(..bytes);

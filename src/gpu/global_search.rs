@@ -16,6 +16,8 @@ use crate::search::{Bins, Prepared, Step, STEPS};
 use crate::status::{owned_runs, Owner};
 use wgpu::BufferUsages as U;
 
+mod resident;
+
 const STATUS_BYTES: u64 = (STATUS_WORDS * 4) as u64;
 
 /// The search's buffers that later passes of the same increment bind.
@@ -51,6 +53,7 @@ struct Pipelines {
     bin_count: wgpu::ComputePipeline,
     scan_blocks: wgpu::ComputePipeline,
     scan_add: wgpu::ComputePipeline,
+    copy_starts: wgpu::ComputePipeline,
     bin_scatter: wgpu::ComputePipeline,
     nearest_count: wgpu::ComputePipeline,
     nearest_args: wgpu::ComputePipeline,
@@ -71,6 +74,7 @@ struct BindGroups {
     bin_count: wgpu::BindGroup,
     scan_blocks: Vec<wgpu::BindGroup>,
     scan_add: Vec<wgpu::BindGroup>,
+    copy_starts: wgpu::BindGroup,
     bin_scatter: wgpu::BindGroup,
     nearest_count: wgpu::BindGroup,
     work_scan_blocks: Vec<wgpu::BindGroup>,
@@ -107,6 +111,8 @@ struct Buffers {
     best: GrowBuffer,
     /// The indirect dispatch of the nearest-facet work items (x, y, z).
     args: wgpu::Buffer,
+    /// The device-resident plan (`PLAN_*` words); to_local raises the master box into it.
+    plan: wgpu::Buffer,
 }
 
 /// The global search on one GPU device; its buffers grow as needed and are reused.
@@ -137,6 +143,11 @@ pub struct GpuSearch {
     anchored: bool,
     /// The pair's constant arrays still have to be uploaded (first run, or buffers replaced).
     static_dirty: bool,
+    /// Device-resident increments: their pipelines, plan slots and bind groups.
+    resident: Option<Box<resident::ResidentSearch>>,
+    /// Device-resident increments: the params the plan started from, and the preparation the
+    /// buffers were sized for.
+    resident_params: Option<(SearchParams, Prepared)>,
 }
 
 impl GpuSearch {
@@ -176,6 +187,7 @@ impl GpuSearch {
             bin_count: pipeline(&passes::BIN_COUNT),
             scan_blocks: pipeline(&passes::SCAN_BLOCKS),
             scan_add: pipeline(&passes::SCAN_ADD),
+            copy_starts: pipeline(&passes::COPY_STARTS),
             bin_scatter: pipeline(&passes::BIN_SCATTER),
             nearest_count: pipeline(&passes::NEAREST_COUNT),
             nearest_args: pipeline(&passes::NEAREST_ARGS),
@@ -246,6 +258,12 @@ impl GpuSearch {
                 usage: U::STORAGE | U::INDIRECT,
                 mapped_at_creation: false,
             }),
+            plan: device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some("device-resident plan"),
+                size: (crate::search::layout::PLAN_WORDS * 4) as u64,
+                usage: U::STORAGE | U::INDIRECT | U::COPY_SRC | U::COPY_DST,
+                mapped_at_creation: false,
+            }),
         };
         super::upload(
             &ctx,
@@ -270,6 +288,8 @@ impl GpuSearch {
             frame: ctx_frame,
             anchored: false,
             static_dirty: true,
+            resident: None,
+            resident_params: None,
         })
     }
 
@@ -330,7 +350,11 @@ impl GpuSearch {
         replaced |= b
             .cursor
             .ensure(d, l, (prep.params.n_cells as u64 + 1) * 4)?;
-        replaced |= b.entries.ensure(d, l, self.entry_capacity as u64 * 4)?;
+        replaced |= b.entries.ensure(
+            d,
+            l,
+            crate::cpu::entry_words(self.entry_capacity, prep.facets.len()) as u64 * 4,
+        )?;
         replaced |= b.hits.ensure(d, l, hits_bytes)?;
         replaced |= b.reference.ensure(d, l, (prep.n_nodes * 16) as u64)?;
         replaced |= b.anchors.ensure(
@@ -386,6 +410,7 @@ impl GpuSearch {
             Buf::Work => b.work.buffer.as_entire_binding(),
             Buf::Best => b.best.buffer.as_entire_binding(),
             Buf::Args => b.args.as_entire_binding(),
+            Buf::Plan => b.plan.as_entire_binding(),
             _ => return None,
         })
     }
@@ -426,6 +451,7 @@ impl GpuSearch {
             bin_count: group(&p.bin_count, &passes::BIN_COUNT)?,
             scan_blocks,
             scan_add,
+            copy_starts: group(&p.copy_starts, &passes::COPY_STARTS)?,
             bin_scatter: group(&p.bin_scatter, &passes::BIN_SCATTER)?,
             nearest_count: group(&p.nearest_count, &passes::NEAREST_COUNT)?,
             work_scan_blocks,
@@ -537,35 +563,7 @@ impl GpuSearch {
                 bytemuck::cast_slice(&prep.nodes),
             );
         }
-        // facets, slaves, adjacency and motion nodes are the pair's constants: uploaded once,
-        // and again only into buffers that were just replaced
-        if self.static_dirty {
-            super::upload(
-                &self.ctx,
-                &self.buffers.adjacency.buffer,
-                0,
-                bytemuck::cast_slice(&prep.adjacency),
-            );
-            super::upload(
-                &self.ctx,
-                &self.buffers.motion_nodes.buffer,
-                0,
-                bytemuck::cast_slice(&prep.motion_nodes),
-            );
-            super::upload(
-                &self.ctx,
-                &self.buffers.facets.buffer,
-                0,
-                bytemuck::cast_slice(&prep.facets),
-            );
-            super::upload(
-                &self.ctx,
-                &self.buffers.slaves.buffer,
-                0,
-                bytemuck::cast_slice(&prep.slaves),
-            );
-            self.static_dirty = false;
-        }
+        self.upload_static(prep);
         for i in 0..levels.levels.len() {
             let sp = levels.params(i);
             super::upload(
@@ -666,12 +664,56 @@ impl GpuSearch {
             if self.buffers.entries.ensure(
                 &self.ctx.device,
                 &self.ctx.limits,
-                self.entry_capacity as u64 * 4,
+                crate::cpu::entry_words(self.entry_capacity, prep.facets.len()) as u64 * 4,
             )? {
                 self.bind_groups = None;
             }
             regrowths += 1;
         }
+    }
+
+    /// Uploads the pair's constants (facets, slaves, adjacency, motion nodes) once, and again
+    /// only into buffers that were just replaced.
+    fn upload_static(&mut self, prep: &Prepared) {
+        if !self.static_dirty {
+            return;
+        }
+        let b = &self.buffers;
+        super::upload(
+            &self.ctx,
+            &b.adjacency.buffer,
+            0,
+            bytemuck::cast_slice(&prep.adjacency),
+        );
+        super::upload(
+            &self.ctx,
+            &b.motion_nodes.buffer,
+            0,
+            bytemuck::cast_slice(&prep.motion_nodes),
+        );
+        super::upload(
+            &self.ctx,
+            &b.facets.buffer,
+            0,
+            bytemuck::cast_slice(&prep.facets),
+        );
+        super::upload(
+            &self.ctx,
+            &b.slaves.buffer,
+            0,
+            bytemuck::cast_slice(&prep.slaves),
+        );
+        self.static_dirty = false;
+    }
+
+    /// The search buffers later passes bind, and the generation of the bind groups on them.
+    pub(crate) fn shared_buffers(&self) -> (SharedBuffers<'_>, u64) {
+        (self.shared(), self.generation)
+    }
+
+    /// Workgroups per dispatch dimension before folding.
+    pub(crate) fn max_workgroups_per_dim(&self) -> u32 {
+        self.max_workgroups_per_dim
     }
 
     /// The search buffers later passes bind.
@@ -846,25 +888,24 @@ impl GpuSearch {
                     scan_work(p, levels, &bg.scan_blocks, &bg.scan_add, &mut work);
                     dispatch(&mut enc, "scan", &work);
                 }
-                Step::BinScatter => {
-                    enc.copy_buffer_to_buffer(
-                        &b.scan.buffer,
-                        0,
-                        &b.cursor.buffer,
-                        0,
-                        (params.n_cells as u64 + 1) * 4,
-                    );
-                    dispatch(
-                        &mut enc,
-                        "bin_scatter",
-                        &[(
+                Step::BinScatter => dispatch(
+                    &mut enc,
+                    "bin_scatter",
+                    &[
+                        (
+                            &p.copy_starts,
+                            &bg.copy_starts,
+                            params.n_cells + 1,
+                            ITEM_WORKGROUP,
+                        ),
+                        (
                             &p.bin_scatter,
                             &bg.bin_scatter,
                             params.n_facets,
                             ITEM_WORKGROUP,
-                        )],
-                    );
-                }
+                        ),
+                    ],
+                ),
                 Step::NearestFacet => {
                     let work = work_levels(prep);
                     let mut seq = vec![(
@@ -883,6 +924,7 @@ impl GpuSearch {
                     if params.flags & crate::search::layout::FLAG_SELF_CONTACT != 0 {
                         chunks.push((&p.nearest_crowded, &bg.nearest_crowded));
                     }
+                    let chunks: Vec<_> = chunks.into_iter().map(|(p, g)| (p, g, 0)).collect();
                     super::run_indirect_pass(
                         &self.ctx,
                         &mut enc,

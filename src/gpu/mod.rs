@@ -3,10 +3,12 @@
 
 pub(crate) mod buffers;
 mod global_search;
+mod increment;
 mod penalty;
 pub mod shaders;
 
 pub use global_search::{AfterSearch, GpuSearch, SharedBuffers};
+pub(crate) use increment::GpuIncrement;
 pub use penalty::GpuPenalty;
 
 /// One dispatch of a compute pass: pipeline, its bind group, items, items per workgroup.
@@ -38,13 +40,17 @@ pub(crate) fn run_pass(
     }
 }
 
+/// One indirect dispatch: pipeline, bind group, and the byte offset of its (x, y, z) arguments.
+pub(crate) type IndirectWork<'a> = (&'a wgpu::ComputePipeline, &'a wgpu::BindGroup, u64);
+
 /// Records one compute pass running each (pipeline, bind group) in order with the workgroup
-/// counts the device wrote into `args` (x, y, z: an indirect dispatch, decided on the device).
+/// counts the device wrote into `args` at each one's offset (x, y, z: an indirect dispatch,
+/// decided on the device).
 pub(crate) fn run_indirect_pass(
     ctx: &crate::device::GpuContext,
     enc: &mut wgpu::CommandEncoder,
     label: &str,
-    work: &[(&wgpu::ComputePipeline, &wgpu::BindGroup)],
+    work: &[IndirectWork<'_>],
     args: &wgpu::Buffer,
 ) {
     if let Ok(mut t) = ctx.traffic.lock() {
@@ -52,10 +58,10 @@ pub(crate) fn run_indirect_pass(
     }
     let mut profiler = ctx.profiler.lock().ok();
     let mut pass = begin_pass(&mut profiler, enc, label);
-    for &(pipe, group) in work {
+    for &(pipe, group, offset) in work {
         pass.set_pipeline(pipe);
         pass.set_bind_group(0, group, &[]);
-        pass.dispatch_workgroups_indirect(args, 0);
+        pass.dispatch_workgroups_indirect(args, offset);
     }
 }
 
@@ -100,6 +106,9 @@ pub(crate) fn submit(ctx: &crate::device::GpuContext, mut enc: wgpu::CommandEnco
         Some(p) if !p.labels.is_empty() => {
             p.resolve(&mut enc);
             ctx.queue.submit([enc.finish()]);
+            if let Ok(mut t) = ctx.traffic.lock() {
+                t.waits += 1;
+            }
             let times = p.read(&ctx.device, ctx.queue.get_timestamp_period());
             if let Ok(mut t) = ctx.traffic.lock() {
                 for (label, ns) in times {

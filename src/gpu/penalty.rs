@@ -18,6 +18,7 @@ struct Pipelines {
     penalty: wgpu::ComputePipeline,
     scatter: wgpu::ComputePipeline,
     gather: wgpu::ComputePipeline,
+    add_forces: wgpu::ComputePipeline,
 }
 
 struct Groups {
@@ -49,10 +50,24 @@ pub struct GpuPenalty {
     n_slaves: u32,
     n_pair_nodes: u32,
     read_outputs: bool,
+    /// Device-resident increments: the bind groups on the caller's buffers, keyed by the
+    /// search's generation and the (velocities, forces, rows) buffers.
+    resident: Option<ResidentGroups>,
+    /// The parameters last uploaded for device-resident increments.
+    resident_params: Option<PenaltyParams>,
     /// Force per pair node after the last increment.
     pub forces_out: Vec<[f32; 4]>,
     /// Per-slave results after the last increment (when outputs were asked for).
     pub outputs: Vec<ContactOut>,
+}
+
+/// The bind groups of a pair's device-resident increments.
+struct ResidentGroups {
+    key: (u64, wgpu::Buffer, wgpu::Buffer, wgpu::Buffer),
+    groups: Groups,
+    add_forces: wgpu::BindGroup,
+    /// The search's status buffer and its reset image.
+    status: (wgpu::Buffer, wgpu::Buffer),
 }
 
 fn storage(
@@ -94,6 +109,7 @@ impl GpuPenalty {
             penalty: super::pipeline(d, &penalty, &passes::PENALTY, &friction),
             scatter: super::pipeline(d, &gather, &passes::SCATTER_FORCES, &[]),
             gather: super::pipeline(d, &gather, &passes::GATHER, &[]),
+            add_forces: super::pipeline(d, &gather, &passes::ADD_FORCES, &[]),
         };
         if let Some(e) = pollster::block_on(scope.pop()) {
             return Err(Error::Gpu {
@@ -197,6 +213,8 @@ impl GpuPenalty {
             n_slaves,
             n_pair_nodes,
             read_outputs: false,
+            resident: None,
+            resident_params: None,
             forces_out: Vec::new(),
             outputs: Vec::new(),
             ctx,
@@ -236,7 +254,128 @@ impl GpuPenalty {
         Ok(())
     }
 
+    /// The device this pair runs on.
+    pub(crate) fn context(&self) -> Arc<GpuContext> {
+        self.ctx.clone()
+    }
+
+    /// The pair nodes (node, slave index, adjacency start, end), for the increment's statistics.
+    pub(crate) fn pair_nodes_buffer(&self) -> &wgpu::Buffer {
+        &self.pair_nodes
+    }
+
+    /// Encodes the penalty part of one device-resident increment after its search (`search`,
+    /// whose bind groups are at `generation`): normals, penalty, the fixed-point gather, and each
+    /// pair node's force added into the caller's `forces` (`vec4<f32>` per model node, xyz) and
+    /// its bound row into `rows`. Velocities come from the caller's `velocities` (`vec4<f32>` per
+    /// model node, the half step before). `params` are uploaded only when they change.
+    #[allow(clippy::too_many_arguments)]
+    pub(crate) fn encode_resident(
+        &mut self,
+        enc: &mut wgpu::CommandEncoder,
+        search: &SharedBuffers<'_>,
+        generation: u64,
+        params: &PenaltyParams,
+        velocities: &wgpu::Buffer,
+        forces: &wgpu::Buffer,
+        rows: &wgpu::Buffer,
+        max_dim: u32,
+    ) -> Result<()> {
+        if self.resident_params.as_ref() != Some(params) {
+            super::upload(&self.ctx, &self.params, 0, bytemuck::bytes_of(params));
+            self.resident_params = Some(*params);
+        }
+        let key = (generation, velocities.clone(), forces.clone(), rows.clone());
+        if self.resident.as_ref().is_none_or(|r| r.key != key) {
+            let scope = self
+                .ctx
+                .device
+                .push_error_scope(wgpu::ErrorFilter::Validation);
+            let made = self.build_resident_groups(search, velocities, forces, rows);
+            if let Some(e) = pollster::block_on(scope.pop()) {
+                return Err(Error::Gpu {
+                    during: "binding the caller's buffers".into(),
+                    message: e.to_string(),
+                });
+            }
+            let (groups, add_forces) = made?;
+            self.resident = Some(ResidentGroups {
+                key,
+                groups,
+                add_forces,
+                status: (search.status.clone(), search.status_reset.clone()),
+            });
+        }
+        let r = self.resident.as_ref().expect("built");
+        let (g, p) = (&r.groups, &self.pipelines);
+        super::global_search::reset_status(
+            enc,
+            &r.status.1,
+            &r.status.0,
+            crate::status::Owner::Penalty,
+        );
+        let run = |enc: &mut wgpu::CommandEncoder, label: &str, work: &[super::Work<'_>]| {
+            super::run_pass(&self.ctx, enc, label, work, max_dim)
+        };
+        let iw = ITEM_WORKGROUP;
+        run(
+            enc,
+            "nodal_normals + penalty",
+            &[
+                (&p.nodal_normals, &g.nodal_normals, self.n_pair_nodes, iw),
+                (&p.penalty, &g.penalty, self.n_slaves, iw),
+            ],
+        );
+        enc.clear_buffer(&self.acc, 0, None);
+        run(
+            enc,
+            "scatter_forces + gather + add_forces",
+            &[
+                (&p.scatter, &g.scatter, self.n_slaves, iw),
+                (&p.gather, &g.gather, self.n_pair_nodes, iw),
+                (&p.add_forces, &r.add_forces, self.n_pair_nodes, iw),
+            ],
+        );
+        Ok(())
+    }
+
+    fn build_resident_groups(
+        &self,
+        s: &SharedBuffers<'_>,
+        velocities: &wgpu::Buffer,
+        forces: &wgpu::Buffer,
+        rows: &wgpu::Buffer,
+    ) -> Result<(Groups, wgpu::BindGroup)> {
+        let groups = self.groups_with(s, Some(velocities))?;
+        let add_forces = super::bind(
+            &self.ctx.device,
+            &self.pipelines.add_forces,
+            &passes::ADD_FORCES,
+            |buf| {
+                Some(match buf {
+                    Buf::PenaltyParams => self.params.as_entire_binding(),
+                    Buf::PairNodes => self.pair_nodes.as_entire_binding(),
+                    Buf::Forces => self.forces.as_entire_binding(),
+                    Buf::HostForces => forces.as_entire_binding(),
+                    Buf::Rows => rows.as_entire_binding(),
+                    _ => return None,
+                })
+            },
+        )?;
+        Ok((groups, add_forces))
+    }
+
     fn build_groups(&self, s: &SharedBuffers<'_>) -> Result<Groups> {
+        self.groups_with(s, None)
+    }
+
+    /// The bind groups of the four passes; velocities from `velocities` when given (the
+    /// caller's buffer), else from this pair's own upload buffer.
+    fn groups_with(
+        &self,
+        s: &SharedBuffers<'_>,
+        velocities: Option<&wgpu::Buffer>,
+    ) -> Result<Groups> {
         let d = &self.ctx.device;
         let p = &self.pipelines;
         // the buffer of each role: the pair's own, or the search's shared ones
@@ -247,7 +386,7 @@ impl GpuPenalty {
                 Buf::Facets => s.facets.as_entire_binding(),
                 Buf::Hits => s.hits.as_entire_binding(),
                 Buf::Status => s.status.as_entire_binding(),
-                Buf::Velocities => self.vel.buffer.as_entire_binding(),
+                Buf::Velocities => velocities.unwrap_or(&self.vel.buffer).as_entire_binding(),
                 Buf::Normals => self.normals.buffer.as_entire_binding(),
                 Buf::PairNodes => self.pair_nodes.as_entire_binding(),
                 Buf::PairAdjacency => self.adjacency.as_entire_binding(),

@@ -24,7 +24,7 @@ pub enum Prelude {
 
 /// (file stem, source, prelude) of every kernel file.
 #[rustfmt::skip]
-pub const KERNELS: [(&str, &str, Prelude); 11] = [
+pub const KERNELS: [(&str, &str, Prelude); 13] = [
     ("bin_count", include_str!("../../shaders/bin_count.wgsl"), Prelude::None),
     ("scan", include_str!("../../shaders/scan.wgsl"), Prelude::None),
     ("bin_scatter", include_str!("../../shaders/bin_scatter.wgsl"), Prelude::None),
@@ -36,6 +36,8 @@ pub const KERNELS: [(&str, &str, Prelude); 11] = [
     ("nodal_normals", include_str!("../../shaders/nodal_normals.wgsl"), Prelude::Penalty),
     ("penalty", include_str!("../../shaders/penalty.wgsl"), Prelude::Penalty),
     ("gather", include_str!("../../shaders/gather.wgsl"), Prelude::Penalty),
+    ("schedule", include_str!("../../shaders/schedule.wgsl"), Prelude::None),
+    ("stats", include_str!("../../shaders/stats.wgsl"), Prelude::None),
 ];
 
 /// The full source of kernel file `stem` (its preludes prepended), or `None` if unknown.

@@ -55,8 +55,8 @@ impl Grid {
             origin[a] = ((lo[a] - radius) / q).floor() * q;
             extent[a] = hi[a] + radius - origin[a];
         }
-        let budget = (8 * n_facets as u64).clamp(4096, MAX_CELLS) as f64;
-        let mut h = (0.5 * (facet_extent + 2.0 * radius)).max(facet_extent);
+        let budget = Self::cell_budget(n_facets) as f64;
+        let mut h = Self::base_cell(radius, facet_extent);
         let cells = |h: f64| -> f64 {
             (0..axes)
                 .map(|a| (extent[a] / h).floor() + 1.0)
@@ -78,6 +78,18 @@ impl Grid {
             cell_size: h,
             dims,
         })
+    }
+
+    /// The most cells a grid over `n_facets` facets may have: `max(8·n_facets, 4096)`, at most
+    /// [`MAX_CELLS`].
+    pub fn cell_budget(n_facets: usize) -> u32 {
+        (8 * n_facets as u64).clamp(4096, MAX_CELLS) as u32
+    }
+
+    /// The cell size before the cell budget is applied: half of `facet_extent + 2·radius`, but
+    /// at least `facet_extent`.
+    pub fn base_cell(radius: f64, facet_extent: f64) -> f64 {
+        (0.5 * (facet_extent + 2.0 * radius)).max(facet_extent)
     }
 
     /// Number of cells.

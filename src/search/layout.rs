@@ -50,6 +50,9 @@ pub const STATUS_FORCE_SCALE: usize = 16;
 /// Status word: bits of the largest bound share of a penalty spring in contact this increment:
 /// the gather's fixed-point row scale (WGSL: `STATUS_ROW_SCALE`).
 pub const STATUS_ROW_SCALE: usize = 17;
+/// Status word: facets whose bin entries did not fit in the entry buffer; they are listed after
+/// it and every slave examines them, so the search stays exact (WGSL: `STATUS_SPILLED`).
+pub const STATUS_SPILLED: usize = 18;
 /// Status word: bits of the largest overclosure (−gap ≥ 0, a non-negative f32) of the penalty
 /// springs carrying force this increment (WGSL: `STATUS_MAX_OVERCLOSURE`).
 pub const STATUS_MAX_OVERCLOSURE: usize = 14;
@@ -99,8 +102,18 @@ pub struct SearchParams {
     pub budget: f32,
     /// Nodes whose motion is measured (slaves and master nodes).
     pub n_motion_nodes: u32,
+    /// Lower corner of cell (0, 0, 0) in the local frame (0 for a grid fitted on the host,
+    /// whose origin is the frame's).
+    pub grid_lo: [f32; 3],
+    /// The cell size a grid fitted on the device starts from (the host fit's, from the mean
+    /// facet extent and the radius), model length units.
+    pub base_cell: f32,
+    /// Cells the search's buffers hold: a grid fitted on the device has at most this many.
+    pub cell_capacity: u32,
+    /// Padding.
+    pub _pad: [u32; 3],
 }
-const _: () = assert!(std::mem::size_of::<SearchParams>() == 64);
+const _: () = assert!(std::mem::size_of::<SearchParams>() == 96);
 
 /// Flag: the local search walks the facets around every node of the tracked node's facets
 /// (the more expensive, more robust alternative) (WGSL: `FLAG_WIDE_LOCAL`).
@@ -108,6 +121,10 @@ pub const FLAG_WIDE_LOCAL: u32 = 1;
 /// Flag: self-contact, a slave's own facets and their neighbours are skipped
 /// (WGSL: `FLAG_SELF_CONTACT`).
 pub const FLAG_SELF_CONTACT: u32 = 2;
+/// Flag: a device-resident increment; facets whose bin entries do not fit spill (every slave
+/// then examines them) and the increment goes on, instead of raising `STATUS_OVERFLOW` for the
+/// host to grow the buffer and run again (WGSL: `FLAG_RESIDENT`).
+pub const FLAG_RESIDENT: u32 = 4;
 /// Walk iterations of the local search before it gives up (WGSL default).
 pub const MAX_LOCAL_ITERATIONS: u32 = 16;
 
@@ -261,3 +278,119 @@ pub fn fold_dispatch(items: u32, per_group: u32, max_per_dim: u32) -> (u32, u32)
         (groups.div_ceil(y), y)
     }
 }
+
+// The plan of a device-resident increment: one u32 buffer per search (WGSL twins: PLAN_* in
+// common.wgsl; the passes: schedule.wgsl, to_local.wgsl, stats.wgsl).
+/// Plan word: increments since the last global search.
+pub const PLAN_SINCE_GLOBAL: usize = 0;
+/// Plan word: 1 once a global search has run.
+pub const PLAN_SEARCHED: usize = 1;
+/// Plan word: self-contact slaves crowded at the last global search.
+pub const PLAN_CROWDED: usize = 2;
+/// Plan word: the host asks for a global search in the next increment.
+pub const PLAN_FORCE: usize = 3;
+/// Plan word: this increment searches globally.
+pub const PLAN_GLOBAL: usize = 4;
+/// Plan word: why (`TRIGGER_*`).
+pub const PLAN_TRIGGER: usize = 5;
+/// Plan word: the schedule's interval.
+pub const PLAN_INTERVAL: usize = 6;
+/// Plan word: dispatch slots in use.
+pub const PLAN_N_SLOTS: usize = 7;
+/// Plan word: the lowest node with a non-finite coordinate this increment (`u32::MAX`: none).
+pub const PLAN_NONFINITE: usize = 8;
+/// Plan word: grids that could not be fitted (no finite master node; the last grid kept).
+pub const PLAN_FIT_FAILED: usize = 9;
+/// Plan words: order-preserving bits of the master box (min xyz, max xyz).
+pub const PLAN_BOX: usize = 10;
+/// Plan words: the `SearchParams` of the increment (24 words), copied into the uniform.
+pub const PLAN_PARAMS: usize = 16;
+/// Plan words: the dispatch slots, `PLAN_SLOT_WORDS` each: live (x, y, z, 0), full (x, y, z, kind).
+pub const PLAN_SLOTS: usize = 40;
+/// Words per dispatch slot.
+pub const PLAN_SLOT_WORDS: usize = 8;
+/// Most dispatch slots of a plan (WGSL: `MAX_PLAN_SLOTS` in schedule.wgsl).
+pub const MAX_PLAN_SLOTS: usize = 16;
+/// Words of a plan.
+pub const PLAN_WORDS: usize = PLAN_SLOTS + MAX_PLAN_SLOTS * PLAN_SLOT_WORDS;
+/// Slot kind: dispatched in global increments.
+pub const SLOT_GLOBAL: u32 = 1;
+/// Slot kind: dispatched in local increments.
+pub const SLOT_LOCAL: u32 = 2;
+/// Trigger code: the local search.
+pub const TRIGGER_LOCAL: u32 = 0;
+/// Trigger code: the first global search.
+pub const TRIGGER_FIRST: u32 = 1;
+/// Trigger code: the interval came round.
+pub const TRIGGER_INTERVAL: u32 = 2;
+/// Trigger code: the motion budget was used up.
+pub const TRIGGER_BUDGET: u32 = 3;
+/// Trigger code: self-contact was crowded.
+pub const TRIGGER_CROWDED: u32 = 4;
+/// Trigger code: the host asked for it.
+pub const TRIGGER_REQUESTED: u32 = 5;
+
+/// f32 bits as a u32 whose unsigned order is the floats' order (WGSL: `ordered_bits`).
+pub fn ordered_bits(x: f32) -> u32 {
+    let b = x.to_bits();
+    if b & 0x8000_0000 != 0 {
+        !b
+    } else {
+        b | 0x8000_0000
+    }
+}
+
+/// The inverse of [`ordered_bits`] (WGSL: `from_ordered_bits`).
+pub fn from_ordered_bits(u: u32) -> f32 {
+    f32::from_bits(if u & 0x8000_0000 != 0 {
+        u & 0x7fff_ffff
+    } else {
+        !u
+    })
+}
+
+/// What a device-resident increment leaves in its statistics buffer (64 bytes, WGSL twin: the
+/// `STAT_*` words of stats.wgsl). A host integrator running on the device can bind the buffer
+/// and read `stable_dt` there; the host reads it a few increments late without waiting.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, PartialEq, Pod, Zeroable)]
+pub struct IncrementStats {
+    /// The largest increment the penalty springs allow (s), as `StepReport::stable_dt`;
+    /// `NO_LIMIT` (f32::MAX) when no spring limits it.
+    pub stable_dt: f32,
+    /// The approach limit (s), as `StepReport::approach_dt`; `NO_LIMIT` when none.
+    pub approach_dt: f32,
+    /// The largest overclosure of a spring carrying force (model length units, ≥ 0).
+    pub max_overclosure: f32,
+    /// The node-wise bound on the springs' ω² (1/s²).
+    pub omega2: f32,
+    /// Slave nodes in contact.
+    pub active: u32,
+    /// Of which slipping.
+    pub slipping: u32,
+    /// Searches that ran globally this increment.
+    pub global_searches: u32,
+    /// Of which because the motion budget was used up.
+    pub budget_searches: u32,
+    /// Facets spilled from full bins (the search stayed exact; the entry buffer grows at the
+    /// next increment the host encodes after reading this).
+    pub spilled: u32,
+    /// The most bin entries a search needed.
+    pub needed_entries: u32,
+    /// The lowest model node with a NaN or infinite coordinate, `u32::MAX` when none.
+    pub nonfinite_node: u32,
+    /// Local walks stopped at the iteration cap.
+    pub local_capped: u32,
+    /// The largest motion since a global search (model length units).
+    pub motion: f32,
+    /// Grids that could not be fitted, since the start (the last grid was kept).
+    pub fit_failed: u32,
+    /// The largest contact damping ratio of the penalty pairs (constant).
+    pub damping: f32,
+    /// Increments completed since the start (this one included).
+    pub increment: u32,
+}
+const _: () = assert!(std::mem::size_of::<IncrementStats>() == 64);
+
+/// Words of [`IncrementStats`] reset at the start of every increment (the last two persist).
+pub const STATS_RESET_WORDS: usize = 14;

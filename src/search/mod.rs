@@ -746,6 +746,43 @@ impl GlobalSearch {
         )
     }
 
+    /// Readies this search for device-resident increments, at the model's positions
+    /// `positions` (they fix the frame and size the bin entries; the grid is fitted on the
+    /// device at every global search, within `Grid::cell_budget` cells). Small sliding anchors
+    /// its slaves here, by a global search at `positions`, as its first increment would.
+    pub(crate) fn make_resident(&mut self, positions: &[[f64; 3]]) -> Result<()> {
+        let anchored = self.sliding != crate::model::Sliding::Finite;
+        if anchored && self.anchors.is_none() {
+            self.step(positions)?;
+        }
+        let mut prep = self.prepare(positions)?;
+        prep.params.cell_capacity = Grid::cell_budget(self.facets.len());
+        let interval = self.schedule.interval;
+        match &mut self.executor {
+            Executor::Gpu(g) => g.make_resident(&prep, interval, anchored),
+            Executor::Cpu(c) => {
+                c.make_resident(&prep, interval, anchored);
+                Ok(())
+            }
+        }
+    }
+
+    /// The GPU executor, if this search runs on one.
+    pub(crate) fn gpu_mut(&mut self) -> Option<&mut GpuSearch> {
+        match &mut self.executor {
+            Executor::Gpu(g) => Some(g),
+            Executor::Cpu(_) => None,
+        }
+    }
+
+    /// The CPU executor, if this search runs on the CPU path.
+    pub(crate) fn cpu_mut(&mut self) -> Option<&mut CpuSearch> {
+        match &mut self.executor {
+            Executor::Gpu(_) => None,
+            Executor::Cpu(c) => Some(c),
+        }
+    }
+
     /// The slave nodes searched, in order.
     pub fn slaves(&self) -> &[u32] {
         &self.slave_ids
@@ -893,6 +930,10 @@ impl GlobalSearch {
             flags: self.flags(),
             budget: (self.schedule.budget * self.radius) as f32,
             n_motion_nodes: self.motion_nodes.len() as u32,
+            grid_lo: [0.0; 3],
+            base_cell: Grid::base_cell(self.radius, extent_sum / n_facets as f64) as f32,
+            cell_capacity: grid.n_cells(),
+            _pad: [0; 3],
         };
         let margin = params.bin_margin as f64;
         let estimated_entries = boxes

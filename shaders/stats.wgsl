@@ -1,0 +1,86 @@
+// stats.wgsl — the statistics of a device-resident increment, reduced on the device into one
+// buffer the host's own integrator can read there (and the host a few increments late).
+// CPU mirror: src/cpu/stats.rs.
+//
+// Bindings: 0 status (a pair's status words), 1 plan (its search's plan), 2 stats (the
+//           increment's words, STAT_* below; Rust twin: IncrementStats), 3 pair_nodes (the pair's
+//           nodes), 4 rows (f32 per model node: the node-wise bound's rows, summed over pairs).
+// Dispatch: pair_stats one invocation per pair after its passes; bound_max one per pair node of
+//           each pair after every pair's add_forces; finish_stats one invocation, last.
+// Invariants: increments are positive f32 and overclosures and rows non-negative f32, so their
+//             minima and maxima are taken on the bits; every other word is an integer sum, so
+//             the words do not depend on the order of the invocations. pair_stats also resets
+//             the plan's per-increment words (the box, the first non-finite node) for the next
+//             increment and keeps the crowding of a global search for the next schedule.
+
+@group(0) @binding(0) var<storage, read> status: array<u32>;
+@group(0) @binding(1) var<storage, read_write> plan: array<u32>;
+@group(0) @binding(2) var<storage, read_write> stats: array<atomic<u32>>;
+@group(0) @binding(3) var<storage, read> pair_nodes: array<vec4<u32>>;
+@group(0) @binding(4) var<storage, read> rows: array<f32>;
+
+// Words of the statistics (Rust twin: IncrementStats, 64 bytes).
+const STAT_STABLE_DT: u32 = 0u;      // f32: the largest stable increment the penalty springs allow
+const STAT_APPROACH_DT: u32 = 1u;    // f32: the approach limit
+const STAT_MAX_OVERCLOSURE: u32 = 2u; // f32: the largest overclosure of a spring in contact
+const STAT_OMEGA2: u32 = 3u;         // f32: the node-wise bound on the springs' ω²
+const STAT_ACTIVE: u32 = 4u;         // slaves in contact
+const STAT_SLIPPING: u32 = 5u;       // of which slipping
+const STAT_GLOBAL: u32 = 6u;         // searches that ran globally
+const STAT_BUDGET: u32 = 7u;         // of which because the motion budget was used up
+const STAT_SPILLED: u32 = 8u;        // facets spilled from the bins (all pairs)
+const STAT_NEEDED: u32 = 9u;         // the most bin entries a search needed
+const STAT_NONFINITE: u32 = 10u;     // the lowest node with a non-finite coordinate, NO_NODE if none
+const STAT_LOCAL_CAPPED: u32 = 11u;  // local walks stopped at the iteration cap
+const STAT_MOTION: u32 = 12u;        // f32: the largest motion since a global search
+const STAT_FIT_FAILED: u32 = 13u;    // grids that could not be fitted (since the start)
+const STAT_DAMPING: u32 = 14u;       // f32: the largest contact damping ratio (constant)
+const STAT_INCREMENT: u32 = 15u;     // increments completed (since the start)
+
+@compute @workgroup_size(1)
+fn pair_stats() {
+    atomicMin(&stats[STAT_STABLE_DT], status[STATUS_DT_STABLE]);
+    atomicMin(&stats[STAT_APPROACH_DT], status[STATUS_DT_APPROACH]);
+    atomicMax(&stats[STAT_MAX_OVERCLOSURE], status[STATUS_MAX_OVERCLOSURE]);
+    atomicAdd(&stats[STAT_ACTIVE], status[STATUS_ACTIVE]);
+    atomicAdd(&stats[STAT_SLIPPING], status[STATUS_SLIPPING]);
+    atomicAdd(&stats[STAT_SPILLED], status[STATUS_SPILLED]);
+    atomicMax(&stats[STAT_NEEDED], status[STATUS_NEEDED_ENTRIES]);
+    atomicAdd(&stats[STAT_LOCAL_CAPPED], status[STATUS_LOCAL_CAPPED]);
+    atomicMax(&stats[STAT_MOTION], status[STATUS_MOTION]);
+    atomicMin(&stats[STAT_NONFINITE], plan[PLAN_NONFINITE]);
+    atomicMax(&stats[STAT_FIT_FAILED], plan[PLAN_FIT_FAILED]);
+    if (plan[PLAN_GLOBAL] != 0u) {
+        atomicAdd(&stats[STAT_GLOBAL], 1u);
+        if (plan[PLAN_TRIGGER] == TRIGGER_BUDGET) { atomicAdd(&stats[STAT_BUDGET], 1u); }
+        plan[PLAN_CROWDED] = status[STATUS_CROWDED];
+    }
+    plan[PLAN_GLOBAL] = 0u;
+    plan[PLAN_NONFINITE] = NO_NODE;
+    for (var a = 0u; a < 3u; a++) {
+        plan[PLAN_BOX + a] = 0xffffffffu;
+        plan[PLAN_BOX + 3u + a] = 0u;
+    }
+}
+
+@compute @workgroup_size(64)
+fn bound_max(@builtin(workgroup_id) wg: vec3<u32>,
+             @builtin(num_workgroups) nwg: vec3<u32>,
+             @builtin(local_invocation_index) li: u32) {
+    let i = folded_id(wg, nwg, li, ITEM_WORKGROUP);
+    if (i >= arrayLength(&pair_nodes)) { return; }
+    let node = pair_nodes[i].x;
+    if (node == NO_NODE) { return; }
+    atomicMax(&stats[STAT_OMEGA2], bitcast<u32>(max(rows[node], 0.0)));
+}
+
+@compute @workgroup_size(1)
+fn finish_stats() {
+    let w2 = bitcast<f32>(atomicLoad(&stats[STAT_OMEGA2]));
+    if (w2 > 0.0) {
+        let z = bitcast<f32>(atomicLoad(&stats[STAT_DAMPING]));
+        let dt = 2.0 / sqrt(w2) * (sqrt(1.0 + z * z) - z);
+        atomicMin(&stats[STAT_STABLE_DT], bitcast<u32>(dt));
+    }
+    atomicAdd(&stats[STAT_INCREMENT], 1u);
+}

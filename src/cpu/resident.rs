@@ -1,0 +1,194 @@
+//! The search part of a device-resident increment on the CPU path: the same plan as the GPU's
+//! (`gpu::global_search::resident`), pass for pass through the mirrors, on f32 host arrays laid
+//! out as the caller's device buffers would be.
+
+use super::{anchor, bin_count, local_search, motion, run_step, schedule, to_local, CpuSearch};
+use crate::error::{Error, Result};
+use crate::search::layout::*;
+use crate::search::{Prepared, Step};
+
+/// What a CPU search keeps for its device-resident increments.
+#[derive(Clone, Debug)]
+pub(crate) struct CpuResident {
+    /// The preparation at the model's positions: constants, nodes (updated in place) and masses.
+    prep: Prepared,
+    frame: FrameParams,
+    /// The plan words (`PLAN_*`), as the GPU's plan buffer holds them.
+    plan: Vec<u32>,
+    /// The nearest-facet chunk dispatch (x, y, z).
+    args: [u32; 3],
+    anchored: bool,
+}
+
+impl CpuSearch {
+    /// Readies this search for device-resident increments (see `GpuSearch::make_resident`).
+    pub(crate) fn make_resident(&mut self, prep: &Prepared, interval: u32, anchored: bool) {
+        let mut params = prep.params;
+        if self.presize {
+            self.entry_capacity = super::presized_capacity(prep, self.entry_capacity);
+        }
+        params.entry_capacity = self.entry_capacity;
+        params.flags |= FLAG_RESIDENT;
+        let mut plan = vec![0u32; PLAN_WORDS];
+        plan[PLAN_INTERVAL] = interval;
+        plan[PLAN_NONFINITE] = u32::MAX;
+        plan[PLAN_BOX..PLAN_BOX + 3].fill(u32::MAX);
+        plan[PLAN_PARAMS..PLAN_PARAMS + 24].copy_from_slice(bytemuck::cast_slice(&[params]));
+        let levels = ScanLevels::new(params.cell_capacity + 1);
+        self.ws.scan.clear();
+        self.ws.scan.resize(levels.words as usize, 0);
+        self.ws.cursor.clear();
+        self.ws.cursor.resize(params.cell_capacity as usize + 1, 0);
+        self.ws.entries.clear();
+        self.ws.entries.resize(
+            super::entry_words(self.entry_capacity, prep.facets.len()),
+            0,
+        );
+        self.ws.hits.resize(prep.slaves.len(), GpuHit::miss(0, 0));
+        self.ws.reference = prep.nodes.clone();
+        self.resident = Some(Box::new(CpuResident {
+            prep: prep.clone(),
+            frame: FrameParams {
+                origin: [
+                    prep.grid.origin[0] as f32,
+                    prep.grid.origin[1] as f32,
+                    prep.grid.origin[2] as f32,
+                    0.0,
+                ],
+                n_nodes: prep.n_nodes as u32,
+                _pad: [0; 3],
+            },
+            plan,
+            args: [0; 3],
+            anchored,
+        }));
+    }
+
+    /// Grows the bin entries to hold `needed` (a spill seen in the statistics).
+    pub(crate) fn grow_resident_entries(&mut self, needed: u32) {
+        let Some(r) = self.resident.as_mut() else {
+            return;
+        };
+        if needed <= self.entry_capacity {
+            return;
+        }
+        self.entry_capacity = super::grown_capacity(needed);
+        r.plan[PLAN_PARAMS + 10] = self.entry_capacity;
+        self.ws.entries.resize(
+            super::entry_words(self.entry_capacity, r.prep.facets.len()),
+            0,
+        );
+    }
+
+    /// The plan words of the device-resident increments (the statistics read them).
+    pub(crate) fn resident_plan_mut(&mut self) -> Option<&mut [u32]> {
+        self.resident.as_mut().map(|r| r.plan.as_mut_slice())
+    }
+
+    /// Asks the next device-resident increment to search globally.
+    pub(crate) fn request_global(&mut self) {
+        if let Some(r) = self.resident.as_mut() {
+            r.plan[PLAN_FORCE] = 1;
+        }
+    }
+
+    /// One device-resident increment's search on the CPU: `positions` as the caller's device
+    /// buffer would hold them (`[f32; 4]` per model node, model frame). Returns the status words
+    /// and the grid-local nodes and hits the penalty passes read; `plan` words are updated as
+    /// the GPU's are.
+    pub(crate) fn step_resident(
+        &mut self,
+        positions: &[[f32; 4]],
+    ) -> Result<([u32; STATUS_WORDS], &Prepared, &[GpuHit])> {
+        let Some(r) = self.resident.as_mut() else {
+            return Err(Error::BadParameter {
+                name: "device-resident increment",
+                value: "a search not made resident".into(),
+                expected: "make_resident first",
+            });
+        };
+        if positions.len() < r.prep.n_nodes {
+            return Err(Error::LengthMismatch {
+                what: "device positions (one vec4 per model node)",
+                expected: r.prep.n_nodes,
+                got: positions.len(),
+            });
+        }
+        let mut status = self.ws.status;
+        crate::status::reset(&mut status, crate::status::Owner::Search);
+        let mut params: SearchParams = bytemuck::pod_read_unaligned(bytemuck::cast_slice(
+            &r.plan[PLAN_PARAMS..PLAN_PARAMS + 24],
+        ));
+        let prep = &mut r.prep;
+        to_local::to_local(
+            &params,
+            &r.frame,
+            positions,
+            &mut prep.nodes,
+            &prep.adjacency,
+            &mut status,
+            &mut r.plan,
+        );
+        if r.anchored {
+            let anchors = self.anchors.as_deref().unwrap_or(&[]);
+            anchor::anchor(
+                &params,
+                &prep.nodes,
+                &prep.facets,
+                &prep.slaves,
+                anchors,
+                &mut status,
+                &mut self.ws.hits,
+                &prep.adjacency,
+            );
+            self.ws.status = status;
+            return Ok((status, &r.prep, &self.ws.hits));
+        }
+        motion::motion(
+            &params,
+            &prep.nodes,
+            &self.ws.reference,
+            &prep.motion_nodes,
+            &mut status,
+            &self.ws.hits,
+        );
+        schedule::schedule(&params, &mut r.plan, &mut status, &mut r.args);
+        params = bytemuck::pod_read_unaligned(bytemuck::cast_slice(
+            &r.plan[PLAN_PARAMS..PLAN_PARAMS + 24],
+        ));
+        if r.plan[PLAN_GLOBAL] == 0 {
+            local_search::local_search(
+                &params,
+                &prep.nodes,
+                &prep.facets,
+                &prep.slaves,
+                &prep.adjacency,
+                &mut status,
+                &mut self.ws.hits,
+            );
+        } else {
+            bin_count::clear_counts(&params, &mut self.ws.scan);
+            let levels = ScanLevels::new(params.n_cells + 1);
+            prep.params = params;
+            self.ws.status = status;
+            for step in [
+                Step::BinCount,
+                Step::Scan,
+                Step::BinScatter,
+                Step::NearestFacet,
+            ] {
+                run_step(step, &params, &levels, prep, &mut self.ws);
+            }
+            status = self.ws.status;
+            motion::set_reference(
+                &params,
+                &prep.nodes,
+                &mut self.ws.reference,
+                &prep.motion_nodes,
+            );
+            self.n_cells = params.n_cells;
+        }
+        self.ws.status = status;
+        Ok((status, &r.prep, &self.ws.hits))
+    }
+}

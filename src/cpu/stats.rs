@@ -1,0 +1,79 @@
+//! CPU mirror of `shaders/stats.wgsl`: the statistics of a device-resident increment.
+
+use crate::penalty::layout::PairNode;
+use crate::search::layout::*;
+
+/// Words of the statistics (WGSL: `STAT_*`), in [`IncrementStats`] order.
+const STABLE_DT: usize = 0;
+const APPROACH_DT: usize = 1;
+const MAX_OVERCLOSURE: usize = 2;
+const OMEGA2: usize = 3;
+const ACTIVE: usize = 4;
+const SLIPPING: usize = 5;
+const GLOBAL: usize = 6;
+const BUDGET: usize = 7;
+const SPILLED: usize = 8;
+const NEEDED: usize = 9;
+const NONFINITE: usize = 10;
+const LOCAL_CAPPED: usize = 11;
+const MOTION: usize = 12;
+const FIT_FAILED: usize = 13;
+const DAMPING: usize = 14;
+const INCREMENT: usize = 15;
+
+/// The reset values of the statistics' first [`STATS_RESET_WORDS`] words.
+pub fn reset_image() -> [u32; STATS_RESET_WORDS] {
+    let mut w = [0u32; STATS_RESET_WORDS];
+    w[STABLE_DT] = crate::penalty::layout::NO_LIMIT.to_bits();
+    w[APPROACH_DT] = crate::penalty::layout::NO_LIMIT.to_bits();
+    w[NONFINITE] = u32::MAX;
+    w
+}
+
+/// One "invocation" per pair: its status words into the statistics; the plan's per-increment
+/// words reset (WGSL: `pair_stats`).
+pub fn pair_stats(status: &[u32], plan: &mut [u32], stats: &mut [u32; 16]) {
+    stats[STABLE_DT] = stats[STABLE_DT].min(status[STATUS_DT_STABLE]);
+    stats[APPROACH_DT] = stats[APPROACH_DT].min(status[STATUS_DT_APPROACH]);
+    stats[MAX_OVERCLOSURE] = stats[MAX_OVERCLOSURE].max(status[STATUS_MAX_OVERCLOSURE]);
+    stats[ACTIVE] += status[STATUS_ACTIVE];
+    stats[SLIPPING] += status[STATUS_SLIPPING];
+    stats[SPILLED] += status[STATUS_SPILLED];
+    stats[NEEDED] = stats[NEEDED].max(status[STATUS_NEEDED_ENTRIES]);
+    stats[LOCAL_CAPPED] += status[STATUS_LOCAL_CAPPED];
+    stats[MOTION] = stats[MOTION].max(status[STATUS_MOTION]);
+    stats[NONFINITE] = stats[NONFINITE].min(plan[PLAN_NONFINITE]);
+    stats[FIT_FAILED] = stats[FIT_FAILED].max(plan[PLAN_FIT_FAILED]);
+    if plan[PLAN_GLOBAL] != 0 {
+        stats[GLOBAL] += 1;
+        if plan[PLAN_TRIGGER] == TRIGGER_BUDGET {
+            stats[BUDGET] += 1;
+        }
+        plan[PLAN_CROWDED] = status[STATUS_CROWDED];
+    }
+    plan[PLAN_GLOBAL] = 0;
+    plan[PLAN_NONFINITE] = u32::MAX;
+    for a in 0..3 {
+        plan[PLAN_BOX + a] = u32::MAX;
+        plan[PLAN_BOX + 3 + a] = 0;
+    }
+}
+
+/// One "invocation" per pair node: the largest row of the node-wise bound (WGSL: `bound_max`).
+pub fn bound_max(pair_nodes: &[PairNode], rows: &[f32], stats: &mut [u32; 16]) {
+    for pn in pair_nodes {
+        stats[OMEGA2] = stats[OMEGA2].max(rows[pn.node as usize].max(0.0).to_bits());
+    }
+}
+
+/// One "invocation": the stable increment from the bound, the increment counted
+/// (WGSL: `finish_stats`).
+pub fn finish_stats(stats: &mut [u32; 16]) {
+    let w2 = f32::from_bits(stats[OMEGA2]);
+    if w2 > 0.0 {
+        let z = f32::from_bits(stats[DAMPING]);
+        let dt = 2.0 / w2.sqrt() * ((1.0 + z * z).sqrt() - z);
+        stats[STABLE_DT] = stats[STABLE_DT].min(dt.to_bits());
+    }
+    stats[INCREMENT] += 1;
+}

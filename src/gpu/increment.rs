@@ -1,0 +1,278 @@
+//! The parts of a device-resident increment that belong to no one pair, on the GPU: the rows of
+//! the node-wise bound summed over the pairs, the increment's statistics reduced on the device,
+//! and a ring of staging buffers that lets the host read those statistics a few increments late
+//! without ever waiting.
+
+use std::sync::atomic::{AtomicU8, Ordering};
+use std::sync::Arc;
+
+use crate::device::GpuContext;
+use crate::error::{Error, Result};
+use crate::passes::{self, Buf};
+use crate::search::layout::{IncrementStats, ITEM_WORKGROUP, STATS_RESET_WORDS};
+use wgpu::BufferUsages as U;
+
+/// Staging buffers in the statistics ring: how many increments the host may fall behind before
+/// an increment's statistics are dropped from it (the device buffer always has the latest).
+pub const STATS_RING: usize = 8;
+
+const STATS_BYTES: u64 = std::mem::size_of::<IncrementStats>() as u64;
+
+/// The state of one staging buffer of the ring.
+const FREE: u8 = 0;
+const COPIED: u8 = 1;
+const MAPPING: u8 = 2;
+const MAPPED: u8 = 3;
+const FAILED: u8 = 4;
+
+struct Slot {
+    buffer: wgpu::Buffer,
+    state: Arc<AtomicU8>,
+}
+
+/// One pair's bind groups of the statistics passes.
+struct PairGroups {
+    pair_stats: wgpu::BindGroup,
+    bound_max: wgpu::BindGroup,
+    n_pair_nodes: u32,
+}
+
+/// Rows, statistics and their ring for the device-resident increments of one `Contact`.
+pub(crate) struct GpuIncrement {
+    ctx: Arc<GpuContext>,
+    pair_stats: wgpu::ComputePipeline,
+    bound_max: wgpu::ComputePipeline,
+    finish_stats: wgpu::ComputePipeline,
+    finish_group: wgpu::BindGroup,
+    /// f32 per model node: the node-wise bound's rows, summed over the pairs of an increment.
+    rows: wgpu::Buffer,
+    /// The increment's statistics (`IncrementStats`).
+    stats: wgpu::Buffer,
+    /// The reset values of the statistics' first words.
+    stats_image: wgpu::Buffer,
+    pairs: Vec<PairGroups>,
+    ring: Vec<Slot>,
+    /// Increments whose statistics found no free staging buffer.
+    pub(crate) dropped: u64,
+}
+
+impl GpuIncrement {
+    /// The rows and statistics of a model of `n_nodes` nodes whose penalty pairs have the
+    /// largest damping ratio `damping`; each pair given as (status, plan, pair nodes, count).
+    pub(crate) fn new(
+        ctx: Arc<GpuContext>,
+        n_nodes: usize,
+        damping: f32,
+        pairs: &[(&wgpu::Buffer, &wgpu::Buffer, &wgpu::Buffer, u32)],
+    ) -> Result<Self> {
+        let d = &ctx.device;
+        let scope = d.push_error_scope(wgpu::ErrorFilter::Validation);
+        let made = (|| -> Result<Self> {
+            let module = super::module(d, "stats")?;
+            let pipe = |p| super::pipeline(d, &module, p, &[]);
+            let (pair_stats, bound_max, finish_stats) = (
+                pipe(&passes::PAIR_STATS),
+                pipe(&passes::BOUND_MAX),
+                pipe(&passes::FINISH_STATS),
+            );
+            let buffer = |label, size: u64, usage| {
+                d.create_buffer(&wgpu::BufferDescriptor {
+                    label: Some(label),
+                    size: size.max(16).next_multiple_of(16),
+                    usage,
+                    mapped_at_creation: false,
+                })
+            };
+            let rows = buffer("bound rows", n_nodes as u64 * 4, U::STORAGE | U::COPY_DST);
+            let stats = buffer(
+                "increment statistics",
+                STATS_BYTES,
+                U::STORAGE | U::COPY_DST | U::COPY_SRC,
+            );
+            let stats_image = buffer(
+                "statistics reset image",
+                STATS_BYTES,
+                U::COPY_SRC | U::COPY_DST,
+            );
+            let mut first = [0u32; 16];
+            first[..STATS_RESET_WORDS].copy_from_slice(&crate::cpu::stats::reset_image());
+            first[14] = damping.to_bits();
+            super::upload(&ctx, &stats, 0, bytemuck::cast_slice(&first));
+            super::upload(&ctx, &stats_image, 0, bytemuck::cast_slice(&first));
+            let finish_group = super::bind(d, &finish_stats, &passes::FINISH_STATS, |b| match b {
+                Buf::Stats => Some(stats.as_entire_binding()),
+                _ => None,
+            })?;
+            let mut groups = Vec::new();
+            for &(status, plan, pair_nodes, n_pair_nodes) in pairs {
+                let resource = |b| {
+                    Some(match b {
+                        Buf::Status => status.as_entire_binding(),
+                        Buf::Plan => plan.as_entire_binding(),
+                        Buf::Stats => stats.as_entire_binding(),
+                        Buf::PairNodes => pair_nodes.as_entire_binding(),
+                        Buf::Rows => rows.as_entire_binding(),
+                        _ => return None,
+                    })
+                };
+                groups.push(PairGroups {
+                    pair_stats: super::bind(d, &pair_stats, &passes::PAIR_STATS, resource)?,
+                    bound_max: super::bind(d, &bound_max, &passes::BOUND_MAX, resource)?,
+                    n_pair_nodes,
+                });
+            }
+            let ring = (0..STATS_RING)
+                .map(|_| Slot {
+                    buffer: buffer("statistics ring", STATS_BYTES, U::MAP_READ | U::COPY_DST),
+                    state: Arc::new(AtomicU8::new(FREE)),
+                })
+                .collect();
+            Ok(Self {
+                ctx: ctx.clone(),
+                pair_stats,
+                bound_max,
+                finish_stats,
+                finish_group,
+                rows,
+                stats,
+                stats_image,
+                pairs: groups,
+                ring,
+                dropped: 0,
+            })
+        })();
+        if let Some(e) = pollster::block_on(scope.pop()) {
+            return Err(Error::Gpu {
+                during: "making the device-resident statistics".into(),
+                message: e.to_string(),
+            });
+        }
+        made
+    }
+
+    /// Errors wgpu raised outside error scopes while the increment was encoded.
+    pub(crate) fn take_uncaptured(&self) -> Result<()> {
+        self.ctx.take_uncaptured("device-resident increment")
+    }
+
+    /// The rows buffer the pairs' add_forces sum into.
+    pub(crate) fn rows(&self) -> &wgpu::Buffer {
+        &self.rows
+    }
+
+    /// The statistics buffer (`IncrementStats`, 64 bytes, STORAGE | COPY_SRC).
+    pub(crate) fn stats(&self) -> &wgpu::Buffer {
+        &self.stats
+    }
+
+    /// Encodes the start of an increment: the rows zeroed, the statistics reset.
+    pub(crate) fn begin(&self, enc: &mut wgpu::CommandEncoder) {
+        enc.clear_buffer(&self.rows, 0, None);
+        enc.copy_buffer_to_buffer(
+            &self.stats_image,
+            0,
+            &self.stats,
+            0,
+            4 * STATS_RESET_WORDS as u64,
+        );
+    }
+
+    /// Encodes pair `k`'s statistics (after its passes).
+    pub(crate) fn pair(&self, enc: &mut wgpu::CommandEncoder, k: usize, max_dim: u32) {
+        let g = &self.pairs[k];
+        super::run_pass(
+            &self.ctx,
+            enc,
+            "pair_stats",
+            &[(&self.pair_stats, &g.pair_stats, 1, 1)],
+            max_dim,
+        );
+    }
+
+    /// Encodes the end of an increment: the bound's largest row, the stable increment, and a
+    /// copy of the statistics into a free staging buffer of the ring (none free: dropped).
+    pub(crate) fn finish(&mut self, enc: &mut wgpu::CommandEncoder, max_dim: u32) {
+        let mut work: Vec<super::Work<'_>> = self
+            .pairs
+            .iter()
+            .map(|g| {
+                (
+                    &self.bound_max,
+                    &g.bound_max,
+                    g.n_pair_nodes,
+                    ITEM_WORKGROUP,
+                )
+            })
+            .collect();
+        work.push((&self.finish_stats, &self.finish_group, 1, 1));
+        super::run_pass(&self.ctx, enc, "bound_max + finish_stats", &work, max_dim);
+        match self
+            .ring
+            .iter()
+            .find(|s| s.state.load(Ordering::Acquire) == FREE)
+        {
+            Some(slot) => {
+                enc.copy_buffer_to_buffer(&self.stats, 0, &slot.buffer, 0, STATS_BYTES);
+                slot.state.store(COPIED, Ordering::Release);
+            }
+            None => self.dropped += 1,
+        }
+    }
+
+    /// The statistics of increments whose staging buffers the device has finished with, in
+    /// increment order, without waiting: staging copied by increments submitted since the last
+    /// call is asked to map (so call this only after submitting what was encoded), and the
+    /// device is polled once, not waited on.
+    pub(crate) fn collect(&mut self) -> Result<Vec<IncrementStats>> {
+        for slot in &self.ring {
+            if slot.state.load(Ordering::Acquire) == COPIED {
+                slot.state.store(MAPPING, Ordering::Release);
+                let state = slot.state.clone();
+                slot.buffer
+                    .slice(..)
+                    .map_async(wgpu::MapMode::Read, move |r| {
+                        state.store(if r.is_ok() { MAPPED } else { FAILED }, Ordering::Release);
+                    });
+            }
+        }
+        self.ctx
+            .device
+            .poll(wgpu::PollType::Poll)
+            .map_err(|e| Error::DeviceLost {
+                during: "polling the statistics ring".into(),
+                message: e.to_string(),
+            })?;
+        let mut out = Vec::new();
+        for slot in &self.ring {
+            match slot.state.load(Ordering::Acquire) {
+                MAPPED => {
+                    let stats: IncrementStats = {
+                        let view = slot.buffer.slice(..).get_mapped_range().map_err(|e| {
+                            Error::DeviceLost {
+                                during: "reading the statistics ring".into(),
+                                message: e.to_string(),
+                            }
+                        })?;
+                        bytemuck::pod_read_unaligned(&view[..STATS_BYTES as usize])
+                    };
+                    slot.buffer.unmap();
+                    slot.state.store(FREE, Ordering::Release);
+                    if let Ok(mut t) = self.ctx.traffic.lock() {
+                        t.lagged_read_bytes += STATS_BYTES;
+                    }
+                    out.push(stats);
+                }
+                FAILED => {
+                    slot.state.store(FREE, Ordering::Release);
+                    return Err(Error::DeviceLost {
+                        during: "mapping the statistics ring".into(),
+                        message: "the map failed".into(),
+                    });
+                }
+                _ => {}
+            }
+        }
+        out.sort_by_key(|s| s.increment);
+        Ok(out)
+    }
+}

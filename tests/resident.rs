@@ -1,0 +1,357 @@
+//! The device-resident increment (`Contact::encode_increment`) against the host-array one
+//! (`Contact::penalty_step`): the same forces and statistics over increments with local and
+//! global searches, friction, balanced pairs and a motion-budget trigger; no readback and no
+//! wait per increment; a jump past the budget caught in the same increment; bins that spill.
+
+mod common;
+
+use abut::mesh::plate_quads;
+use abut::search::Schedule;
+use abut::{
+    Contact, Device, Enforce, Friction, IncrementStats, Model, Pair, Penalty, ResidentIo,
+    Stiffness, Surface,
+};
+use common::gpus;
+
+/// Rounds to f32 and back: positions both paths see exactly.
+fn f32r(v: f64) -> f64 {
+    v as f32 as f64
+}
+
+/// Positions and velocities of an increment.
+type Motion = dyn Fn(usize) -> (Vec<[f64; 3]>, Vec<[f64; 3]>);
+
+/// A scene whose motion is prescribed: a master plate that ripples, a grid of slave nodes that
+/// sinks into it and slides (friction), and one slave that starts far above the plate, out of
+/// reach of every facet, and jumps into it at increment `jump`.
+struct Scene {
+    model: Model,
+    /// Positions and velocities of increment `k`.
+    motion: Box<Motion>,
+    dt: f64,
+    jumper: usize,
+}
+
+fn scene(jump: usize, balanced: bool, interval: u32) -> Scene {
+    let plate = plate_quads(10, 10, 1.0, 1.0, 0.0, 0, &|_, _| 0.0);
+    let mut model = Model::new_3d();
+    let master_nodes = model
+        .add_nodes(&plate.positions, &vec![4.0; plate.positions.len()])
+        .unwrap();
+    let master = model.add_surface(Surface::quads(&plate.facets)).unwrap();
+    let n = 12;
+    let mut slaves = Vec::new();
+    for j in 0..n {
+        for i in 0..n {
+            slaves.push([
+                0.1 + 0.5 * i as f64 / n as f64,
+                0.1 + 0.5 * j as f64 / n as f64,
+                0.004,
+            ]);
+        }
+    }
+    slaves.push([0.55, 0.45, 2.5]); // the jumper
+    let range = model.add_nodes(&slaves, &vec![1.0; slaves.len()]).unwrap();
+    let set = model.add_node_set(&range.to_vec()).unwrap();
+    let pen = Penalty {
+        stiffness: Stiffness::Absolute(2.0e3),
+        damping: 0.05,
+        ..Default::default()
+    };
+    let mut pair = Pair::new(set, master)
+        .search_radius(0.25)
+        .enforce(Enforce::Penalty(pen))
+        .friction(Friction::coulomb(0.3))
+        .schedule(Schedule {
+            interval,
+            budget: 0.5,
+            wide_local: false,
+        });
+    if balanced {
+        // the slave grid as a surface of its own (its nodes in quads), weighted 0.5
+        let mut quads = Vec::new();
+        for j in 0..n - 1 {
+            for i in 0..n - 1 {
+                let a = range.start + (j * n + i) as u32;
+                quads.push([a, a + 1, a + 1 + n as u32, a + n as u32]);
+            }
+        }
+        let slave_surface = model.add_surface(Surface::quads(&quads)).unwrap();
+        pair = pair.balanced(slave_surface, 0.5);
+    }
+    model.add_pair(pair).unwrap();
+    let x0 = model.positions().to_vec();
+    let dt = 1.0e-3;
+    let first_slave = range.start as usize;
+    let jumper = range.end as usize - 1;
+    let master_end = master_nodes.end as usize;
+    // node i's position at increment k
+    let at = move |i: usize, k: usize| -> [f64; 3] {
+        let (t, mut x) = (k as f64, x0[i]);
+        if i < master_end {
+            x[2] = 0.001 * (3.0 * x[0] + 0.7 * t).sin() * (2.0 * x[1]).cos();
+        } else if i == jumper {
+            if k >= jump {
+                x = [0.55, 0.45, -0.003];
+            }
+        } else if i >= first_slave {
+            x[0] += 0.0125 * t;
+            x[2] = 0.004 - 0.0015 * t;
+        }
+        x.map(f32r)
+    };
+    let n_nodes = model.positions().len();
+    let motion = move |k: usize| {
+        let x: Vec<[f64; 3]> = (0..n_nodes).map(|i| at(i, k)).collect();
+        // velocities at the half step before: from the increment before
+        let v = (0..n_nodes)
+            .map(|i| {
+                let prev = at(i, k.saturating_sub(1));
+                [0, 1, 2].map(|c| f32r((x[i][c] - prev[c]) / dt))
+            })
+            .collect();
+        (x, v)
+    };
+    Scene {
+        model,
+        motion: Box::new(motion),
+        dt,
+        jumper,
+    }
+}
+
+/// What one increment gave: forces per node, the statistics, and (host path) whether it searched
+/// globally and whether the budget made it.
+struct Step {
+    forces: Vec<[f64; 3]>,
+    stable_dt: f64,
+    active: u32,
+    global: bool,
+    budget: bool,
+}
+
+fn host_steps(device: &Device, s: &Scene, steps: usize) -> Vec<Step> {
+    let mut c = Contact::new(device, &s.model).unwrap();
+    c.request_outputs(true);
+    (0..steps)
+        .map(|k| {
+            let (x, v) = (s.motion)(k);
+            let r = c.penalty_step(&x, &v, s.dt).unwrap().clone();
+            use abut::search::Trigger;
+            // every search of the increment (both passes of a balanced pair)
+            let triggers: Vec<Trigger> = c
+                .outputs()
+                .iter()
+                .map(|(_, o)| o.search.as_ref().unwrap().stats.trigger)
+                .collect();
+            Step {
+                forces: r.forces,
+                stable_dt: r.stable_dt,
+                active: r.active as u32,
+                global: triggers.iter().any(|t| !matches!(t, Trigger::Local)),
+                budget: triggers.iter().any(|t| matches!(t, Trigger::Budget)),
+            }
+        })
+        .collect()
+}
+
+fn vec4(a: &[[f64; 3]]) -> Vec<[f32; 4]> {
+    a.iter()
+        .map(|p| [p[0] as f32, p[1] as f32, p[2] as f32, 0.0])
+        .collect()
+}
+
+fn step_from(forces: &[[f32; 4]], st: &IncrementStats) -> Step {
+    Step {
+        forces: forces
+            .iter()
+            .map(|f| [f[0] as f64, f[1] as f64, f[2] as f64])
+            .collect(),
+        stable_dt: if st.stable_dt >= f32::MAX {
+            f64::INFINITY
+        } else {
+            st.stable_dt as f64
+        },
+        active: st.active,
+        global: st.global_searches > 0,
+        budget: st.budget_searches > 0,
+    }
+}
+
+/// Device buffers of a host program: positions, velocities, forces (vec4<f32> per node).
+struct Buffers {
+    x: wgpu::Buffer,
+    v: wgpu::Buffer,
+    f: wgpu::Buffer,
+}
+
+fn buffers(device: &Device, n: usize) -> Buffers {
+    let (d, _) = device.wgpu().unwrap();
+    let make = |label| {
+        d.create_buffer(&wgpu::BufferDescriptor {
+            label: Some(label),
+            size: (n * 16) as u64,
+            usage: wgpu::BufferUsages::STORAGE
+                | wgpu::BufferUsages::COPY_DST
+                | wgpu::BufferUsages::COPY_SRC,
+            mapped_at_creation: false,
+        })
+    };
+    Buffers {
+        x: make("test positions"),
+        v: make("test velocities"),
+        f: make("test forces"),
+    }
+}
+
+/// Reads `bytes` of `buffer` back (the test's own readback, not abut's).
+fn read(device: &Device, buffer: &wgpu::Buffer, bytes: u64) -> Vec<u8> {
+    let (d, q) = device.wgpu().unwrap();
+    let staging = d.create_buffer(&wgpu::BufferDescriptor {
+        label: Some("test readback"),
+        size: bytes,
+        usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
+        mapped_at_creation: false,
+    });
+    let mut enc = d.create_command_encoder(&Default::default());
+    enc.copy_buffer_to_buffer(buffer, 0, &staging, 0, bytes);
+    q.submit([enc.finish()]);
+    let slice = staging.slice(..);
+    slice.map_async(wgpu::MapMode::Read, |r| r.unwrap());
+    d.poll(wgpu::PollType::wait_indefinitely()).unwrap();
+    let out = slice.get_mapped_range().unwrap().to_vec();
+    staging.unmap();
+    out
+}
+
+fn resident_steps(device: &Device, s: &Scene, steps: usize, cap: Option<u32>) -> Vec<Step> {
+    let mut c = Contact::new(device, &s.model).unwrap();
+    if let Some(w) = cap {
+        c.set_entry_capacity(w);
+    }
+    let n = s.model.positions().len();
+    let mut out = Vec::new();
+    if device.is_gpu() {
+        let b = buffers(device, n);
+        let (d, q) = device.wgpu().unwrap();
+        for k in 0..steps {
+            let (x, v) = (s.motion)(k);
+            q.write_buffer(&b.x, 0, bytemuck::cast_slice(&vec4(&x)));
+            q.write_buffer(&b.v, 0, bytemuck::cast_slice(&vec4(&v)));
+            let mut enc = d.create_command_encoder(&Default::default());
+            enc.clear_buffer(&b.f, 0, None);
+            c.encode_increment(
+                ResidentIo::Gpu {
+                    encoder: &mut enc,
+                    positions: &b.x,
+                    velocities: &b.v,
+                    forces: &b.f,
+                },
+                s.dt,
+            )
+            .unwrap();
+            q.submit([enc.finish()]);
+            let forces: Vec<[f32; 4]> =
+                bytemuck::pod_collect_to_vec(&read(device, &b.f, (n * 16) as u64));
+            let st: IncrementStats =
+                bytemuck::pod_read_unaligned(&read(device, c.stats_buffer().unwrap(), 64));
+            assert_eq!(st.increment as usize, k + 1, "{device}: increment counter");
+            out.push(step_from(&forces, &st));
+        }
+    } else {
+        for k in 0..steps {
+            let (x, v) = (s.motion)(k);
+            let mut f = vec![[0.0f32; 4]; n];
+            c.encode_increment(
+                ResidentIo::Cpu {
+                    positions: &vec4(&x),
+                    velocities: &vec4(&v),
+                    forces: &mut f,
+                },
+                s.dt,
+            )
+            .unwrap();
+            let st = c.collect_stats().unwrap();
+            assert_eq!(st.len(), 1);
+            out.push(step_from(&f, &st[0]));
+        }
+    }
+    out
+}
+
+fn assert_same(what: &str, host: &[Step], dev: &[Step], jumper: usize) {
+    let scale = host
+        .iter()
+        .flat_map(|s| s.forces.iter().flatten())
+        .fold(0.0f64, |a, f| a.max(f.abs()));
+    assert!(scale > 0.0, "{what}: no contact force at all");
+    for (k, (h, d)) in host.iter().zip(dev).enumerate() {
+        assert_eq!(h.global, d.global, "{what} increment {k}: global search");
+        assert_eq!(h.budget, d.budget, "{what} increment {k}: budget trigger");
+        assert_eq!(
+            h.active, d.active,
+            "{what} increment {k}: slaves in contact"
+        );
+        for (i, (a, b)) in h.forces.iter().zip(&d.forces).enumerate() {
+            for c in 0..3 {
+                assert!(
+                    (a[c] - b[c]).abs() <= 3e-5 * scale,
+                    "{what} increment {k}: node {i} force {a:?} vs {b:?}"
+                );
+            }
+        }
+        let rel = if h.stable_dt.is_finite() {
+            (h.stable_dt - d.stable_dt).abs() / h.stable_dt
+        } else {
+            if d.stable_dt.is_finite() {
+                1.0
+            } else {
+                0.0
+            }
+        };
+        assert!(
+            rel < 1e-4,
+            "{what} increment {k}: stable dt {} vs {}",
+            h.stable_dt,
+            d.stable_dt
+        );
+        let _ = jumper;
+    }
+}
+
+#[test]
+fn resident_increments_match_host_arrays() {
+    let steps = 16;
+    for balanced in [false, true] {
+        let s = scene(7, balanced, 5);
+        let cpu_host = host_steps(&Device::cpu(), &s, steps);
+        // the scene does what it is meant to: local and global searches, an interval, the
+        // budget, and the jumper in contact from the increment it jumped
+        assert!(cpu_host.iter().any(|h| !h.global), "no local increment");
+        assert!(cpu_host.iter().filter(|h| h.global).count() >= 4);
+        assert!(cpu_host[7].budget, "the jump did not trigger the budget");
+        if !balanced {
+            assert_eq!(cpu_host.iter().filter(|h| h.budget).count(), 1);
+        }
+        assert!(
+            cpu_host[7].forces[s.jumper][2] > 0.0,
+            "the jumper is not pushed out in the increment it jumped"
+        );
+        assert!(cpu_host[6].forces[s.jumper] == [0.0; 3]);
+        let what = format!("balanced {balanced}");
+        let cpu_dev = resident_steps(&Device::cpu(), &s, steps, None);
+        assert_same(&format!("{what}, CPU path"), &cpu_host, &cpu_dev, s.jumper);
+        for g in gpus() {
+            let host = host_steps(g, &s, steps);
+            let dev = resident_steps(g, &s, steps, None);
+            assert_same(&format!("{what}, {g}"), &host, &dev, s.jumper);
+            // and the device-resident increment on the GPU against the CPU path's
+            assert_same(
+                &format!("{what}, {g} against the CPU path"),
+                &cpu_dev,
+                &dev,
+                s.jumper,
+            );
+        }
+    }
+}
