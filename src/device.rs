@@ -239,6 +239,24 @@ impl Device {
         }
     }
 
+    /// Submits an encoder the host recorded abut's passes into (device-resident increments,
+    /// `gpu::CentralDifference`), counting it in [`Traffic`] and, with timestamps on
+    /// ([`Device::enable_timestamps`]), reading the passes' times (which waits). The host may
+    /// as well submit with its own queue; then nothing is counted. Errors on the CPU path.
+    pub fn submit(&self, encoder: wgpu::CommandEncoder) -> Result<()> {
+        match &self.kind {
+            DeviceKind::Gpu(ctx) => {
+                crate::gpu::submit(ctx, encoder);
+                Ok(())
+            }
+            DeviceKind::Cpu => Err(Error::BadParameter {
+                name: "submit",
+                value: "CPU path".into(),
+                expected: "a GPU device",
+            }),
+        }
+    }
+
     /// The executor behind this device.
     pub fn kind(&self) -> &DeviceKind {
         &self.kind

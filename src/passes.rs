@@ -78,6 +78,10 @@ pub enum Buf {
     Rows,
     /// The statistics of a device-resident increment (`IncrementStats`).
     Stats,
+    /// Uniform `IntegrateParams` (the device integrator of a host program).
+    IntegrateParams,
+    /// Node masses (f32 per model node).
+    Masses,
 }
 
 /// How a shader declares a binding.
@@ -512,8 +516,23 @@ pub const FINISH_STATS: Pass = Pass {
     per_workgroup: 1,
 };
 
+/// `integrate.wgsl`: central differences for point masses (a host program's integrator).
+pub const INTEGRATE: Pass = Pass {
+    stem: "integrate",
+    entry: "integrate",
+    bindings: &[
+        b(0, IntegrateParams, U),
+        b(1, Positions, RW),
+        b(2, Velocities, RW),
+        b(3, HostForces, RW),
+        b(4, Masses, R),
+    ],
+    items: Items::Nodes,
+    per_workgroup: ITEM_WORKGROUP,
+};
+
 /// Every pass, in the order an increment may run them.
-pub const PASSES: [Pass; 26] = [
+pub const PASSES: [Pass; 27] = [
     TO_LOCAL,
     ANCHOR,
     MOTION,
@@ -540,6 +559,7 @@ pub const PASSES: [Pass; 26] = [
     PAIR_STATS,
     BOUND_MAX,
     FINISH_STATS,
+    INTEGRATE,
 ];
 
 /// The pass whose entry point is `entry`, if declared.

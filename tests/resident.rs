@@ -355,3 +355,294 @@ fn resident_increments_match_host_arrays() {
         }
     }
 }
+
+/// A bounce scene: `n` point masses (m = 1) falling at 1 m/s onto a rigid plate (huge masses),
+/// penalty k = 4e5, 40 increments per contact.
+fn bounce_scene(n: usize) -> (Model, std::ops::Range<u32>, f64) {
+    let side = 10;
+    let plate = plate_quads(side, side, 1.0, 1.0, 0.0, 0, &|_, _| 0.0);
+    let mut model = Model::new_3d();
+    model
+        .add_nodes(&plate.positions, &vec![1e12; plate.positions.len()])
+        .unwrap();
+    let master = model.add_surface(Surface::quads(&plate.facets)).unwrap();
+    let drops: Vec<[f64; 3]> = (0..n)
+        .map(|i| {
+            let (a, b) = ((i * 7919) % 997, (i * 104_729) % 991);
+            [
+                f32r(0.02 + 0.96 * a as f64 / 997.0),
+                f32r(0.02 + 0.96 * b as f64 / 991.0),
+                f32r(0.01 + 0.04 * ((i * 31) % 101) as f64 / 101.0),
+            ]
+        })
+        .collect();
+    let range = model.add_nodes(&drops, &vec![1.0; n]).unwrap();
+    let set = model.add_node_set(&range.to_vec()).unwrap();
+    let pen = Penalty {
+        stiffness: Stiffness::Absolute(4.0e5),
+        ..Default::default()
+    };
+    model
+        .add_pair(
+            Pair::new(set, master)
+                .search_radius(0.1)
+                .enforce(Enforce::Penalty(pen)),
+        )
+        .unwrap();
+    let dt = std::f64::consts::PI / (4.0e5f64).sqrt() / 40.0;
+    (model, range.start..range.end, dt)
+}
+
+/// 1,000 device-resident increments, each recorded with a WGSL integrator into one encoder and
+/// submitted: no readback, no wait, no upload by abut (the statistics ring aside), and the masses
+/// bounce as on the CPU path's mirror of the same program.
+#[test]
+fn resident_increments_neither_read_back_nor_wait() {
+    use abut::gpu::{CentralDifference, IntegrateParams};
+    let (model, range, dt) = bounce_scene(300);
+    let n = model.positions().len();
+    let steps = 1000;
+    let masses = model.masses().to_vec();
+    let x0 = vec4(model.positions());
+    let mut v0 = vec![[0.0f32; 4]; n];
+    for v in &mut v0[range.start as usize..] {
+        v[2] = -1.0;
+    }
+    // the CPU path: the same program with the mirrors
+    let cpu = {
+        let mut c = Contact::new(&Device::cpu(), &model).unwrap();
+        let (mut x, mut v, mut f) = (x0.clone(), v0.clone(), vec![[0.0f32; 4]; n]);
+        let m32: Vec<f32> = masses.iter().map(|&m| m as f32).collect();
+        let ip = IntegrateParams {
+            acceleration: [0.0, 0.0, 0.0, dt as f32],
+            first: range.start,
+            count: range.end - range.start,
+            n_nodes: n as u32,
+            _pad: 0,
+        };
+        let mut active = 0u64;
+        for _ in 0..steps {
+            c.encode_increment(
+                ResidentIo::Cpu {
+                    positions: &x,
+                    velocities: &v,
+                    forces: &mut f,
+                },
+                dt,
+            )
+            .unwrap();
+            abut::cpu::integrate::integrate(&ip, &mut x, &mut v, &mut f, &m32);
+            active += c.collect_stats().unwrap()[0].active as u64;
+        }
+        (x, v, active)
+    };
+    // every mass came back up at about its impact speed
+    for i in range.start as usize..range.end as usize {
+        assert!(
+            (cpu.1[i][2] - 1.0).abs() < 0.02,
+            "CPU path: node {i} rebounds at {}",
+            cpu.1[i][2]
+        );
+    }
+    // devices of this test's own (the shared ones count other tests' traffic too)
+    let own: Vec<Device> = Device::all_gpus().into_iter().flatten().collect();
+    assert_eq!(own.len(), gpus().len(), "adapters found");
+    for g in &own {
+        let (d, q) = g.wgpu().unwrap();
+        let b = buffers(g, n);
+        q.write_buffer(&b.x, 0, bytemuck::cast_slice(&x0));
+        q.write_buffer(&b.v, 0, bytemuck::cast_slice(&v0));
+        let mut c = Contact::new(g, &model).unwrap();
+        let mut integ = CentralDifference::new(g, &masses).unwrap();
+        let mut record = |c: &mut Contact| {
+            let mut enc = d.create_command_encoder(&Default::default());
+            c.encode_increment(
+                ResidentIo::Gpu {
+                    encoder: &mut enc,
+                    positions: &b.x,
+                    velocities: &b.v,
+                    forces: &b.f,
+                },
+                dt,
+            )
+            .unwrap();
+            integ
+                .encode(&mut enc, &b.x, &b.v, &b.f, dt, [0.0; 3], range.clone())
+                .unwrap();
+            q.submit([enc.finish()]);
+        };
+        // the first increment readies the pairs (pipelines, buffers, constants uploaded)
+        record(&mut c);
+        let mut stats = c.collect_stats().unwrap();
+        let before = g.traffic().unwrap();
+        for _ in 1..steps {
+            record(&mut c);
+            stats.extend(c.collect_stats().unwrap());
+        }
+        let t = g.traffic().unwrap().since(&before);
+        assert_eq!(t.read_back_bytes, 0, "{g}: bytes read back");
+        assert_eq!(t.waits, 0, "{g}: blocking waits");
+        assert_eq!(t.uploaded_bytes, 0, "{g}: bytes uploaded");
+        assert!(t.total_dispatches() > 0);
+        eprintln!(
+            "{g}: {} increments, {} statistics collected on the way, {} dropped from the ring, {} bytes of them",
+            steps,
+            stats.len(),
+            c.dropped_stats(),
+            t.lagged_read_bytes
+        );
+        // the test's own readback: every statistic arrives, in order, none lost
+        let x: Vec<[f32; 4]> = bytemuck::pod_collect_to_vec(&read(g, &b.x, (n * 16) as u64));
+        let v: Vec<[f32; 4]> = bytemuck::pod_collect_to_vec(&read(g, &b.v, (n * 16) as u64));
+        stats.extend(c.collect_stats().unwrap());
+        stats.extend(c.collect_stats().unwrap());
+        assert_eq!(
+            stats.len() as u64 + c.dropped_stats(),
+            steps as u64,
+            "{g}: statistics collected and dropped"
+        );
+        assert!(stats.windows(2).all(|w| w[0].increment < w[1].increment));
+        for i in range.start as usize..range.end as usize {
+            for a in 0..3 {
+                assert!(
+                    (v[i][a] - cpu.1[i][a]).abs() < 1e-3,
+                    "{g}: node {i} velocity {:?} vs the CPU path's {:?}",
+                    v[i],
+                    cpu.1[i]
+                );
+                assert!(
+                    (x[i][a] - cpu.0[i][a]).abs() < 1e-5,
+                    "{g}: node {i} position"
+                );
+            }
+        }
+        if c.dropped_stats() == 0 {
+            let active: u64 = stats.iter().map(|s| s.active as u64).sum();
+            assert_eq!(active, cpu.2, "{g}: slave-increments in contact");
+        }
+    }
+}
+
+/// A slave that jumps from out of reach into the master, farther than the motion budget, in
+/// one increment gets its contact force in that increment (the schedule runs the global search
+/// on the device in the same increment), wherever on the plate it lands and whenever it jumps.
+#[test]
+fn a_jump_past_the_budget_is_caught_in_the_same_increment() {
+    let mut devices = vec![Device::cpu()];
+    devices.extend(gpus().iter().cloned());
+    for (target, jump) in [
+        ([0.55, 0.45, -0.003], 3),
+        ([0.05, 0.93, -0.001], 4),
+        ([0.999, 0.5, -0.002], 6),
+        ([0.3, 0.3, -0.0005], 8),
+    ] {
+        let s = scene(jump, false, 100);
+        let jumper = s.jumper;
+        let moved = Scene {
+            motion: Box::new({
+                let m = s.motion;
+                move |k| {
+                    let (mut x, mut v) = m(k);
+                    if k >= jump {
+                        x[jumper] = target.map(f32r);
+                        v[jumper] = [0.0; 3];
+                    }
+                    (x, v)
+                }
+            }),
+            ..s
+        };
+        for d in &devices {
+            let steps = resident_steps(d, &moved, jump + 2, None);
+            for (k, st) in steps.iter().enumerate() {
+                let pushed = st.forces[jumper][2] > 0.0;
+                assert_eq!(
+                    pushed,
+                    k >= jump,
+                    "{d}: jump to {target:?} at {jump}: increment {k} force {:?}",
+                    st.forces[jumper]
+                );
+                assert_eq!(st.budget, k == jump, "{d}: increment {k}: budget search");
+            }
+        }
+    }
+}
+
+/// Bins far too small for the model spill: every increment stays exact (the same forces as the
+/// host-array increment), the statistics say so, and once read the entries grow and the spill
+/// stops.
+#[test]
+fn bins_that_do_not_fit_spill_and_stay_exact() {
+    let s = scene(7, false, 3);
+    let steps = 10;
+    let host = host_steps(&Device::cpu(), &s, steps);
+    let mut devices = vec![Device::cpu()];
+    devices.extend(gpus().iter().cloned());
+    for d in &devices {
+        let dev = resident_steps(d, &s, steps, Some(16));
+        assert_same(&format!("{d}, 16 bin entries"), &host, &dev, s.jumper);
+        // the spill of each global search
+        let spilled = spill_counts(d, &s, steps);
+        assert!(spilled.len() >= 3, "{d}: global searches {spilled:?}");
+        assert!(spilled[0] > 0, "{d}: nothing spilled from 16 entries");
+        assert_eq!(
+            spilled[spilled.len() - 1],
+            0,
+            "{d}: still spilling after the statistics were read: {spilled:?}"
+        );
+    }
+}
+
+/// Facets spilled in each global search, the statistics collected after every increment.
+fn spill_counts(device: &Device, s: &Scene, steps: usize) -> Vec<u32> {
+    let mut c = Contact::new(device, &s.model).unwrap();
+    c.set_entry_capacity(16);
+    let n = s.model.positions().len();
+    let mut out = Vec::new();
+    for k in 0..steps {
+        let (x, v) = (s.motion)(k);
+        if device.is_gpu() {
+            let b = buffers(device, n);
+            let (d, q) = device.wgpu().unwrap();
+            q.write_buffer(&b.x, 0, bytemuck::cast_slice(&vec4(&x)));
+            q.write_buffer(&b.v, 0, bytemuck::cast_slice(&vec4(&v)));
+            let mut enc = d.create_command_encoder(&Default::default());
+            c.encode_increment(
+                ResidentIo::Gpu {
+                    encoder: &mut enc,
+                    positions: &b.x,
+                    velocities: &b.v,
+                    forces: &b.f,
+                },
+                s.dt,
+            )
+            .unwrap();
+            q.submit([enc.finish()]);
+            let st: IncrementStats =
+                bytemuck::pod_read_unaligned(&read(device, c.stats_buffer().unwrap(), 64));
+            if st.global_searches > 0 {
+                out.push(st.spilled);
+            }
+            // what the lagged ring brings back grows the bins at the next increment
+            for _ in 0..4 {
+                c.collect_stats().unwrap();
+            }
+        } else {
+            let mut f = vec![[0.0f32; 4]; n];
+            c.encode_increment(
+                ResidentIo::Cpu {
+                    positions: &vec4(&x),
+                    velocities: &vec4(&v),
+                    forces: &mut f,
+                },
+                s.dt,
+            )
+            .unwrap();
+            let st = c.collect_stats().unwrap()[0];
+            if st.global_searches > 0 {
+                out.push(st.spilled);
+            }
+        }
+    }
+    out
+}

@@ -11,6 +11,7 @@ pub mod bin_scatter;
 pub mod brute_force;
 pub mod common;
 pub mod gather;
+pub mod integrate;
 pub mod local_search;
 pub mod motion;
 pub mod nearest_facet;

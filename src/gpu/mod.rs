@@ -4,11 +4,13 @@
 pub(crate) mod buffers;
 mod global_search;
 mod increment;
+mod integrate;
 mod penalty;
 pub mod shaders;
 
 pub use global_search::{AfterSearch, GpuSearch, SharedBuffers};
 pub(crate) use increment::GpuIncrement;
+pub use integrate::{CentralDifference, IntegrateParams};
 pub use penalty::GpuPenalty;
 
 /// One dispatch of a compute pass: pipeline, its bind group, items, items per workgroup.

@@ -24,7 +24,7 @@ pub enum Prelude {
 
 /// (file stem, source, prelude) of every kernel file.
 #[rustfmt::skip]
-pub const KERNELS: [(&str, &str, Prelude); 13] = [
+pub const KERNELS: [(&str, &str, Prelude); 14] = [
     ("bin_count", include_str!("../../shaders/bin_count.wgsl"), Prelude::None),
     ("scan", include_str!("../../shaders/scan.wgsl"), Prelude::None),
     ("bin_scatter", include_str!("../../shaders/bin_scatter.wgsl"), Prelude::None),
@@ -38,6 +38,7 @@ pub const KERNELS: [(&str, &str, Prelude); 13] = [
     ("gather", include_str!("../../shaders/gather.wgsl"), Prelude::Penalty),
     ("schedule", include_str!("../../shaders/schedule.wgsl"), Prelude::None),
     ("stats", include_str!("../../shaders/stats.wgsl"), Prelude::None),
+    ("integrate", include_str!("../../shaders/integrate.wgsl"), Prelude::None),
 ];
 
 /// The full source of kernel file `stem` (its preludes prepended), or `None` if unknown.

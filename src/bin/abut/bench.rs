@@ -33,6 +33,11 @@ pub struct BenchArgs {
     /// Leave out the CPU path (it dominates the run time at 10^6 slaves).
     #[arg(long)]
     pub gpu_only: bool,
+    /// Only the device-resident increment beside the host-array one (10^4–10^6 slaves, every
+    /// GPU adapter): submits, readbacks and waits, host time, GPU time per pass against the copy
+    /// kernel's bandwidth, and an H100 estimate. Writes resident.md to --out.
+    #[arg(long)]
+    pub resident: bool,
 }
 
 /// Enforcement of a configuration.
@@ -51,7 +56,7 @@ enum Interval {
 }
 
 #[derive(Clone, Copy, Debug, Serialize)]
-struct Config {
+pub(crate) struct Config {
     slaves: usize,
     enforce: Enf,
     small: bool,
@@ -60,7 +65,7 @@ struct Config {
 }
 
 impl Config {
-    fn base(slaves: usize) -> Self {
+    pub(crate) fn base(slaves: usize) -> Self {
         Config {
             slaves,
             enforce: Enf::Penalty,
@@ -127,13 +132,13 @@ struct Row {
 }
 
 /// The bench scene: `n` point masses above a rigid plate of about n/4 quads.
-struct BenchScene {
-    model: Model,
-    first: usize,
+pub(crate) struct BenchScene {
+    pub(crate) model: Model,
+    pub(crate) first: usize,
     h: f64,
-    dt: f64,
-    v0: f64,
-    u: f64,
+    pub(crate) dt: f64,
+    pub(crate) v0: f64,
+    pub(crate) u: f64,
     /// Start heights.
     z0: Vec<f64>,
 }
@@ -142,7 +147,7 @@ const INCREMENTS: usize = 48;
 /// Search radius in facet sizes (the masses start at most 2.5 facets above the plate).
 const RADIUS: f64 = 3.0;
 
-fn scene(c: &Config) -> abut::Result<BenchScene> {
+pub(crate) fn scene(c: &Config) -> abut::Result<BenchScene> {
     let side = ((c.slaves as f64 / 4.0).sqrt().round() as usize).max(4);
     let h = 1.0 / side as f64;
     let dt = 1e-3;
@@ -468,7 +473,7 @@ fn search_rows(devices: &[Device], slaves: usize) -> abut::Result<Vec<SearchRow>
 /// a node is 16 B (vec4<f32>), a hit `GpuHit` (64 B), a facet 16 B (four u32), a contact output
 /// `ContactOut`, a quad facet touches 4 nodes; a plate node has 4 facets; there are about 4
 /// slaves per facet and per master node (the scene's ratio).
-fn kernel_bytes() -> Vec<(&'static str, f64)> {
+pub(crate) fn kernel_bytes() -> Vec<(&'static str, f64)> {
     use abut::passes;
     // (kernel, bytes per slave); the passes that run them are in PASSES
     let node = 16.0;
@@ -523,7 +528,7 @@ const PASSES: &[(&str, &[&str])] = &[
 
 /// The bandwidth of a copy kernel on `device` (bytes read + written per second), or of a host
 /// memory copy on the CPU path.
-fn copy_bandwidth(device: &Device) -> f64 {
+pub(crate) fn copy_bandwidth(device: &Device) -> f64 {
     const BYTES: usize = 64 << 20;
     let Some((d, q)) = device.wgpu() else {
         let src = vec![1u8; BYTES];
@@ -600,7 +605,7 @@ fn copy_bandwidth(device: &Device) -> f64 {
     5.0 * 2.0 * size as f64 / t.elapsed().as_secs_f64()
 }
 
-fn machine() -> String {
+pub(crate) fn machine() -> String {
     let cpu = std::fs::read_to_string("/proc/cpuinfo")
         .ok()
         .and_then(|s| {
@@ -723,6 +728,9 @@ fn plot(rows: &[Row], front: &[usize], path: &std::path::Path, title: &str) -> R
 
 /// Runs the benchmark.
 pub fn bench(a: &BenchArgs) -> abut::Result<()> {
+    if a.resident {
+        return crate::resident_bench::run(a);
+    }
     let mut devices: Vec<Device> = Device::all_gpus()
         .into_iter()
         .filter_map(|d| d.ok())
@@ -1006,7 +1014,7 @@ pub fn bench(a: &BenchArgs) -> abut::Result<()> {
     Ok(())
 }
 
-fn io_err(p: &std::path::Path, e: std::io::Error) -> abut::Error {
+pub(crate) fn io_err(p: &std::path::Path, e: std::io::Error) -> abut::Error {
     abut::Error::BadParameter {
         name: "bench output",
         value: format!("{}: {e}", p.display()),

@@ -1,0 +1,347 @@
+//! `abut bench --resident`: the device-resident increment beside the host-array one, on the
+//! bench's scene (point masses falling obliquely onto a rigid plate and bouncing, penalty), for
+//! 10^4–10^6 slaves on every GPU adapter. Per increment: submits, bytes read back and blocking
+//! waits (`Device::traffic`), the host's time (recording and submitting, for the resident one;
+//! the whole call minus the GPU's time, for the host-array one), the wall time, the GPU time of
+//! each pass (timestamp queries, in a separate timed run, where the adapter has them) as a
+//! fraction of the copy kernel's bandwidth, and the time an H100-class GPU would need for the
+//! compulsory bytes — an estimate, labelled as one.
+
+use std::fmt::Write as _;
+use std::time::Instant;
+
+use abut::gpu::CentralDifference;
+use abut::{Contact, Device, ResidentIo};
+
+use crate::bench::{copy_bandwidth, io_err, machine, scene, BenchArgs, Config};
+
+/// Increments timed per mode (after the first).
+const INCREMENTS: usize = 24;
+/// H100 SXM (HBM3) memory bandwidth, bytes/s, for the estimate.
+const H100_BANDWIDTH: f64 = 3.35e12;
+/// Assumed cost of one dispatch (launch and the barrier after it) on such a GPU, seconds.
+const H100_DISPATCH: f64 = 2.0e-6;
+
+/// Compulsory bytes per slave of each compute pass of a local device-resident increment (the
+/// scene has 0.25 master nodes per slave; see `bench::kernel_bytes` for the shared passes).
+fn resident_bytes() -> Vec<(&'static str, f64)> {
+    let kb: std::collections::HashMap<&str, f64> =
+        crate::bench::kernel_bytes().into_iter().collect();
+    let per_master = 0.25;
+    let nodes = 1.0 + per_master;
+    vec![
+        // positions in (16 B) and grid-local nodes out (16 B) per node; motion as before
+        ("to_local + motion + schedule", 32.0 * nodes + kb["motion"]),
+        ("local or global search", kb["local_search"]),
+        ("nearest_facet: chunks", 0.0),
+        ("nearest_facet + set_reference", 0.0),
+        (
+            "nodal_normals + penalty",
+            kb["nodal_normals"] + kb["penalty"],
+        ),
+        // add_forces: pair node (16 B), its force (16 B), the caller's force read and written
+        // (32 B) and its row (8 B), per pair node
+        (
+            "scatter_forces + gather + add_forces",
+            kb["scatter_forces"] + kb["gather"] + 72.0 * nodes,
+        ),
+        ("pair_stats", 0.0),
+        // bound_max: pair node and row per pair node
+        ("bound_max + finish_stats", 20.0 * nodes),
+        // integrate: position, velocity and force read and written, mass read, per node
+        ("integrate", 100.0 * nodes),
+    ]
+}
+
+/// One mode's measurements at one size on one device.
+struct Measured {
+    /// Wall time per increment, device completion included (ms).
+    wall_ms: f64,
+    /// Host time per increment (µs): recording and submitting (resident), or the wall time
+    /// minus the GPU's (host arrays).
+    host_us: f64,
+    submits: f64,
+    read_back: f64,
+    waits: f64,
+    /// GPU time per increment by pass label (ms), from the timed run; empty without timestamps.
+    pass_ms: Vec<(String, f64)>,
+}
+
+fn per(t: &abut::Traffic, n: usize) -> (f64, f64, f64) {
+    let n = n as f64;
+    (
+        t.submits as f64 / n,
+        t.read_back_bytes as f64 / n,
+        t.waits as f64 / n,
+    )
+}
+
+/// GPU time per increment by pass over `n` increments of `traffic`.
+fn passes(t: &abut::Traffic, n: usize) -> Vec<(String, f64)> {
+    t.pass_ns
+        .iter()
+        .map(|(k, v)| (k.clone(), v / n as f64 / 1e6))
+        .collect()
+}
+
+fn host_arrays(device: &Device, c: &Config) -> abut::Result<Measured> {
+    let sc = scene(c)?;
+    let run = |timed: bool| -> abut::Result<(f64, abut::Traffic)> {
+        device.enable_timestamps(timed);
+        let mut contact = Contact::new(device, &sc.model)?;
+        let mut x = sc.model.positions().to_vec();
+        let mut v = vec![[0.0; 3]; x.len()];
+        for vi in &mut v[sc.first..] {
+            *vi = [sc.u, 0.0, -sc.v0];
+        }
+        let mut step = |x: &mut Vec<[f64; 3]>, v: &mut Vec<[f64; 3]>| -> abut::Result<()> {
+            let r = contact.penalty_step(x, v, sc.dt)?;
+            for i in sc.first..x.len() {
+                for a in 0..3 {
+                    v[i][a] += sc.dt * r.forces[i][a];
+                    x[i][a] += sc.dt * v[i][a];
+                }
+            }
+            Ok(())
+        };
+        step(&mut x, &mut v)?;
+        let before = device.traffic().unwrap_or_default();
+        let t = Instant::now();
+        for _ in 0..INCREMENTS {
+            step(&mut x, &mut v)?;
+        }
+        let wall = t.elapsed().as_secs_f64() / INCREMENTS as f64;
+        Ok((wall, device.traffic().unwrap_or_default().since(&before)))
+    };
+    let (wall, traffic) = run(false)?;
+    let (_, timed) = run(true)?;
+    device.enable_timestamps(false);
+    let pass_ms = passes(&timed, INCREMENTS);
+    let gpu_s = pass_ms.iter().map(|(_, ms)| ms).sum::<f64>() / 1e3;
+    let (submits, read_back, waits) = per(&traffic, INCREMENTS);
+    Ok(Measured {
+        wall_ms: wall * 1e3,
+        host_us: if pass_ms.is_empty() {
+            f64::NAN
+        } else {
+            (wall - gpu_s).max(0.0) * 1e6
+        },
+        submits,
+        read_back,
+        waits,
+        pass_ms,
+    })
+}
+
+fn resident(device: &Device, c: &Config) -> abut::Result<Measured> {
+    let sc = scene(c)?;
+    let Some((d, q)) = device.wgpu() else {
+        return Err(abut::Error::BadParameter {
+            name: "device",
+            value: "CPU path".into(),
+            expected: "a GPU adapter",
+        });
+    };
+    let n_nodes = sc.model.positions().len();
+    let x0: Vec<[f32; 4]> = sc
+        .model
+        .positions()
+        .iter()
+        .map(|p| [p[0] as f32, p[1] as f32, p[2] as f32, 0.0])
+        .collect();
+    let mut v0 = vec![[0.0f32; 4]; n_nodes];
+    for v in &mut v0[sc.first..] {
+        *v = [sc.u as f32, 0.0, -sc.v0 as f32, 0.0];
+    }
+    let drops = sc.first as u32..n_nodes as u32;
+    let run = |timed: bool| -> abut::Result<(f64, f64, abut::Traffic)> {
+        device.enable_timestamps(timed);
+        let make = |data: &[[f32; 4]]| {
+            let b = d.create_buffer(&wgpu::BufferDescriptor {
+                label: Some("bench state"),
+                size: (n_nodes * 16) as u64,
+                usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST,
+                mapped_at_creation: false,
+            });
+            q.write_buffer(&b, 0, bytemuck::cast_slice(data));
+            b
+        };
+        let (x, v, f) = (make(&x0), make(&v0), make(&vec![[0.0; 4]; n_nodes]));
+        let mut contact = Contact::new(device, &sc.model)?;
+        let mut integ = CentralDifference::new(device, sc.model.masses())?;
+        let mut record = |contact: &mut Contact| -> abut::Result<f64> {
+            let t0 = Instant::now();
+            let mut enc = d.create_command_encoder(&Default::default());
+            contact.encode_increment(
+                ResidentIo::Gpu {
+                    encoder: &mut enc,
+                    positions: &x,
+                    velocities: &v,
+                    forces: &f,
+                },
+                sc.dt,
+            )?;
+            integ.encode(&mut enc, &x, &v, &f, sc.dt, [0.0; 3], drops.clone())?;
+            let cmd = enc.finish();
+            let recorded = t0.elapsed().as_secs_f64();
+            if timed {
+                // through abut, which reads the timestamps (and waits for them)
+                let mut e = d.create_command_encoder(&Default::default());
+                e.insert_debug_marker("timed increment");
+                q.submit([cmd]);
+                device.submit(e)?;
+            } else {
+                q.submit([cmd]);
+            }
+            contact.collect_stats()?;
+            Ok(recorded)
+        };
+        record(&mut contact)?;
+        let _ = d.poll(wgpu::PollType::wait_indefinitely());
+        let before = device.traffic().unwrap_or_default();
+        let (mut host, mut recording) = (0.0, 0.0);
+        let t = Instant::now();
+        for _ in 0..INCREMENTS {
+            let th = Instant::now();
+            recording += record(&mut contact)?;
+            host += th.elapsed().as_secs_f64();
+        }
+        eprintln!(
+            "  recording {:.0} µs, recording + submit + collect {:.0} µs per increment",
+            recording / INCREMENTS as f64 * 1e6,
+            host / INCREMENTS as f64 * 1e6
+        );
+        let traffic = device.traffic().unwrap_or_default().since(&before);
+        let _ = d.poll(wgpu::PollType::wait_indefinitely());
+        let wall = t.elapsed().as_secs_f64() / INCREMENTS as f64;
+        Ok((wall, host / INCREMENTS as f64, traffic))
+    };
+    let (wall, host, traffic) = run(false)?;
+    let (_, _, timed) = run(true)?;
+    device.enable_timestamps(false);
+    let (submits, read_back, waits) = per(&traffic, INCREMENTS);
+    Ok(Measured {
+        wall_ms: wall * 1e3,
+        host_us: host * 1e6,
+        submits,
+        read_back,
+        waits,
+        pass_ms: passes(&timed, INCREMENTS),
+    })
+}
+
+/// Runs the comparison and writes resident.md into `a.out`.
+pub fn run(a: &BenchArgs) -> abut::Result<()> {
+    let devices: Vec<Device> = Device::all_gpus()
+        .into_iter()
+        .filter_map(|d| d.ok())
+        .collect();
+    if devices.is_empty() {
+        return Err(abut::Error::NoAdapter {
+            detail: ": the device-resident increment needs a GPU adapter".into(),
+        });
+    }
+    let sizes: &[usize] = if a.quick {
+        &[1_000, 10_000]
+    } else {
+        &[10_000, 100_000, 1_000_000]
+    };
+    let bytes: std::collections::HashMap<&str, f64> = resident_bytes().into_iter().collect();
+    let mut md = String::new();
+    let _ = writeln!(
+        md,
+        "# Device-resident increment beside the host-array one\n\n`abut bench --resident{}` on {} — \
+         {} increments per mode after the first; the bench scene (point masses falling obliquely onto a \
+         rigid plate of quads, penalty, global search every 100 increments). Host arrays: \
+         `Contact::penalty_step` with the integration on the host. Device-resident: \
+         `Contact::encode_increment` and `gpu::CentralDifference` recorded into one encoder, one \
+         submit per increment, statistics collected from the lagged ring without waiting.\n",
+        if a.quick { " --quick" } else { "" },
+        machine(),
+        INCREMENTS
+    );
+    for device in &devices {
+        let bandwidth = copy_bandwidth(device);
+        let _ = writeln!(
+            md,
+            "## {device}\n\nCopy kernel: {:.1} GB/s (read + written).\n",
+            bandwidth / 1e9
+        );
+        let _ = writeln!(
+            md,
+            "| slaves | mode | submits / incr. | bytes read back / incr. | blocking waits / incr. | host time / incr. | wall / incr. | GPU time / incr. | H100 estimate / incr. |\n|---|---|---|---|---|---|---|---|---|"
+        );
+        let mut detail = String::new();
+        for &n in sizes {
+            eprintln!("{device}: {n} slaves");
+            let c = Config::base(n);
+            let h = host_arrays(device, &c)?;
+            let r = resident(device, &c)?;
+            let compulsory: f64 = bytes.values().sum::<f64>() * n as f64;
+            let dispatches = 14.0; // a local increment's dispatches (one pair), the integrator's included
+            let h100 = compulsory / H100_BANDWIDTH + dispatches * H100_DISPATCH;
+            for (mode, m) in [("host arrays", &h), ("device-resident", &r)] {
+                let gpu: f64 = m.pass_ms.iter().map(|(_, v)| v).sum();
+                let _ = writeln!(
+                    md,
+                    "| {n} | {mode} | {:.2} | {:.0} | {:.2} | {} | {:.2} ms | {} | {} |",
+                    m.submits,
+                    m.read_back,
+                    m.waits,
+                    if m.host_us.is_nan() {
+                        "–".into()
+                    } else {
+                        format!("{:.0} µs", m.host_us)
+                    },
+                    m.wall_ms,
+                    if m.pass_ms.is_empty() {
+                        "no timestamps".into()
+                    } else {
+                        format!("{gpu:.2} ms")
+                    },
+                    if mode == "device-resident" {
+                        format!("≈ {:.0} µs (estimate)", h100 * 1e6)
+                    } else {
+                        "–".into()
+                    }
+                );
+            }
+            if !r.pass_ms.is_empty() {
+                let _ = writeln!(
+                    detail,
+                    "\n{n} slaves, device-resident, GPU time per pass (timed run) and the share of the copy kernel's bandwidth its compulsory bytes reach:\n\n| pass | GPU time / incr. | compulsory bytes | fraction of copy bandwidth |\n|---|---|---|---|"
+                );
+                for (label, ms) in &r.pass_ms {
+                    let b = bytes.get(label.as_str()).copied().unwrap_or(0.0) * n as f64;
+                    let frac = if *ms > 0.0 && b > 0.0 {
+                        format!("{:.2}", b / (ms / 1e3) / bandwidth)
+                    } else {
+                        "–".into()
+                    };
+                    let _ = writeln!(
+                        detail,
+                        "| {label} | {ms:.3} ms | {:.1} MB | {frac} |",
+                        b / 1e6
+                    );
+                }
+            }
+        }
+        md.push_str(&detail);
+        md.push('\n');
+    }
+    let _ = writeln!(
+        md,
+        "The H100 estimate is the compulsory bytes of a local increment (the table's passes, {:.0} B \
+         per slave) at {:.2} TB/s plus {:.0} µs per dispatch for 14 dispatches — not a measurement: \
+         no GPU machine is lent to this project.",
+        bytes.values().sum::<f64>(),
+        H100_BANDWIDTH / 1e12,
+        H100_DISPATCH * 1e6
+    );
+    std::fs::create_dir_all(&a.out).map_err(|e| io_err(&a.out, e))?;
+    let path = a.out.join("resident.md");
+    std::fs::write(&path, &md).map_err(|e| io_err(&path, e))?;
+    println!("{md}");
+    println!("written: {}", path.display());
+    Ok(())
+}
