@@ -80,10 +80,13 @@ const STATUS_MAX_OVERCLOSURE: u32 = 14u; // bits of the largest overclosure in c
 const STATUS_FORCE_SCALE: u32 = 16u;  // bits of the largest |force component| of a spring in contact
 const STATUS_ROW_SCALE: u32 = 17u;    // bits of the largest bound share of a spring in contact
 const STATUS_SPILLED: u32 = 18u;      // facets whose bin entries did not fit (spilled: every slave sees them)
+const STATUS_BOX: u32 = 20u;          // 6 words: order-preserving bits of the master box, min then max
+const STATUS_NONFINITE: u32 = 26u;    // lowest node with a non-finite coordinate, NO_NODE if none
 
 // The plan of a device-resident increment: one buffer per search, u32 words (Rust twins:
-// PLAN_* in src/search/layout.rs). Words 0..16 the schedule's state, 16..40 the SearchParams
-// the schedule fitted (copied into the uniform), then PLAN_SLOT_WORDS per dispatch slot: the
+// PLAN_* in src/search/layout.rs). Words 0..16 the schedule's state, 64..88 the SearchParams
+// the schedule fitted (the search passes bind them as their uniform), then PLAN_SLOT_WORDS per
+// dispatch slot: the
 // live indirect arguments (x, y, z, 0), then the full-size ones (x, y, z, kind).
 const PLAN_SINCE_GLOBAL: u32 = 0u;  // increments since the last global search
 const PLAN_SEARCHED: u32 = 1u;      // 1 once a global search has run
@@ -93,11 +96,9 @@ const PLAN_GLOBAL: u32 = 4u;        // this increment searches globally
 const PLAN_TRIGGER: u32 = 5u;       // why (TRIGGER_*)
 const PLAN_INTERVAL: u32 = 6u;      // the schedule's interval
 const PLAN_N_SLOTS: u32 = 7u;       // dispatch slots in use
-const PLAN_NONFINITE: u32 = 8u;     // lowest node with a non-finite coordinate, NO_NODE if none
 const PLAN_FIT_FAILED: u32 = 9u;    // the grid could not be fitted (the old one was kept)
-const PLAN_BOX: u32 = 10u;          // 6 words: order-preserving bits of the master box, min then max
-const PLAN_PARAMS: u32 = 16u;       // 24 words: the fitted SearchParams
-const PLAN_SLOTS: u32 = 40u;
+const PLAN_PARAMS: u32 = 64u;       // 24 words: the fitted SearchParams (byte 256: bound as the uniform)
+const PLAN_SLOTS: u32 = 88u;
 const PLAN_SLOT_WORDS: u32 = 8u;
 const SLOT_GLOBAL: u32 = 1u;        // slot kind: dispatched in global increments
 const SLOT_LOCAL: u32 = 2u;         // slot kind: dispatched in local increments

@@ -12,7 +12,8 @@
 // Bindings: 0 pp (uniform PenaltyParams), 1 pair_nodes (node, slave index, adjacency start,
 //           end), 2 facet_nodes (pair-node index of each active facet's nodes, NO_NODE padded),
 //           3 hits, 4 out (ContactOut), 5 status (read: the two scale words), 6 acc (8 words per
-//           pair node: fx, fy, fz, row as (low, high) pairs; zeroed before scatter_forces),
+//           pair node: fx, fy, fz, row as (low, high) pairs; zero before scatter_forces: the
+//           buffer starts zeroed and gather zeroes what it reads),
 //           7 forces (vec4 per pair node), 8 host_forces (the caller's force buffer: vec4<f32>
 //           per model node, xyz summed into, w left alone), 9 rows (f32 per model node: the
 //           node-wise bound's rows summed over the pairs of the increment).
@@ -143,7 +144,8 @@ fn gather(@builtin(workgroup_id) wg: vec3<u32>,
     var sum: array<f32, 4>;
     for (var c = 0u; c < 4u; c++) {
         let w = 2u * (4u * i + c);
-        let a = vec2<u32>(atomicLoad(&acc[w]), atomicLoad(&acc[w + 1u]));
+        // read and zeroed: the sums start from zero at the next increment's scatter
+        let a = vec2<u32>(atomicExchange(&acc[w], 0u), atomicExchange(&acc[w + 1u], 0u));
         sum[c] = from_fixed(a, select(inv_f, inv_r, c == 3u));
     }
     forces[i] = vec4<f32>(f + vec3<f32>(sum[0], sum[1], sum[2]), row + sum[3]);

@@ -2,30 +2,46 @@
 // this increment searches globally, the grid it searches in, and the dispatch sizes of every
 // pass that depends on that choice. CPU mirror: src/cpu/schedule.rs.
 //
-// Bindings: 0 params (uniform SearchParams: the grid of the last global search), 1 plan (the
-//           search's plan words, PLAN_* in common.wgsl), 2 status (read: the motion budget;
-//           written: the budget flag is cleared once this increment searches globally), 3 args
-//           (the nearest-facet chunk dispatch, emptied in a local increment).
-// Dispatch: one invocation (after to_local and motion, before every pass it sizes); the plan's
-//           SearchParams are then copied into the uniform.
+// Bindings: 1 plan (the search's plan words, PLAN_* in common.wgsl; its SearchParams words are
+//           the grid of the last global search, and what every later pass binds as its
+//           uniform), 2 status (read: the motion budget and the master box; written: the budget
+//           flag is cleared once this increment searches globally), 3 args (the nearest-facet
+//           chunk dispatch, emptied in a local increment).
+// Dispatch: one invocation, after to_local and motion and before every pass it sizes (in the
+//           same compute pass: WebGPU's usage scopes are per dispatch).
 // Invariants: global when no global search has run yet, when the host asked for one, when the
 //             interval came round, when self-contact was crowded at the last one, or when the
 //             motion budget is used up (the motion pass ran just before): the host schedule's
 //             rules, so both choose the same increments. A global increment fits the grid to the
-//             master box to_local raised, as Grid::fit does on the host (the origin snapped to a
+//             master box to_local raised (STATUS_BOX), as Grid::fit does on the host (the origin snapped to a
 //             power of two, cells of base_cell grown until at most cell_capacity cells): the
 //             buffers were sized for cell_capacity, so no position can overflow them. A box that
 //             cannot be fitted (no finite master node) keeps the last grid and is counted in
 //             PLAN_FIT_FAILED. Each dispatch slot gets its full size when its kind matches the
 //             increment and zero workgroups otherwise. No loop runs past 64 iterations.
 
-@group(0) @binding(0) var<uniform> params: SearchParams;
 @group(0) @binding(1) var<storage, read_write> plan: array<u32>;
 @group(0) @binding(2) var<storage, read_write> status: array<u32>;
 @group(0) @binding(3) var<storage, read_write> args: array<u32>;
 
 // Most dispatch slots a plan has (Rust twin: MAX_PLAN_SLOTS).
 const MAX_PLAN_SLOTS: u32 = 16u;
+// Words of SearchParams the schedule reads and writes (Rust: the struct's field order).
+const P_CELL_SIZE: u32 = 0u;
+const P_INV_CELL_SIZE: u32 = 1u;
+const P_RADIUS: u32 = 2u;
+const P_BIN_MARGIN: u32 = 3u;
+const P_DIMS: u32 = 4u;
+const P_N_CELLS: u32 = 7u;
+const P_DIM: u32 = 11u;
+const P_FLAGS: u32 = 13u;
+const P_GRID_LO: u32 = 16u;
+const P_BASE_CELL: u32 = 19u;
+const P_CELL_CAPACITY: u32 = 20u;
+
+fn param(k: u32) -> u32 {
+    return plan[PLAN_PARAMS + k];
+}
 
 // Cells of a grid of cell size h over extents ext in `dim` dimensions.
 fn cell_count(ext: vec3<f32>, h: f32, dim: u32) -> f32 {
@@ -36,15 +52,15 @@ fn cell_count(ext: vec3<f32>, h: f32, dim: u32) -> f32 {
 
 // Fits the grid to the plan's box into the plan's SearchParams words; false when it cannot.
 fn fit_grid() -> bool {
-    if (plan[PLAN_BOX] > plan[PLAN_BOX + 3u]) { return false; } // no finite master node
-    let dim = params.dim;
-    let r = params.radius;
+    if (status[STATUS_BOX] > status[STATUS_BOX + 3u]) { return false; } // no finite master node
+    let dim = param(P_DIM);
+    let r = bitcast<f32>(param(P_RADIUS));
     var lo = vec3<f32>(0.0);
     var hi = vec3<f32>(0.0);
     var span = 0.0;
     for (var a = 0u; a < dim; a++) {
-        lo[a] = from_ordered_bits(plan[PLAN_BOX + a]);
-        hi[a] = from_ordered_bits(plan[PLAN_BOX + 3u + a]);
+        lo[a] = from_ordered_bits(status[STATUS_BOX + a]);
+        hi[a] = from_ordered_bits(status[STATUS_BOX + 3u + a]);
         span = max(span, hi[a] - lo[a] + 2.0 * r);
     }
     let q = exp2(floor(log2(span / 16.0)));
@@ -56,8 +72,8 @@ fn fit_grid() -> bool {
         ext[a] = hi[a] + r - g[a];
         volume *= ext[a];
     }
-    let budget = f32(params.cell_capacity);
-    var h = params.base_cell;
+    let budget = f32(param(P_CELL_CAPACITY));
+    var h = bitcast<f32>(param(P_BASE_CELL));
     if (cell_count(ext, h, dim) > budget) {
         h = max(h, pow(volume / budget, 1.0 / f32(dim)));
         for (var k = 0u; k < 64u && cell_count(ext, h, dim) > budget; k++) { h *= 1.1; }
@@ -70,16 +86,14 @@ fn fit_grid() -> bool {
         top = max(top, f32(dims[a]) * h);
     }
     let b = PLAN_PARAMS;
-    plan[b + 0u] = bitcast<u32>(h);
-    plan[b + 1u] = bitcast<u32>(1.0 / h);
-    plan[b + 3u] = bitcast<u32>(r * 1.0001 + 8.0 * 1.1920929e-7 * top);
-    plan[b + 4u] = dims.x;
-    plan[b + 5u] = dims.y;
-    plan[b + 6u] = dims.z;
-    plan[b + 7u] = dims.x * dims.y * dims.z;
-    plan[b + 16u] = bitcast<u32>(g.x);
-    plan[b + 17u] = bitcast<u32>(g.y);
-    plan[b + 18u] = bitcast<u32>(g.z);
+    plan[b + P_CELL_SIZE] = bitcast<u32>(h);
+    plan[b + P_INV_CELL_SIZE] = bitcast<u32>(1.0 / h);
+    plan[b + P_BIN_MARGIN] = bitcast<u32>(r * 1.0001 + 8.0 * 1.1920929e-7 * top);
+    for (var a = 0u; a < 3u; a++) {
+        plan[b + P_DIMS + a] = dims[a];
+        plan[b + P_GRID_LO + a] = bitcast<u32>(g[a]);
+    }
+    plan[b + P_N_CELLS] = dims.x * dims.y * dims.z;
     return true;
 }
 
@@ -92,7 +106,7 @@ fn schedule() {
         trigger = TRIGGER_REQUESTED;
     } else if (plan[PLAN_SINCE_GLOBAL] + 1u >= plan[PLAN_INTERVAL]) {
         trigger = TRIGGER_INTERVAL;
-    } else if ((params.flags & FLAG_SELF_CONTACT) != 0u && plan[PLAN_CROWDED] != 0u) {
+    } else if ((param(P_FLAGS) & FLAG_SELF_CONTACT) != 0u && plan[PLAN_CROWDED] != 0u) {
         trigger = TRIGGER_CROWDED;
     } else if (status[STATUS_BUDGET_EXCEEDED] != 0u) {
         trigger = TRIGGER_BUDGET;

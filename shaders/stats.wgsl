@@ -9,9 +9,8 @@
 //           each pair after every pair's add_forces; finish_stats one invocation, last.
 // Invariants: increments are positive f32 and overclosures and rows non-negative f32, so their
 //             minima and maxima are taken on the bits; every other word is an integer sum, so
-//             the words do not depend on the order of the invocations. pair_stats also resets
-//             the plan's per-increment words (the box, the first non-finite node) for the next
-//             increment and keeps the crowding of a global search for the next schedule.
+//             the words do not depend on the order of the invocations. pair_stats also keeps the
+//             crowding of a global search for the next schedule.
 
 @group(0) @binding(0) var<storage, read> status: array<u32>;
 @group(0) @binding(1) var<storage, read_write> plan: array<u32>;
@@ -48,7 +47,7 @@ fn pair_stats() {
     atomicMax(&stats[STAT_NEEDED], status[STATUS_NEEDED_ENTRIES]);
     atomicAdd(&stats[STAT_LOCAL_CAPPED], status[STATUS_LOCAL_CAPPED]);
     atomicMax(&stats[STAT_MOTION], status[STATUS_MOTION]);
-    atomicMin(&stats[STAT_NONFINITE], plan[PLAN_NONFINITE]);
+    atomicMin(&stats[STAT_NONFINITE], status[STATUS_NONFINITE]);
     atomicMax(&stats[STAT_FIT_FAILED], plan[PLAN_FIT_FAILED]);
     if (plan[PLAN_GLOBAL] != 0u) {
         atomicAdd(&stats[STAT_GLOBAL], 1u);
@@ -56,11 +55,6 @@ fn pair_stats() {
         plan[PLAN_CROWDED] = status[STATUS_CROWDED];
     }
     plan[PLAN_GLOBAL] = 0u;
-    plan[PLAN_NONFINITE] = NO_NODE;
-    for (var a = 0u; a < 3u; a++) {
-        plan[PLAN_BOX + a] = 0xffffffffu;
-        plan[PLAN_BOX + 3u + a] = 0u;
-    }
 }
 
 @compute @workgroup_size(64)

@@ -4,17 +4,17 @@
 // Bindings: 0 params (uniform SearchParams), 1 frame (uniform FrameParams: the frame origin),
 //           2 positions (the caller's buffer: one vec4<f32> per model node, model frame, w
 //           ignored), 3 nodes (the search's grid-local nodes; w, the mass, is kept),
-//           4 adjacency (as in local_search.wgsl: tells master nodes), 5 status, 6 plan (the
-//           device-resident plan: the master box and the first non-finite node are raised here).
+//           4 adjacency (as in local_search.wgsl: tells master nodes), 5 status (the master box
+//           and the first non-finite node are raised here).
 // Dispatch: one invocation per model node, ITEM_WORKGROUP per workgroup, folded into 2D.
 // Invariants: nothing is read back; the subtraction is in f32 (the caller's positions are f32
 //             already, so a model far from its origin should keep them relative to a nearby
 //             point). A master node outside the grid's box sets STATUS_FRAME_STALE (positions
 //             from the host's grid: the host refits and runs again). Every master node widens
-//             the plan's box (atomicMin/Max on order-preserving bits, so the box does not depend
-//             on the order): the grid a device-resident increment fits. A node with a NaN or
-//             infinite coordinate is named in PLAN_NONFINITE (the lowest such node) and left out
-//             of the box.
+//             STATUS_BOX (atomicMin/Max on order-preserving bits, so the box does not depend on
+//             the order): the grid a device-resident increment fits. A node with a NaN or
+//             infinite coordinate is named in STATUS_NONFINITE (the lowest such node) and left
+//             out of the box.
 
 // Rust twin: FrameParams (src/search/layout.rs), 32 bytes.
 struct FrameParams {
@@ -31,7 +31,6 @@ struct FrameParams {
 @group(0) @binding(3) var<storage, read_write> nodes: array<vec4<f32>>;
 @group(0) @binding(4) var<storage, read> adjacency: array<u32>;
 @group(0) @binding(5) var<storage, read_write> status: array<atomic<u32>>;
-@group(0) @binding(6) var<storage, read_write> plan: array<atomic<u32>>;
 
 @compute @workgroup_size(64)
 fn to_local(@builtin(workgroup_id) wg: vec3<u32>,
@@ -42,7 +41,7 @@ fn to_local(@builtin(workgroup_id) wg: vec3<u32>,
     let x = positions[i].xyz - frame.origin.xyz;
     nodes[i] = vec4<f32>(x, nodes[i].w);
     if (non_finite(x.x) || non_finite(x.y) || non_finite(x.z)) {
-        atomicMin(&plan[PLAN_NONFINITE], i);
+        atomicMin(&status[STATUS_NONFINITE], i);
         return;
     }
     if (adjacency[i] != adjacency[i + 1u]) {
@@ -51,8 +50,8 @@ fn to_local(@builtin(workgroup_id) wg: vec3<u32>,
         let inside = all(g >= vec3<f32>(0.0)) && all(g <= top);
         if (!inside) { atomicStore(&status[STATUS_FRAME_STALE], 1u); }
         for (var a = 0u; a < 3u; a++) {
-            atomicMin(&plan[PLAN_BOX + a], ordered_bits(x[a]));
-            atomicMax(&plan[PLAN_BOX + 3u + a], ordered_bits(x[a]));
+            atomicMin(&status[STATUS_BOX + a], ordered_bits(x[a]));
+            atomicMax(&status[STATUS_BOX + 3u + a], ordered_bits(x[a]));
         }
     }
 }

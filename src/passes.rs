@@ -344,12 +344,7 @@ pub const SET_REFERENCE: Pass = Pass {
 pub const SCHEDULE: Pass = Pass {
     stem: "schedule",
     entry: "schedule",
-    bindings: &[
-        b(0, SearchParams, U),
-        b(1, Plan, RW),
-        b(2, Status, RW),
-        b(3, Args, RW),
-    ],
+    bindings: &[b(1, Plan, RW), b(2, Status, RW), b(3, Args, RW)],
     items: Items::One,
     per_workgroup: 1,
 };
@@ -383,7 +378,6 @@ pub const TO_LOCAL: Pass = Pass {
         b(3, Nodes, RW),
         b(4, Adjacency, R),
         b(5, Status, RW),
-        b(6, Plan, RW),
     ],
     items: Items::Nodes,
     per_workgroup: ITEM_WORKGROUP,

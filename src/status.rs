@@ -139,6 +139,49 @@ pub const STATUS_TABLE: [StatusWord; STATUS_WORDS] = [
         0,
     ),
     w(19, "unused", Owner::Unused, 0),
+    w(
+        STATUS_BOX,
+        "master box min x (ordered bits)",
+        Owner::Search,
+        u32::MAX,
+    ),
+    w(
+        STATUS_BOX + 1,
+        "master box min y (ordered bits)",
+        Owner::Search,
+        u32::MAX,
+    ),
+    w(
+        STATUS_BOX + 2,
+        "master box min z (ordered bits)",
+        Owner::Search,
+        u32::MAX,
+    ),
+    w(
+        STATUS_BOX + 3,
+        "master box max x (ordered bits)",
+        Owner::Search,
+        0,
+    ),
+    w(
+        STATUS_BOX + 4,
+        "master box max y (ordered bits)",
+        Owner::Search,
+        0,
+    ),
+    w(
+        STATUS_BOX + 5,
+        "master box max z (ordered bits)",
+        Owner::Search,
+        0,
+    ),
+    w(
+        STATUS_NONFINITE,
+        "lowest node with a non-finite coordinate",
+        Owner::Search,
+        u32::MAX,
+    ),
+    w(27, "unused", Owner::Unused, 0),
 ];
 
 /// Every word at its reset value (the image the GPU executors copy resets from).

@@ -173,28 +173,40 @@ impl Contact {
                 }
                 inc.begin(encoder);
                 let mut max_dim = u32::MAX;
-                for (k, pr) in self.pairs.iter_mut().enumerate() {
+                // what may allocate or upload first: bind groups on the caller's buffers, params
+                for pr in self.pairs.iter_mut() {
                     let pp = pr.setup.params(dt, dt_ref);
                     let g = pr.search.gpu_mut().ok_or_else(mixed)?;
-                    g.encode_resident(encoder, positions)?;
-                    max_dim = g.max_workgroups_per_dim();
+                    g.prepare_resident(positions)?;
+                    max_dim = max_dim.min(g.max_workgroups_per_dim());
                     let (shared, generation) = g.shared_buffers();
                     let PenaltyExec::Gpu(p) = &mut pr.exec else {
                         return Err(mixed());
                     };
-                    p.encode_resident(
-                        encoder,
-                        &shared,
-                        generation,
-                        &pp,
-                        velocities,
-                        forces,
-                        inc.rows(),
-                        max_dim,
-                    )?;
-                    inc.pair(encoder, k, max_dim);
+                    p.prepare_resident(&shared, generation, &pp, velocities, forces, inc.rows())?;
                 }
-                inc.finish(encoder, max_dim);
+                // then the copies (resets) and one compute pass for every pair's dispatches
+                let mut groups = Vec::new();
+                for (k, pr) in self.pairs.iter().enumerate() {
+                    let g = pr.search.gpu().ok_or_else(mixed)?;
+                    let PenaltyExec::Gpu(p) = &pr.exec else {
+                        return Err(mixed());
+                    };
+                    g.resident_copies(encoder);
+                    groups.extend(g.resident_dispatches());
+                    groups.extend(p.resident_dispatches());
+                    groups.push(inc.pair_dispatch(k));
+                }
+                groups.push(inc.finish_dispatch());
+                crate::gpu::record_groups(
+                    inc.context(),
+                    encoder,
+                    "device-resident increment",
+                    &groups,
+                    max_dim,
+                );
+                drop(groups);
+                inc.end(encoder);
                 inc.take_uncaptured()
             }
             (

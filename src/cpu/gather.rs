@@ -127,7 +127,7 @@ pub fn gather(
     pair_nodes: &[PairNode],
     out: &[ContactOut],
     status: &[u32],
-    acc: &[u32],
+    acc: &mut [u32],
     forces: &mut [[f32; 4]],
 ) {
     let inv_f = pow2(-fixed_exponent(status[STATUS_FORCE_SCALE], pp.n_slaves));
@@ -145,6 +145,8 @@ pub fn gather(
             let w = 2 * (4 * i + c);
             let inv = if c == 3 { inv_r } else { inv_f };
             *s = from_fixed([acc[w], acc[w + 1]], inv);
+            acc[w] = 0;
+            acc[w + 1] = 0;
         }
         forces[i] = [f[0] + sum[0], f[1] + sum[1], f[2] + sum[2], row + sum[3]];
     }

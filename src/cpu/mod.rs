@@ -371,7 +371,7 @@ impl CpuPenalty {
             &setup.pair_nodes,
             &self.out,
             status,
-            &self.acc,
+            &mut self.acc,
             &mut self.forces,
         );
     }

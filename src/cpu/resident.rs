@@ -31,8 +31,6 @@ impl CpuSearch {
         params.flags |= FLAG_RESIDENT;
         let mut plan = vec![0u32; PLAN_WORDS];
         plan[PLAN_INTERVAL] = interval;
-        plan[PLAN_NONFINITE] = u32::MAX;
-        plan[PLAN_BOX..PLAN_BOX + 3].fill(u32::MAX);
         plan[PLAN_PARAMS..PLAN_PARAMS + 24].copy_from_slice(bytemuck::cast_slice(&[params]));
         let levels = ScanLevels::new(params.cell_capacity + 1);
         self.ws.scan.clear();
@@ -127,7 +125,6 @@ impl CpuSearch {
             &mut prep.nodes,
             &prep.adjacency,
             &mut status,
-            &mut r.plan,
         );
         if r.anchored {
             let anchors = self.anchors.as_deref().unwrap_or(&[]);
@@ -152,10 +149,8 @@ impl CpuSearch {
             &mut status,
             &self.ws.hits,
         );
-        schedule::schedule(&params, &mut r.plan, &mut status, &mut r.args);
-        params = bytemuck::pod_read_unaligned(bytemuck::cast_slice(
-            &r.plan[PLAN_PARAMS..PLAN_PARAMS + 24],
-        ));
+        schedule::schedule(&mut r.plan, &mut status, &mut r.args);
+        params = schedule::plan_params(&r.plan);
         if r.plan[PLAN_GLOBAL] == 0 {
             local_search::local_search(
                 &params,

@@ -11,8 +11,8 @@ fn cell_count(ext: [f32; 3], h: f32, dim: u32) -> f32 {
 
 /// Fits the grid to the plan's box into the plan's SearchParams words; false when it cannot
 /// (WGSL: `fit_grid`).
-fn fit_grid(params: &SearchParams, plan: &mut [u32]) -> bool {
-    if plan[PLAN_BOX] > plan[PLAN_BOX + 3] {
+fn fit_grid(params: &SearchParams, plan: &mut [u32], status: &[u32]) -> bool {
+    if status[STATUS_BOX] > status[STATUS_BOX + 3] {
         return false;
     }
     let dim = params.dim as usize;
@@ -20,8 +20,8 @@ fn fit_grid(params: &SearchParams, plan: &mut [u32]) -> bool {
     let (mut lo, mut hi) = ([0.0f32; 3], [0.0f32; 3]);
     let mut span = 0.0f32;
     for a in 0..dim {
-        lo[a] = from_ordered_bits(plan[PLAN_BOX + a]);
-        hi[a] = from_ordered_bits(plan[PLAN_BOX + 3 + a]);
+        lo[a] = from_ordered_bits(status[STATUS_BOX + a]);
+        hi[a] = from_ordered_bits(status[STATUS_BOX + 3 + a]);
         span = span.max(hi[a] - lo[a] + 2.0 * r);
     }
     let q = (span / 16.0).log2().floor().exp2();
@@ -65,9 +65,15 @@ fn fit_grid(params: &SearchParams, plan: &mut [u32]) -> bool {
     true
 }
 
+/// The SearchParams words of a plan.
+pub fn plan_params(plan: &[u32]) -> SearchParams {
+    bytemuck::pod_read_unaligned(bytemuck::cast_slice(&plan[PLAN_PARAMS..PLAN_PARAMS + 24]))
+}
+
 /// One "invocation": global or local, the fitted grid, the dispatch slots; `args` is the
-/// nearest-facet chunk dispatch (WGSL: `schedule`).
-pub fn schedule(params: &SearchParams, plan: &mut [u32], status: &mut [u32], args: &mut [u32; 3]) {
+/// nearest-facet chunk dispatch (WGSL: `schedule`, which reads the params from the plan too).
+pub fn schedule(plan: &mut [u32], status: &mut [u32], args: &mut [u32; 3]) {
+    let params = plan_params(plan);
     let trigger = if plan[PLAN_SEARCHED] == 0 {
         TRIGGER_FIRST
     } else if plan[PLAN_FORCE] != 0 {
@@ -83,7 +89,7 @@ pub fn schedule(params: &SearchParams, plan: &mut [u32], status: &mut [u32], arg
     };
     let global = trigger != TRIGGER_LOCAL;
     if global {
-        if !fit_grid(params, plan) {
+        if !fit_grid(&params, plan, status) {
             plan[PLAN_FIT_FAILED] += 1;
         }
         plan[PLAN_SINCE_GLOBAL] = 0;

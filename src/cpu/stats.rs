@@ -30,8 +30,7 @@ pub fn reset_image() -> [u32; STATS_RESET_WORDS] {
     w
 }
 
-/// One "invocation" per pair: its status words into the statistics; the plan's per-increment
-/// words reset (WGSL: `pair_stats`).
+/// One "invocation" per pair: its status words into the statistics (WGSL: `pair_stats`).
 pub fn pair_stats(status: &[u32], plan: &mut [u32], stats: &mut [u32; 16]) {
     stats[STABLE_DT] = stats[STABLE_DT].min(status[STATUS_DT_STABLE]);
     stats[APPROACH_DT] = stats[APPROACH_DT].min(status[STATUS_DT_APPROACH]);
@@ -42,7 +41,7 @@ pub fn pair_stats(status: &[u32], plan: &mut [u32], stats: &mut [u32; 16]) {
     stats[NEEDED] = stats[NEEDED].max(status[STATUS_NEEDED_ENTRIES]);
     stats[LOCAL_CAPPED] += status[STATUS_LOCAL_CAPPED];
     stats[MOTION] = stats[MOTION].max(status[STATUS_MOTION]);
-    stats[NONFINITE] = stats[NONFINITE].min(plan[PLAN_NONFINITE]);
+    stats[NONFINITE] = stats[NONFINITE].min(status[STATUS_NONFINITE]);
     stats[FIT_FAILED] = stats[FIT_FAILED].max(plan[PLAN_FIT_FAILED]);
     if plan[PLAN_GLOBAL] != 0 {
         stats[GLOBAL] += 1;
@@ -52,11 +51,6 @@ pub fn pair_stats(status: &[u32], plan: &mut [u32], stats: &mut [u32; 16]) {
         plan[PLAN_CROWDED] = status[STATUS_CROWDED];
     }
     plan[PLAN_GLOBAL] = 0;
-    plan[PLAN_NONFINITE] = u32::MAX;
-    for a in 0..3 {
-        plan[PLAN_BOX + a] = u32::MAX;
-        plan[PLAN_BOX + 3 + a] = 0;
-    }
 }
 
 /// One "invocation" per pair node: the largest row of the node-wise bound (WGSL: `bound_max`).

@@ -1,11 +1,11 @@
 //! CPU mirror of `shaders/to_local.wgsl`: model-frame f32 positions into the local frame.
 
 use crate::search::layout::{
-    ordered_bits, FrameParams, SearchParams, PLAN_BOX, PLAN_NONFINITE, STATUS_FRAME_STALE,
+    ordered_bits, FrameParams, SearchParams, STATUS_BOX, STATUS_FRAME_STALE, STATUS_NONFINITE,
 };
 
 /// One "invocation" per model node; keeps each node's mass (w), flags a master node outside
-/// the grid's box, widens the plan's master box and names the lowest non-finite node.
+/// the grid's box, widens the master box and names the lowest non-finite node (status words).
 pub fn to_local(
     params: &SearchParams,
     frame: &FrameParams,
@@ -13,7 +13,6 @@ pub fn to_local(
     nodes: &mut [[f32; 4]],
     adjacency: &[u32],
     status: &mut [u32],
-    plan: &mut [u32],
 ) {
     let top = [
         params.dims_x as f32 * params.cell_size,
@@ -26,7 +25,7 @@ pub fn to_local(
         }
         let x = nodes[i];
         if x[..3].iter().any(|v| !v.is_finite()) {
-            plan[PLAN_NONFINITE] = plan[PLAN_NONFINITE].min(i as u32);
+            status[STATUS_NONFINITE] = status[STATUS_NONFINITE].min(i as u32);
             continue;
         }
         if adjacency[i] != adjacency[i + 1] {
@@ -38,8 +37,8 @@ pub fn to_local(
                 status[STATUS_FRAME_STALE] = 1;
             }
             for a in 0..3 {
-                plan[PLAN_BOX + a] = plan[PLAN_BOX + a].min(ordered_bits(x[a]));
-                plan[PLAN_BOX + 3 + a] = plan[PLAN_BOX + 3 + a].max(ordered_bits(x[a]));
+                status[STATUS_BOX + a] = status[STATUS_BOX + a].min(ordered_bits(x[a]));
+                status[STATUS_BOX + 3 + a] = status[STATUS_BOX + 3 + a].max(ordered_bits(x[a]));
             }
         }
     }

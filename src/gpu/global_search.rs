@@ -261,7 +261,7 @@ impl GpuSearch {
             plan: device.create_buffer(&wgpu::BufferDescriptor {
                 label: Some("device-resident plan"),
                 size: (crate::search::layout::PLAN_WORDS * 4) as u64,
-                usage: U::STORAGE | U::INDIRECT | U::COPY_SRC | U::COPY_DST,
+                usage: U::STORAGE | U::INDIRECT | U::UNIFORM | U::COPY_SRC | U::COPY_DST,
                 mapped_at_creation: false,
             }),
         };

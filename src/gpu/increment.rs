@@ -177,35 +177,46 @@ impl GpuIncrement {
         );
     }
 
-    /// Encodes pair `k`'s statistics (after its passes).
-    pub(crate) fn pair(&self, enc: &mut wgpu::CommandEncoder, k: usize, max_dim: u32) {
+    /// Pair `k`'s statistics (after its passes).
+    pub(crate) fn pair_dispatch(&self, k: usize) -> super::Group<'_> {
         let g = &self.pairs[k];
-        super::run_pass(
-            &self.ctx,
-            enc,
+        (
             "pair_stats",
-            &[(&self.pair_stats, &g.pair_stats, 1, 1)],
-            max_dim,
-        );
+            vec![super::Dispatch::Direct((
+                &self.pair_stats,
+                &g.pair_stats,
+                1,
+                1,
+            ))],
+        )
     }
 
-    /// Encodes the end of an increment: the bound's largest row, the stable increment, and a
-    /// copy of the statistics into a free staging buffer of the ring (none free: dropped).
-    pub(crate) fn finish(&mut self, enc: &mut wgpu::CommandEncoder, max_dim: u32) {
-        let mut work: Vec<super::Work<'_>> = self
+    /// The end of an increment: the bound's largest row and the stable increment.
+    pub(crate) fn finish_dispatch(&self) -> super::Group<'_> {
+        let mut work: Vec<super::Dispatch<'_>> = self
             .pairs
             .iter()
             .map(|g| {
-                (
+                super::Dispatch::Direct((
                     &self.bound_max,
                     &g.bound_max,
                     g.n_pair_nodes,
                     ITEM_WORKGROUP,
-                )
+                ))
             })
             .collect();
-        work.push((&self.finish_stats, &self.finish_group, 1, 1));
-        super::run_pass(&self.ctx, enc, "bound_max + finish_stats", &work, max_dim);
+        work.push(super::Dispatch::Direct((
+            &self.finish_stats,
+            &self.finish_group,
+            1,
+            1,
+        )));
+        ("bound_max + finish_stats", work)
+    }
+
+    /// Encodes, after the increment's compute pass, a copy of the statistics into a free staging
+    /// buffer of the ring (none free: dropped, and counted).
+    pub(crate) fn end(&mut self, enc: &mut wgpu::CommandEncoder) {
         match self
             .ring
             .iter()
@@ -217,6 +228,11 @@ impl GpuIncrement {
             }
             None => self.dropped += 1,
         }
+    }
+
+    /// The device.
+    pub(crate) fn context(&self) -> &GpuContext {
+        &self.ctx
     }
 
     /// The statistics of increments whose staging buffers the device has finished with, in

@@ -67,6 +67,77 @@ pub(crate) fn run_indirect_pass(
     }
 }
 
+/// One dispatch among others of a device-resident increment: direct (pipeline, bind group,
+/// items, items per workgroup), or indirect from the (x, y, z) words at a byte offset of a buffer.
+pub(crate) enum Dispatch<'a> {
+    /// Workgroups known when recording.
+    Direct(Work<'a>),
+    /// Workgroups the device wrote.
+    Indirect(
+        &'a wgpu::ComputePipeline,
+        &'a wgpu::BindGroup,
+        &'a wgpu::Buffer,
+        u64,
+    ),
+}
+
+/// Dispatches under one label (a kernel or a few that belong together).
+pub(crate) type Group<'a> = (&'static str, Vec<Dispatch<'a>>);
+
+/// Records `groups` in order: all in one compute pass (WebGPU's usage scopes are per dispatch,
+/// so a dispatch may read as its indirect arguments or uniform what an earlier one wrote), or,
+/// with timestamps on, one compute pass per group so that each gets its own time.
+pub(crate) fn record_groups(
+    ctx: &crate::device::GpuContext,
+    enc: &mut wgpu::CommandEncoder,
+    label: &str,
+    groups: &[Group<'_>],
+    max_dim: u32,
+) {
+    if let Ok(mut t) = ctx.traffic.lock() {
+        for (label, work) in groups {
+            *t.dispatches.entry(label.to_string()).or_default() += work.len() as u64;
+            t.workgroups += work
+                .iter()
+                .map(|d| match d {
+                    Dispatch::Direct((_, _, n, per)) => n.div_ceil((*per).max(1)) as u64,
+                    Dispatch::Indirect(..) => 0,
+                })
+                .sum::<u64>();
+        }
+    }
+    let mut profiler = ctx.profiler.lock().ok();
+    let timed = profiler.as_ref().is_some_and(|p| p.is_some());
+    let record = |pass: &mut wgpu::ComputePass<'_>, work: &[Dispatch<'_>]| {
+        for d in work {
+            match *d {
+                Dispatch::Direct((pipe, group, n, per)) => {
+                    let (x, y) = crate::search::layout::fold_dispatch(n, per, max_dim);
+                    pass.set_pipeline(pipe);
+                    pass.set_bind_group(0, group, &[]);
+                    pass.dispatch_workgroups(x, y, 1);
+                }
+                Dispatch::Indirect(pipe, group, args, offset) => {
+                    pass.set_pipeline(pipe);
+                    pass.set_bind_group(0, group, &[]);
+                    pass.dispatch_workgroups_indirect(args, offset);
+                }
+            }
+        }
+    };
+    if timed {
+        for (label, work) in groups {
+            let mut pass = begin_pass(&mut profiler, enc, label);
+            record(&mut pass, work);
+        }
+    } else {
+        let mut pass = begin_pass(&mut profiler, enc, label);
+        for (_, work) in groups {
+            record(&mut pass, work);
+        }
+    }
+}
+
 /// Begins compute pass `label`, with timestamps around it when the profiler has room.
 fn begin_pass<'e>(
     profiler: &mut Option<std::sync::MutexGuard<'_, Option<Profiler>>>,

@@ -66,8 +66,6 @@ struct ResidentGroups {
     key: (u64, wgpu::Buffer, wgpu::Buffer, wgpu::Buffer),
     groups: Groups,
     add_forces: wgpu::BindGroup,
-    /// The search's status buffer and its reset image.
-    status: (wgpu::Buffer, wgpu::Buffer),
 }
 
 fn storage(
@@ -264,22 +262,20 @@ impl GpuPenalty {
         &self.pair_nodes
     }
 
-    /// Encodes the penalty part of one device-resident increment after its search (`search`,
-    /// whose bind groups are at `generation`): normals, penalty, the fixed-point gather, and each
-    /// pair node's force added into the caller's `forces` (`vec4<f32>` per model node, xyz) and
-    /// its bound row into `rows`. Velocities come from the caller's `velocities` (`vec4<f32>` per
-    /// model node, the half step before). `params` are uploaded only when they change.
+    /// Readies the penalty part of a device-resident increment after its search (`search`,
+    /// whose bind groups are at `generation`): `params` uploaded when they change, the bind groups
+    /// on the caller's `velocities` (`vec4<f32>` per model node, the half step before) and
+    /// `forces` (`vec4<f32>` per model node, xyz summed into) and on `rows` built once per set of
+    /// buffers.
     #[allow(clippy::too_many_arguments)]
-    pub(crate) fn encode_resident(
+    pub(crate) fn prepare_resident(
         &mut self,
-        enc: &mut wgpu::CommandEncoder,
         search: &SharedBuffers<'_>,
         generation: u64,
         params: &PenaltyParams,
         velocities: &wgpu::Buffer,
         forces: &wgpu::Buffer,
         rows: &wgpu::Buffer,
-        max_dim: u32,
     ) -> Result<()> {
         if self.resident_params.as_ref() != Some(params) {
             super::upload(&self.ctx, &self.params, 0, bytemuck::bytes_of(params));
@@ -303,40 +299,36 @@ impl GpuPenalty {
                 key,
                 groups,
                 add_forces,
-                status: (search.status.clone(), search.status_reset.clone()),
             });
         }
-        let r = self.resident.as_ref().expect("built");
-        let (g, p) = (&r.groups, &self.pipelines);
-        super::global_search::reset_status(
-            enc,
-            &r.status.1,
-            &r.status.0,
-            crate::status::Owner::Penalty,
-        );
-        let run = |enc: &mut wgpu::CommandEncoder, label: &str, work: &[super::Work<'_>]| {
-            super::run_pass(&self.ctx, enc, label, work, max_dim)
-        };
-        let iw = ITEM_WORKGROUP;
-        run(
-            enc,
-            "nodal_normals + penalty",
-            &[
-                (&p.nodal_normals, &g.nodal_normals, self.n_pair_nodes, iw),
-                (&p.penalty, &g.penalty, self.n_slaves, iw),
-            ],
-        );
-        enc.clear_buffer(&self.acc, 0, None);
-        run(
-            enc,
-            "scatter_forces + gather + add_forces",
-            &[
-                (&p.scatter, &g.scatter, self.n_slaves, iw),
-                (&p.gather, &g.gather, self.n_pair_nodes, iw),
-                (&p.add_forces, &r.add_forces, self.n_pair_nodes, iw),
-            ],
-        );
         Ok(())
+    }
+
+    /// The dispatches of the penalty part of one device-resident increment (after its search's):
+    /// normals, penalty, the fixed-point gather, and each pair node's force added into the
+    /// caller's buffer and its bound row into the rows.
+    pub(crate) fn resident_dispatches(&self) -> Vec<super::Group<'_>> {
+        use super::Dispatch::Direct;
+        let r = self.resident.as_ref().expect("prepared");
+        let (g, p) = (&r.groups, &self.pipelines);
+        let iw = ITEM_WORKGROUP;
+        vec![
+            (
+                "nodal_normals + penalty",
+                vec![
+                    Direct((&p.nodal_normals, &g.nodal_normals, self.n_pair_nodes, iw)),
+                    Direct((&p.penalty, &g.penalty, self.n_slaves, iw)),
+                ],
+            ),
+            (
+                "scatter_forces + gather + add_forces",
+                vec![
+                    Direct((&p.scatter, &g.scatter, self.n_slaves, iw)),
+                    Direct((&p.gather, &g.gather, self.n_pair_nodes, iw)),
+                    Direct((&p.add_forces, &r.add_forces, self.n_pair_nodes, iw)),
+                ],
+            ),
+        ]
     }
 
     fn build_resident_groups(
@@ -455,7 +447,7 @@ impl AfterSearch for GpuPenalty {
                 (&p.penalty, &g.penalty, self.n_slaves, ITEM_WORKGROUP),
             ],
         );
-        enc.clear_buffer(&self.acc, 0, None);
+        // the sums start at zero: the buffer was made zeroed and gather zeroes what it reads
         run(
             enc,
             "scatter_forces + gather",

@@ -42,7 +42,7 @@ pub const STATUS_ACTIVE: usize = 6;
 /// Status word: slave nodes slipping (WGSL: `STATUS_SLIPPING`).
 pub const STATUS_SLIPPING: usize = 7;
 /// Number of status words.
-pub const STATUS_WORDS: usize = 20;
+pub const STATUS_WORDS: usize = 28;
 /// Status word: bits of the largest force component magnitude of a penalty spring in contact
 /// this increment (a non-negative f32): the gather's fixed-point force scale
 /// (WGSL: `STATUS_FORCE_SCALE`).
@@ -53,6 +53,13 @@ pub const STATUS_ROW_SCALE: usize = 17;
 /// Status word: facets whose bin entries did not fit in the entry buffer; they are listed after
 /// it and every slave examines them, so the search stays exact (WGSL: `STATUS_SPILLED`).
 pub const STATUS_SPILLED: usize = 18;
+/// Status words: order-preserving bits (`ordered_bits`) of the box of the master nodes the
+/// increment's positions put the master in, min xyz then max xyz (WGSL: `STATUS_BOX`; raised by
+/// to_local, read by the schedule).
+pub const STATUS_BOX: usize = 20;
+/// Status word: the lowest model node with a NaN or infinite coordinate in the increment's
+/// positions, `u32::MAX` when none (WGSL: `STATUS_NONFINITE`; raised by to_local).
+pub const STATUS_NONFINITE: usize = 26;
 /// Status word: bits of the largest overclosure (−gap ≥ 0, a non-negative f32) of the penalty
 /// springs carrying force this increment (WGSL: `STATUS_MAX_OVERCLOSURE`).
 pub const STATUS_MAX_OVERCLOSURE: usize = 14;
@@ -297,16 +304,13 @@ pub const PLAN_TRIGGER: usize = 5;
 pub const PLAN_INTERVAL: usize = 6;
 /// Plan word: dispatch slots in use.
 pub const PLAN_N_SLOTS: usize = 7;
-/// Plan word: the lowest node with a non-finite coordinate this increment (`u32::MAX`: none).
-pub const PLAN_NONFINITE: usize = 8;
 /// Plan word: grids that could not be fitted (no finite master node; the last grid kept).
 pub const PLAN_FIT_FAILED: usize = 9;
-/// Plan words: order-preserving bits of the master box (min xyz, max xyz).
-pub const PLAN_BOX: usize = 10;
-/// Plan words: the `SearchParams` of the increment (24 words), copied into the uniform.
-pub const PLAN_PARAMS: usize = 16;
+/// Plan words: the `SearchParams` of the increment (24 words, from byte 256: the search passes
+/// bind them as their uniform).
+pub const PLAN_PARAMS: usize = 64;
 /// Plan words: the dispatch slots, `PLAN_SLOT_WORDS` each: live (x, y, z, 0), full (x, y, z, kind).
-pub const PLAN_SLOTS: usize = 40;
+pub const PLAN_SLOTS: usize = 88;
 /// Words per dispatch slot.
 pub const PLAN_SLOT_WORDS: usize = 8;
 /// Most dispatch slots of a plan (WGSL: `MAX_PLAN_SLOTS` in schedule.wgsl).

@@ -775,6 +775,14 @@ impl GlobalSearch {
         }
     }
 
+    /// The GPU executor, if this search runs on one.
+    pub(crate) fn gpu(&self) -> Option<&GpuSearch> {
+        match &self.executor {
+            Executor::Gpu(g) => Some(g),
+            Executor::Cpu(_) => None,
+        }
+    }
+
     /// The CPU executor, if this search runs on the CPU path.
     pub(crate) fn cpu_mut(&mut self) -> Option<&mut CpuSearch> {
         match &mut self.executor {

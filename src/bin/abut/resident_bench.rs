@@ -57,9 +57,14 @@ fn resident_bytes() -> Vec<(&'static str, f64)> {
 struct Measured {
     /// Wall time per increment, device completion included (ms).
     wall_ms: f64,
-    /// Host time per increment (µs): recording and submitting (resident), or the wall time
-    /// minus the GPU's (host arrays).
+    /// Host time per increment (µs): recording the increment and the integrator and finishing
+    /// the command buffer (resident), or the wall time minus the GPU's (host arrays).
     host_us: f64,
+    /// Of which abut's `encode_increment` (µs; resident).
+    abut_us: f64,
+    /// Recording, submitting and collecting the statistics (µs; resident): on a software
+    /// adapter the submit runs the shaders on the calling thread.
+    submit_us: f64,
     submits: f64,
     read_back: f64,
     waits: f64,
@@ -126,6 +131,8 @@ fn host_arrays(device: &Device, c: &Config) -> abut::Result<Measured> {
         } else {
             (wall - gpu_s).max(0.0) * 1e6
         },
+        abut_us: f64::NAN,
+        submit_us: f64::NAN,
         submits,
         read_back,
         waits,
@@ -154,7 +161,7 @@ fn resident(device: &Device, c: &Config) -> abut::Result<Measured> {
         *v = [sc.u as f32, 0.0, -sc.v0 as f32, 0.0];
     }
     let drops = sc.first as u32..n_nodes as u32;
-    let run = |timed: bool| -> abut::Result<(f64, f64, abut::Traffic)> {
+    let run = |timed: bool| -> abut::Result<(f64, [f64; 3], abut::Traffic)> {
         device.enable_timestamps(timed);
         let make = |data: &[[f32; 4]]| {
             let b = d.create_buffer(&wgpu::BufferDescriptor {
@@ -169,9 +176,10 @@ fn resident(device: &Device, c: &Config) -> abut::Result<Measured> {
         let (x, v, f) = (make(&x0), make(&v0), make(&vec![[0.0; 4]; n_nodes]));
         let mut contact = Contact::new(device, &sc.model)?;
         let mut integ = CentralDifference::new(device, sc.model.masses())?;
-        let mut record = |contact: &mut Contact| -> abut::Result<f64> {
+        let mut record = |contact: &mut Contact| -> abut::Result<(f64, f64)> {
             let t0 = Instant::now();
             let mut enc = d.create_command_encoder(&Default::default());
+            let ta = Instant::now();
             contact.encode_increment(
                 ResidentIo::Gpu {
                     encoder: &mut enc,
@@ -181,6 +189,7 @@ fn resident(device: &Device, c: &Config) -> abut::Result<Measured> {
                 },
                 sc.dt,
             )?;
+            let abut_s = ta.elapsed().as_secs_f64();
             integ.encode(&mut enc, &x, &v, &f, sc.dt, [0.0; 3], drops.clone())?;
             let cmd = enc.finish();
             let recorded = t0.elapsed().as_secs_f64();
@@ -194,27 +203,25 @@ fn resident(device: &Device, c: &Config) -> abut::Result<Measured> {
                 q.submit([cmd]);
             }
             contact.collect_stats()?;
-            Ok(recorded)
+            Ok((abut_s, recorded))
         };
         record(&mut contact)?;
         let _ = d.poll(wgpu::PollType::wait_indefinitely());
         let before = device.traffic().unwrap_or_default();
-        let (mut host, mut recording) = (0.0, 0.0);
+        let (mut host, mut recording, mut abut_s) = (0.0, 0.0, 0.0);
         let t = Instant::now();
         for _ in 0..INCREMENTS {
             let th = Instant::now();
-            recording += record(&mut contact)?;
+            let (a, rec) = record(&mut contact)?;
+            abut_s += a;
+            recording += rec;
             host += th.elapsed().as_secs_f64();
         }
-        eprintln!(
-            "  recording {:.0} µs, recording + submit + collect {:.0} µs per increment",
-            recording / INCREMENTS as f64 * 1e6,
-            host / INCREMENTS as f64 * 1e6
-        );
         let traffic = device.traffic().unwrap_or_default().since(&before);
         let _ = d.poll(wgpu::PollType::wait_indefinitely());
         let wall = t.elapsed().as_secs_f64() / INCREMENTS as f64;
-        Ok((wall, host / INCREMENTS as f64, traffic))
+        let per = |v: f64| v / INCREMENTS as f64;
+        Ok((wall, [per(abut_s), per(recording), per(host)], traffic))
     };
     let (wall, host, traffic) = run(false)?;
     let (_, _, timed) = run(true)?;
@@ -222,8 +229,11 @@ fn resident(device: &Device, c: &Config) -> abut::Result<Measured> {
     let (submits, read_back, waits) = per(&traffic, INCREMENTS);
     Ok(Measured {
         wall_ms: wall * 1e3,
-        host_us: host * 1e6,
-        submits,
+        host_us: host[1] * 1e6,
+        abut_us: host[0] * 1e6,
+        submit_us: host[2] * 1e6,
+        // this program submits each increment itself (through Device::submit only when timed)
+        submits: submits.max(1.0),
         read_back,
         waits,
         pass_ms: passes(&timed, INCREMENTS),
@@ -269,9 +279,16 @@ pub fn run(a: &BenchArgs) -> abut::Result<()> {
         );
         let _ = writeln!(
             md,
-            "| slaves | mode | submits / incr. | bytes read back / incr. | blocking waits / incr. | host time / incr. | wall / incr. | GPU time / incr. | H100 estimate / incr. |\n|---|---|---|---|---|---|---|---|---|"
+            "| slaves | mode | submits / incr. | bytes read back / incr. | blocking waits / incr. | host time / incr. | of which abut | recording + submit (software adapter) | wall / incr. | GPU time / incr. | H100 estimate / incr. |\n|---|---|---|---|---|---|---|---|---|---|---|"
         );
         let mut detail = String::new();
+        let us = |v: f64| {
+            if v.is_nan() {
+                "–".to_string()
+            } else {
+                format!("{v:.0} µs")
+            }
+        };
         for &n in sizes {
             eprintln!("{device}: {n} slaves");
             let c = Config::base(n);
@@ -284,15 +301,13 @@ pub fn run(a: &BenchArgs) -> abut::Result<()> {
                 let gpu: f64 = m.pass_ms.iter().map(|(_, v)| v).sum();
                 let _ = writeln!(
                     md,
-                    "| {n} | {mode} | {:.2} | {:.0} | {:.2} | {} | {:.2} ms | {} | {} |",
+                    "| {n} | {mode} | {:.2} | {:.0} | {:.2} | {} | {} | {} | {:.2} ms | {} | {} |",
                     m.submits,
                     m.read_back,
                     m.waits,
-                    if m.host_us.is_nan() {
-                        "–".into()
-                    } else {
-                        format!("{:.0} µs", m.host_us)
-                    },
+                    us(m.host_us),
+                    us(m.abut_us),
+                    us(m.submit_us),
                     m.wall_ms,
                     if m.pass_ms.is_empty() {
                         "no timestamps".into()

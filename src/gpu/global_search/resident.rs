@@ -7,7 +7,6 @@ use crate::error::{Error, Result};
 use crate::passes::{self, Buf};
 use crate::search::layout::*;
 use crate::search::Prepared;
-use crate::status::Owner;
 use wgpu::BufferUsages as U;
 
 /// The dispatch slots of a search's plan: each names the byte offset of its live indirect
@@ -50,11 +49,25 @@ pub(crate) struct ResidentSearch {
     anchored: bool,
 }
 
+/// The bind groups of a search's device-resident passes: every pass that reads `SearchParams`
+/// binds the plan's params words (so the schedule's grid is what it sees, with no copy).
 struct Groups {
     /// The search's bind groups' generation these were built against.
     generation: u64,
     schedule: wgpu::BindGroup,
+    motion: wgpu::BindGroup,
+    anchor: wgpu::BindGroup,
+    local_search: wgpu::BindGroup,
     clear_counts: wgpu::BindGroup,
+    bin_count: wgpu::BindGroup,
+    copy_starts: wgpu::BindGroup,
+    bin_scatter: wgpu::BindGroup,
+    nearest_count: wgpu::BindGroup,
+    nearest_args: wgpu::BindGroup,
+    nearest_chunks: wgpu::BindGroup,
+    nearest_ties: wgpu::BindGroup,
+    nearest_crowded: wgpu::BindGroup,
+    nearest_facet: wgpu::BindGroup,
     set_reference: wgpu::BindGroup,
     scan_blocks: Vec<wgpu::BindGroup>,
     scan_add: Vec<wgpu::BindGroup>,
@@ -93,8 +106,6 @@ fn initial_plan(
 ) -> Result<(Vec<u32>, Slots)> {
     let mut plan = vec![0u32; PLAN_WORDS];
     plan[PLAN_INTERVAL] = interval;
-    plan[PLAN_NONFINITE] = u32::MAX;
-    plan[PLAN_BOX..PLAN_BOX + 3].fill(u32::MAX);
     plan[PLAN_PARAMS..PLAN_PARAMS + 24].copy_from_slice(bytemuck::cast_slice(&[*params]));
     let (g, l) = (SLOT_GLOBAL, SLOT_LOCAL);
     let iw = ITEM_WORKGROUP;
@@ -216,12 +227,6 @@ impl GpuSearch {
             0,
             bytemuck::cast_slice(&plan),
         );
-        super::super::upload(
-            &self.ctx,
-            &self.buffers.params,
-            0,
-            bytemuck::bytes_of(&params),
-        );
         if self.bind_groups.is_none() {
             self.bind_groups = Some(self.bind_groups(&cell_levels, &sized)?);
             self.scan_levels = cell_levels.levels.len();
@@ -298,6 +303,23 @@ impl GpuSearch {
         (&self.buffers.status, &self.buffers.plan)
     }
 
+    /// The plan's params words as a uniform binding.
+    fn plan_params(&self) -> wgpu::BindingResource<'_> {
+        wgpu::BindingResource::Buffer(wgpu::BufferBinding {
+            buffer: &self.buffers.plan,
+            offset: 4 * PLAN_PARAMS as u64,
+            size: wgpu::BufferSize::new(std::mem::size_of::<SearchParams>() as u64),
+        })
+    }
+
+    /// The buffer of each role in a device-resident pass.
+    fn resident_resource(&self, buf: Buf) -> Option<wgpu::BindingResource<'_>> {
+        match buf {
+            Buf::SearchParams => Some(self.plan_params()),
+            other => self.resource(other),
+        }
+    }
+
     fn resident_groups(&mut self, positions: &wgpu::Buffer) -> Result<()> {
         let generation = self.generation;
         let r = self.resident.as_ref().expect("resident");
@@ -331,12 +353,25 @@ impl GpuSearch {
                 r.work_levels.levels.len(),
             )?;
             let group = |pipe: &wgpu::ComputePipeline, pass: &passes::Pass| {
-                super::super::bind(d, pipe, pass, |buf| self.resource(buf))
+                super::super::bind(d, pipe, pass, |buf| self.resident_resource(buf))
             };
+            let p = &self.pipelines;
             let groups = Groups {
                 generation,
                 schedule: group(&r.schedule, &passes::SCHEDULE)?,
+                motion: group(&p.motion, &passes::MOTION)?,
+                anchor: group(&p.anchor, &passes::ANCHOR)?,
+                local_search: group(&p.local_search, &passes::LOCAL_SEARCH)?,
                 clear_counts: group(&r.clear_counts, &passes::CLEAR_COUNTS)?,
+                bin_count: group(&p.bin_count, &passes::BIN_COUNT)?,
+                copy_starts: group(&p.copy_starts, &passes::COPY_STARTS)?,
+                bin_scatter: group(&p.bin_scatter, &passes::BIN_SCATTER)?,
+                nearest_count: group(&p.nearest_count, &passes::NEAREST_COUNT)?,
+                nearest_args: group(&p.nearest_args, &passes::NEAREST_ARGS)?,
+                nearest_chunks: group(&p.nearest_chunks, &passes::NEAREST_CHUNKS)?,
+                nearest_ties: group(&p.nearest_ties, &passes::NEAREST_TIES)?,
+                nearest_crowded: group(&p.nearest_crowded, &passes::NEAREST_CROWDED)?,
+                nearest_facet: group(&p.nearest_facet, &passes::NEAREST_FACET)?,
                 set_reference: group(&r.set_reference, &passes::SET_REFERENCE)?,
                 scan_blocks,
                 scan_add,
@@ -356,7 +391,7 @@ impl GpuSearch {
                 &passes::TO_LOCAL,
                 |buf| match buf {
                     Buf::Positions => Some(positions.as_entire_binding()),
-                    other => self.resource(other),
+                    other => self.resident_resource(other),
                 },
             )?;
             let r = self.resident.as_mut().expect("resident");
@@ -367,16 +402,10 @@ impl GpuSearch {
         Ok(())
     }
 
-    /// Encodes the search part of one device-resident increment into `enc`: the caller's
-    /// positions (`vec4<f32>` per model node, model frame, STORAGE usage) into the local frame,
-    /// then (finite sliding) the motion budget, the schedule, and the local or the global search
-    /// through the plan's indirect dispatches, or (small sliding) the anchors. Nothing is read
-    /// back and nothing waits.
-    pub(crate) fn encode_resident(
-        &mut self,
-        enc: &mut wgpu::CommandEncoder,
-        positions: &wgpu::Buffer,
-    ) -> Result<()> {
+    /// Readies the search part of a device-resident increment on the caller's positions
+    /// (`vec4<f32>` per model node, model frame, STORAGE usage): checks the buffer, builds the
+    /// bind groups it needs (once per buffer).
+    pub(crate) fn prepare_resident(&mut self, positions: &wgpu::Buffer) -> Result<()> {
         let Some(r) = self.resident.as_ref() else {
             return Err(Error::BadParameter {
                 name: "device-resident increment",
@@ -396,92 +425,103 @@ impl GpuSearch {
                 expected: "one vec4<f32> per model node and STORAGE usage",
             });
         }
-        self.resident_groups(positions)?;
+        self.resident_groups(positions)
+    }
+
+    /// Encodes the copy before the increment's compute pass: every status word reset (the
+    /// search's and the penalty passes' that follow it in the same increment), in one copy.
+    pub(crate) fn resident_copies(&self, enc: &mut wgpu::CommandEncoder) {
+        let b = &self.buffers;
+        enc.copy_buffer_to_buffer(&b.status_reset, 0, &b.status, 0, b.status.size());
+    }
+
+    /// The dispatches of the search part of one device-resident increment (after
+    /// `prepare_resident` and `resident_copies`): the positions into the local frame, then
+    /// (finite sliding) the motion budget, the schedule and the local or the global search
+    /// through the plan's indirect dispatches, or (small sliding) the anchors.
+    pub(crate) fn resident_dispatches(&self) -> Vec<super::super::Group<'_>> {
+        use super::super::Dispatch::{Direct, Indirect};
         let r = self.resident.as_ref().expect("resident");
-        let g = r.groups.as_ref().expect("groups built");
-        let bg = self.bind_groups.as_ref().expect("bind groups built");
-        let (p, b, ctx) = (&self.pipelines, &self.buffers, &self.ctx);
-        let max_dim = self.max_workgroups_per_dim;
+        let g = r.groups.as_ref().expect("prepared");
+        let (p, b) = (&self.pipelines, &self.buffers);
         let iw = ITEM_WORKGROUP;
-        super::reset_status(enc, &b.status_reset, &b.status, Owner::Search);
-        let to_local = &g.to_local.as_ref().expect("to_local bound").1;
+        let to_local = &g.to_local.as_ref().expect("prepared").1;
         if r.anchored {
-            super::super::run_pass(
-                ctx,
-                enc,
+            return vec![(
                 "to_local + anchor",
-                &[
-                    (&p.to_local, to_local, r.n_nodes, iw),
-                    (&p.anchor, &bg.anchor, r.n_slaves, iw),
+                vec![
+                    Direct((&p.to_local, to_local, r.n_nodes, iw)),
+                    Direct((&p.anchor, &g.anchor, r.n_slaves, iw)),
                 ],
-                max_dim,
-            );
-            return Ok(());
+            )];
         }
-        super::super::run_pass(
-            ctx,
-            enc,
-            "to_local + motion + schedule",
-            &[
-                (&p.to_local, to_local, r.n_nodes, iw),
-                (&p.motion, &bg.motion, r.n_motion_nodes, iw),
-                (&r.schedule, &g.schedule, 1, 1),
-            ],
-            max_dim,
-        );
-        // the schedule's params (the fitted grid) are what every later pass reads
-        enc.copy_buffer_to_buffer(
-            &b.plan,
-            4 * PLAN_PARAMS as u64,
-            &b.params,
-            0,
-            std::mem::size_of::<SearchParams>() as u64,
-        );
         let s = &r.slots;
-        let mut global: Vec<super::super::IndirectWork<'_>> = vec![
-            (&p.local_search, &bg.local_search, s.local_slaves),
-            (&r.clear_counts, &g.clear_counts, s.cell_words),
-            (&p.bin_count, &bg.bin_count, s.facets),
+        let plan = &b.plan;
+        let mut global = vec![
+            Indirect(&r.clear_counts, &g.clear_counts, plan, s.cell_words),
+            Indirect(&p.bin_count, &g.bin_count, plan, s.facets),
         ];
         for (i, &slot) in s.cell_levels.iter().enumerate() {
-            global.push((&p.scan_blocks, &g.scan_blocks[i], slot));
+            global.push(Indirect(&p.scan_blocks, &g.scan_blocks[i], plan, slot));
         }
         for i in (0..s.cell_levels.len().saturating_sub(1)).rev() {
-            global.push((&p.scan_add, &g.scan_add[i], s.cell_levels[i]));
+            global.push(Indirect(
+                &p.scan_add,
+                &g.scan_add[i],
+                plan,
+                s.cell_levels[i],
+            ));
         }
-        global.push((&p.copy_starts, &bg.copy_starts, s.cell_words));
-        global.push((&p.bin_scatter, &bg.bin_scatter, s.facets));
-        global.push((&p.nearest_count, &bg.nearest_count, s.slaves));
+        global.push(Indirect(&p.copy_starts, &g.copy_starts, plan, s.cell_words));
+        global.push(Indirect(&p.bin_scatter, &g.bin_scatter, plan, s.facets));
+        global.push(Indirect(&p.nearest_count, &g.nearest_count, plan, s.slaves));
         for (i, &slot) in s.work_levels.iter().enumerate() {
-            global.push((&p.scan_blocks, &g.work_scan_blocks[i], slot));
+            global.push(Indirect(&p.scan_blocks, &g.work_scan_blocks[i], plan, slot));
         }
         for i in (0..s.work_levels.len().saturating_sub(1)).rev() {
-            global.push((&p.scan_add, &g.work_scan_add[i], s.work_levels[i]));
+            global.push(Indirect(
+                &p.scan_add,
+                &g.work_scan_add[i],
+                plan,
+                s.work_levels[i],
+            ));
         }
-        global.push((&p.nearest_args, &bg.nearest_args, s.one));
-        super::super::run_indirect_pass(ctx, enc, "local or global search", &global, &b.plan);
-        let mut chunks = vec![
-            (&p.nearest_chunks, &bg.nearest_chunks, 0),
-            (&p.nearest_ties, &bg.nearest_ties, 0),
-        ];
+        global.push(Indirect(&p.nearest_args, &g.nearest_args, plan, s.one));
+        global.push(Indirect(&p.nearest_chunks, &g.nearest_chunks, &b.args, 0));
+        global.push(Indirect(&p.nearest_ties, &g.nearest_ties, &b.args, 0));
         if self
             .resident_params
             .as_ref()
             .is_some_and(|(q, _)| q.flags & FLAG_SELF_CONTACT != 0)
         {
-            chunks.push((&p.nearest_crowded, &bg.nearest_crowded, 0));
+            global.push(Indirect(&p.nearest_crowded, &g.nearest_crowded, &b.args, 0));
         }
-        super::super::run_indirect_pass(ctx, enc, "nearest_facet: chunks", &chunks, &b.args);
-        super::super::run_indirect_pass(
-            ctx,
-            enc,
-            "nearest_facet + set_reference",
-            &[
-                (&p.nearest_facet, &bg.nearest_facet, s.slaves),
-                (&r.set_reference, &g.set_reference, s.motion_nodes),
-            ],
-            &b.plan,
-        );
-        Ok(())
+        global.push(Indirect(&p.nearest_facet, &g.nearest_facet, plan, s.slaves));
+        global.push(Indirect(
+            &r.set_reference,
+            &g.set_reference,
+            plan,
+            s.motion_nodes,
+        ));
+        vec![
+            (
+                "to_local + motion + schedule",
+                vec![
+                    Direct((&p.to_local, to_local, r.n_nodes, iw)),
+                    Direct((&p.motion, &g.motion, r.n_motion_nodes, iw)),
+                    Direct((&r.schedule, &g.schedule, 1, 1)),
+                ],
+            ),
+            (
+                "local_search",
+                vec![Indirect(
+                    &p.local_search,
+                    &g.local_search,
+                    plan,
+                    s.local_slaves,
+                )],
+            ),
+            ("global search", global),
+        ]
     }
 }
