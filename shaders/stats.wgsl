@@ -6,7 +6,8 @@
 //           increment's words, STAT_* below; Rust twin: IncrementStats), 3 pair_nodes (the pair's
 //           nodes), 4 rows (f32 per model node: the node-wise bound's rows, summed over pairs).
 // Dispatch: pair_stats one invocation per pair after its passes; bound_max one per pair node of
-//           each pair after every pair's add_forces; finish_stats one invocation, last.
+//           each pair after every pair's add_forces (a workgroup reduces its 64 rows, then one
+//           atomicMax); finish_stats one invocation, last.
 // Invariants: increments are positive f32 and overclosures and rows non-negative f32, so their
 //             minima and maxima are taken on the bits; every other word is an integer sum, so
 //             the words do not depend on the order of the invocations. pair_stats also keeps the
@@ -57,15 +58,27 @@ fn pair_stats() {
     plan[PLAN_GLOBAL] = 0u;
 }
 
+// The workgroup's largest row (bits of non-negative floats order as the values).
+var<workgroup> top: array<u32, 64>;
+
 @compute @workgroup_size(64)
 fn bound_max(@builtin(workgroup_id) wg: vec3<u32>,
              @builtin(num_workgroups) nwg: vec3<u32>,
              @builtin(local_invocation_index) li: u32) {
     let i = folded_id(wg, nwg, li, ITEM_WORKGROUP);
-    if (i >= arrayLength(&pair_nodes)) { return; }
-    let node = pair_nodes[i].x;
-    if (node == NO_NODE) { return; }
-    atomicMax(&stats[STAT_OMEGA2], bitcast<u32>(max(rows[node], 0.0)));
+    var v = 0u;
+    if (i < arrayLength(&pair_nodes)) {
+        let node = pair_nodes[i].x;
+        if (node != NO_NODE) { v = bitcast<u32>(max(rows[node], 0.0)); }
+    }
+    // reduced in the workgroup first: one atomic per workgroup, not one per node on one word
+    top[li] = v;
+    workgroupBarrier();
+    for (var s = 32u; s > 0u; s = s >> 1u) {
+        if (li < s) { top[li] = max(top[li], top[li + s]); }
+        workgroupBarrier();
+    }
+    if (li == 0u) { atomicMax(&stats[STAT_OMEGA2], top[0]); }
 }
 
 @compute @workgroup_size(1)

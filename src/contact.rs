@@ -10,9 +10,7 @@ use crate::kinematic::{
 };
 use crate::model::{validate_positions, Model, PairId};
 use crate::model::{BodyId, Enforce, MasterSurface, PressureOverclosure, RigidBody, RigidPairId};
-use crate::penalty::layout::{
-    ContactOut, CSTATUS_MASK, CSTATUS_OPEN, CSTATUS_SLIP, CSTATUS_STICK, NO_LIMIT,
-};
+use crate::penalty::layout::{ContactOut, CSTATUS_MASK, CSTATUS_OPEN, CSTATUS_SLIP, CSTATUS_STICK};
 use crate::penalty::PenaltySetup;
 use crate::search::{GlobalSearch, SearchResult};
 
@@ -62,6 +60,8 @@ pub struct StepReport {
     pub active: usize,
     /// Of which slipping.
     pub slipping: usize,
+    /// Searches that ran globally this increment (the schedule's choice, made on the device).
+    pub global_searches: usize,
 }
 
 /// Contact output variables of one pair after an increment (when requested).
@@ -101,6 +101,8 @@ struct PairRun {
     setup: PenaltySetup,
     exec: PenaltyExec,
     output: PairOutput,
+    /// Host-array increments: what the host knows of the device's schedule.
+    schedule: resident::HostSchedule,
 }
 
 /// A kinematic pair against a meshed master (pure or balanced).
@@ -169,14 +171,18 @@ pub struct Contact {
     dt_ref: Option<f64>,
     want_outputs: bool,
     report: StepReport,
-    /// Per model node, the row of the node-wise frequency bound being summed over the pairs
-    /// (zero between increments), and the nodes touched this increment.
-    bound_rows: Vec<f64>,
-    bound_touched: Vec<u32>,
     /// The model's positions (the frame and anchors of device-resident increments).
     initial_positions: Vec<[f64; 3]>,
     /// Device-resident increments: rows, statistics and their ring.
     resident: Option<resident::Resident>,
+    /// Global searches of the penalty pairs since the start (host-array increments).
+    global_total: u64,
+    /// Which kind of penalty increment this Contact runs (set by the first).
+    mode: Option<resident::Mode>,
+    /// Host-array increments run.
+    host_increments: u64,
+    /// Spatial dimension.
+    dim: u32,
     /// Device-resident increments: bin entries to grow to at the next one (a spill was seen).
     grow_to: Option<u32>,
 }
@@ -241,6 +247,7 @@ impl Contact {
                                     slaves: nodes,
                                     ..Default::default()
                                 },
+                                schedule: Default::default(),
                             })
                         }
                         None => None,
@@ -254,6 +261,7 @@ impl Contact {
                             slaves,
                             ..Default::default()
                         },
+                        schedule: Default::default(),
                     });
                     pairs.extend(back);
                 }
@@ -326,35 +334,14 @@ impl Contact {
             dt_ref: None,
             want_outputs: false,
             report: StepReport::default(),
-            bound_rows: vec![0.0; n_nodes],
-            bound_touched: Vec::new(),
             initial_positions: model.positions().to_vec(),
             resident: None,
+            mode: None,
+            global_total: 0,
+            host_increments: 0,
+            dim: model.dim(),
             grow_to: None,
         })
-    }
-
-    /// The node-wise bound on the highest frequency of all penalty springs together (ω², 1/s²)
-    /// from the rows summed this increment, which it clears.
-    ///
-    /// Each spring s adds k_s·(u_s·x)² to xᵀKx, where x are the nodes' mass-scaled
-    /// displacements and u_s its nodes' shares: 1/√m for the slave, |w_j|/√m_j for a master
-    /// node. Weighted Cauchy–Schwarz, (u·x)² ≤ (Σ_n u_n²/α_n)·(Σ_n α_n·|x_n|²) for any α > 0,
-    /// with α = 1 at the spring's light nodes and α = u_n/cut at its heavy ones (share below
-    /// `HEAVY_SHARE` of its largest, `cut`), gives xᵀKx ≤ Σ_n |x_n|²·Λ_n, Λ_n the sum over the
-    /// springs at node n of k_s·q_s·α_n with q_s = Σ u²/α. So ω² ≤ max_n Λ_n. One spring alone
-    /// gets its exact k·Σu² (to the heavy nodes' 1e-4 or less); a rigid node (u ≈ 1e-6 of the
-    /// slave's) takes only ~1e-4 of each spring it carries. The kernels compute each spring's
-    /// share (penalty) and sum them per node (gather); the pairs' rows are summed here.
-    fn take_bound_rows(&mut self) -> f64 {
-        let mut top = 0.0f64;
-        for &n in &self.bound_touched {
-            let row = &mut self.bound_rows[n as usize];
-            top = top.max(*row);
-            *row = 0.0;
-        }
-        self.bound_touched.clear();
-        top
     }
 
     /// Asks for the contact output variables ([`Contact::outputs`]) to be computed and read
@@ -382,20 +369,26 @@ impl Contact {
         dt: f64,
     ) -> Result<&StepReport> {
         positive_dt(dt)?;
-        if self.resident.is_some() {
+        if matches!(self.mode, Some(resident::Mode::Device)) {
             return Err(Error::BadParameter {
                 name: "penalty_step",
                 value: "a Contact running device-resident increments".into(),
                 expected: "one kind of increment per Contact (make another for host arrays)",
             });
         }
-        if velocities.len() != self.n_nodes {
-            return Err(Error::LengthMismatch {
-                what: "velocities (one per model node)",
-                expected: self.n_nodes,
-                got: velocities.len(),
-            });
+        for (what, len) in [
+            ("positions (one per model node)", positions.len()),
+            ("velocities (one per model node)", velocities.len()),
+        ] {
+            if len != self.n_nodes {
+                return Err(Error::LengthMismatch {
+                    what,
+                    expected: self.n_nodes,
+                    got: len,
+                });
+            }
         }
+        validate_positions(positions, 0, self.dim)?;
         validate_positions(velocities, 0, 3).map_err(|e| match e {
             Error::NonFiniteCoordinate { node, axis, value } => Error::BadParameter {
                 name: "velocity",
@@ -404,77 +397,16 @@ impl Contact {
             },
             e => e,
         })?;
-        let dt_ref = *self.dt_ref.get_or_insert(dt);
-        let vel: Vec<[f32; 4]> = velocities
-            .iter()
-            .map(|v| [v[0] as f32, v[1] as f32, v[2] as f32, 0.0])
-            .collect();
-        let mut damping = 0.0f64;
-        let mut report = StepReport {
-            forces: vec![[0.0; 3]; self.n_nodes],
-            stable_dt: f64::INFINITY,
-            approach_dt: f64::INFINITY,
-            max_overclosure: 0.0,
-            active: 0,
-            slipping: 0,
-        };
-        for pr in &mut self.pairs {
-            let pp = pr.setup.params(dt, dt_ref);
-            let (result, status) = pr.search.step_with_penalty(
-                positions,
-                &mut pr.exec,
-                &pr.setup,
-                &pp,
-                &vel,
-                self.want_outputs,
-            )?;
-            let forces: &[[f32; 4]] = match &pr.exec {
-                PenaltyExec::Gpu(g) => &g.forces_out,
-                PenaltyExec::Cpu(c) => &c.forces,
+        if self.pairs.is_empty() {
+            self.report = StepReport {
+                forces: vec![[0.0; 3]; self.n_nodes],
+                stable_dt: f64::INFINITY,
+                approach_dt: f64::INFINITY,
+                ..Default::default()
             };
-            for (pn, f) in pr.setup.pair_nodes.iter().zip(forces) {
-                let r = &mut report.forces[pn.node as usize];
-                for a in 0..3 {
-                    r[a] += f[a] as f64;
-                }
-                if f[3] > 0.0 {
-                    let row = &mut self.bound_rows[pn.node as usize];
-                    if *row == 0.0 {
-                        self.bound_touched.push(pn.node);
-                    }
-                    *row += f[3] as f64;
-                }
-            }
-            damping = damping.max(pp.damping as f64);
-            let status = crate::status::Status(status);
-            let limit = |v: f32| {
-                if v >= NO_LIMIT {
-                    f64::INFINITY
-                } else {
-                    v as f64
-                }
-            };
-            report.stable_dt = report.stable_dt.min(limit(status.dt_stable()));
-            report.max_overclosure = report.max_overclosure.max(status.max_overclosure() as f64);
-            report.approach_dt = report.approach_dt.min(limit(status.dt_approach()));
-            report.active += status.active() as usize;
-            report.slipping += status.slipping() as usize;
-            if self.want_outputs {
-                let outs: &[ContactOut] = match &pr.exec {
-                    PenaltyExec::Gpu(g) => &g.outputs,
-                    PenaltyExec::Cpu(c) => &c.out,
-                };
-                fill_output(&mut pr.output, outs, &pr.setup.areas, result);
-            }
+            return Ok(&self.report);
         }
-        let omega2 = self.take_bound_rows();
-        if omega2 > 0.0 {
-            let z = damping;
-            report.stable_dt = report
-                .stable_dt
-                .min(2.0 / omega2.sqrt() * ((1.0 + z * z).sqrt() - z));
-        }
-        self.report = report;
+        self.host_increment(positions, velocities, dt)?;
         Ok(&self.report)
     }
 
@@ -485,6 +417,12 @@ impl Contact {
         for pr in &mut self.pairs {
             pr.search.set_entry_capacity(words);
         }
+    }
+
+    /// Global searches the penalty pairs' host-array increments ran since the start (each
+    /// pass of a balanced pair counts).
+    pub fn global_searches(&self) -> u64 {
+        self.global_total
     }
 
     /// Whether any pair is enforced by penalty.

@@ -33,7 +33,15 @@ struct Scene {
 }
 
 fn scene(jump: usize, balanced: bool, interval: u32) -> Scene {
-    let plate = plate_quads(10, 10, 1.0, 1.0, 0.0, 0, &|_, _| 0.0);
+    scene_at(jump, balanced, interval, 0.0, 0.0)
+}
+
+/// `scene`, displaced by `shift` along x and travelling `travel` along x per increment.
+fn scene_at(jump: usize, balanced: bool, interval: u32, shift: f64, travel: f64) -> Scene {
+    let mut plate = plate_quads(10, 10, 1.0, 1.0, 0.0, 0, &|_, _| 0.0);
+    for p in &mut plate.positions {
+        p[0] += shift;
+    }
     let mut model = Model::new_3d();
     let master_nodes = model
         .add_nodes(&plate.positions, &vec![4.0; plate.positions.len()])
@@ -51,6 +59,9 @@ fn scene(jump: usize, balanced: bool, interval: u32) -> Scene {
         }
     }
     slaves.push([0.55, 0.45, 2.5]); // the jumper
+    for p in &mut slaves {
+        p[0] += shift;
+    }
     let range = model.add_nodes(&slaves, &vec![1.0; slaves.len()]).unwrap();
     let set = model.add_node_set(&range.to_vec()).unwrap();
     let pen = Penalty {
@@ -87,7 +98,9 @@ fn scene(jump: usize, balanced: bool, interval: u32) -> Scene {
     let master_end = master_nodes.end as usize;
     // node i's position at increment k
     let at = move |i: usize, k: usize| -> [f64; 3] {
+        // the scene near the origin (f32-exact), displaced below
         let (t, mut x) = (k as f64, x0[i]);
+        x[0] -= shift;
         if i < master_end {
             x[2] = 0.001 * (3.0 * x[0] + 0.7 * t).sin() * (2.0 * x[1]).cos();
         } else if i == jumper {
@@ -102,13 +115,18 @@ fn scene(jump: usize, balanced: bool, interval: u32) -> Scene {
     };
     let n_nodes = model.positions().len();
     let motion = move |k: usize| {
-        let x: Vec<[f64; 3]> = (0..n_nodes).map(|i| at(i, k)).collect();
-        // velocities at the half step before: from the increment before
+        let near: Vec<[f64; 3]> = (0..n_nodes).map(|i| at(i, k)).collect();
+        // velocities at the half step before: from the increment before (without the travel,
+        // which moves slaves and master alike)
         let v = (0..n_nodes)
             .map(|i| {
                 let prev = at(i, k.saturating_sub(1));
-                [0, 1, 2].map(|c| f32r((x[i][c] - prev[c]) / dt))
+                [0, 1, 2].map(|c| f32r((near[i][c] - prev[c]) / dt))
             })
+            .collect();
+        let x = near
+            .iter()
+            .map(|p| [p[0] + shift + travel * k as f64, p[1], p[2]])
             .collect();
         (x, v)
     };
@@ -645,4 +663,41 @@ fn spill_counts(device: &Device, s: &Scene, steps: usize) -> Vec<u32> {
         }
     }
     out
+}
+
+/// Host arrays far from the model origin, and a pair that travels far during the run: the frame
+/// follows (a new origin and a global search once the pair is 16 times its grid's extent away),
+/// so the forces equal those of the same motion near the origin to f32 round-off of the contact
+/// forces, however far it goes.
+#[test]
+fn host_arrays_keep_their_precision_far_away() {
+    let steps = 16;
+    let near = scene(7, false, 5);
+    let mut devices = vec![Device::cpu()];
+    devices.extend(gpus().iter().cloned());
+    for (shift, travel) in [(1.0e4, 0.0), (-3.0e5, 0.0), (0.0, 40.0), (2.0e3, -25.0)] {
+        let far = scene_at(7, false, 5, shift, travel);
+        for d in &devices {
+            let a = host_steps(d, &near, steps);
+            let b = host_steps(d, &far, steps);
+            let scale = a
+                .iter()
+                .flat_map(|s| s.forces.iter().flatten())
+                .fold(0.0f64, |m, f| m.max(f.abs()));
+            for (k, (sa, sb)) in a.iter().zip(&b).enumerate() {
+                assert_eq!(
+                    sa.active, sb.active,
+                    "{d} shift {shift} travel {travel}: increment {k}"
+                );
+                for (i, (fa, fb)) in sa.forces.iter().zip(&sb.forces).enumerate() {
+                    for c in 0..3 {
+                        assert!(
+                            (fa[c] - fb[c]).abs() <= 1e-4 * scale,
+                            "{d} shift {shift} travel {travel}: increment {k}, node {i}: {fa:?} vs {fb:?}"
+                        );
+                    }
+                }
+            }
+        }
+    }
 }

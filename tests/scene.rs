@@ -142,7 +142,7 @@ fn graded_axes_keep_a_uniform_core() {
 /// its own increment).
 #[test]
 fn penalty_contact_chatter_is_kept_from_running_away() {
-    let scene = |extra_run: &str, extra_contact: &str| {
+    let scene_at = |z0: f64, extra_run: &str, extra_contact: &str| {
         format!(
             r#"
 title = "bar pressed into a stiff penalty floor"
@@ -159,7 +159,7 @@ density = 1.0
 name = "bar"
 shape = "bar"
 material = "unit"
-origin = [0.0, 0.0, 0.0]
+origin = [0.0, 0.0, {z0:?}]
 size = [0.0, 0.0, 1.0]
 area = 1.0
 divisions = [10, 0, 0]
@@ -184,6 +184,7 @@ stiffness = 100.0
 "#
         )
     };
+    let scene = |extra_run: &str, extra_contact: &str| scene_at(0.0, extra_run, extra_contact);
     let run_text = |t: String| run(&Scene::parse(&t).unwrap(), &Device::cpu(), None).unwrap();
     let static_force = 0.01 / (1.0 + 1.0 / 400.0);
     for (what, s) in [
@@ -210,7 +211,9 @@ stiffness = 100.0
             s.energy_balance_error
         );
     }
-    let s = run_text(scene("contact_safety = 0.9", ""));
+    // touching from a gap of 10⁻⁴ (a contact that switches on at once; pressed from touching,
+    // the gap grows from round-off and the force with it)
+    let s = run_text(scene_at(1e-4, "contact_safety = 0.9", ""));
     assert!(
         s.peak_force > 20.0 * static_force,
         "undamped at 0.9 was expected to run away: peak {}",
@@ -274,8 +277,15 @@ fn runs_report_what_they_dispatched() {
     let s = run(&penalty, &own, None).unwrap();
     let d = &s.dispatches_per_increment;
     assert!((d["nodal_normals + penalty"] - 2.0).abs() < 1e-9, "{d:?}");
-    // the first increment searched globally; later ones track locally (interval 100)
-    assert!(d["nearest_facet"] <= 0.02, "{d:?}");
+    // the first increment searched globally; later ones track locally (interval 100): the
+    // global search's dispatches are recorded every increment, with the workgroups the
+    // schedule gives them on the device (none in a local increment)
+    let increments = s.increments as u64;
+    assert!(
+        s.global_searches >= 1 && s.global_searches <= 1 + increments / 100,
+        "{} global searches in {increments} increments",
+        s.global_searches
+    );
     assert!(s.read_back_bytes_per_increment > 0.0 && s.uploaded_bytes_per_increment > 0.0);
 }
 

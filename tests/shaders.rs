@@ -177,6 +177,75 @@ fn wgsl_twins_match_rust() {
     )));
 }
 
+/// The device-resident increment's words agree between WGSL and Rust: the plan's layout, the
+/// status words to_local raises, the trigger codes and slot kinds, the statistics' size and the
+/// integrator's parameters; and the plan's params sit where a uniform binding may start.
+#[test]
+fn resident_twins_match_rust() {
+    use abut::search::layout as l;
+    let m = parse("schedule");
+    for (name, v) in [
+        ("PLAN_SINCE_GLOBAL", l::PLAN_SINCE_GLOBAL),
+        ("PLAN_SEARCHED", l::PLAN_SEARCHED),
+        ("PLAN_CROWDED", l::PLAN_CROWDED),
+        ("PLAN_FORCE", l::PLAN_FORCE),
+        ("PLAN_GLOBAL", l::PLAN_GLOBAL),
+        ("PLAN_TRIGGER", l::PLAN_TRIGGER),
+        ("PLAN_INTERVAL", l::PLAN_INTERVAL),
+        ("PLAN_N_SLOTS", l::PLAN_N_SLOTS),
+        ("PLAN_FIT_FAILED", l::PLAN_FIT_FAILED),
+        ("PLAN_PARAMS", l::PLAN_PARAMS),
+        ("PLAN_SLOTS", l::PLAN_SLOTS),
+        ("PLAN_SLOT_WORDS", l::PLAN_SLOT_WORDS),
+        ("MAX_PLAN_SLOTS", l::MAX_PLAN_SLOTS),
+        ("STATUS_BOX", l::STATUS_BOX),
+        ("STATUS_NONFINITE", l::STATUS_NONFINITE),
+        ("STATUS_SPILLED", l::STATUS_SPILLED),
+        ("STATUS_BUDGET_EXCEEDED", l::STATUS_BUDGET_EXCEEDED),
+    ] {
+        assert_eq!(constant_u32(&m, name) as usize, v, "{name}");
+    }
+    for (name, v) in [
+        ("SLOT_GLOBAL", l::SLOT_GLOBAL),
+        ("SLOT_LOCAL", l::SLOT_LOCAL),
+        ("TRIGGER_LOCAL", l::TRIGGER_LOCAL),
+        ("TRIGGER_FIRST", l::TRIGGER_FIRST),
+        ("TRIGGER_INTERVAL", l::TRIGGER_INTERVAL),
+        ("TRIGGER_BUDGET", l::TRIGGER_BUDGET),
+        ("TRIGGER_CROWDED", l::TRIGGER_CROWDED),
+        ("TRIGGER_REQUESTED", l::TRIGGER_REQUESTED),
+        ("FLAG_RESIDENT", l::FLAG_RESIDENT),
+    ] {
+        assert_eq!(constant_u32(&m, name), v, "{name}");
+    }
+    // the params words are bound as a uniform: their offset must be a multiple of 256 bytes
+    assert_eq!((4 * l::PLAN_PARAMS) % 256, 0);
+    assert!(l::PLAN_PARAMS + std::mem::size_of::<SearchParams>() / 4 <= l::PLAN_SLOTS);
+    let st = parse("stats");
+    assert_eq!(constant_u32(&st, "STAT_INCREMENT") as usize, 15);
+    assert_eq!(std::mem::size_of::<l::IncrementStats>(), 16 * 4);
+    assert_eq!(
+        constant_u32(&st, "STAT_DAMPING") as usize,
+        l::STATS_RESET_WORDS
+    );
+    let i = parse("integrate");
+    assert_eq!(
+        struct_size(&i, "IntegrateParams") as usize,
+        std::mem::size_of::<abut::gpu::IntegrateParams>()
+    );
+    // ordered bits order as the floats, and invert
+    let xs = [-1e30f32, -2.5, -0.0, 0.0, 1e-30, 3.0, f32::MAX];
+    for w in xs.windows(2) {
+        assert!(l::ordered_bits(w[0]) <= l::ordered_bits(w[1]), "{w:?}");
+    }
+    for x in xs {
+        assert_eq!(
+            l::from_ordered_bits(l::ordered_bits(x)).to_bits(),
+            x.to_bits()
+        );
+    }
+}
+
 #[test]
 fn penalty_twins_match_rust() {
     use abut::penalty::layout::*;

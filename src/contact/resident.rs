@@ -9,11 +9,16 @@
 //! penalty passes, then the pair's statistics; one executor, chosen when the `Contact` was made
 //! (GPU or CPU path), runs them all.
 
-use super::{positive_dt, Contact, PenaltyExec};
+use super::{fill_output, positive_dt, Contact, PenaltyExec, StepReport};
 use crate::cpu::{gather, stats};
 use crate::error::{Error, Result};
 use crate::gpu::GpuIncrement;
-use crate::search::layout::{IncrementStats, STATS_RESET_WORDS};
+use crate::penalty::layout::{ContactOut, NO_LIMIT};
+use crate::search::layout::{
+    GpuHit, IncrementStats, PLAN_CROWDED, PLAN_FORCE, PLAN_SEARCHED, PLAN_SINCE_GLOBAL, PLAN_SLOTS,
+    PLAN_TRIGGER, STATS_RESET_WORDS, STATUS_WORDS,
+};
+use crate::search::GlobalSearch;
 
 /// The caller's arrays for one device-resident increment.
 ///
@@ -61,10 +66,109 @@ pub(crate) enum Resident {
     },
 }
 
+/// Which kind of increment a `Contact` runs (fixed by its first penalty increment).
+pub(crate) enum Mode {
+    /// The caller's device buffers or f32 arrays (`encode_increment`).
+    Device,
+    /// Host f64 arrays (`penalty_step`), through the same plan on abut's own buffers.
+    Host(Box<HostArrays>),
+}
+
+/// abut's own arrays of host-array increments run through the device-resident plan.
+pub(crate) enum HostArrays {
+    /// On a GPU: positions (one buffer per pair, relative to its search's frame), velocities,
+    /// forces, and the staging buffer everything read back goes through.
+    Gpu {
+        x: Vec<wgpu::Buffer>,
+        v: wgpu::Buffer,
+        f: wgpu::Buffer,
+        staging: wgpu::Buffer,
+    },
+    /// On the CPU path: the same as host arrays.
+    Cpu {
+        x: Vec<Vec<[f32; 4]>>,
+        v: Vec<[f32; 4]>,
+        f: Vec<[f32; 4]>,
+    },
+}
+
+/// What the host knows of a pair's schedule in host-array increments (its plan's words, read
+/// back with every increment's forces): enough to tell when the device's schedule will surely
+/// choose the local search, so that the global search's dispatches — which would get zero
+/// workgroups — need not be recorded. The device still decides; the host only leaves out what
+/// it has proved empty.
+#[derive(Clone, Debug, Default)]
+pub(crate) struct HostSchedule {
+    /// Increments since the last global search.
+    since_global: u32,
+    /// A global search has run.
+    searched: bool,
+    /// Self-contact slaves were crowded at the last global search.
+    crowded: bool,
+    /// A global search was asked for (a new frame).
+    forced: bool,
+    /// Positions of the watched nodes at the last global search (model units).
+    reference: Vec<[f64; 3]>,
+}
+
+impl HostSchedule {
+    /// Whether the schedule of `search` will choose the local search at `positions`: not the
+    /// first or a requested increment, the interval not come round, no crowding, and every
+    /// watched node (tracked slaves included, which the device does not count) has moved less
+    /// than half the budget since the last global search, with a margin for f32 round-off.
+    fn surely_local(&self, search: &GlobalSearch, positions: &[[f64; 3]]) -> bool {
+        let sched = search.schedule();
+        if !self.searched
+            || self.forced
+            || self.since_global + 1 >= sched.interval
+            || (search.is_self_contact() && self.crowded)
+            || self.reference.len() != search.motion_nodes().len()
+        {
+            return false;
+        }
+        let budget = sched.budget * search.radius();
+        let limit = (0.49 * budget).powi(2);
+        search
+            .motion_nodes()
+            .iter()
+            .zip(&self.reference)
+            .all(|(&n, r)| {
+                let x = positions[n as usize];
+                (0..3).map(|a| (x[a] - r[a]).powi(2)).sum::<f64>() < limit
+            })
+    }
+
+    /// Takes in the plan's words after an increment at `positions`.
+    fn update(&mut self, plan: &[u32], search: &GlobalSearch, positions: &[[f64; 3]]) {
+        self.since_global = plan[PLAN_SINCE_GLOBAL];
+        self.searched = plan[PLAN_SEARCHED] != 0;
+        self.crowded = plan[PLAN_CROWDED] != 0;
+        self.forced = plan[PLAN_FORCE] != 0;
+        if self.searched && self.since_global == 0 {
+            self.reference = search
+                .motion_nodes()
+                .iter()
+                .map(|&n| positions[n as usize])
+                .collect();
+        }
+    }
+}
+
+/// Positions of each pair's search, when they differ (host arrays: each relative to its own
+/// frame); otherwise the increment's one positions array serves every pair.
+#[derive(Clone, Copy)]
+enum PairPositions<'a> {
+    Shared,
+    Gpu(&'a [wgpu::Buffer]),
+    Cpu(&'a [Vec<[f32; 4]>]),
+}
+
 impl Contact {
-    /// Readies every pair for device-resident increments (the first increment does this).
-    fn make_resident(&mut self) -> Result<()> {
-        if !self.kinematic.is_empty() || !self.rigid.is_empty() {
+    /// Readies every pair for device-resident increments (the first increment does this) at
+    /// `positions`: the caller's f32 buffers in the model frame (`caller_frame`), or abut's own
+    /// arrays, each pair's relative to its search's frame.
+    fn make_resident(&mut self, positions: &[[f64; 3]], caller_frame: bool) -> Result<()> {
+        if caller_frame && (!self.kinematic.is_empty() || !self.rigid.is_empty()) {
             return Err(Error::BadParameter {
                 name: "device-resident increment",
                 value: "a model with kinematic pairs".into(),
@@ -74,7 +178,7 @@ impl Contact {
         }
         let mut damping = 0.0f32;
         for pr in &mut self.pairs {
-            pr.search.make_resident(&self.initial_positions)?;
+            pr.search.make_resident(positions, caller_frame)?;
             damping = damping.max(pr.setup.params.damping);
         }
         let resident = match self.pairs.first_mut().map(|p| &mut p.exec) {
@@ -133,9 +237,34 @@ impl Contact {
     /// increments no longer runs host-array ones ([`Contact::penalty_step`]).
     pub fn encode_increment(&mut self, io: ResidentIo<'_>, dt: f64) -> Result<()> {
         positive_dt(dt)?;
-        if self.resident.is_none() {
-            self.make_resident()?;
+        match self.mode {
+            None => {
+                let x = self.initial_positions.clone();
+                self.make_resident(&x, true)?;
+                self.mode = Some(Mode::Device);
+            }
+            Some(Mode::Device) => {}
+            Some(Mode::Host(_)) => {
+                return Err(Error::BadParameter {
+                    name: "encode_increment",
+                    value: "a Contact running host-array increments (penalty_step)".into(),
+                    expected: "one kind of increment per Contact (make another for device buffers)",
+                })
+            }
         }
+        self.record(io, PairPositions::Shared, &[], dt, true)
+    }
+
+    /// Records (GPU) or runs (CPU path) one increment through the plan; `pair_x` overrides the
+    /// positions per pair; `ring`: copy the statistics into the lagged ring.
+    fn record(
+        &mut self,
+        io: ResidentIo<'_>,
+        pair_x: PairPositions<'_>,
+        local_only: &[bool],
+        dt: f64,
+        ring: bool,
+    ) -> Result<()> {
         if let Some(needed) = self.grow_to.take() {
             for pr in &mut self.pairs {
                 match pr.search.gpu_mut() {
@@ -174,10 +303,13 @@ impl Contact {
                 inc.begin(encoder);
                 let mut max_dim = u32::MAX;
                 // what may allocate or upload first: bind groups on the caller's buffers, params
-                for pr in self.pairs.iter_mut() {
+                for (k, pr) in self.pairs.iter_mut().enumerate() {
                     let pp = pr.setup.params(dt, dt_ref);
                     let g = pr.search.gpu_mut().ok_or_else(mixed)?;
-                    g.prepare_resident(positions)?;
+                    g.prepare_resident(match pair_x {
+                        PairPositions::Gpu(b) => &b[k],
+                        _ => positions,
+                    })?;
                     max_dim = max_dim.min(g.max_workgroups_per_dim());
                     let (shared, generation) = g.shared_buffers();
                     let PenaltyExec::Gpu(p) = &mut pr.exec else {
@@ -193,7 +325,8 @@ impl Contact {
                         return Err(mixed());
                     };
                     g.resident_copies(encoder);
-                    groups.extend(g.resident_dispatches());
+                    groups
+                        .extend(g.resident_dispatches(local_only.get(k).copied().unwrap_or(false)));
                     groups.extend(p.resident_dispatches());
                     groups.push(inc.pair_dispatch(k));
                 }
@@ -206,7 +339,9 @@ impl Contact {
                     max_dim,
                 );
                 drop(groups);
-                inc.end(encoder);
+                if ring {
+                    inc.end(encoder);
+                }
                 inc.take_uncaptured()
             }
             (
@@ -242,10 +377,13 @@ impl Contact {
                 }
                 rows.iter_mut().for_each(|r| *r = 0.0);
                 words[..STATS_RESET_WORDS].copy_from_slice(&stats::reset_image());
-                for pr in &mut self.pairs {
+                for (k, pr) in self.pairs.iter_mut().enumerate() {
                     let pp = pr.setup.params(dt, dt_ref);
                     let c = pr.search.cpu_mut().ok_or_else(mixed)?;
-                    let (mut status, prep, hits) = c.step_resident(positions)?;
+                    let (mut status, prep, hits) = c.step_resident(match pair_x {
+                        PairPositions::Cpu(x) => &x[k],
+                        _ => positions,
+                    })?;
                     let PenaltyExec::Cpu(p) = &mut pr.exec else {
                         return Err(mixed());
                     };
@@ -258,7 +396,9 @@ impl Contact {
                     stats::bound_max(&pr.setup.pair_nodes, rows, words);
                 }
                 stats::finish_stats(words);
-                queue.push(bytemuck::cast(*words));
+                if ring {
+                    queue.push(bytemuck::cast(*words));
+                }
                 Ok(())
             }
             _ => Err(Error::BadParameter {
@@ -367,5 +507,335 @@ fn mixed() -> Error {
     Error::Gpu {
         during: "device-resident increment".into(),
         message: "the pairs' executors run on different devices".into(),
+    }
+}
+
+/// What one pair's increment left, read back for its output variables.
+struct PairRaw {
+    status: [u32; STATUS_WORDS],
+    /// The plan's words up to the end of its params.
+    plan: Vec<u32>,
+    hits: Vec<GpuHit>,
+    out: Vec<ContactOut>,
+}
+
+/// What a host-array increment reads back: the forces, the statistics, each pair's raw results
+/// (with outputs) and each pair's schedule words.
+type HostResults = (Vec<[f32; 4]>, IncrementStats, Vec<PairRaw>, Vec<Vec<u32>>);
+
+/// Bytes of a pair's output readback: status, plan words up to its slots, hits, outputs.
+fn pair_raw_bytes(n_slaves: usize) -> u64 {
+    (STATUS_WORDS * 4 + PLAN_SLOTS * 4) as u64
+        + n_slaves as u64
+            * (std::mem::size_of::<GpuHit>() + std::mem::size_of::<ContactOut>()) as u64
+}
+
+impl Contact {
+    /// The host-array increment (`penalty_step`, inputs validated) through the device-resident
+    /// plan on abut's own arrays: positions uploaded relative to the frame's origin (subtracted
+    /// in f64), the increment recorded and submitted, the forces, the statistics and (when asked
+    /// for) the pairs' output variables read back in one wait.
+    pub(crate) fn host_increment(
+        &mut self,
+        positions: &[[f64; 3]],
+        velocities: &[[f64; 3]],
+        dt: f64,
+    ) -> Result<()> {
+        if self.mode.is_none() {
+            self.make_resident(positions, false)?;
+            let n = self.n_nodes;
+            let arrays = match self.pairs.first().map(|p| &p.exec) {
+                Some(PenaltyExec::Gpu(p)) => {
+                    let ctx = p.context();
+                    let buffer = |label, size: u64, usage| {
+                        ctx.device.create_buffer(&wgpu::BufferDescriptor {
+                            label: Some(label),
+                            size: size.max(16).next_multiple_of(16),
+                            usage,
+                            mapped_at_creation: false,
+                        })
+                    };
+                    let state = wgpu::BufferUsages::STORAGE
+                        | wgpu::BufferUsages::COPY_DST
+                        | wgpu::BufferUsages::COPY_SRC;
+                    let outputs: u64 = self
+                        .pairs
+                        .iter()
+                        .map(|p| pair_raw_bytes(p.setup.areas.len()))
+                        .sum();
+                    HostArrays::Gpu {
+                        x: (0..self.pairs.len())
+                            .map(|_| buffer("positions", n as u64 * 16, state))
+                            .collect(),
+                        v: buffer("velocities", n as u64 * 16, state),
+                        f: buffer("forces", n as u64 * 16, state),
+                        staging: buffer(
+                            "increment readback",
+                            n as u64 * 16 + 64 * (1 + self.pairs.len() as u64) + outputs,
+                            wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
+                        ),
+                    }
+                }
+                _ => HostArrays::Cpu {
+                    x: vec![vec![[0.0; 4]; n]; self.pairs.len()],
+                    v: vec![[0.0; 4]; n],
+                    f: vec![[0.0; 4]; n],
+                },
+            };
+            self.mode = Some(Mode::Host(Box::new(arrays)));
+        }
+        // each pair's positions relative to its search's frame (a pair whose nodes travelled
+        // far from it gets a new one, and a global search)
+        let mut xs = Vec::with_capacity(self.pairs.len());
+        for pr in &mut self.pairs {
+            if pr.search.rebase_if_far(positions)? {
+                pr.schedule.forced = true;
+            }
+            let o = pr.search.resident_frame();
+            xs.push(
+                positions
+                    .iter()
+                    .map(|p| {
+                        [
+                            (p[0] - o[0]) as f32,
+                            (p[1] - o[1]) as f32,
+                            (p[2] - o[2]) as f32,
+                            0.0,
+                        ]
+                    })
+                    .collect::<Vec<[f32; 4]>>(),
+            );
+        }
+        let v: Vec<[f32; 4]> = velocities
+            .iter()
+            .map(|v| [v[0] as f32, v[1] as f32, v[2] as f32, 0.0])
+            .collect();
+        let outputs = self.want_outputs;
+        let local_only: Vec<bool> = self
+            .pairs
+            .iter()
+            .map(|pr| !pr.search.is_anchored() && pr.schedule.surely_local(&pr.search, positions))
+            .collect();
+        let mut mode = self.mode.take();
+        let done = self.host_arrays_increment(&mut mode, &xs, &v, &local_only, dt, outputs);
+        self.mode = mode;
+        let (forces, st, raws, plans) = done?;
+        for (pr, plan) in self.pairs.iter_mut().zip(&plans) {
+            pr.schedule.update(plan, &pr.search, positions);
+        }
+        self.host_increments += 1;
+        if st.spilled > 0 {
+            self.grow_to = Some(self.grow_to.unwrap_or(0).max(st.needed_entries));
+        }
+        let limit = |v: f32| {
+            if v >= NO_LIMIT {
+                f64::INFINITY
+            } else {
+                v as f64
+            }
+        };
+        self.report = StepReport {
+            forces: forces
+                .iter()
+                .map(|f| [f[0] as f64, f[1] as f64, f[2] as f64])
+                .collect(),
+            stable_dt: limit(st.stable_dt),
+            approach_dt: limit(st.approach_dt),
+            max_overclosure: st.max_overclosure as f64,
+            active: st.active as usize,
+            slipping: st.slipping as usize,
+            global_searches: st.global_searches as usize,
+        };
+        self.global_total += st.global_searches as u64;
+        let first = self.host_increments == 1;
+        for (pr, raw) in self.pairs.iter_mut().zip(raws) {
+            let params = crate::cpu::schedule::plan_params(&raw.plan);
+            let result = pr.search.resident_result(
+                raw.hits,
+                &raw.status,
+                &params,
+                raw.plan[PLAN_TRIGGER],
+                first,
+            );
+            fill_output(&mut pr.output, &raw.out, &pr.setup.areas, result);
+        }
+        Ok(())
+    }
+
+    /// Runs one increment on abut's own arrays `mode` (positions `x`, per pair relative to its
+    /// search's frame, velocities `v`); returns the forces, the statistics and, with `outputs`,
+    /// each pair's raw results.
+    fn host_arrays_increment(
+        &mut self,
+        mode: &mut Option<Mode>,
+        x: &[Vec<[f32; 4]>],
+        v: &[[f32; 4]],
+        local_only: &[bool],
+        dt: f64,
+        outputs: bool,
+    ) -> Result<HostResults> {
+        let Some(Mode::Host(arrays)) = mode else {
+            return Err(mixed());
+        };
+        let n = self.n_nodes;
+        match arrays.as_mut() {
+            HostArrays::Gpu {
+                x: xb,
+                v: vb,
+                f: fb,
+                staging,
+            } => {
+                let ctx = match self.pairs.first().map(|p| &p.exec) {
+                    Some(PenaltyExec::Gpu(p)) => p.context(),
+                    _ => return Err(mixed()),
+                };
+                for (b, xk) in xb.iter().zip(x) {
+                    crate::gpu::upload(&ctx, b, 0, bytemuck::cast_slice(xk));
+                }
+                crate::gpu::upload(&ctx, vb, 0, bytemuck::cast_slice(v));
+                let mut enc = ctx
+                    .device
+                    .create_command_encoder(&wgpu::CommandEncoderDescriptor {
+                        label: Some("penalty increment"),
+                    });
+                enc.clear_buffer(fb, 0, None);
+                self.record(
+                    ResidentIo::Gpu {
+                        encoder: &mut enc,
+                        positions: &xb[0],
+                        velocities: vb,
+                        forces: fb,
+                    },
+                    PairPositions::Gpu(xb),
+                    local_only,
+                    dt,
+                    false,
+                )?;
+                let forces_bytes = n as u64 * 16;
+                enc.copy_buffer_to_buffer(fb, 0, staging, 0, forces_bytes);
+                let Some(Resident::Gpu(inc)) = &self.resident else {
+                    return Err(mixed());
+                };
+                enc.copy_buffer_to_buffer(inc.stats(), 0, staging, forces_bytes, 64);
+                let mut offset = forces_bytes + 64;
+                // every pair's schedule words
+                let heads = offset;
+                for pr in &self.pairs {
+                    let g = pr.search.gpu().ok_or_else(mixed)?;
+                    enc.copy_buffer_to_buffer(g.resident_outputs().1, 0, staging, offset, 64);
+                    offset += 64;
+                }
+                let mut layout = Vec::new();
+                if outputs {
+                    for pr in &self.pairs {
+                        let g = pr.search.gpu().ok_or_else(mixed)?;
+                        let PenaltyExec::Gpu(p) = &pr.exec else {
+                            return Err(mixed());
+                        };
+                        let ns = pr.setup.areas.len() as u64;
+                        let (status, plan, hits) = g.resident_outputs();
+                        let start = offset;
+                        for (src, bytes) in [
+                            (status, (STATUS_WORDS * 4) as u64),
+                            (plan, (PLAN_SLOTS * 4) as u64),
+                            (hits, ns * 64),
+                            (p.out_buffer(), ns * 64),
+                        ] {
+                            if bytes > 0 {
+                                enc.copy_buffer_to_buffer(src, 0, staging, offset, bytes);
+                            }
+                            offset += bytes;
+                        }
+                        layout.push((start, ns as usize));
+                    }
+                }
+                crate::gpu::submit(&ctx, enc);
+                let bytes =
+                    crate::gpu::buffers::read_back(&ctx, staging, offset, "penalty increment")?;
+                ctx.take_uncaptured("penalty increment")?;
+                let forces: Vec<[f32; 4]> =
+                    bytemuck::pod_collect_to_vec(&bytes[..forces_bytes as usize]);
+                let st: IncrementStats = bytemuck::pod_read_unaligned(
+                    &bytes[forces_bytes as usize..forces_bytes as usize + 64],
+                );
+                let plans: Vec<Vec<u32>> = (0..self.pairs.len())
+                    .map(|k| {
+                        let o = heads as usize + 64 * k;
+                        bytemuck::pod_collect_to_vec(&bytes[o..o + 64])
+                    })
+                    .collect();
+                let raws = layout
+                    .into_iter()
+                    .map(|(start, ns)| {
+                        let mut o = start as usize;
+                        let mut take = |len: usize| {
+                            let s = &bytes[o..o + len];
+                            o += len;
+                            s
+                        };
+                        let status: [u32; STATUS_WORDS] =
+                            bytemuck::pod_read_unaligned(take(STATUS_WORDS * 4));
+                        let plan: Vec<u32> = bytemuck::pod_collect_to_vec(take(PLAN_SLOTS * 4));
+                        let hits: Vec<GpuHit> = bytemuck::pod_collect_to_vec(take(ns * 64));
+                        let out: Vec<ContactOut> = bytemuck::pod_collect_to_vec(take(ns * 64));
+                        PairRaw {
+                            status,
+                            plan,
+                            hits,
+                            out,
+                        }
+                    })
+                    .collect();
+                Ok((forces, st, raws, plans))
+            }
+            HostArrays::Cpu {
+                x: xa,
+                v: va,
+                f: fa,
+            } => {
+                for (a, xk) in xa.iter_mut().zip(x) {
+                    a.copy_from_slice(xk);
+                }
+                va.copy_from_slice(v);
+                fa.iter_mut().for_each(|f| *f = [0.0; 4]);
+                self.record(
+                    ResidentIo::Cpu {
+                        positions: &xa[0],
+                        velocities: va,
+                        forces: fa,
+                    },
+                    PairPositions::Cpu(xa),
+                    local_only,
+                    dt,
+                    false,
+                )?;
+                let Some(Resident::Cpu { stats: words, .. }) = &self.resident else {
+                    return Err(mixed());
+                };
+                let st: IncrementStats = bytemuck::cast(*words);
+                let mut plans = Vec::new();
+                for pr in &mut self.pairs {
+                    let c = pr.search.cpu_mut().ok_or_else(mixed)?;
+                    plans.push(c.resident_outputs().1[..16].to_vec());
+                }
+                let mut raws = Vec::new();
+                if outputs {
+                    for pr in &mut self.pairs {
+                        let c = pr.search.cpu_mut().ok_or_else(mixed)?;
+                        let (status, plan, hits) = c.resident_outputs();
+                        let PenaltyExec::Cpu(p) = &pr.exec else {
+                            return Err(mixed());
+                        };
+                        raws.push(PairRaw {
+                            status,
+                            plan: plan[..PLAN_SLOTS].to_vec(),
+                            hits: hits.to_vec(),
+                            out: p.out.clone(),
+                        });
+                    }
+                }
+                Ok((fa.clone(), st, raws, plans))
+            }
+        }
     }
 }

@@ -22,16 +22,20 @@ pub(crate) struct CpuResident {
 
 impl CpuSearch {
     /// Readies this search for device-resident increments (see `GpuSearch::make_resident`).
-    pub(crate) fn make_resident(&mut self, prep: &Prepared, interval: u32, anchored: bool) {
+    pub(crate) fn make_resident(
+        &mut self,
+        prep: &Prepared,
+        interval: u32,
+        anchored: bool,
+        frame_origin: [f32; 3],
+    ) {
         let mut params = prep.params;
         if self.presize {
             self.entry_capacity = super::presized_capacity(prep, self.entry_capacity);
         }
         params.entry_capacity = self.entry_capacity;
         params.flags |= FLAG_RESIDENT;
-        let mut plan = vec![0u32; PLAN_WORDS];
-        plan[PLAN_INTERVAL] = interval;
-        plan[PLAN_PARAMS..PLAN_PARAMS + 24].copy_from_slice(bytemuck::cast_slice(&[params]));
+        let plan = fresh_plan(&params, interval);
         let levels = ScanLevels::new(params.cell_capacity + 1);
         self.ws.scan.clear();
         self.ws.scan.resize(levels.words as usize, 0);
@@ -47,12 +51,7 @@ impl CpuSearch {
         self.resident = Some(Box::new(CpuResident {
             prep: prep.clone(),
             frame: FrameParams {
-                origin: [
-                    prep.grid.origin[0] as f32,
-                    prep.grid.origin[1] as f32,
-                    prep.grid.origin[2] as f32,
-                    0.0,
-                ],
+                origin: [frame_origin[0], frame_origin[1], frame_origin[2], 0.0],
                 n_nodes: prep.n_nodes as u32,
                 _pad: [0; 3],
             },
@@ -76,6 +75,15 @@ impl CpuSearch {
             super::entry_words(self.entry_capacity, r.prep.facets.len()),
             0,
         );
+    }
+
+    /// The status words, plan and hits of the last device-resident increment.
+    pub(crate) fn resident_outputs(&self) -> ([u32; STATUS_WORDS], &[u32], &[GpuHit]) {
+        let plan = self
+            .resident
+            .as_ref()
+            .map_or(&[][..], |r| r.plan.as_slice());
+        (self.ws.status, plan, &self.ws.hits)
     }
 
     /// The plan words of the device-resident increments (the statistics read them).

@@ -34,16 +34,6 @@ pub struct SharedBuffers<'a> {
     pub status_reset: &'a wgpu::Buffer,
 }
 
-/// Passes that run after the search in the same command encoder (the penalty passes).
-pub trait AfterSearch {
-    /// Makes buffers and bind groups ready; `generation` changes whenever the search's
-    /// buffers were replaced, so bind groups on them must be rebuilt.
-    fn prepare(&mut self, search: &SharedBuffers<'_>, generation: u64) -> Result<()>;
-    /// Encodes the passes and the copies of what they read back into their own staging.
-    fn encode(&self, enc: &mut wgpu::CommandEncoder, max_workgroups_per_dim: u32);
-    /// Maps the staging and keeps what it holds (called after the submit, unless overflowed).
-    fn read(&mut self, ctx: &GpuContext) -> Result<()>;
-}
 /// Readback layout: status words, then the bin total (padded to 16 bytes), then the hits.
 const READBACK_HITS_OFFSET: u64 = STATUS_BYTES + 16;
 /// Uniform offsets must be multiples of this (WebGPU's default alignment).
@@ -474,12 +464,11 @@ impl GpuSearch {
     }
 
     /// Runs a global search (`local` false; presized like `run`) or the motion check and the
-    /// local search, followed by the passes of `after`, in one submit.
+    /// local search, in one submit.
     pub(crate) fn run_mode(
         &mut self,
         prep: &Prepared,
         local: bool,
-        after: Option<&mut (dyn AfterSearch + 'static)>,
         read_hits: bool,
     ) -> Result<(Vec<GpuHit>, u32, u32, [u32; STATUS_WORDS])> {
         if local {
@@ -493,7 +482,7 @@ impl GpuSearch {
         } else if self.presize {
             self.entry_capacity = presized_capacity(prep, self.entry_capacity);
         }
-        self.run_with(prep, 0, None, after, read_hits, local)
+        self.run_with(prep, 0, None, read_hits, local)
     }
 
     /// Runs the steps `STEPS[first..]` on the GPU, starting from the CPU mirror's state after
@@ -506,7 +495,7 @@ impl GpuSearch {
         preload: &CpuWorkspace,
     ) -> Result<(Vec<GpuHit>, u32, u32, [u32; STATUS_WORDS])> {
         self.entry_capacity = self.entry_capacity.max(preload.entries.len() as u32);
-        self.run_with(prep, first, Some(preload), None, true, false)
+        self.run_with(prep, first, Some(preload), true, false)
     }
 
     fn run_from(
@@ -515,20 +504,18 @@ impl GpuSearch {
         first: usize,
         preload: Option<&CpuWorkspace>,
     ) -> Result<(Vec<GpuHit>, u32, u32)> {
-        let (hits, total, regrowths, _) = self.run_with(prep, first, preload, None, true, false)?;
+        let (hits, total, regrowths, _) = self.run_with(prep, first, preload, true, false)?;
         Ok((hits, total, regrowths))
     }
 
-    /// Runs the search steps `STEPS[first..]` and then the passes of `after` in the same
-    /// command encoder and submit, reading back once; on overflow grows the entry buffer and
-    /// runs the whole again. Returns the hits (empty unless `read_hits`), the bin entries, the
+    /// Runs the search steps `STEPS[first..]` in one command encoder and submit, reading back
+    /// once; on overflow grows the entry buffer and runs the whole again. Returns the hits (empty unless `read_hits`), the bin entries, the
     /// regrowths and the status words.
     pub(crate) fn run_with(
         &mut self,
         prep: &Prepared,
         first: usize,
         preload: Option<&CpuWorkspace>,
-        mut after: Option<&mut (dyn AfterSearch + 'static)>,
         read_hits: bool,
         local: bool,
     ) -> Result<(Vec<GpuHit>, u32, u32, [u32; STATUS_WORDS])> {
@@ -625,9 +612,6 @@ impl GpuSearch {
                     self.to_local_group = Some((src, self.generation, group));
                 }
             }
-            if let Some(a) = after.as_deref_mut() {
-                a.prepare(&self.shared(), self.generation)?;
-            }
             let mut params = prep.params;
             params.entry_capacity = self.entry_capacity;
             super::upload(
@@ -636,15 +620,8 @@ impl GpuSearch {
                 0,
                 bytemuck::bytes_of(&params),
             );
-            let (status, total, hits) = self.submit(
-                &params,
-                &levels,
-                prep,
-                first,
-                after.as_deref_mut(),
-                read_hits,
-                local,
-            )?;
+            let (status, total, hits) =
+                self.submit(&params, &levels, prep, first, read_hits, local)?;
             if status[STATUS_OVERFLOW] == 0 {
                 self.last = Some((levels.words, params.n_cells, total));
                 return Ok((hits, total, regrowths, status));
@@ -816,7 +793,6 @@ impl GpuSearch {
         levels: &ScanLevels,
         prep: &Prepared,
         first: usize,
-        mut after: Option<&mut (dyn AfterSearch + 'static)>,
         read_hits: bool,
         local: bool,
     ) -> Result<([u32; STATUS_WORDS], u32, Vec<GpuHit>)> {
@@ -955,9 +931,6 @@ impl GpuSearch {
                 (prep.n_nodes * 16) as u64,
             );
         }
-        if let Some(a) = after.as_deref_mut() {
-            a.encode(&mut enc, max_dim);
-        }
         let hits_bytes = if read_hits {
             (n_slaves * std::mem::size_of::<GpuHit>()) as u64
         } else {
@@ -998,11 +971,6 @@ impl GpuSearch {
         let total: u32 =
             bytemuck::pod_read_unaligned(&bytes[STATUS_BYTES as usize..STATUS_BYTES as usize + 4]);
         let hits = bytemuck::pod_collect_to_vec(&bytes[READBACK_HITS_OFFSET as usize..]);
-        if status[STATUS_OVERFLOW] == 0 {
-            if let Some(a) = after {
-                a.read(&self.ctx)?;
-            }
-        }
         self.ctx.take_uncaptured("contact increment")?;
         Ok((status, total, hits))
     }

@@ -8,7 +8,7 @@ mod integrate;
 mod penalty;
 pub mod shaders;
 
-pub use global_search::{AfterSearch, GpuSearch, SharedBuffers};
+pub use global_search::{GpuSearch, SharedBuffers};
 pub(crate) use increment::GpuIncrement;
 pub use integrate::{CentralDifference, IntegrateParams};
 pub use penalty::GpuPenalty;

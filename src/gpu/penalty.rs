@@ -3,12 +3,12 @@
 
 use std::sync::Arc;
 
-use super::buffers::{read_back, GrowBuffer};
-use super::global_search::{AfterSearch, SharedBuffers};
+use super::buffers::GrowBuffer;
+use super::global_search::SharedBuffers;
 use crate::device::GpuContext;
 use crate::error::{Error, Result};
 use crate::passes::{self, Buf};
-use crate::penalty::layout::{ContactOut, PenaltyParams};
+use crate::penalty::layout::PenaltyParams;
 use crate::penalty::PenaltySetup;
 use crate::search::layout::ITEM_WORKGROUP;
 use wgpu::BufferUsages as U;
@@ -33,7 +33,6 @@ pub struct GpuPenalty {
     ctx: Arc<GpuContext>,
     pipelines: Pipelines,
     params: wgpu::Buffer,
-    vel: GrowBuffer,
     normals: GrowBuffer,
     pair_nodes: wgpu::Buffer,
     adjacency: wgpu::Buffer,
@@ -42,23 +41,13 @@ pub struct GpuPenalty {
     facet_nodes: wgpu::Buffer,
     acc: wgpu::Buffer,
     forces: wgpu::Buffer,
-    staging: wgpu::Buffer,
-    groups: Option<(u64, Groups)>,
-    /// The search's status buffer and its reset image (bound at prepare); these passes reset
-    /// the words the status table gives them.
-    status: Option<(wgpu::Buffer, wgpu::Buffer)>,
     n_slaves: u32,
     n_pair_nodes: u32,
-    read_outputs: bool,
     /// Device-resident increments: the bind groups on the caller's buffers, keyed by the
     /// search's generation and the (velocities, forces, rows) buffers.
     resident: Option<ResidentGroups>,
     /// The parameters last uploaded for device-resident increments.
     resident_params: Option<PenaltyParams>,
-    /// Force per pair node after the last increment.
-    pub forces_out: Vec<[f32; 4]>,
-    /// Per-slave results after the last increment (when outputs were asked for).
-    pub outputs: Vec<ContactOut>,
 }
 
 /// The bind groups of a pair's device-resident increments.
@@ -180,12 +169,6 @@ impl GpuPenalty {
                 usage: U::UNIFORM | U::COPY_DST,
                 mapped_at_creation: false,
             }),
-            vel: GrowBuffer::new(
-                d,
-                "velocities",
-                n_nodes as u64 * 16,
-                U::STORAGE | U::COPY_DST,
-            ),
             normals: GrowBuffer::new(
                 d,
                 "nodal normals",
@@ -199,57 +182,18 @@ impl GpuPenalty {
             facet_nodes,
             acc: storage(d, "fixed-point force sums", acc_bytes, U::empty()),
             forces: storage(d, "pair forces", n_pair_nodes as u64 * 16, U::COPY_SRC),
-            staging: d.create_buffer(&wgpu::BufferDescriptor {
-                label: Some("penalty readback"),
-                size: (n_pair_nodes as u64 * 16 + out_bytes).max(16),
-                usage: U::MAP_READ | U::COPY_DST,
-                mapped_at_creation: false,
-            }),
             pipelines,
-            groups: None,
-            status: None,
             n_slaves,
             n_pair_nodes,
-            read_outputs: false,
             resident: None,
             resident_params: None,
-            forces_out: Vec::new(),
-            outputs: Vec::new(),
             ctx,
         })
     }
 
-    /// Uploads this increment's parameters and velocities (f32, one per model node); `outputs`
-    /// asks for the per-slave results to be read back too.
-    pub fn set_inputs(
-        &mut self,
-        params: &PenaltyParams,
-        velocities: &[[f32; 4]],
-        outputs: bool,
-    ) -> Result<()> {
-        super::upload(&self.ctx, &self.params, 0, bytemuck::bytes_of(params));
-        if self.vel.ensure(
-            &self.ctx.device,
-            &self.ctx.limits,
-            velocities.len() as u64 * 16,
-        )? {
-            self.groups = None;
-        }
-        if self.normals.ensure(
-            &self.ctx.device,
-            &self.ctx.limits,
-            velocities.len() as u64 * 16,
-        )? {
-            self.groups = None;
-        }
-        super::upload(
-            &self.ctx,
-            &self.vel.buffer,
-            0,
-            bytemuck::cast_slice(velocities),
-        );
-        self.read_outputs = outputs;
-        Ok(())
+    /// The per-slave results (`ContactOut`), for the output variables.
+    pub(crate) fn out_buffer(&self) -> &wgpu::Buffer {
+        &self.out
     }
 
     /// The device this pair runs on.
@@ -338,7 +282,7 @@ impl GpuPenalty {
         forces: &wgpu::Buffer,
         rows: &wgpu::Buffer,
     ) -> Result<(Groups, wgpu::BindGroup)> {
-        let groups = self.groups_with(s, Some(velocities))?;
+        let groups = self.groups_with(s, velocities)?;
         let add_forces = super::bind(
             &self.ctx.device,
             &self.pipelines.add_forces,
@@ -357,17 +301,8 @@ impl GpuPenalty {
         Ok((groups, add_forces))
     }
 
-    fn build_groups(&self, s: &SharedBuffers<'_>) -> Result<Groups> {
-        self.groups_with(s, None)
-    }
-
-    /// The bind groups of the four passes; velocities from `velocities` when given (the
-    /// caller's buffer), else from this pair's own upload buffer.
-    fn groups_with(
-        &self,
-        s: &SharedBuffers<'_>,
-        velocities: Option<&wgpu::Buffer>,
-    ) -> Result<Groups> {
+    /// The bind groups of the four passes, velocities from the caller's `velocities`.
+    fn groups_with(&self, s: &SharedBuffers<'_>, velocities: &wgpu::Buffer) -> Result<Groups> {
         let d = &self.ctx.device;
         let p = &self.pipelines;
         // the buffer of each role: the pair's own, or the search's shared ones
@@ -378,7 +313,7 @@ impl GpuPenalty {
                 Buf::Facets => s.facets.as_entire_binding(),
                 Buf::Hits => s.hits.as_entire_binding(),
                 Buf::Status => s.status.as_entire_binding(),
-                Buf::Velocities => velocities.unwrap_or(&self.vel.buffer).as_entire_binding(),
+                Buf::Velocities => velocities.as_entire_binding(),
                 Buf::Normals => self.normals.buffer.as_entire_binding(),
                 Buf::PairNodes => self.pair_nodes.as_entire_binding(),
                 Buf::PairAdjacency => self.adjacency.as_entire_binding(),
@@ -399,94 +334,5 @@ impl GpuPenalty {
             scatter: group(&p.scatter, &passes::SCATTER_FORCES)?,
             gather: group(&p.gather, &passes::GATHER)?,
         })
-    }
-
-    fn pair_bytes(&self) -> u64 {
-        self.n_pair_nodes as u64 * 16
-    }
-}
-
-impl AfterSearch for GpuPenalty {
-    fn prepare(&mut self, search: &SharedBuffers<'_>, generation: u64) -> Result<()> {
-        if self.groups.as_ref().is_none_or(|(g, _)| *g != generation) {
-            let scope = self
-                .ctx
-                .device
-                .push_error_scope(wgpu::ErrorFilter::Validation);
-            let groups = self.build_groups(search);
-            if let Some(e) = pollster::block_on(scope.pop()) {
-                return Err(Error::Gpu {
-                    during: "binding the penalty buffers".into(),
-                    message: e.to_string(),
-                });
-            }
-            self.groups = Some((generation, groups?));
-            self.status = Some((search.status.clone(), search.status_reset.clone()));
-        }
-        Ok(())
-    }
-
-    fn encode(&self, enc: &mut wgpu::CommandEncoder, max_dim: u32) {
-        let (_, g) = self.groups.as_ref().expect("prepared before encoding");
-        let p = &self.pipelines;
-        let (status, image) = self.status.as_ref().expect("prepared before encoding");
-        super::global_search::reset_status(enc, image, status, crate::status::Owner::Penalty);
-        let run = |enc: &mut wgpu::CommandEncoder, label: &str, work: &[super::Work<'_>]| {
-            super::run_pass(&self.ctx, enc, label, work, max_dim)
-        };
-        run(
-            enc,
-            "nodal_normals + penalty",
-            &[
-                (
-                    &p.nodal_normals,
-                    &g.nodal_normals,
-                    self.n_pair_nodes,
-                    ITEM_WORKGROUP,
-                ),
-                (&p.penalty, &g.penalty, self.n_slaves, ITEM_WORKGROUP),
-            ],
-        );
-        // the sums start at zero: the buffer was made zeroed and gather zeroes what it reads
-        run(
-            enc,
-            "scatter_forces + gather",
-            &[
-                (&p.scatter, &g.scatter, self.n_slaves, ITEM_WORKGROUP),
-                (&p.gather, &g.gather, self.n_pair_nodes, ITEM_WORKGROUP),
-            ],
-        );
-        enc.copy_buffer_to_buffer(&self.forces, 0, &self.staging, 0, self.pair_bytes());
-        if self.read_outputs && self.n_slaves > 0 {
-            enc.copy_buffer_to_buffer(
-                &self.out,
-                0,
-                &self.staging,
-                self.pair_bytes(),
-                self.n_slaves as u64 * 64,
-            );
-        }
-    }
-
-    fn read(&mut self, ctx: &GpuContext) -> Result<()> {
-        let out_bytes = if self.read_outputs {
-            self.n_slaves as u64 * 64
-        } else {
-            0
-        };
-        let bytes = read_back(
-            ctx,
-            &self.staging,
-            (self.pair_bytes() + out_bytes).max(16),
-            "penalty readback",
-        )?;
-        let pb = self.pair_bytes() as usize;
-        self.forces_out = bytemuck::pod_collect_to_vec(&bytes[..pb]);
-        self.outputs = if self.read_outputs {
-            bytemuck::pod_collect_to_vec(&bytes[pb..pb + out_bytes as usize])
-        } else {
-            Vec::new()
-        };
-        Ok(())
     }
 }

@@ -210,6 +210,9 @@ pub struct Summary {
     pub uploaded_bytes_per_increment: f64,
     /// Bytes read back per increment after the first.
     pub read_back_bytes_per_increment: f64,
+    /// Global searches of the penalty pairs over the run (the schedule's, decided on the device;
+    /// each pass of a balanced pair counts).
+    pub global_searches: u64,
 }
 
 /// Rising and falling edges of a force history (time, force per increment) at half its
@@ -605,6 +608,7 @@ pub fn run(scene: &Scene, device: &Device, output: Option<&Path>) -> Result<Summ
             .collect(),
         uploaded_bytes_per_increment: traffic.uploaded_bytes as f64 / steady,
         read_back_bytes_per_increment: traffic.read_back_bytes as f64 / steady,
+        global_searches: contact.as_ref().map_or(0, |c| c.global_searches()),
     };
     if let (Some(dir), Some(mut f)) = (output, history) {
         f.flush().map_err(io)?;

@@ -334,6 +334,15 @@ pub const TRIGGER_CROWDED: u32 = 4;
 /// Trigger code: the host asked for it.
 pub const TRIGGER_REQUESTED: u32 = 5;
 
+/// The words of a fresh plan: the schedule's `interval`, the search's `params` (the grid a
+/// first global search starts from), no dispatch slot yet.
+pub fn fresh_plan(params: &SearchParams, interval: u32) -> Vec<u32> {
+    let mut plan = vec![0u32; PLAN_WORDS];
+    plan[PLAN_INTERVAL] = interval;
+    plan[PLAN_PARAMS..PLAN_PARAMS + 24].copy_from_slice(bytemuck::cast_slice(&[*params]));
+    plan
+}
+
 /// f32 bits as a u32 whose unsigned order is the floats' order (WGSL: `ordered_bits`).
 pub fn ordered_bits(x: f32) -> u32 {
     let b = x.to_bits();

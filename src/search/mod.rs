@@ -9,14 +9,11 @@
 pub mod grid;
 pub mod layout;
 
-use crate::contact::PenaltyExec;
 use crate::cpu::CpuSearch;
 use crate::device::{Device, DeviceKind};
 use crate::error::{Error, Result};
 use crate::gpu::GpuSearch;
 use crate::model::{validate_positions, MasterSurface, Model, PairId};
-use crate::penalty::layout::PenaltyParams;
-use crate::penalty::PenaltySetup;
 use crate::status::Status;
 use grid::Grid;
 use layout::{GpuHit, SearchParams, NO_FACET};
@@ -220,6 +217,10 @@ pub struct GlobalSearch {
     sliding: crate::model::Sliding,
     /// Small sliding: the anchors, fixed at the first global search.
     anchors: Option<Vec<layout::Anchor>>,
+    /// Device-resident increments: the origin the kernels' frame is relative to.
+    resident_origin: Option<[f64; 3]>,
+    /// Device-resident increments: the extent of the grid the frame was fitted to.
+    resident_span: f64,
 }
 
 #[allow(clippy::large_enum_variant)] // one per search: its size does not matter
@@ -322,6 +323,8 @@ impl GlobalSearch {
             crowded: false,
             sliding: crate::model::Sliding::Finite,
             anchors: None,
+            resident_origin: None,
+            resident_span: 0.0,
         })
     }
 
@@ -383,7 +386,7 @@ impl GlobalSearch {
     /// Runs a global search at node positions `positions` (one per model node, model units),
     /// whatever the schedule (it resets the schedule's count).
     pub fn run(&mut self, positions: &[[f64; 3]]) -> Result<SearchResult> {
-        Ok(self.execute(positions, Some(Trigger::Requested), None)?.0)
+        Ok(self.execute(positions, Some(Trigger::Requested))?.0)
     }
 
     /// One increment of finite-sliding tracking: a global search when the schedule calls for
@@ -391,7 +394,7 @@ impl GlobalSearch {
     /// self-contact), the local search otherwise. `stats.trigger` says which ran and why.
     pub fn step(&mut self, positions: &[[f64; 3]]) -> Result<SearchResult> {
         let trigger = self.decide();
-        Ok(self.execute(positions, trigger, None)?.0)
+        Ok(self.execute(positions, trigger)?.0)
     }
 
     /// The schedule's choice for the next increment: `Some(trigger)` for a global search,
@@ -415,14 +418,12 @@ impl GlobalSearch {
         }
     }
 
-    /// Runs one increment, global (`Some(trigger)`) or local (`None`), with the penalty passes
-    /// of `pen` after it when given; a local increment whose motion budget is used up is run
-    /// again globally.
+    /// Runs one increment, global (`Some(trigger)`) or local (`None`); a local increment whose
+    /// motion budget is used up is run again globally.
     fn execute(
         &mut self,
         positions: &[[f64; 3]],
         mut global: Option<Trigger>,
-        mut pen: Option<PenaltyRun<'_>>,
     ) -> Result<(SearchResult, [u32; layout::STATUS_WORDS])> {
         let mut anchored_first = false;
         loop {
@@ -432,34 +433,11 @@ impl GlobalSearch {
             };
             let local = global.is_none();
             // small sliding's first increment: the global search alone, to anchor the slaves;
-            // then the same increment from the anchors (with the enforcement passes)
+            // then the same increment from the anchors
             let anchoring = self.sliding != crate::model::Sliding::Finite && self.anchors.is_none();
-            let pen_now = if anchoring { None } else { pen.as_mut() };
-            let (raw, entries, regrowths, status) = match (&mut self.executor, pen_now) {
-                (Executor::Gpu(g), None) => g.run_mode(&prepared, local, None, true)?,
-                (Executor::Cpu(c), None) => c.run_mode(&prepared, local)?,
-                (Executor::Gpu(g), Some(run)) => {
-                    let PenaltyExec::Gpu(p) = &mut *run.exec else {
-                        return Err(mixed_devices());
-                    };
-                    p.set_inputs(run.params, run.velocities, run.outputs)?;
-                    g.run_mode(&prepared, local, Some(p.as_mut()), run.outputs)?
-                }
-                (Executor::Cpu(c), Some(run)) => {
-                    let PenaltyExec::Cpu(p) = &mut *run.exec else {
-                        return Err(mixed_devices());
-                    };
-                    let (hits, entries, regrowths, mut status) = c.run_mode(&prepared, local)?;
-                    p.run(
-                        run.setup,
-                        run.params,
-                        &prepared,
-                        run.velocities,
-                        &hits,
-                        &mut status,
-                    );
-                    (hits, entries, regrowths, status)
-                }
+            let (raw, entries, regrowths, status) = match &mut self.executor {
+                Executor::Gpu(g) => g.run_mode(&prepared, local, true)?,
+                Executor::Cpu(c) => c.run_mode(&prepared, local)?,
             };
             if local && Status(status).budget_exceeded() {
                 global = Some(Trigger::Budget);
@@ -495,7 +473,15 @@ impl GlobalSearch {
                 continue;
             }
             return Ok((
-                self.finish(&prepared, raw, entries, regrowths, trigger, &status),
+                self.finish(
+                    prepared.grid.origin,
+                    prepared.grid,
+                    raw,
+                    entries,
+                    regrowths,
+                    trigger,
+                    &status,
+                ),
                 status,
             ));
         }
@@ -534,12 +520,12 @@ impl GlobalSearch {
                 });
             };
             g.set_device_positions(Some(positions.clone()));
-            let run = g.run_mode(&prepared, local, None, read_hits);
+            let run = g.run_mode(&prepared, local, read_hits);
             g.set_device_positions(None);
             let (raw, entries, regrowths, status) = run?;
             if Status(status).frame_stale() {
                 let host = g.read_positions(positions, prepared.n_nodes)?;
-                return Ok(self.execute(&host, Some(Trigger::Frame), None)?.0);
+                return Ok(self.execute(&host, Some(Trigger::Frame))?.0);
             }
             if local && Status(status).budget_exceeded() {
                 global = Some(Trigger::Budget);
@@ -553,7 +539,8 @@ impl GlobalSearch {
                 None => self.since_global += 1,
             }
             return Ok(self.finish(
-                &prepared,
+                prepared.grid.origin,
+                prepared.grid,
                 raw,
                 entries,
                 regrowths,
@@ -711,7 +698,8 @@ impl GlobalSearch {
         self.frame = Some((prepared.grid, prepared.params));
         self.since_global = 0;
         Ok(self.finish(
-            &prepared,
+            prepared.grid.origin,
+            prepared.grid,
             raw,
             entries,
             regrowths,
@@ -720,51 +708,135 @@ impl GlobalSearch {
         ))
     }
 
-    /// Runs the scheduled search and then the penalty passes of `pen` in the same increment
-    /// (one submit on the GPU). Returns the search result (with contacts only when `outputs`,
-    /// on the GPU) and the status words.
-    pub(crate) fn step_with_penalty(
+    /// Readies this search for device-resident increments at `positions` (they size the bin
+    /// entries; the grid is fitted on the device at every global search, within
+    /// `Grid::cell_budget` cells). The kernels work relative to the origin of the grid the host
+    /// fits at `positions` (near the master, snapped to a power of two: [`GlobalSearch::
+    /// resident_frame`]): the positions the increments read are in the model frame when
+    /// `caller_frame` (the caller's f32 buffers; the kernels subtract the origin in f32), or
+    /// already relative to the origin (host arrays, subtracted in f64 by the host). Small
+    /// sliding anchors its slaves here, by a global search at `positions`, as its first
+    /// increment would.
+    pub(crate) fn make_resident(
         &mut self,
         positions: &[[f64; 3]],
-        exec: &mut PenaltyExec,
-        setup: &PenaltySetup,
-        params: &PenaltyParams,
-        velocities: &[[f32; 4]],
-        outputs: bool,
-    ) -> Result<(SearchResult, [u32; layout::STATUS_WORDS])> {
-        let trigger = self.decide();
-        self.execute(
-            positions,
-            trigger,
-            Some(PenaltyRun {
-                exec,
-                setup,
-                params,
-                velocities,
-                outputs,
-            }),
-        )
-    }
-
-    /// Readies this search for device-resident increments, at the model's positions
-    /// `positions` (they fix the frame and size the bin entries; the grid is fitted on the
-    /// device at every global search, within `Grid::cell_budget` cells). Small sliding anchors
-    /// its slaves here, by a global search at `positions`, as its first increment would.
-    pub(crate) fn make_resident(&mut self, positions: &[[f64; 3]]) -> Result<()> {
+        caller_frame: bool,
+    ) -> Result<()> {
         let anchored = self.sliding != crate::model::Sliding::Finite;
         if anchored && self.anchors.is_none() {
             self.step(positions)?;
         }
         let mut prep = self.prepare(positions)?;
         prep.params.cell_capacity = Grid::cell_budget(self.facets.len());
+        let origin = prep.grid.origin;
+        let frame = if caller_frame {
+            origin.map(|o| o as f32)
+        } else {
+            [0.0; 3]
+        };
         let interval = self.schedule.interval;
+        self.resident_origin = Some(origin);
+        self.resident_span = (0..3)
+            .map(|a| prep.grid.dims[a] as f64 * prep.grid.cell_size)
+            .fold(self.radius, f64::max);
         match &mut self.executor {
-            Executor::Gpu(g) => g.make_resident(&prep, interval, anchored),
+            Executor::Gpu(g) => g.make_resident(&prep, interval, anchored, frame),
             Executor::Cpu(c) => {
-                c.make_resident(&prep, interval, anchored);
+                c.make_resident(&prep, interval, anchored, frame);
                 Ok(())
             }
         }
+    }
+
+    /// Where the master nodes start in the watched nodes: after the slaves, unless the slaves
+    /// are master nodes themselves (self-contact), when every watched node is one.
+    fn master_start(&self) -> usize {
+        if self.self_contact {
+            0
+        } else {
+            self.slave_ids.len()
+        }
+    }
+
+    /// The nodes the motion budget watches: the slaves, then the master nodes that are not.
+    pub(crate) fn motion_nodes(&self) -> &[u32] {
+        &self.motion_nodes
+    }
+
+    /// Whether this search evaluates fixed anchors (small or infinitesimal sliding).
+    pub(crate) fn is_anchored(&self) -> bool {
+        self.sliding != crate::model::Sliding::Finite
+    }
+
+    /// The origin of the device-resident frame (model units).
+    pub(crate) fn resident_frame(&self) -> [f64; 3] {
+        self.resident_origin.unwrap_or([0.0; 3])
+    }
+
+    /// Host arrays: when a node of the master has travelled more than 16 times the frame's
+    /// extent from its origin (f32 would lose precision there, and contact is only ever near the
+    /// master), the frame moves to the grid the host fits at `positions` and the next increment
+    /// searches globally, which resets everything that was relative to the old origin. Returns
+    /// whether it moved.
+    pub(crate) fn rebase_if_far(&mut self, positions: &[[f64; 3]]) -> Result<bool> {
+        let o = self.resident_frame();
+        let reach = 16.0 * self.resident_span;
+        let masters = &self.motion_nodes[self.master_start()..];
+        let far = masters.iter().any(|&n| {
+            let x = positions[n as usize];
+            (0..3).any(|a| (x[a] - o[a]).abs() > reach)
+        });
+        if !far {
+            return Ok(false);
+        }
+        let prep = self.prepare(positions)?;
+        if prep.grid.origin == o {
+            return Ok(false);
+        }
+        self.resident_origin = Some(prep.grid.origin);
+        self.resident_span = (0..3)
+            .map(|a| prep.grid.dims[a] as f64 * prep.grid.cell_size)
+            .fold(self.radius, f64::max);
+        match &mut self.executor {
+            Executor::Gpu(g) => g.request_global(),
+            Executor::Cpu(c) => c.request_global(),
+        }
+        Ok(true)
+    }
+
+    /// The search result of a device-resident increment from its hits (grid-local, relative to
+    /// the resident origin), status words, params and trigger code.
+    pub(crate) fn resident_result(
+        &self,
+        raw: Vec<GpuHit>,
+        status: &[u32; layout::STATUS_WORDS],
+        params: &SearchParams,
+        trigger: u32,
+        first: bool,
+    ) -> SearchResult {
+        let origin = self.resident_origin.unwrap_or([0.0; 3]);
+        let grid = Grid {
+            origin: [0, 1, 2].map(|a| origin[a] + params.grid_lo[a] as f64),
+            cell_size: params.cell_size as f64,
+            dims: [params.dims_x, params.dims_y, params.dims_z],
+        };
+        let trigger = if self.sliding != crate::model::Sliding::Finite {
+            if first {
+                Trigger::First
+            } else {
+                Trigger::Anchored
+            }
+        } else {
+            match trigger {
+                layout::TRIGGER_FIRST => Trigger::First,
+                layout::TRIGGER_INTERVAL => Trigger::Interval,
+                layout::TRIGGER_BUDGET => Trigger::Budget,
+                layout::TRIGGER_CROWDED => Trigger::Crowded,
+                layout::TRIGGER_REQUESTED => Trigger::Requested,
+                _ => Trigger::Local,
+            }
+        };
+        self.finish(origin, grid, raw, 0, 0, trigger, status)
     }
 
     /// The GPU executor, if this search runs on one.
@@ -810,16 +882,17 @@ impl GlobalSearch {
         }
     }
 
+    #[allow(clippy::too_many_arguments)]
     fn finish(
         &self,
-        prepared: &Prepared,
+        o: [f64; 3],
+        grid: Grid,
         raw: Vec<GpuHit>,
         entries: u32,
         regrowths: u32,
         trigger: Trigger,
         status: &[u32; layout::STATUS_WORDS],
     ) -> SearchResult {
-        let o = prepared.grid.origin;
         let mut candidates = 0u64;
         let contacts = raw
             .iter()
@@ -856,7 +929,7 @@ impl GlobalSearch {
                 plane_off: Status(*status).plane_off(),
                 local_capped: Status(*status).local_capped(),
                 motion: Status(*status).motion() as f64,
-                grid: prepared.grid,
+                grid,
                 entries,
                 candidates,
                 regrowths,
@@ -1010,21 +1083,5 @@ impl GlobalSearch {
             })
             .collect();
         Ok(prepared)
-    }
-}
-
-/// The penalty passes to run after a search in the same increment.
-pub(crate) struct PenaltyRun<'a> {
-    exec: &'a mut PenaltyExec,
-    setup: &'a PenaltySetup,
-    params: &'a PenaltyParams,
-    velocities: &'a [[f32; 4]],
-    outputs: bool,
-}
-
-fn mixed_devices() -> Error {
-    Error::Gpu {
-        during: "penalty step".into(),
-        message: "search and penalty executors run on different devices".into(),
     }
 }

@@ -32,9 +32,9 @@ fn resident_bytes() -> Vec<(&'static str, f64)> {
     vec![
         // positions in (16 B) and grid-local nodes out (16 B) per node; motion as before
         ("to_local + motion + schedule", 32.0 * nodes + kb["motion"]),
-        ("local or global search", kb["local_search"]),
-        ("nearest_facet: chunks", 0.0),
-        ("nearest_facet + set_reference", 0.0),
+        ("local_search", kb["local_search"]),
+        // a local increment: every dispatch of the global search gets zero workgroups
+        ("global search", 0.0),
         (
             "nodal_normals + penalty",
             kb["nodal_normals"] + kb["penalty"],

@@ -104,9 +104,7 @@ fn initial_plan(
     n_nodes_watched: u32,
     max_dim: u32,
 ) -> Result<(Vec<u32>, Slots)> {
-    let mut plan = vec![0u32; PLAN_WORDS];
-    plan[PLAN_INTERVAL] = interval;
-    plan[PLAN_PARAMS..PLAN_PARAMS + 24].copy_from_slice(bytemuck::cast_slice(&[*params]));
+    let mut plan = fresh_plan(params, interval);
     let (g, l) = (SLOT_GLOBAL, SLOT_LOCAL);
     let iw = ITEM_WORKGROUP;
     let mut slots = Slots {
@@ -132,16 +130,18 @@ fn initial_plan(
 }
 
 impl GpuSearch {
-    /// Readies this search for device-resident increments: `prep` is a host preparation at the
-    /// model's positions whose params carry the device's cell capacity and base cell size;
-    /// buffers are sized for the capacities (not for positions), the pair's constants and the
-    /// nodes' masses uploaded, the frame fixed at `prep`'s grid origin and a fresh plan written.
+    /// Readies this search for device-resident increments: `prep` is a host preparation whose
+    /// params carry the device's cell capacity and base cell size and whose nodes are in the
+    /// kernels' frame; buffers are sized for the capacities (not for positions), the pair's
+    /// constants and the nodes' masses uploaded, `frame_origin` subtracted by to_local from the
+    /// positions it reads, and a fresh plan written.
     /// `anchored`: small sliding (anchors already set; increments evaluate them).
     pub(crate) fn make_resident(
         &mut self,
         prep: &Prepared,
         interval: u32,
         anchored: bool,
+        frame_origin: [f32; 3],
     ) -> Result<()> {
         let ctx = self.ctx.clone();
         let d = &ctx.device;
@@ -184,12 +184,7 @@ impl GpuSearch {
             bytemuck::cast_slice(&prep.nodes),
         );
         let frame = FrameParams {
-            origin: [
-                prep.grid.origin[0] as f32,
-                prep.grid.origin[1] as f32,
-                prep.grid.origin[2] as f32,
-                0.0,
-            ],
+            origin: [frame_origin[0], frame_origin[1], frame_origin[2], 0.0],
             n_nodes: prep.n_nodes as u32,
             _pad: [0; 3],
         };
@@ -296,6 +291,15 @@ impl GpuSearch {
             4 * PLAN_FORCE as u64,
             bytemuck::bytes_of(&1u32),
         );
+    }
+
+    /// The status, plan and hits buffers (read back for the output variables).
+    pub(crate) fn resident_outputs(&self) -> (&wgpu::Buffer, &wgpu::Buffer, &wgpu::Buffer) {
+        (
+            &self.buffers.status,
+            &self.buffers.plan,
+            &self.buffers.hits.buffer,
+        )
     }
 
     /// The status and plan buffers (the increment's statistics read them).
@@ -438,8 +442,11 @@ impl GpuSearch {
     /// The dispatches of the search part of one device-resident increment (after
     /// `prepare_resident` and `resident_copies`): the positions into the local frame, then
     /// (finite sliding) the motion budget, the schedule and the local or the global search
-    /// through the plan's indirect dispatches, or (small sliding) the anchors.
-    pub(crate) fn resident_dispatches(&self) -> Vec<super::super::Group<'_>> {
+    /// through the plan's indirect dispatches, or (small sliding) the anchors. `local_only`:
+    /// the caller knows the schedule will choose the local search (host arrays, whose host
+    /// checks the same rules with margin), so the global search's dispatches, which would get
+    /// zero workgroups, are not recorded at all.
+    pub(crate) fn resident_dispatches(&self, local_only: bool) -> Vec<super::super::Group<'_>> {
         use super::super::Dispatch::{Direct, Indirect};
         let r = self.resident.as_ref().expect("resident");
         let g = r.groups.as_ref().expect("prepared");
@@ -503,7 +510,7 @@ impl GpuSearch {
             plan,
             s.motion_nodes,
         ));
-        vec![
+        let mut groups = vec![
             (
                 "to_local + motion + schedule",
                 vec![
@@ -521,7 +528,10 @@ impl GpuSearch {
                     s.local_slaves,
                 )],
             ),
-            ("global search", global),
-        ]
+        ];
+        if !local_only {
+            groups.push(("global search", global));
+        }
+        groups
     }
 }
