@@ -295,7 +295,9 @@ pub fn run(a: &BenchArgs) -> abut::Result<()> {
             let h = host_arrays(device, &c)?;
             let r = resident(device, &c)?;
             let compulsory: f64 = bytes.values().sum::<f64>() * n as f64;
-            let dispatches = 14.0; // a local increment's dispatches (one pair), the integrator's included
+            // the dispatches with work in a local increment (one pair, the integrator's included);
+            // the global search's, empty in a local increment, are left out
+            let dispatches = 14.0;
             let h100 = compulsory / H100_BANDWIDTH + dispatches * H100_DISPATCH;
             for (mode, m) in [("host arrays", &h), ("device-resident", &r)] {
                 let gpu: f64 = m.pass_ms.iter().map(|(_, v)| v).sum();
