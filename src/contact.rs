@@ -62,6 +62,9 @@ pub struct StepReport {
     pub slipping: usize,
     /// Searches that ran globally this increment (the schedule's choice, made on the device).
     pub global_searches: usize,
+    /// Facets whose bin entries did not fit this increment: they spilled into a list every
+    /// slave examines, so the search stayed exact; the bins grow for the next increment.
+    pub spilled: usize,
 }
 
 /// Contact output variables of one pair after an increment (when requested).

@@ -196,3 +196,69 @@ fn hundred_thousand_facets_in_one_search_cell() {
         }
     }
 }
+
+/// 10^5 facets whose bin entries do not fit (16 entries for the whole surface): every one spills
+/// and every slave examines the spill list, in chunks, past 65,536 candidates per slave. The
+/// penalty increment gives the same forces as with bins that fit, on the CPU path and both
+/// software adapters, and the next increment, with the bins grown, spills nothing.
+#[test]
+fn a_hundred_thousand_spilled_facets() {
+    use abut::mesh::plate_triangles;
+    let plate = plate_triangles(224, 224, 0.3, 0.3, 0.0, 0, &|x, y| 0.2 * x - 0.1 * y);
+    let mut m = Model::new_3d();
+    m.add_nodes(&plate.positions, &vec![1.0; plate.positions.len()])
+        .unwrap();
+    let s = m.add_surface(Surface::triangles(&plate.facets)).unwrap();
+    let mut rng = SplitMix64::new(11);
+    let slaves: Vec<[f64; 3]> = (0..200)
+        .map(|_| {
+            let (x, y) = (rng.range(0.01, 0.29), rng.range(0.01, 0.29));
+            [x, y, 0.2 * x - 0.1 * y + rng.range(-0.004, 0.002)]
+        })
+        .collect();
+    let r = m.add_nodes(&slaves, &vec![1.0; slaves.len()]).unwrap();
+    let set = m.add_node_set(&r.to_vec()).unwrap();
+    m.add_pair(
+        Pair::new(set, s)
+            .search_radius(0.01)
+            .enforce(Enforce::Penalty(Penalty {
+                stiffness: Stiffness::Absolute(1e3),
+                ..Default::default()
+            })),
+    )
+    .unwrap();
+    let v = vec![[0.0; 3]; m.positions().len()];
+    for d in devices() {
+        let mut fits = Contact::new(&d, &m).unwrap();
+        let a = fits.penalty_step(m.positions(), &v, 1e-4).unwrap().clone();
+        assert_eq!(a.spilled, 0, "{d}: the bins fit");
+        assert!(a.active > 50, "{d}: {} in contact", a.active);
+        let mut tight = Contact::new(&d, &m).unwrap();
+        tight.set_entry_capacity(16);
+        let b = tight.penalty_step(m.positions(), &v, 1e-4).unwrap().clone();
+        assert!(
+            b.spilled > 65_536,
+            "{d}: {} facets spilled, the case needs more than 65,536",
+            b.spilled
+        );
+        assert_eq!(a.active, b.active, "{d}: slaves in contact");
+        let scale = a
+            .forces
+            .iter()
+            .flatten()
+            .fold(0.0f64, |x, f| x.max(f.abs()));
+        for (i, (fa, fb)) in a.forces.iter().zip(&b.forces).enumerate() {
+            for c in 0..3 {
+                assert!(
+                    (fa[c] - fb[c]).abs() <= 1e-6 * scale,
+                    "{d}: node {i}: {fa:?} with bins that fit, {fb:?} spilled"
+                );
+            }
+        }
+        // the next increment is global again (a fresh search is asked for) and the bins have grown
+        tight.request_global_search();
+        let c = tight.penalty_step(m.positions(), &v, 1e-4).unwrap().clone();
+        assert_eq!(c.global_searches, 1, "{d}");
+        assert_eq!(c.spilled, 0, "{d}: still spilling after growing");
+    }
+}

@@ -490,10 +490,11 @@ impl Contact {
         }
     }
 
-    /// Asks the next device-resident increment of every pair to search globally (a 4-byte upload
-    /// per pair on a GPU).
+    /// Asks the next penalty increment (device-resident or host-array) of every pair to search
+    /// globally (a 4-byte upload per pair on a GPU).
     pub fn request_global_search(&mut self) {
         for pr in &mut self.pairs {
+            pr.schedule.forced = true;
             if let Some(g) = pr.search.gpu_mut() {
                 g.request_global();
             } else if let Some(c) = pr.search.cpu_mut() {
@@ -645,6 +646,7 @@ impl Contact {
             active: st.active as usize,
             slipping: st.slipping as usize,
             global_searches: st.global_searches as usize,
+            spilled: st.spilled as usize,
         };
         self.global_total += st.global_searches as u64;
         let first = self.host_increments == 1;
