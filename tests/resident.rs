@@ -701,3 +701,59 @@ fn host_arrays_keep_their_precision_far_away() {
         }
     }
 }
+
+/// A NaN coordinate in the caller's device positions cannot be checked on the host before the
+/// increment: the device names the lowest such node in the statistics, and `collect_stats`
+/// turns it into an error that names it.
+#[test]
+fn a_nan_in_device_positions_is_named() {
+    let s = scene(7, false, 5);
+    let n = s.model.positions().len();
+    let (x, v) = (s.motion)(0);
+    let mut x4 = vec4(&x);
+    x4[37][1] = f32::NAN;
+    x4[90][2] = f32::INFINITY;
+    let mut devices = vec![Device::cpu()];
+    devices.extend(gpus().iter().cloned());
+    for d in &devices {
+        let mut c = Contact::new(d, &s.model).unwrap();
+        if let Some((dev, q)) = d.wgpu() {
+            let b = buffers(d, n);
+            q.write_buffer(&b.x, 0, bytemuck::cast_slice(&x4));
+            q.write_buffer(&b.v, 0, bytemuck::cast_slice(&vec4(&v)));
+            let mut enc = dev.create_command_encoder(&Default::default());
+            c.encode_increment(
+                ResidentIo::Gpu {
+                    encoder: &mut enc,
+                    positions: &b.x,
+                    velocities: &b.v,
+                    forces: &b.f,
+                },
+                s.dt,
+            )
+            .unwrap();
+            q.submit([enc.finish()]);
+            read(d, &b.f, 16); // the test's wait, so that the ring has the increment
+        } else {
+            let mut f = vec![[0.0f32; 4]; n];
+            c.encode_increment(
+                ResidentIo::Cpu {
+                    positions: &x4,
+                    velocities: &vec4(&v),
+                    forces: &mut f,
+                },
+                s.dt,
+            )
+            .unwrap();
+        }
+        let mut err = None;
+        for _ in 0..4 {
+            if let Err(e) = c.collect_stats() {
+                err = Some(e.to_string());
+                break;
+            }
+        }
+        let e = err.unwrap_or_else(|| panic!("{d}: no error for a NaN position"));
+        assert!(e.contains("node 37"), "{d}: {e}");
+    }
+}

@@ -12,7 +12,7 @@
 use super::{fill_output, positive_dt, Contact, PenaltyExec, StepReport};
 use crate::cpu::{gather, stats};
 use crate::error::{Error, Result};
-use crate::gpu::GpuIncrement;
+use crate::gpu::{GpuIncrement, STATS_RING};
 use crate::penalty::layout::{ContactOut, NO_LIMIT};
 use crate::search::layout::{
     GpuHit, IncrementStats, PLAN_CROWDED, PLAN_FORCE, PLAN_SEARCHED, PLAN_SINCE_GLOBAL, PLAN_SLOTS,
@@ -61,8 +61,10 @@ pub(crate) enum Resident {
         rows: Vec<f32>,
         /// The statistics words (`IncrementStats`).
         stats: [u32; 16],
-        /// Statistics not yet collected.
+        /// Statistics not yet collected (at most `STATS_RING`, as on a GPU).
         queue: Vec<IncrementStats>,
+        /// Increments whose statistics found the queue full.
+        dropped: u64,
     },
 }
 
@@ -188,7 +190,7 @@ impl Contact {
                 for pr in &mut self.pairs {
                     let n = pr.setup.pair_nodes.len() as u32;
                     let g = pr.search.gpu_mut().ok_or_else(mixed)?;
-                    let (status, plan) = g.status_and_plan();
+                    let (status, plan, _) = g.resident_outputs();
                     let PenaltyExec::Gpu(p) = &pr.exec else {
                         return Err(mixed());
                     };
@@ -215,6 +217,7 @@ impl Contact {
                     rows: vec![0.0; self.n_nodes],
                     stats: first,
                     queue: Vec::new(),
+                    dropped: 0,
                 }
             }
             None => {
@@ -354,6 +357,7 @@ impl Contact {
                     rows,
                     stats: words,
                     queue,
+                    dropped,
                 }),
             ) => {
                 for (what, len) in [
@@ -397,7 +401,11 @@ impl Contact {
                 }
                 stats::finish_stats(words);
                 if ring {
-                    queue.push(bytemuck::cast(*words));
+                    if queue.len() < STATS_RING {
+                        queue.push(bytemuck::cast(*words));
+                    } else {
+                        *dropped += 1;
+                    }
                 }
                 Ok(())
             }
@@ -481,11 +489,13 @@ impl Contact {
         Ok(out)
     }
 
-    /// Increments whose statistics found no free staging buffer of the ring (the host fell more
-    /// than `STATS_RING` increments behind); their statistics were on the device all the same.
+    /// Increments whose statistics found no free staging buffer of the ring, or (CPU path) the
+    /// queue of uncollected ones full: the host fell more than [`STATS_RING`] increments behind
+    /// ([`Contact::collect_stats`]); on a GPU their statistics were on the device all the same.
     pub fn dropped_stats(&self) -> u64 {
         match &self.resident {
             Some(Resident::Gpu(inc)) => inc.dropped,
+            Some(Resident::Cpu { dropped, .. }) => *dropped,
             _ => 0,
         }
     }

@@ -30,8 +30,6 @@ pub struct SharedBuffers<'a> {
     pub hits: &'a wgpu::Buffer,
     /// Status words.
     pub status: &'a wgpu::Buffer,
-    /// Every status word at its reset value (`status::reset_image`): owners copy their runs.
-    pub status_reset: &'a wgpu::Buffer,
 }
 
 /// Readback layout: status words, then the bin total (padded to 16 bytes), then the hits.
@@ -700,7 +698,6 @@ impl GpuSearch {
             facets: &self.buffers.facets.buffer,
             hits: &self.buffers.hits.buffer,
             status: &self.buffers.status,
-            status_reset: &self.buffers.status_reset,
         }
     }
 

@@ -10,6 +10,7 @@ pub mod shaders;
 
 pub use global_search::{GpuSearch, SharedBuffers};
 pub(crate) use increment::GpuIncrement;
+pub use increment::STATS_RING;
 pub use integrate::{CentralDifference, IntegrateParams};
 pub use penalty::GpuPenalty;
 

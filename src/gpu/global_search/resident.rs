@@ -302,11 +302,6 @@ impl GpuSearch {
         )
     }
 
-    /// The status and plan buffers (the increment's statistics read them).
-    pub(crate) fn status_and_plan(&self) -> (&wgpu::Buffer, &wgpu::Buffer) {
-        (&self.buffers.status, &self.buffers.plan)
-    }
-
     /// The plan's params words as a uniform binding.
     fn plan_params(&self) -> wgpu::BindingResource<'_> {
         wgpu::BindingResource::Buffer(wgpu::BufferBinding {
