@@ -311,6 +311,20 @@ fn search_detail() -> String {
     }
 }
 
+/// wgpu's default instance flags without `VALIDATION_INDIRECT_CALL`, then the environment's
+/// `WGPU_*` flags (`WGPU_VALIDATION_INDIRECT_CALL=1` turns it back on). That validation makes
+/// wgpu add a compute dispatch of its own, with its barriers, before every indirect dispatch —
+/// about twenty per device-resident increment, paid on the host when recording and on the device
+/// even when the arguments are zero. Every indirect argument abut dispatches is written by its own
+/// shaders within the limits by construction (the plan's slots folded on the host to the device's
+/// workgroups per dimension, the nearest-facet arguments folded in `nearest_args`), which
+/// `tests/resident.rs` checks on every plan the schedule writes.
+pub(crate) fn instance_flags() -> wgpu::InstanceFlags {
+    let mut flags = wgpu::InstanceFlags::default();
+    flags.remove(wgpu::InstanceFlags::VALIDATION_INDIRECT_CALL);
+    flags.with_env()
+}
+
 /// Adapters of `backends` that can run compute shaders, filtered by the environment
 /// (`WGPU_BACKEND` narrows `backends` further), best first.
 fn ranked_adapters(backends: wgpu::Backends) -> Vec<wgpu::Adapter> {
@@ -320,7 +334,7 @@ fn ranked_adapters(backends: wgpu::Backends) -> Vec<wgpu::Adapter> {
     }
     let mut desc = wgpu::InstanceDescriptor::new_without_display_handle();
     desc.backends = backends;
-    desc.flags = wgpu::InstanceFlags::default().with_env();
+    desc.flags = instance_flags();
     let instance = wgpu::Instance::new(desc);
     let mut adapters = pollster::block_on(instance.enumerate_adapters(backends));
     let name = std::env::var("WGPU_ADAPTER_NAME")

@@ -262,3 +262,38 @@ fn a_hundred_thousand_spilled_facets() {
         assert_eq!(c.spilled, 0, "{d}: still spilling after growing");
     }
 }
+
+/// Every dispatch abut folds stays within the workgroups per dimension a device allows, and
+/// covers all its items: wgpu's own check of indirect arguments is off in abut's instances
+/// (`WGPU_VALIDATION_INDIRECT_CALL=1` turns it back on), so the plan's slots, folded by
+/// `fold_dispatch` on the host and copied by the schedule, must be valid by construction.
+#[test]
+fn folded_dispatches_stay_within_the_limits() {
+    use abut::search::layout::fold_dispatch;
+    use proptest::prelude::*;
+    let check = |items: u32, per: u32, max: u32| {
+        let (x, y) = fold_dispatch(items, per, max);
+        assert!(
+            (1..=max).contains(&x) && (1..=max).contains(&y),
+            "{items} items, {per} per workgroup, at most {max}: ({x}, {y})"
+        );
+        let covered = x as u64 * y as u64 * per as u64;
+        assert!(covered >= items as u64, "{items} items: ({x}, {y}) x {per}");
+        // no more than one row of workgroups left over
+        assert!((x as u64) * (y as u64 - 1) * (per as u64) < (items as u64).max(1));
+    };
+    for items in [0, 1, 63, 64, 65, 65_535 * 64, 65_535 * 64 + 1, u32::MAX] {
+        for per in [1, 64, 256] {
+            for max in [65_535, 256, 1] {
+                // a device's limit cannot fold more than max² workgroups
+                if items.div_ceil(per) as u64 <= max as u64 * max as u64 {
+                    check(items, per, max);
+                }
+            }
+        }
+    }
+    proptest!(ProptestConfig::with_cases(4000), |(items in 0u32.., per in 1u32..=1024)| {
+        prop_assume!(items.div_ceil(per) as u64 <= 65_535 * 65_535);
+        check(items, per, 65_535);
+    });
+}

@@ -97,7 +97,13 @@ pub(crate) fn record_groups(
 ) {
     if let Ok(mut t) = ctx.traffic.lock() {
         for (label, work) in groups {
-            *t.dispatches.entry(label.to_string()).or_default() += work.len() as u64;
+            let n = work.len() as u64;
+            match t.dispatches.get_mut(*label) {
+                Some(c) => *c += n,
+                None => {
+                    t.dispatches.insert(label.to_string(), n);
+                }
+            }
             t.workgroups += work
                 .iter()
                 .map(|d| match d {
@@ -109,32 +115,56 @@ pub(crate) fn record_groups(
     }
     let mut profiler = ctx.profiler.lock().ok();
     let timed = profiler.as_ref().is_some_and(|p| p.is_some());
-    let record = |pass: &mut wgpu::ComputePass<'_>, work: &[Dispatch<'_>]| {
-        for d in work {
-            match *d {
-                Dispatch::Direct((pipe, group, n, per)) => {
-                    let (x, y) = crate::search::layout::fold_dispatch(n, per, max_dim);
-                    pass.set_pipeline(pipe);
-                    pass.set_bind_group(0, group, &[]);
-                    pass.dispatch_workgroups(x, y, 1);
-                }
-                Dispatch::Indirect(pipe, group, args, offset) => {
-                    pass.set_pipeline(pipe);
-                    pass.set_bind_group(0, group, &[]);
-                    pass.dispatch_workgroups_indirect(args, offset);
-                }
-            }
-        }
-    };
     if timed {
         for (label, work) in groups {
             let mut pass = begin_pass(&mut profiler, enc, label);
-            record(&mut pass, work);
+            let mut bound = None;
+            record_work(&mut pass, work, &mut bound, max_dim);
         }
     } else {
         let mut pass = begin_pass(&mut profiler, enc, label);
+        let mut bound = None;
         for (_, work) in groups {
-            record(&mut pass, work);
+            record_work(&mut pass, work, &mut bound, max_dim);
+        }
+    }
+}
+
+/// The pipeline and bind group a compute pass has set last.
+type Bound<'a> = Option<(&'a wgpu::ComputePipeline, &'a wgpu::BindGroup)>;
+
+/// Records `work` into `pass`, setting the pipeline and the bind group only where they differ
+/// from what the pass has bound (`bound`, updated).
+fn record_work<'a>(
+    pass: &mut wgpu::ComputePass<'_>,
+    work: &[Dispatch<'a>],
+    bound: &mut Bound<'a>,
+    max_dim: u32,
+) {
+    for d in work {
+        let (pipe, group) = match *d {
+            Dispatch::Direct((pipe, group, ..)) | Dispatch::Indirect(pipe, group, ..) => {
+                (pipe, group)
+            }
+        };
+        let (same_pipe, same_group) = bound.map_or((false, false), |(p, g)| {
+            (std::ptr::eq(p, pipe), std::ptr::eq(g, group))
+        });
+        if !same_pipe {
+            pass.set_pipeline(pipe);
+        }
+        if !same_group {
+            pass.set_bind_group(0, group, &[]);
+        }
+        *bound = Some((pipe, group));
+        match *d {
+            Dispatch::Direct((_, _, n, per)) => {
+                let (x, y) = crate::search::layout::fold_dispatch(n, per, max_dim);
+                pass.dispatch_workgroups(x, y, 1);
+            }
+            Dispatch::Indirect(_, _, args, offset) => {
+                pass.dispatch_workgroups_indirect(args, offset);
+            }
         }
     }
 }

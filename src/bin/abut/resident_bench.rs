@@ -65,11 +65,32 @@ struct Measured {
     /// Recording, submitting and collecting the statistics (µs; resident): on a software
     /// adapter the submit runs the shaders on the calling thread.
     submit_us: f64,
+    /// Host time per increment recorded with the device idle, just after it ran (µs; resident;
+    /// median): the host's own cost, without a software adapter's shaders on the same cores but
+    /// with the caches they evicted.
+    idle_host_us: f64,
+    /// Of which abut's `encode_increment` (µs; resident; median).
+    idle_abut_us: f64,
+    /// Host time of the second of two increments recorded back to back, device idle (µs;
+    /// resident; median): the host's own cost with warm caches.
+    warm_host_us: f64,
+    /// Of which abut's `encode_increment` (µs; resident; median).
+    warm_abut_us: f64,
     submits: f64,
     read_back: f64,
     waits: f64,
     /// GPU time per increment by pass label (ms), from the timed run; empty without timestamps.
     pass_ms: Vec<(String, f64)>,
+}
+
+/// The median of `v` (NaN when empty).
+fn median(mut v: Vec<f64>) -> f64 {
+    v.sort_by(f64::total_cmp);
+    match v.len() {
+        0 => f64::NAN,
+        n if n % 2 == 1 => v[n / 2],
+        n => 0.5 * (v[n / 2 - 1] + v[n / 2]),
+    }
 }
 
 fn per(t: &abut::Traffic, n: usize) -> (f64, f64, f64) {
@@ -133,6 +154,10 @@ fn host_arrays(device: &Device, c: &Config) -> abut::Result<Measured> {
         },
         abut_us: f64::NAN,
         submit_us: f64::NAN,
+        idle_host_us: f64::NAN,
+        idle_abut_us: f64::NAN,
+        warm_host_us: f64::NAN,
+        warm_abut_us: f64::NAN,
         submits,
         read_back,
         waits,
@@ -161,7 +186,7 @@ fn resident(device: &Device, c: &Config) -> abut::Result<Measured> {
         *v = [sc.u as f32, 0.0, -sc.v0 as f32, 0.0];
     }
     let drops = sc.first as u32..n_nodes as u32;
-    let run = |timed: bool| -> abut::Result<(f64, [f64; 3], abut::Traffic)> {
+    let run = |timed: bool| -> abut::Result<(f64, [f64; 7], abut::Traffic)> {
         device.enable_timestamps(timed);
         let make = |data: &[[f32; 4]]| {
             let b = d.create_buffer(&wgpu::BufferDescriptor {
@@ -176,7 +201,9 @@ fn resident(device: &Device, c: &Config) -> abut::Result<Measured> {
         let (x, v, f) = (make(&x0), make(&v0), make(&vec![[0.0; 4]; n_nodes]));
         let mut contact = Contact::new(device, &sc.model)?;
         let mut integ = CentralDifference::new(device, sc.model.masses())?;
-        let mut record = |contact: &mut Contact| -> abut::Result<(f64, f64)> {
+        // records one increment (abut's passes, then the integrator) into a new command buffer:
+        // (seconds in encode_increment, seconds recording in all, the command buffer)
+        let mut encode = |contact: &mut Contact| -> abut::Result<(f64, f64, wgpu::CommandBuffer)> {
             let t0 = Instant::now();
             let mut enc = d.create_command_encoder(&Default::default());
             let ta = Instant::now();
@@ -192,16 +219,23 @@ fn resident(device: &Device, c: &Config) -> abut::Result<Measured> {
             let abut_s = ta.elapsed().as_secs_f64();
             integ.encode(&mut enc, &x, &v, &f, sc.dt, [0.0; 3], drops.clone())?;
             let cmd = enc.finish();
-            let recorded = t0.elapsed().as_secs_f64();
+            Ok((abut_s, t0.elapsed().as_secs_f64(), cmd))
+        };
+        let submit = |cmds: Vec<wgpu::CommandBuffer>| -> abut::Result<()> {
             if timed {
                 // through abut, which reads the timestamps (and waits for them)
                 let mut e = d.create_command_encoder(&Default::default());
                 e.insert_debug_marker("timed increment");
-                q.submit([cmd]);
-                device.submit(e)?;
+                q.submit(cmds);
+                device.submit(e)
             } else {
-                q.submit([cmd]);
+                q.submit(cmds);
+                Ok(())
             }
+        };
+        let mut record = |contact: &mut Contact| -> abut::Result<(f64, f64)> {
+            let (abut_s, recorded, cmd) = encode(contact)?;
+            submit(vec![cmd])?;
             contact.collect_stats()?;
             Ok((abut_s, recorded))
         };
@@ -220,8 +254,39 @@ fn resident(device: &Device, c: &Config) -> abut::Result<Measured> {
         let traffic = device.traffic().unwrap_or_default().since(&before);
         let _ = d.poll(wgpu::PollType::wait_indefinitely());
         let wall = t.elapsed().as_secs_f64() / INCREMENTS as f64;
+        // the host's own cost, with the device idle (on a software adapter the shaders of earlier
+        // increments otherwise share the host's cores): two increments recorded back to back,
+        // then submitted together — the first after the device ran (its shaders have evicted the
+        // host's caches here), the second warm. Medians: this virtual machine's scheduler adds
+        // outliers of several times the median.
+        let (mut cold, mut warm) = (Vec::new(), Vec::new());
+        for _ in 0..INCREMENTS / 2 {
+            let _ = d.poll(wgpu::PollType::wait_indefinitely());
+            let (a1, r1, c1) = encode(&mut contact)?;
+            let (a2, r2, c2) = encode(&mut contact)?;
+            submit(vec![c1, c2])?;
+            contact.collect_stats()?;
+            cold.push((a1, r1));
+            warm.push((a2, r2));
+        }
+        let _ = d.poll(wgpu::PollType::wait_indefinitely());
+        let med = |v: &[(f64, f64)], k: usize| {
+            median(v.iter().map(|p| if k == 0 { p.0 } else { p.1 }).collect())
+        };
         let per = |v: f64| v / INCREMENTS as f64;
-        Ok((wall, [per(abut_s), per(recording), per(host)], traffic))
+        Ok((
+            wall,
+            [
+                per(abut_s),
+                per(recording),
+                per(host),
+                med(&cold, 0),
+                med(&cold, 1),
+                med(&warm, 0),
+                med(&warm, 1),
+            ],
+            traffic,
+        ))
     };
     let (wall, host, traffic) = run(false)?;
     let (_, _, timed) = run(true)?;
@@ -232,6 +297,10 @@ fn resident(device: &Device, c: &Config) -> abut::Result<Measured> {
         host_us: host[1] * 1e6,
         abut_us: host[0] * 1e6,
         submit_us: host[2] * 1e6,
+        idle_abut_us: host[3] * 1e6,
+        idle_host_us: host[4] * 1e6,
+        warm_abut_us: host[5] * 1e6,
+        warm_host_us: host[6] * 1e6,
         // this program submits each increment itself (through Device::submit only when timed)
         submits: submits.max(1.0),
         read_back,
@@ -279,7 +348,7 @@ pub fn run(a: &BenchArgs) -> abut::Result<()> {
         );
         let _ = writeln!(
             md,
-            "| slaves | mode | submits / incr. | bytes read back / incr. | blocking waits / incr. | host time / incr. | of which abut | recording + submit (software adapter) | wall / incr. | GPU time / incr. | H100 estimate / incr. |\n|---|---|---|---|---|---|---|---|---|---|---|"
+            "| slaves | mode | submits / incr. | bytes read back / incr. | blocking waits / incr. | host time / incr. | of which abut | host time, device idle: cold / warm (median) | of which abut: cold / warm | recording + submit (software adapter) | wall / incr. | GPU time / incr. | H100 estimate / incr. |\n|---|---|---|---|---|---|---|---|---|---|---|---|---|"
         );
         let mut detail = String::new();
         let us = |v: f64| {
@@ -287,6 +356,13 @@ pub fn run(a: &BenchArgs) -> abut::Result<()> {
                 "–".to_string()
             } else {
                 format!("{v:.0} µs")
+            }
+        };
+        let pair = |a: f64, b: f64| {
+            if a.is_nan() {
+                "–".to_string()
+            } else {
+                format!("{a:.0} / {b:.0} µs")
             }
         };
         for &n in sizes {
@@ -303,12 +379,14 @@ pub fn run(a: &BenchArgs) -> abut::Result<()> {
                 let gpu: f64 = m.pass_ms.iter().map(|(_, v)| v).sum();
                 let _ = writeln!(
                     md,
-                    "| {n} | {mode} | {:.2} | {:.0} | {:.2} | {} | {} | {} | {:.2} ms | {} | {} |",
+                    "| {n} | {mode} | {:.2} | {:.0} | {:.2} | {} | {} | {} | {} | {} | {:.2} ms | {} | {} |",
                     m.submits,
                     m.read_back,
                     m.waits,
                     us(m.host_us),
                     us(m.abut_us),
+                    pair(m.idle_host_us, m.warm_host_us),
+                    pair(m.idle_abut_us, m.warm_abut_us),
                     us(m.submit_us),
                     m.wall_ms,
                     if m.pass_ms.is_empty() {
