@@ -10,7 +10,8 @@
 //           word of counts up to cell_capacity + 1, indirect from the plan.
 // Invariants: a facet is counted once in every cell its bounding box, grown by bin_margin
 //             (≥ the search radius), overlaps; counts are order-independent integers, so the
-//             result is deterministic.
+//             result is deterministic. A facet collapsed at these positions (facet_collapsed)
+//             is not binned: no slave finds it (bin_scatter counts it).
 
 @group(0) @binding(0) var<uniform> params: SearchParams;
 @group(0) @binding(1) var<storage, read> nodes: array<vec4<f32>>;
@@ -31,6 +32,7 @@ fn bin_count(@builtin(workgroup_id) wg: vec3<u32>,
     var x3 = x1;
     if (n >= 3u) { x2 = nodes[fac.z].xyz; }
     if (n == 4u) { x3 = nodes[fac.w].xyz; }
+    if (facet_collapsed(x0, x1, x2, x3, n)) { return; }
     let r = facet_cells(params, x0, x1, x2, x3, n);
     for (var z = r.lo.z; z <= r.hi.z; z++) {
         for (var y = r.lo.y; y <= r.hi.y; y++) {

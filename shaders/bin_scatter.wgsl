@@ -15,7 +15,9 @@
 //             and STATUS_NEEDED_ENTRIES holds the total; outside a device-resident increment
 //             (FLAG_RESIDENT) STATUS_OVERFLOW is set too, and the host grows the buffer and runs
 //             the search again. The order within a cell and in the spill depends on scheduling;
-//             nothing downstream depends on it (nearest_facet breaks ties by facet id).
+//             nothing downstream depends on it (nearest_facet breaks ties by facet id). A facet
+//             collapsed at these positions is neither binned nor spilled, and is counted in
+//             STATUS_COLLAPSED.
 
 @group(0) @binding(0) var<uniform> params: SearchParams;
 @group(0) @binding(1) var<storage, read> nodes: array<vec4<f32>>;
@@ -54,6 +56,10 @@ fn bin_scatter(@builtin(workgroup_id) wg: vec3<u32>,
     var x3 = x1;
     if (n >= 3u) { x2 = nodes[fac.z].xyz; }
     if (n == 4u) { x3 = nodes[fac.w].xyz; }
+    if (facet_collapsed(x0, x1, x2, x3, n)) {
+        atomicAdd(&status[STATUS_COLLAPSED], 1u);
+        return;
+    }
     let r = facet_cells(params, x0, x1, x2, x3, n);
     var spilled = false;
     for (var z = r.lo.z; z <= r.hi.z; z++) {

@@ -81,6 +81,7 @@ const STATUS_FORCE_SCALE: u32 = 16u;  // bits of the largest |force component| o
 const STATUS_ROW_SCALE: u32 = 17u;    // bits of the largest bound share of a spring in contact
 const STATUS_SPILLED: u32 = 18u;      // facets whose bin entries did not fit (spilled: every slave sees them)
 const STATUS_BOX: u32 = 20u;          // 6 words: order-preserving bits of the master box, min then max
+const STATUS_COLLAPSED: u32 = 19u;    // master facets collapsed at the global search's positions (skipped)
 const STATUS_NONFINITE: u32 = 26u;    // lowest node with a non-finite coordinate, NO_NODE if none
 
 // The plan of a device-resident increment: one buffer per search, u32 words (Rust twins:
@@ -145,6 +146,28 @@ struct CellRange {
 fn cell_coord(x: f32, inv: f32, dims: u32) -> u32 {
     let c = i32(floor(x * inv));
     return u32(clamp(c, 0, i32(dims) - 1));
+}
+
+// Whether a facet with corners x0..x3 (n of them) has collapsed: its length (2D) or area (3D),
+// in units of its longest edge, is not above 1e-6 — the model's rule for degenerate facets
+// (src/model/surface.rs) applied to the current positions. Rust twin: cpu::common::facet_collapsed.
+fn facet_collapsed(x0: vec3<f32>, x1: vec3<f32>, x2: vec3<f32>, x3: vec3<f32>, n: u32) -> bool {
+    var size = length(x1 - x0);
+    if (n == 3u) {
+        size = max(size, max(length(x2 - x1), length(x0 - x2)));
+    } else if (n == 4u) {
+        size = max(max(size, length(x2 - x1)), max(length(x3 - x2), length(x0 - x3)));
+    }
+    if (!(size > 0.0) || size > 3.0e38) { return true; }
+    let inv = 1.0 / size;
+    if (n == 2u) { return false; }
+    var a: vec3<f32>;
+    if (n == 3u) {
+        a = cross((x1 - x0) * inv, (x2 - x0) * inv);
+    } else {
+        a = cross((x2 - x0) * inv, (x3 - x1) * inv);
+    }
+    return !(0.5 * length(a) > 1.0e-6);
 }
 
 fn facet_cells(p: SearchParams, x0: vec3<f32>, x1: vec3<f32>, x2: vec3<f32>, x3: vec3<f32>, n: u32) -> CellRange {

@@ -19,7 +19,8 @@
 //             a slave with no tracked node waits for the next global search. Nothing runs when
 //             the motion budget is exceeded (the increment is run again with a global search).
 //             A slave nearest to a free edge or corner of the master and off to its side gets
-//             HIT_BESIDE_FREE_EDGE in its candidates word (as in nearest_facet.wgsl).
+//             HIT_BESIDE_FREE_EDGE in its candidates word (as in nearest_facet.wgsl). A facet
+//             collapsed at the current positions is passed over (facet_collapsed).
 
 @group(0) @binding(0) var<uniform> params: SearchParams;
 @group(0) @binding(1) var<storage, read> nodes: array<vec4<f32>>;
@@ -38,7 +39,7 @@ struct Best {
 
 fn consider(b: ptr<function, Best>, s: u32, p: vec3<f32>, f: u32) {
     let fac = facets[f];
-    if (excluded(s, fac)) { return; }
+    if (excluded(s, fac) || collapsed(fac)) { return; }
     (*b).candidates += 1u;
     let pr = project_facet(p, fac);
     if ((*b).facet == NO_FACET || pr.dist2 < (*b).d2 || (pr.dist2 == (*b).d2 && f < (*b).facet)) {

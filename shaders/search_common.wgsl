@@ -13,6 +13,18 @@ fn project_facet(p: vec3<f32>, fac: vec4<u32>) -> Projection {
     return closest_on_quad(p, x0, x1, x2, nodes[fac.w].xyz);
 }
 
+// Whether facet fac has collapsed at the current positions (see facet_collapsed in common.wgsl).
+fn collapsed(fac: vec4<u32>) -> bool {
+    let n = facet_node_count(fac);
+    let x0 = nodes[fac.x].xyz;
+    let x1 = nodes[fac.y].xyz;
+    var x2 = x1;
+    var x3 = x1;
+    if (n >= 3u) { x2 = nodes[fac.z].xyz; }
+    if (n == 4u) { x3 = nodes[fac.w].xyz; }
+    return facet_collapsed(x0, x1, x2, x3, n);
+}
+
 // Self-contact: facet f is the slave's own or touches one of the slave's own facets.
 fn excluded(s: u32, fac: vec4<u32>) -> bool {
     if ((params.flags & FLAG_SELF_CONTACT) == 0u) { return false; }

@@ -317,8 +317,8 @@ fn search_detail() -> String {
 /// about twenty per device-resident increment, paid on the host when recording and on the device
 /// even when the arguments are zero. Every indirect argument abut dispatches is written by its own
 /// shaders within the limits by construction (the plan's slots folded on the host to the device's
-/// workgroups per dimension, the nearest-facet arguments folded in `nearest_args`), which
-/// `tests/resident.rs` checks on every plan the schedule writes.
+/// workgroups per dimension, the nearest-facet arguments folded in `nearest_args`); the fold is
+/// tested over the whole range of counts in `tests/bounded_work.rs`.
 pub(crate) fn instance_flags() -> wgpu::InstanceFlags {
     let mut flags = wgpu::InstanceFlags::default();
     flags.remove(wgpu::InstanceFlags::VALIDATION_INDIRECT_CALL);

@@ -15,6 +15,22 @@ pub enum Error {
         /// The offending value.
         value: f64,
     },
+    /// A coordinate of a slave or master node, finite in f64, is beyond single precision's range
+    /// relative to the search's frame (the kernels work in f32 there).
+    #[error(
+        "node {node}: coordinate {axis} = {value:e} is beyond single precision (f32) range relative to \
+         the search frame at {frame:e}"
+    )]
+    CoordinateOutOfRange {
+        /// Index of the node in the model.
+        node: usize,
+        /// Axis: 0 = x, 1 = y, 2 = z.
+        axis: usize,
+        /// The coordinate, model units.
+        value: f64,
+        /// The frame's origin on that axis, model units.
+        frame: f64,
+    },
     /// A node mass is zero, negative, NaN or infinite.
     #[error("node {node}: mass {mass} is not a finite positive number")]
     BadMass {

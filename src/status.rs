@@ -138,7 +138,12 @@ pub const STATUS_TABLE: [StatusWord; STATUS_WORDS] = [
         Owner::Search,
         0,
     ),
-    w(19, "unused", Owner::Unused, 0),
+    w(
+        STATUS_COLLAPSED,
+        "master facets collapsed at the global search",
+        Owner::Search,
+        0,
+    ),
     w(
         STATUS_BOX,
         "master box min x (ordered bits)",
@@ -243,6 +248,10 @@ impl Status {
     /// Self-contact slaves with unconnected facets near and facing them.
     pub fn crowded(&self) -> u32 {
         self.0[STATUS_CROWDED]
+    }
+    /// Master facets collapsed at the global search's positions (skipped).
+    pub fn collapsed(&self) -> u32 {
+        self.0[STATUS_COLLAPSED]
     }
     /// A master node left the grid's box (positions on the device).
     pub fn frame_stale(&self) -> bool {

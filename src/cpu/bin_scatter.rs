@@ -1,8 +1,9 @@
 //! CPU mirror of `shaders/bin_scatter.wgsl`: write facet ids into their cells.
 
-use super::common::{facet_cells, for_each_cell};
+use super::common::{facet_cells, facet_collapsed, for_each_cell};
 use crate::search::layout::{
-    SearchParams, FLAG_RESIDENT, STATUS_NEEDED_ENTRIES, STATUS_OVERFLOW, STATUS_SPILLED,
+    SearchParams, FLAG_RESIDENT, STATUS_COLLAPSED, STATUS_NEEDED_ENTRIES, STATUS_OVERFLOW,
+    STATUS_SPILLED,
 };
 
 /// One "invocation" per word of `starts` up to n_cells: the cursors from the starts, and the
@@ -16,7 +17,8 @@ pub fn copy_starts(params: &SearchParams, starts: &[u32], cursor: &mut [u32], en
 /// One "invocation" per facet. `cursor` starts as a copy of `starts`; `entries` holds
 /// `entry_capacity` bin words, the spill count, then room for every facet. An entry past the
 /// capacity is not written and its facet spills (once); outside a device-resident increment
-/// the overflow is raised for the host to grow and run again.
+/// the overflow is raised for the host to grow and run again. A facet collapsed at `nodes` is
+/// neither binned nor spilled, and is counted in `STATUS_COLLAPSED`.
 pub fn bin_scatter(
     params: &SearchParams,
     nodes: &[[f32; 4]],
@@ -35,6 +37,10 @@ pub fn bin_scatter(
         }
     }
     for f in 0..params.n_facets as usize {
+        if facet_collapsed(nodes, facets[f]) {
+            status[STATUS_COLLAPSED] += 1;
+            continue;
+        }
         let (lo, hi) = facet_cells(params, nodes, facets[f]);
         let mut spilled = false;
         for_each_cell(params, lo, hi, |c| {

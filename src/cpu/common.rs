@@ -22,6 +22,34 @@ pub fn node(nodes: &[[f32; 4]], n: u32) -> V3<f32> {
     V3::new(x[0], x[1], x[2])
 }
 
+/// Whether facet `fac` has collapsed at `nodes`: its length (2D) or area (3D), in units of its
+/// longest edge, is not above 1e-6 — the model's rule for degenerate facets applied to the
+/// current positions (WGSL: `facet_collapsed` in common.wgsl, `collapsed` in
+/// search_common.wgsl).
+pub fn facet_collapsed(nodes: &[[f32; 4]], fac: [u32; 4]) -> bool {
+    let n = facet_node_count(fac);
+    let x: [V3<f32>; 4] = std::array::from_fn(|j| node(nodes, fac[j.min(n - 1)]));
+    let len = |v: V3<f32>| v.length2().sqrt();
+    let mut size = len(x[1] - x[0]);
+    if n == 3 {
+        size = size.max(len(x[2] - x[1]).max(len(x[0] - x[2])));
+    } else if n == 4 {
+        size = size
+            .max(len(x[2] - x[1]))
+            .max(len(x[3] - x[2]).max(len(x[0] - x[3])));
+    }
+    if !(size > 0.0) || size > 3.0e38 {
+        return true;
+    }
+    let inv = 1.0 / size;
+    let a = match n {
+        2 => return false,
+        3 => ((x[1] - x[0]) * inv).cross((x[2] - x[0]) * inv),
+        _ => ((x[2] - x[0]) * inv).cross((x[3] - x[1]) * inv),
+    };
+    !(0.5 * len(a) > 1.0e-6)
+}
+
 /// Cell coordinate along one axis, clamped to the grid (WGSL: `cell_coord`).
 pub fn cell_coord(x: f32, inv: f32, dims: u32) -> u32 {
     let c = (x * inv).floor() as i64;

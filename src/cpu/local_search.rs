@@ -1,6 +1,8 @@
 //! CPU mirror of `shaders/local_search.wgsl`: tracking between global searches.
 
-use super::common::{excluded, facet_node_count, node};
+use rayon::prelude::*;
+
+use super::common::{excluded, facet_collapsed, facet_node_count, node};
 use super::nearest_facet::project;
 use crate::geometry::{Projection, V3};
 use crate::model::NO_NODE;
@@ -25,7 +27,7 @@ fn consider(
     f: u32,
 ) {
     let fac = facets[f as usize];
-    if excluded(params, facets, adjacency, s, fac) {
+    if excluded(params, facets, adjacency, s, fac) || facet_collapsed(nodes, fac) {
         return;
     }
     b.candidates += 1;
@@ -51,111 +53,118 @@ pub fn local_search(
     if status[STATUS_BUDGET_EXCEEDED] != 0 {
         return;
     }
-    for i in 0..params.n_slaves as usize {
-        let s = slaves[i];
-        let p = node(nodes, s);
-        let mut tracked = hits[i].node;
-        let mut hit = GpuHit::miss(s, 0);
-        if tracked == NO_NODE {
-            hits[i] = hit;
-            continue;
-        }
-        let mut b = Best {
-            facet: NO_FACET,
-            d2: 0.0,
-            pr: None,
-            candidates: 0,
-        };
-        let mut it = 0;
-        let mut settled = false;
-        loop {
-            b.facet = NO_FACET;
-            b.d2 = 0.0;
-            for k in adjacency[tracked as usize]..adjacency[tracked as usize + 1] {
-                consider(
-                    &mut b,
-                    params,
+    let n = params.n_slaves as usize;
+    // per slave: (iterations, 1 when its walk hit the cap), reduced as the GPU's atomics are
+    let (most, capped) = hits[..n]
+        .par_iter_mut()
+        .enumerate()
+        .with_min_len(256)
+        .map(|(i, slot)| {
+            let s = slaves[i];
+            let p = node(nodes, s);
+            let mut tracked = slot.node;
+            let mut hit = GpuHit::miss(s, 0);
+            if tracked == NO_NODE {
+                *slot = hit;
+                return (0, 0);
+            }
+            let mut b = Best {
+                facet: NO_FACET,
+                d2: 0.0,
+                pr: None,
+                candidates: 0,
+            };
+            let mut it = 0;
+            let mut settled = false;
+            loop {
+                b.facet = NO_FACET;
+                b.d2 = 0.0;
+                for k in adjacency[tracked as usize]..adjacency[tracked as usize + 1] {
+                    consider(
+                        &mut b,
+                        params,
+                        nodes,
+                        facets,
+                        adjacency,
+                        s,
+                        p,
+                        adjacency[k as usize],
+                    );
+                }
+                if params.flags & FLAG_WIDE_LOCAL != 0 && b.facet != NO_FACET {
+                    let near = facets[b.facet as usize];
+                    for &n in &near[..facet_node_count(near)] {
+                        if n == tracked {
+                            continue;
+                        }
+                        for q in adjacency[n as usize]..adjacency[n as usize + 1] {
+                            consider(
+                                &mut b,
+                                params,
+                                nodes,
+                                facets,
+                                adjacency,
+                                s,
+                                p,
+                                adjacency[q as usize],
+                            );
+                        }
+                    }
+                }
+                it += 1;
+                if b.facet == NO_FACET {
+                    settled = true;
+                    break;
+                }
+                let fac = facets[b.facet as usize];
+                let mut next = NO_NODE;
+                let mut nd2 = 0.0f32;
+                for &n in &fac[..facet_node_count(fac)] {
+                    let d2 = (node(nodes, n) - p).length2();
+                    if next == NO_NODE || d2 < nd2 || (d2 == nd2 && n < next) {
+                        next = n;
+                        nd2 = d2;
+                    }
+                }
+                if next == tracked {
+                    settled = true;
+                    break;
+                }
+                tracked = next;
+                if it >= params.max_local_iterations {
+                    break;
+                }
+            }
+            let outcome = (it, u32::from(!settled));
+            hit.candidates = b.candidates;
+            hit.node = tracked;
+            if let (true, Some(pr)) = (
+                b.facet != NO_FACET && b.d2 <= params.radius * params.radius,
+                b.pr,
+            ) {
+                let q = pr.point;
+                hit.facet = b.facet;
+                hit.point_gap = [q.x, q.y, q.z, (p - q).dot(pr.normal)];
+                hit.normal_dist = [pr.normal.x, pr.normal.y, pr.normal.z, b.d2.sqrt()];
+                hit.weights = pr.weights;
+                if super::common::beside_free_edge(
                     nodes,
                     facets,
                     adjacency,
-                    s,
+                    b.facet,
+                    facets[b.facet as usize],
+                    pr.weights,
                     p,
-                    adjacency[k as usize],
-                );
-            }
-            if params.flags & FLAG_WIDE_LOCAL != 0 && b.facet != NO_FACET {
-                let near = facets[b.facet as usize];
-                for &n in &near[..facet_node_count(near)] {
-                    if n == tracked {
-                        continue;
-                    }
-                    for q in adjacency[n as usize]..adjacency[n as usize + 1] {
-                        consider(
-                            &mut b,
-                            params,
-                            nodes,
-                            facets,
-                            adjacency,
-                            s,
-                            p,
-                            adjacency[q as usize],
-                        );
-                    }
+                    q,
+                    pr.normal,
+                ) {
+                    hit.candidates |= HIT_BESIDE_FREE_EDGE;
                 }
             }
-            it += 1;
-            if b.facet == NO_FACET {
-                settled = true;
-                break;
-            }
-            let fac = facets[b.facet as usize];
-            let mut next = NO_NODE;
-            let mut nd2 = 0.0f32;
-            for &n in &fac[..facet_node_count(fac)] {
-                let d2 = (node(nodes, n) - p).length2();
-                if next == NO_NODE || d2 < nd2 || (d2 == nd2 && n < next) {
-                    next = n;
-                    nd2 = d2;
-                }
-            }
-            if next == tracked {
-                settled = true;
-                break;
-            }
-            tracked = next;
-            if it >= params.max_local_iterations {
-                break;
-            }
-        }
-        status[STATUS_LOCAL_ITERATIONS] = status[STATUS_LOCAL_ITERATIONS].max(it);
-        if !settled {
-            status[STATUS_LOCAL_CAPPED] += 1;
-        }
-        hit.candidates = b.candidates;
-        hit.node = tracked;
-        if let (true, Some(pr)) = (
-            b.facet != NO_FACET && b.d2 <= params.radius * params.radius,
-            b.pr,
-        ) {
-            let q = pr.point;
-            hit.facet = b.facet;
-            hit.point_gap = [q.x, q.y, q.z, (p - q).dot(pr.normal)];
-            hit.normal_dist = [pr.normal.x, pr.normal.y, pr.normal.z, b.d2.sqrt()];
-            hit.weights = pr.weights;
-            if super::common::beside_free_edge(
-                nodes,
-                facets,
-                adjacency,
-                b.facet,
-                facets[b.facet as usize],
-                pr.weights,
-                p,
-                q,
-                pr.normal,
-            ) {
-                hit.candidates |= HIT_BESIDE_FREE_EDGE;
-            }
-        }
-        hits[i] = hit;
-    }
+            *slot = hit;
+            outcome
+        })
+        .reduce(|| (0, 0), |a, b| (a.0.max(b.0), a.1 + b.1));
+    status[STATUS_LOCAL_ITERATIONS] = status[STATUS_LOCAL_ITERATIONS].max(most);
+    status[STATUS_LOCAL_CAPPED] += capped;
 }

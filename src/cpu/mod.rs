@@ -1,9 +1,13 @@
 //! The CPU path: a mirror of every shader (same file name, same loop shape, f32 in grid-local
 //! coordinates) and a brute-force f64 oracle for the tests.
 //!
-//! The mirror runs the kernels' "invocations" one after another, which makes its atomics
-//! sequential; the results equal the GPU's up to f32 round-off (and exactly for the integer
-//! binning). It is also the backend used where no adapter exists.
+//! The mirror runs the kernels' "invocations" on all cores (rayon): a kernel whose invocations
+//! each write their own output runs them in parallel; one whose invocations combine through
+//! atomics uses atomics whose result does not depend on their order (counts), or runs each
+//! slave's work items in order on one thread (the nearest facet's chunks); the rest run one
+//! after another. The results are bitwise the same on one thread or many, and equal the GPU's up
+//! to f32 round-off (exactly for the integer binning). It is also the backend used where no
+//! adapter exists.
 
 pub mod anchor;
 pub mod bin_count;
@@ -23,11 +27,24 @@ pub mod schedule;
 pub mod stats;
 pub mod to_local;
 
+use std::sync::atomic::AtomicU32;
+
 use crate::error::Result;
 use crate::search::layout::{
     GpuHit, ScanLevels, STATUS_NEEDED_ENTRIES, STATUS_OVERFLOW, STATUS_WORDS,
 };
 use crate::search::{Bins, Prepared, Step, STEPS};
+
+// an AtomicU32 is a u32 in memory (same size and bit validity; alignment checked here)
+const _: () = assert!(std::mem::align_of::<AtomicU32>() == std::mem::align_of::<u32>());
+
+/// `words` as atomics, for a mirror whose invocations run on several threads and combine through
+/// atomics whose result does not depend on their order, as on the GPU.
+pub(crate) fn as_atomic(words: &mut [u32]) -> &[AtomicU32] {
+    // SAFETY: AtomicU32 has the size and bit validity of u32 and (asserted above) its
+    // alignment, and the exclusive borrow keeps every other access out while the result lives.
+    unsafe { &*(words as *mut [u32] as *const [AtomicU32]) }
+}
 
 /// The buffers of one search on the CPU; they only grow.
 #[derive(Clone, Debug, Default)]

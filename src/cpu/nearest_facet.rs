@@ -1,5 +1,7 @@
 //! CPU mirror of `shaders/nearest_facet.wgsl`: the nearest active facet of each slave node.
 
+use rayon::prelude::*;
+
 use super::common::{excluded, facet_node_count, node, share_node};
 use crate::geometry::{closest_on_quad, closest_on_segment, closest_on_triangle, Projection, V3};
 use crate::search::layout::{
@@ -20,6 +22,10 @@ pub fn project(nodes: &[[f32; 4]], p: V3<f32>, fac: [u32; 4]) -> Projection<f32>
     }
     closest_on_quad(p, [x0, x1, x2, node(nodes, fac[3])])
 }
+
+/// Fewest slaves a thread of the CPU path takes at once (below it, splitting costs more than
+/// it gains).
+const PAR_MIN: usize = 256;
 
 /// Candidates one work item projects at most (WGSL: `CANDIDATE_CHUNK`).
 pub const CANDIDATE_CHUNK: u32 = 1024;
@@ -78,22 +84,6 @@ fn candidate(params: &SearchParams, entries: &[u32], c: NodeCandidates, k: u32) 
     } else {
         entries[(params.entry_capacity + 1 + k - c.in_cell) as usize]
     }
-}
-
-/// The slave of work item t: the largest i with work[i] ≤ t (WGSL: `work_slave`).
-fn work_slave(params: &SearchParams, work: &[u32], t: u32) -> usize {
-    let (mut lo, mut hi) = (0u32, params.n_slaves);
-    let mut step = 0;
-    while step < 32 && hi - lo > 1 {
-        let mid = (lo + hi) / 2;
-        if work[mid as usize] <= t {
-            lo = mid;
-        } else {
-            hi = mid;
-        }
-        step += 1;
-    }
-    lo as usize
 }
 
 /// The inputs every work-item pass reads.
@@ -158,16 +148,21 @@ pub fn nearest_count(
     if n > 0 {
         work[n] = 0;
     }
-    for i in 0..n {
-        let count = candidates(params, starts, entries, node(nodes, slaves[i])).n;
-        work[i] = count.div_ceil(CANDIDATE_CHUNK);
-        best[BEST_WORDS * i..BEST_WORDS * (i + 1)].copy_from_slice(&[
-            (params.radius * params.radius).to_bits(),
-            NO_FACET,
-            0,
-            count,
-        ]);
-    }
+    work[..n]
+        .par_iter_mut()
+        .zip(best.par_chunks_mut(BEST_WORDS))
+        .enumerate()
+        .with_min_len(PAR_MIN)
+        .for_each(|(i, (w, b))| {
+            let count = candidates(params, starts, entries, node(nodes, slaves[i])).n;
+            *w = count.div_ceil(CANDIDATE_CHUNK);
+            b.copy_from_slice(&[
+                (params.radius * params.radius).to_bits(),
+                NO_FACET,
+                0,
+                count,
+            ]);
+        });
 }
 
 /// The number of work items, from the scanned `work` (WGSL: `nearest_args`, which writes the
@@ -176,36 +171,57 @@ pub fn nearest_args(params: &SearchParams, work: &[u32]) -> u32 {
     work[params.n_slaves as usize]
 }
 
+/// The work items of each slave (`work` scanned: slave i owns items `work[i]..work[i + 1]`), in
+/// parallel over the slaves on all cores, each slave's items in order, with its `best` record.
+/// The GPU runs every work item as one invocation and combines a slave's through atomics whose
+/// result does not depend on their order, so running a slave's items one after another on one
+/// thread gives the same bits, whatever the number of threads.
+fn per_slave_items(
+    c: &Candidates<'_>,
+    work: &[u32],
+    best: &mut [u32],
+    item: impl Fn(usize, u32, &mut [u32]) + Sync,
+) {
+    let n = c.params.n_slaves as usize;
+    best[..BEST_WORDS * n]
+        .par_chunks_mut(BEST_WORDS)
+        .enumerate()
+        .with_min_len(PAR_MIN)
+        .for_each(|(i, b)| {
+            for t in work[i]..work[i + 1] {
+                item(i, t, b);
+            }
+        });
+}
+
 /// One "invocation" per work item: the chunk's nearest facet (WGSL: `nearest_chunks`).
 pub fn nearest_chunks(c: &Candidates<'_>, work: &[u32], best: &mut [u32]) {
-    for t in 0..nearest_args(c.params, work) {
-        let i = work_slave(c.params, work, t);
+    per_slave_items(c, work, best, |i, t, b| {
         let (d2, f) = chunk_best(c, work, i, t);
         if f == NO_FACET {
-            continue;
+            return;
         }
         if work[i + 1] - work[i] == 1 {
-            best[BEST_WORDS * i] = d2.to_bits();
-            best[BEST_WORDS * i + 1] = f;
+            b[0] = d2.to_bits();
+            b[1] = f;
         } else {
-            best[BEST_WORDS * i] = best[BEST_WORDS * i].min(d2.to_bits());
+            b[0] = b[0].min(d2.to_bits());
         }
-    }
+    });
 }
 
 /// One "invocation" per work item of slaves with several chunks: the lowest id at the best
 /// distance (WGSL: `nearest_ties`).
 pub fn nearest_ties(c: &Candidates<'_>, work: &[u32], best: &mut [u32]) {
-    for t in 0..nearest_args(c.params, work) {
-        let i = work_slave(c.params, work, t);
+    per_slave_items(c, work, best, |i, t, b| {
         if work[i + 1] - work[i] == 1 {
-            continue;
+            return;
         }
         let (d2, f) = chunk_best(c, work, i, t);
-        if f != NO_FACET && d2.to_bits() == best[BEST_WORDS * i] {
-            best[BEST_WORDS * i + 1] = best[BEST_WORDS * i + 1].min(f);
+        if f != NO_FACET && d2.to_bits() == b[0] {
+            b[1] = b[1].min(f);
         }
-    }
+    });
 }
 
 /// One "invocation" per work item, self-contact only: flags a slave with another facet near and
@@ -215,11 +231,10 @@ pub fn nearest_crowded(c: &Candidates<'_>, work: &[u32], best: &mut [u32]) {
         return;
     }
     let r2 = c.params.radius * c.params.radius;
-    for t in 0..nearest_args(c.params, work) {
-        let i = work_slave(c.params, work, t);
-        let best_f = best[BEST_WORDS * i + 1];
+    per_slave_items(c, work, best, |i, t, b| {
+        let best_f = b[1];
         if best_f == NO_FACET {
-            continue;
+            return;
         }
         let slave = c.slaves[i];
         let p = node(c.nodes, slave);
@@ -236,11 +251,11 @@ pub fn nearest_crowded(c: &Candidates<'_>, work: &[u32], best: &mut [u32]) {
             let pr = project(c.nodes, p, c.facets[f as usize]);
             let gap = (p - pr.point).dot(pr.normal);
             if pr.dist2 <= r2 && 4.0 * gap * gap > pr.dist2 {
-                best[BEST_WORDS * i + 2] = 1;
+                b[2] = 1;
                 break;
             }
         }
-    }
+    });
 }
 
 /// One "invocation" per slave node: the hit from the winning facet; writes `hits[i]`
@@ -255,53 +270,58 @@ pub fn nearest_facet(
     adjacency: &[u32],
     best: &[u32],
 ) {
-    for i in 0..params.n_slaves as usize {
-        let p = node(nodes, slaves[i]);
-        let candidates = best[BEST_WORDS * i + 3];
-        let best_f = best[BEST_WORDS * i + 1];
-        if best_f == NO_FACET {
-            hits[i] = GpuHit::miss(slaves[i], candidates);
-            continue;
-        }
-        if best[BEST_WORDS * i + 2] != 0 {
-            status[STATUS_CROWDED] += 1;
-        }
-        let fac = facets[best_f as usize];
-        let best = project(nodes, p, fac);
-        let mut best_node = u32::MAX;
-        let mut best_nd2 = 0.0f32;
-        for &id in &fac[..facet_node_count(fac)] {
-            let d2 = (node(nodes, id) - p).length2();
-            if best_node == u32::MAX || d2 < best_nd2 || (d2 == best_nd2 && id < best_node) {
-                best_node = id;
-                best_nd2 = d2;
+    let n = params.n_slaves as usize;
+    let crowded: u32 = hits[..n]
+        .par_iter_mut()
+        .enumerate()
+        .with_min_len(PAR_MIN)
+        .map(|(i, hit)| {
+            let p = node(nodes, slaves[i]);
+            let candidates = best[BEST_WORDS * i + 3];
+            let best_f = best[BEST_WORDS * i + 1];
+            if best_f == NO_FACET {
+                *hit = GpuHit::miss(slaves[i], candidates);
+                return 0;
             }
-        }
-        let q = best.point;
-        let beside = super::common::beside_free_edge(
-            nodes,
-            facets,
-            adjacency,
-            best_f,
-            fac,
-            best.weights,
-            p,
-            q,
-            best.normal,
-        );
-        hits[i] = GpuHit {
-            facet: best_f,
-            node: best_node,
-            candidates: candidates | if beside { HIT_BESIDE_FREE_EDGE } else { 0 },
-            slave: slaves[i],
-            point_gap: [q.x, q.y, q.z, (p - q).dot(best.normal)],
-            normal_dist: [
-                best.normal.x,
-                best.normal.y,
-                best.normal.z,
-                best.dist2.sqrt(),
-            ],
-            weights: best.weights,
-        };
-    }
+            let fac = facets[best_f as usize];
+            let best_pr = project(nodes, p, fac);
+            let mut best_node = u32::MAX;
+            let mut best_nd2 = 0.0f32;
+            for &id in &fac[..facet_node_count(fac)] {
+                let d2 = (node(nodes, id) - p).length2();
+                if best_node == u32::MAX || d2 < best_nd2 || (d2 == best_nd2 && id < best_node) {
+                    best_node = id;
+                    best_nd2 = d2;
+                }
+            }
+            let q = best_pr.point;
+            let beside = super::common::beside_free_edge(
+                nodes,
+                facets,
+                adjacency,
+                best_f,
+                fac,
+                best_pr.weights,
+                p,
+                q,
+                best_pr.normal,
+            );
+            *hit = GpuHit {
+                facet: best_f,
+                node: best_node,
+                candidates: candidates | if beside { HIT_BESIDE_FREE_EDGE } else { 0 },
+                slave: slaves[i],
+                point_gap: [q.x, q.y, q.z, (p - q).dot(best_pr.normal)],
+                normal_dist: [
+                    best_pr.normal.x,
+                    best_pr.normal.y,
+                    best_pr.normal.z,
+                    best_pr.dist2.sqrt(),
+                ],
+                weights: best_pr.weights,
+            };
+            u32::from(best[BEST_WORDS * i + 2] != 0)
+        })
+        .sum();
+    status[STATUS_CROWDED] += crowded;
 }

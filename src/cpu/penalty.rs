@@ -1,5 +1,9 @@
 //! CPU mirror of `shaders/penalty.wgsl`: penalty force, friction and outputs of each slave.
 
+use std::sync::atomic::Ordering;
+
+use rayon::prelude::*;
+
 use super::common::{facet_node_count, node};
 use crate::geometry::{tangent_directions, V3};
 use crate::penalty::layout::*;
@@ -112,10 +116,6 @@ fn row_shares(k_row: f32, share_s: f32, share: &[f32]) -> ([f32; 2], u32) {
     ([k_row * q, k_row * q * (heavy / cut)], mask)
 }
 
-fn min_bits(word: &mut u32, v: f32) {
-    *word = (*word).min(v.to_bits());
-}
-
 /// One "invocation" per slave node (WGSL: `penalty`); `friction` is the FRICTION override.
 #[allow(clippy::too_many_arguments)]
 pub fn penalty(
@@ -133,145 +133,155 @@ pub fn penalty(
     if status[STATUS_OVERFLOW] != 0 || status[crate::search::layout::STATUS_BUDGET_EXCEEDED] != 0 {
         return;
     }
-    for i in 0..pp.n_slaves as usize {
-        let hit = hits[i];
-        let mut o = ContactOut {
-            force: [0.0; 4],
-            tangential: [0.0; 4],
-            normal_gap: [0.0; 4],
-            status: CSTATUS_OPEN,
-            dissipation: 0.0,
-            bound_light: 0.0,
-            bound_heavy: 0.0,
-        };
-        let (mut dt_stable, mut dt_approach) = (NO_LIMIT, NO_LIMIT);
-        let area = state[i].tangential_area[3];
-        o.dissipation = state[i].history[0];
-        if hit.facet == NO_FACET
-            || hit.candidates & crate::search::layout::HIT_BESIDE_FREE_EDGE != 0
-        {
-            state[i].tangential_area = [0.0, 0.0, 0.0, area];
-            out[i] = o;
-            continue;
-        }
-        let s = hit.slave;
-        let fac = facets[hit.facet as usize];
-        let n = facet_node_count(fac);
-        let (mut nsum, mut vm) = (V3::<f32>::zero(), V3::<f32>::zero());
-        let (mut inv_mm, mut h_facet) = (0.0f32, 0.0f32);
-        let mut share = [0.0f32; 4];
-        for j in 0..n {
-            let w = hit.weights[j];
-            let id = fac[j];
-            let nn = normals[id as usize];
-            nsum = nsum + V3::new(nn[0], nn[1], nn[2]) * w;
-            let v = vel[id as usize];
-            vm = vm + V3::new(v[0], v[1], v[2]) * w;
-            inv_mm += w * w / nodes[id as usize][3];
-            share[j] = w.abs() / nodes[id as usize][3].sqrt();
-            h_facet = h_facet.max(
-                (node(nodes, fac[(j + 1) % n]) - node(nodes, id))
-                    .length2()
-                    .sqrt(),
-            );
-        }
-        let mut nrm = nsum.normalize_or_zero();
-        if nrm.length2() == 0.0 {
-            nrm = V3::new(hit.normal_dist[0], hit.normal_dist[1], hit.normal_dist[2]);
-        }
-        let p = node(nodes, s);
-        let c = V3::new(hit.point_gap[0], hit.point_gap[1], hit.point_gap[2]);
-        let mut gap = (p - c).dot(nrm);
-        if pp.flags & PENALTY_ANCHORED != 0 {
-            nrm = V3::new(hit.normal_dist[0], hit.normal_dist[1], hit.normal_dist[2]);
-            gap = hit.point_gap[3];
-        }
-        let m_eff = 1.0 / (1.0 / nodes[s as usize][3] + inv_mm);
-        let mut k = pp.stiffness;
-        if pp.stiffness_mode == STIFFNESS_AUTO {
-            k = 0.25 * pp.stiffness * m_eff / (pp.dt_ref * pp.dt_ref);
-        } else if pp.stiffness_mode == STIFFNESS_MODULUS {
-            k = pp.stiffness * pp.modulus * area / h_facet;
-        } else if pp.stiffness_mode == STIFFNESS_PER_AREA {
-            k = pp.stiffness * area;
-        }
-        let lv = law(pp, -gap, k, area);
-        let vs = vel[s as usize];
-        let v_rel = V3::new(vs[0], vs[1], vs[2]) - vm;
-        let v_close = -v_rel.dot(nrm);
-        let omega = (lv.stiffness / m_eff).sqrt();
-        let z = pp.damping;
-        if omega > 0.0 {
-            dt_stable = 2.0 / omega * ((1.0 + z * z).sqrt() - z);
-        }
-        if gap > 0.0 && v_close > 0.0 {
-            dt_approach = 0.5 * gap / v_close;
-        }
-        let mut k_row = pp.weight * lv.stiffness;
-        if friction {
-            k_row *= pp.stick_stiffness.max(1.0);
-        }
-        let (bound, mask) = row_shares(k_row, 1.0 / nodes[s as usize][3].sqrt(), &share[..n]);
-        o.bound_light = bound[0];
-        o.bound_heavy = bound[1];
-        o.normal_gap = [nrm.x, nrm.y, nrm.z, gap];
-        let mut f_t = V3::<f32>::zero();
-        if lv.force > 0.0 {
-            let cdamp = 2.0 * z * (lv.stiffness * m_eff).sqrt();
-            let f_n = (lv.force + cdamp * v_close).max(0.0);
-            o.status = CSTATUS_SLIP;
+    let n = pp.n_slaves as usize;
+    let status = super::as_atomic(status);
+    let max_word = |k: usize, v: u32| {
+        status[k].fetch_max(v, Ordering::Relaxed);
+    };
+    let min_word = |k: usize, v: f32| {
+        status[k].fetch_min(v.to_bits(), Ordering::Relaxed);
+    };
+    state[..n]
+        .par_iter_mut()
+        .zip(out[..n].par_iter_mut())
+        .enumerate()
+        .with_min_len(256)
+        .for_each(|(i, (slave_state, slot))| {
+            let hit = hits[i];
+            let mut o = ContactOut {
+                force: [0.0; 4],
+                tangential: [0.0; 4],
+                normal_gap: [0.0; 4],
+                status: CSTATUS_OPEN,
+                dissipation: 0.0,
+                bound_light: 0.0,
+                bound_heavy: 0.0,
+            };
+            let (mut dt_stable, mut dt_approach) = (NO_LIMIT, NO_LIMIT);
+            let area = slave_state.tangential_area[3];
+            o.dissipation = slave_state.history[0];
+            if hit.facet == NO_FACET
+                || hit.candidates & crate::search::layout::HIT_BESIDE_FREE_EDGE != 0
+            {
+                slave_state.tangential_area = [0.0, 0.0, 0.0, area];
+                *slot = o;
+                return;
+            }
+            let s = hit.slave;
+            let fac = facets[hit.facet as usize];
+            let n = facet_node_count(fac);
+            let (mut nsum, mut vm) = (V3::<f32>::zero(), V3::<f32>::zero());
+            let (mut inv_mm, mut h_facet) = (0.0f32, 0.0f32);
+            let mut share = [0.0f32; 4];
+            for j in 0..n {
+                let w = hit.weights[j];
+                let id = fac[j];
+                let nn = normals[id as usize];
+                nsum = nsum + V3::new(nn[0], nn[1], nn[2]) * w;
+                let v = vel[id as usize];
+                vm = vm + V3::new(v[0], v[1], v[2]) * w;
+                inv_mm += w * w / nodes[id as usize][3];
+                share[j] = w.abs() / nodes[id as usize][3].sqrt();
+                h_facet = h_facet.max(
+                    (node(nodes, fac[(j + 1) % n]) - node(nodes, id))
+                        .length2()
+                        .sqrt(),
+                );
+            }
+            let mut nrm = nsum.normalize_or_zero();
+            if nrm.length2() == 0.0 {
+                nrm = V3::new(hit.normal_dist[0], hit.normal_dist[1], hit.normal_dist[2]);
+            }
+            let p = node(nodes, s);
+            let c = V3::new(hit.point_gap[0], hit.point_gap[1], hit.point_gap[2]);
+            let mut gap = (p - c).dot(nrm);
+            if pp.flags & PENALTY_ANCHORED != 0 {
+                nrm = V3::new(hit.normal_dist[0], hit.normal_dist[1], hit.normal_dist[2]);
+                gap = hit.point_gap[3];
+            }
+            let m_eff = 1.0 / (1.0 / nodes[s as usize][3] + inv_mm);
+            let mut k = pp.stiffness;
+            if pp.stiffness_mode == STIFFNESS_AUTO {
+                k = 0.25 * pp.stiffness * m_eff / (pp.dt_ref * pp.dt_ref);
+            } else if pp.stiffness_mode == STIFFNESS_MODULUS {
+                k = pp.stiffness * pp.modulus * area / h_facet;
+            } else if pp.stiffness_mode == STIFFNESS_PER_AREA {
+                k = pp.stiffness * area;
+            }
+            let lv = law(pp, -gap, k, area);
+            let vs = vel[s as usize];
+            let v_rel = V3::new(vs[0], vs[1], vs[2]) - vm;
+            let v_close = -v_rel.dot(nrm);
+            let omega = (lv.stiffness / m_eff).sqrt();
+            let z = pp.damping;
+            if omega > 0.0 {
+                dt_stable = 2.0 / omega * ((1.0 + z * z).sqrt() - z);
+            }
+            if gap > 0.0 && v_close > 0.0 {
+                dt_approach = 0.5 * gap / v_close;
+            }
+            let mut k_row = pp.weight * lv.stiffness;
             if friction {
-                let st = state[i].tangential_area;
-                let mut t_prev = V3::new(st[0], st[1], st[2]);
-                let mag = t_prev.length2().sqrt();
-                t_prev = (t_prev - nrm * t_prev.dot(nrm)).normalize_or_zero() * mag;
-                let v_t = v_rel - nrm * v_rel.dot(nrm);
-                let k_t = pp.stick_stiffness * lv.stiffness;
-                let trial = t_prev - v_t * (k_t * pp.dt);
-                let mu = pp.mu_kinetic
-                    + (pp.mu - pp.mu_kinetic) * (-pp.decay * v_t.length2().sqrt()).exp();
-                let limit = mu * f_n;
-                let t_len = trial.length2().sqrt();
-                if t_len <= limit {
-                    f_t = trial;
-                    o.status = CSTATUS_STICK;
-                } else {
-                    f_t = trial * (limit / t_len);
+                k_row *= pp.stick_stiffness.max(1.0);
+            }
+            let (bound, mask) = row_shares(k_row, 1.0 / nodes[s as usize][3].sqrt(), &share[..n]);
+            o.bound_light = bound[0];
+            o.bound_heavy = bound[1];
+            o.normal_gap = [nrm.x, nrm.y, nrm.z, gap];
+            let mut f_t = V3::<f32>::zero();
+            if lv.force > 0.0 {
+                let cdamp = 2.0 * z * (lv.stiffness * m_eff).sqrt();
+                let f_n = (lv.force + cdamp * v_close).max(0.0);
+                o.status = CSTATUS_SLIP;
+                if friction {
+                    let st = slave_state.tangential_area;
+                    let mut t_prev = V3::new(st[0], st[1], st[2]);
+                    let mag = t_prev.length2().sqrt();
+                    t_prev = (t_prev - nrm * t_prev.dot(nrm)).normalize_or_zero() * mag;
+                    let v_t = v_rel - nrm * v_rel.dot(nrm);
+                    let k_t = pp.stick_stiffness * lv.stiffness;
+                    let trial = t_prev - v_t * (k_t * pp.dt);
+                    let mu = pp.mu_kinetic
+                        + (pp.mu - pp.mu_kinetic) * (-pp.decay * v_t.length2().sqrt()).exp();
+                    let limit = mu * f_n;
+                    let t_len = trial.length2().sqrt();
+                    if t_len <= limit {
+                        f_t = trial;
+                        o.status = CSTATUS_STICK;
+                    } else {
+                        f_t = trial * (limit / t_len);
+                        if k_t > 0.0 {
+                            o.dissipation += pp.weight * limit * (t_len - limit) / k_t;
+                        }
+                    }
                     if k_t > 0.0 {
-                        o.dissipation += pp.weight * limit * (t_len - limit) / k_t;
+                        o.tangential[3] = 0.5 * f_t.dot(f_t) / k_t;
                     }
                 }
-                if k_t > 0.0 {
-                    o.tangential[3] = 0.5 * f_t.dot(f_t) / k_t;
+                let w = pp.weight;
+                let f = (nrm * f_n + f_t) * w;
+                o.force = [f.x, f.y, f.z, w * f_n];
+                let ft = f_t * w;
+                o.tangential = [ft.x, ft.y, ft.z, w * (o.tangential[3] + lv.energy)];
+                status[STATUS_ACTIVE].fetch_add(1, Ordering::Relaxed);
+                if o.status == CSTATUS_SLIP {
+                    status[STATUS_SLIPPING].fetch_add(1, Ordering::Relaxed);
                 }
+                max_word(STATUS_MAX_OVERCLOSURE, (-gap).max(0.0).to_bits());
             }
-            let w = pp.weight;
-            let f = (nrm * f_n + f_t) * w;
-            o.force = [f.x, f.y, f.z, w * f_n];
-            let ft = f_t * w;
-            o.tangential = [ft.x, ft.y, ft.z, w * (o.tangential[3] + lv.energy)];
-            status[STATUS_ACTIVE] += 1;
-            if o.status == CSTATUS_SLIP {
-                status[STATUS_SLIPPING] += 1;
+            slave_state.tangential_area = [f_t.x, f_t.y, f_t.z, area];
+            slave_state.history = [o.dissipation, 0.0, 0.0, 0.0];
+            min_word(STATUS_DT_STABLE, dt_stable);
+            min_word(STATUS_DT_APPROACH, dt_approach);
+            o.status |= mask;
+            if o.status & CSTATUS_MASK != CSTATUS_OPEN {
+                // the fixed-point scales of the gather: the largest magnitudes it will sum
+                let a = o.force[0].abs().max(o.force[1].abs().max(o.force[2].abs()));
+                max_word(STATUS_FORCE_SCALE, a.to_bits());
+                max_word(STATUS_ROW_SCALE, o.bound_light.max(o.bound_heavy).to_bits());
             }
-            let w = &mut status[STATUS_MAX_OVERCLOSURE];
-            *w = (*w).max((-gap).max(0.0).to_bits());
-        }
-        state[i].tangential_area = [f_t.x, f_t.y, f_t.z, area];
-        state[i].history = [o.dissipation, 0.0, 0.0, 0.0];
-        min_bits(&mut status[STATUS_DT_STABLE], dt_stable);
-        min_bits(&mut status[STATUS_DT_APPROACH], dt_approach);
-        o.status |= mask;
-        if o.status & CSTATUS_MASK != CSTATUS_OPEN {
-            // the fixed-point scales of the gather: the largest magnitudes it will sum
-            let a = o.force[0].abs().max(o.force[1].abs().max(o.force[2].abs()));
-            let w = &mut status[STATUS_FORCE_SCALE];
-            *w = (*w).max(a.to_bits());
-            let w = &mut status[STATUS_ROW_SCALE];
-            *w = (*w).max(o.bound_light.max(o.bound_heavy).to_bits());
-        }
-        out[i] = o;
-    }
+            *slot = o;
+        });
 }
 
 /// Local tangent directions of a contact normal in f32 (the kernel's convention), for outputs.

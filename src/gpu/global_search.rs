@@ -530,9 +530,9 @@ impl GpuSearch {
             }
             let frame = FrameParams {
                 origin: [
-                    prep.grid.origin[0] as f32,
-                    prep.grid.origin[1] as f32,
-                    prep.grid.origin[2] as f32,
+                    prep.grid.frame[0] as f32,
+                    prep.grid.frame[1] as f32,
+                    prep.grid.frame[2] as f32,
                     0.0,
                 ],
                 n_nodes: prep.n_nodes as u32,

@@ -6,11 +6,17 @@ use crate::error::{Error, Result};
 pub const MAX_CELLS: u64 = 1 << 24;
 
 /// A uniform grid of cubic cells covering the master surface's bounding box grown by the
-/// search radius. Its origin is the frame the GPU works in: coordinates are stored relative to
-/// it in f32, so a small mesh far from the model origin keeps its precision.
+/// search radius, and the frame the kernels work in: coordinates are stored relative to
+/// `frame` in f32, so a small mesh far from the model origin keeps its precision. The frame
+/// comes from the master's own extent, not from the radius, so that a search radius far larger
+/// than the master (10⁶ model sizes, say) does not turn the gaps into round-off.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Grid {
-    /// Lower corner in model coordinates (f64).
+    /// Origin of the kernels' local frame, model coordinates (f64): the master's lower corner
+    /// snapped down to a power of two about 1/16 of the master's extent.
+    pub frame: [f64; 3],
+    /// Lower corner of cell (0, 0, 0), model coordinates (f64); relative to `frame` it is a
+    /// multiple of a power of two, exact in f32 ([`Grid::lo_in_frame`]).
     pub origin: [f64; 3],
     /// Cell edge length, model units.
     pub cell_size: f64,
@@ -42,17 +48,28 @@ impl Grid {
             });
         }
         let axes = dim as usize;
-        // The origin is snapped down to a multiple of a power of two q (about 1/16 of the
-        // extent), so that coordinates with few significant bits (structured meshes, nodes
-        // exactly on edges) stay exact in the local frame and exact ties stay ties.
+        // The frame is the master's lower corner snapped down to a multiple of a power of two
+        // q (about 1/16 of the master's extent), so that coordinates with few significant bits
+        // (structured meshes, nodes exactly on edges) stay exact in it and exact ties stay
+        // ties; the grid's corner, a radius below, is snapped to a multiple of a power of two
+        // about 1/16 of the grid's span, so it is exact in f32 relative to the frame.
+        let pow2_below = |x: f64| 2f64.powi((x / 16.0).log2().floor() as i32);
+        let master_span = (0..axes).map(|a| hi[a] - lo[a]).fold(0.0, f64::max);
+        let q = pow2_below(if master_span > 0.0 {
+            master_span
+        } else {
+            radius
+        });
         let span = (0..axes)
             .map(|a| hi[a] - lo[a] + 2.0 * radius)
             .fold(0.0, f64::max);
-        let q = 2f64.powi((span / 16.0).log2().floor() as i32);
+        let q_grid = pow2_below(span).max(q);
+        let mut frame = [0.0; 3];
         let mut origin = [0.0; 3];
         let mut extent = [0.0; 3];
         for a in 0..axes {
-            origin[a] = ((lo[a] - radius) / q).floor() * q;
+            frame[a] = (lo[a] / q).floor() * q;
+            origin[a] = frame[a] + ((lo[a] - radius - frame[a]) / q_grid).floor() * q_grid;
             extent[a] = hi[a] + radius - origin[a];
         }
         let budget = Self::cell_budget(n_facets) as f64;
@@ -74,10 +91,16 @@ impl Grid {
             dims[a] = ((extent[a] / h).floor() as u32 + 1).max(1);
         }
         Ok(Self {
+            frame,
             origin,
             cell_size: h,
             dims,
         })
+    }
+
+    /// The grid's lower corner relative to the frame (`SearchParams::grid_lo`), f32.
+    pub fn lo_in_frame(&self) -> [f32; 3] {
+        [0, 1, 2].map(|a| (self.origin[a] - self.frame[a]) as f32)
     }
 
     /// The most cells a grid over `n_facets` facets may have: `max(8·n_facets, 4096)`, at most

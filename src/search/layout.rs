@@ -53,6 +53,9 @@ pub const STATUS_ROW_SCALE: usize = 17;
 /// Status word: facets whose bin entries did not fit in the entry buffer; they are listed after
 /// it and every slave examines them, so the search stays exact (WGSL: `STATUS_SPILLED`).
 pub const STATUS_SPILLED: usize = 18;
+/// Status word: master facets collapsed at the global search's positions, skipped by the search
+/// (WGSL: `STATUS_COLLAPSED`; counted by bin_scatter).
+pub const STATUS_COLLAPSED: usize = 19;
 /// Status words: order-preserving bits (`ordered_bits`) of the box of the master nodes the
 /// increment's positions put the master in, min xyz then max xyz (WGSL: `STATUS_BOX`; raised by
 /// to_local, read by the schedule).

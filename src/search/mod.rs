@@ -88,6 +88,10 @@ pub struct SearchStats {
     pub candidates: u64,
     /// Times the entry buffer overflowed, was grown and the search run again.
     pub regrowths: u32,
+    /// Global searches: active master facets that had collapsed at these positions (zero
+    /// length or area, by the model's rule for degenerate facets), skipped by the search; local
+    /// searches pass over them too, uncounted.
+    pub collapsed_facets: u32,
 }
 
 /// The result of a global search: one entry per slave node, in node-set order.
@@ -474,7 +478,7 @@ impl GlobalSearch {
             }
             return Ok((
                 self.finish(
-                    prepared.grid.origin,
+                    prepared.grid.frame,
                     prepared.grid,
                     raw,
                     entries,
@@ -539,7 +543,7 @@ impl GlobalSearch {
                 None => self.since_global += 1,
             }
             return Ok(self.finish(
-                prepared.grid.origin,
+                prepared.grid.frame,
                 prepared.grid,
                 raw,
                 entries,
@@ -698,7 +702,7 @@ impl GlobalSearch {
         self.frame = Some((prepared.grid, prepared.params));
         self.since_global = 0;
         Ok(self.finish(
-            prepared.grid.origin,
+            prepared.grid.frame,
             prepared.grid,
             raw,
             entries,
@@ -728,7 +732,7 @@ impl GlobalSearch {
         }
         let mut prep = self.prepare(positions)?;
         prep.params.cell_capacity = Grid::cell_budget(self.facets.len());
-        let origin = prep.grid.origin;
+        let origin = prep.grid.frame;
         let frame = if caller_frame {
             origin.map(|o| o as f32)
         } else {
@@ -790,10 +794,10 @@ impl GlobalSearch {
             return Ok(false);
         }
         let prep = self.prepare(positions)?;
-        if prep.grid.origin == o {
+        if prep.grid.frame == o {
             return Ok(false);
         }
-        self.resident_origin = Some(prep.grid.origin);
+        self.resident_origin = Some(prep.grid.frame);
         self.resident_span = (0..3)
             .map(|a| prep.grid.dims[a] as f64 * prep.grid.cell_size)
             .fold(self.radius, f64::max);
@@ -816,6 +820,7 @@ impl GlobalSearch {
     ) -> SearchResult {
         let origin = self.resident_origin.unwrap_or([0.0; 3]);
         let grid = Grid {
+            frame: origin,
             origin: [0, 1, 2].map(|a| origin[a] + params.grid_lo[a] as f64),
             cell_size: params.cell_size as f64,
             dims: [params.dims_x, params.dims_y, params.dims_z],
@@ -933,6 +938,7 @@ impl GlobalSearch {
                 entries,
                 candidates,
                 regrowths,
+                collapsed_facets: Status(*status).collapsed(),
             },
         }
     }
@@ -978,19 +984,7 @@ impl GlobalSearch {
             n_facets,
             self.dim,
         )?;
-        let o = grid.origin;
-        let nodes = positions
-            .iter()
-            .zip(&self.masses)
-            .map(|(x, &m)| {
-                [
-                    (x[0] - o[0]) as f32,
-                    (x[1] - o[1]) as f32,
-                    (x[2] - o[2]) as f32,
-                    m,
-                ]
-            })
-            .collect();
+        let nodes = self.in_frame(positions, grid.frame)?;
         let max_extent = (0..3)
             .map(|a| grid.dims[a] as f64 * grid.cell_size)
             .fold(0.0, f64::max);
@@ -1011,7 +1005,7 @@ impl GlobalSearch {
             flags: self.flags(),
             budget: (self.schedule.budget * self.radius) as f32,
             n_motion_nodes: self.motion_nodes.len() as u32,
-            grid_lo: [0.0; 3],
+            grid_lo: grid.lo_in_frame(),
             base_cell: Grid::base_cell(self.radius, extent_sum / n_facets as f64) as f32,
             cell_capacity: grid.n_cells(),
             _pad: [0; 3],
@@ -1023,7 +1017,7 @@ impl GlobalSearch {
                 (0..3)
                     .map(|a| {
                         let cell = |x: f64| {
-                            (((x - o[a]) / grid.cell_size).floor())
+                            (((x - grid.origin[a]) / grid.cell_size).floor())
                                 .clamp(0.0, grid.dims[a] as f64 - 1.0)
                         };
                         (cell(fhi[a] + margin) - cell(flo[a] - margin) + 1.0) as u64
@@ -1069,19 +1063,49 @@ impl GlobalSearch {
         }
         validate_positions(positions, 0, self.dim)?;
         let mut prepared = self.prepare_device(true)?;
-        let o = prepared.grid.origin;
-        prepared.nodes = positions
+        prepared.nodes = self.in_frame(positions, prepared.grid.frame)?;
+        Ok(prepared)
+    }
+
+    /// Every node's position relative to `frame` in f32, with its mass; an error naming the
+    /// first slave or master node whose coordinate there is beyond f32's range (finite in f64,
+    /// 1e39 say, but infinite to the kernels).
+    fn in_frame(&self, positions: &[[f64; 3]], frame: [f64; 3]) -> Result<Vec<[f32; 4]>> {
+        let nodes: Vec<[f32; 4]> = positions
             .iter()
             .zip(&self.masses)
             .map(|(x, &m)| {
                 [
-                    (x[0] - o[0]) as f32,
-                    (x[1] - o[1]) as f32,
-                    (x[2] - o[2]) as f32,
+                    (x[0] - frame[0]) as f32,
+                    (x[1] - frame[1]) as f32,
+                    (x[2] - frame[2]) as f32,
                     m,
                 ]
             })
             .collect();
-        Ok(prepared)
+        // the lowest node beyond f32 in the model frame itself, else in the search's frame
+        let lowest = |beyond: &dyn Fn(usize, usize) -> bool| {
+            let mut bad: Option<(usize, usize)> = None;
+            for &n in self.motion_nodes.iter() {
+                let n = n as usize;
+                if let Some(axis) = (0..3).find(|&a| beyond(n, a)) {
+                    if bad.is_none_or(|(b, _)| n < b) {
+                        bad = Some((n, axis));
+                    }
+                }
+            }
+            bad
+        };
+        let bad = lowest(&|n, a| !(positions[n][a] as f32).is_finite())
+            .or_else(|| lowest(&|n, a| !nodes[n][a].is_finite()));
+        match bad {
+            None => Ok(nodes),
+            Some((node, axis)) => Err(Error::CoordinateOutOfRange {
+                node,
+                axis,
+                value: positions[node][axis],
+                frame: frame[axis],
+            }),
+        }
     }
 }
