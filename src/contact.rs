@@ -65,6 +65,10 @@ pub struct StepReport {
     /// Facets whose bin entries did not fit this increment: they spilled into a list every
     /// slave examines, so the search stayed exact; the bins grow for the next increment.
     pub spilled: usize,
+    /// `stable_dt` is finite although no slave node is in contact: it is the limit of springs of
+    /// slave nodes within the search radius that have not touched yet (one may close within an
+    /// increment, so their limit applies before contact).
+    pub stable_dt_before_contact: bool,
 }
 
 /// Contact output variables of one pair after an increment (when requested).

@@ -1058,3 +1058,32 @@ fn nodes_beside_a_free_edge_are_not_in_contact() {
         }
     }
 }
+
+/// A slave node within the search radius but not yet touching: the report gives the limit its
+/// spring will set when it closes (finite), and says that it comes before contact
+/// (`stable_dt_before_contact`); in contact it no longer says so; out of the radius there is
+/// no limit. On every device.
+#[test]
+fn the_report_says_when_the_contact_limit_comes_before_contact() {
+    let (k, ms) = (400.0, 0.5);
+    for d in devices() {
+        for (z, limited, before) in [(0.2, true, true), (-0.01, true, false), (0.8, false, false)] {
+            let (mut m, s) = rigid_plate(-1.0, 1.0, 2);
+            let r = m.add_nodes(&[[0.1, 0.2, z]], &[ms]).unwrap();
+            let set = m.add_node_set(&r.to_vec()).unwrap();
+            m.add_pair(Pair::new(set, s).search_radius(0.5).enforce(penalty(k)))
+                .unwrap();
+            let mut c = Contact::new(&d, &m).unwrap();
+            let v = vec![[0.0; 3]; m.positions().len()];
+            let rep = c.penalty_step(m.positions(), &v, 1e-3).unwrap();
+            assert_eq!(
+                rep.stable_dt.is_finite(),
+                limited,
+                "{d}: z = {z}: {}",
+                rep.stable_dt
+            );
+            assert_eq!(rep.active, usize::from(z < 0.0), "{d}: z = {z}");
+            assert_eq!(rep.stable_dt_before_contact, before, "{d}: z = {z}");
+        }
+    }
+}

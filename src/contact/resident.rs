@@ -657,6 +657,7 @@ impl Contact {
             slipping: st.slipping as usize,
             global_searches: st.global_searches as usize,
             spilled: st.spilled as usize,
+            stable_dt_before_contact: st.active == 0 && limit(st.stable_dt).is_finite(),
         };
         self.global_total += st.global_searches as u64;
         let first = self.host_increments == 1;

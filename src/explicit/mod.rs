@@ -84,7 +84,9 @@ pub struct Energy {
     pub kinetic: f64,
     /// Strain energy now.
     pub internal: f64,
-    /// Work done by gravity and external forces.
+    /// Work done by gravity, loads and prescribed motions: the forces that hold prescribed
+    /// degrees of freedom of nodes, and rigid bodies fixed or moved at a set velocity, on their
+    /// paths.
     pub external_work: f64,
     /// Work done by contact: penalty forces, and kinematic corrections taken as the forces
     /// m·Δv/dt that would make them (negative: dissipated).
@@ -486,9 +488,17 @@ impl Solver {
             let (fp, mp) = body_pen[k];
             let (fk, mk) = body_kin[k];
             let (fe, me) = body_ext[k];
+            // a body held on a prescribed path (fixed, or at a set velocity) is driven by
+            // whatever holds it there: against contact, gravity and its loads together, so the
+            // drive and those external forces do, on it, the negative of the contact's power
+            let held = b.motion != BodyMotion::Free;
             for a in 0..3 {
+                let contact = (fp[a] + fk[a]) * v_now[a] + (mp[a] + mk[a]) * w_now[a];
                 p_ext += fe[a] * v_now[a] + me[a] * w_now[a];
-                p_con += (fp[a] + fk[a]) * v_now[a] + (mp[a] + mk[a]) * w_now[a];
+                if held {
+                    p_ext -= contact;
+                }
+                p_con += contact;
             }
         }
         // work since the last step by the trapezoidal rule on the powers at the two times

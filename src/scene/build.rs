@@ -258,15 +258,27 @@ impl PartNodes {
                 areas,
             });
         }
-        // segments carry the part's thickness; axisymmetric (thickness NaN): per radian, their
-        // mid radius
-        let (nodes, areas) = crate::io::face_nodes_and_areas_scaled(&facets, x, &|f| match f {
-            Facet::Segment([a, b]) if thickness.is_nan() => {
-                0.5 * (x[*a as usize][0] + x[*b as usize][0])
+        // segments carry the part's thickness; axisymmetric (thickness NaN): per radian, each
+        // node the area its linear shape function carries, ∫ N r ds = L·(2·r_near + r_far)/6,
+        // so a uniform pressure gives the element's consistent nodal forces — a node on the axis
+        // gets L²/6, not L/2 times the mid radius (L²/4), and its CPRESS is the pressure
+        let (nodes, areas) = if thickness.is_nan() {
+            let mut area = std::collections::BTreeMap::<u32, f64>::new();
+            for f in &facets {
+                if let Facet::Segment([a, b]) = f {
+                    let (xa, xb) = (x[*a as usize], x[*b as usize]);
+                    let l = ((xb[0] - xa[0]).powi(2) + (xb[1] - xa[1]).powi(2)).sqrt();
+                    *area.entry(*a).or_default() += l * (2.0 * xa[0] + xb[0]) / 6.0;
+                    *area.entry(*b).or_default() += l * (xa[0] + 2.0 * xb[0]) / 6.0;
+                }
             }
-            Facet::Segment(_) => thickness,
-            _ => 1.0,
-        });
+            area.into_iter().unzip()
+        } else {
+            crate::io::face_nodes_and_areas_scaled(&facets, x, &|f| match f {
+                Facet::Segment(_) => thickness,
+                _ => 1.0,
+            })
+        };
         Ok(Face {
             nodes,
             areas,
@@ -763,6 +775,9 @@ impl Scene {
                 .enforce(enforce)
                 .friction(friction)
                 .sliding(sliding);
+            if let Some(r) = c.search_radius {
+                pair = pair.search_radius(r);
+            }
             if let Some(k) = c.search_interval {
                 pair = pair.schedule(Schedule {
                     interval: k,

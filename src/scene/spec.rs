@@ -309,6 +309,10 @@ pub struct ContactSpec {
     /// Global search every this many increments.
     #[serde(default)]
     pub search_interval: Option<u32>,
+    /// Search radius, model length units (default: the master's mean facet size): a slave node
+    /// farther than this from every master facet is not in the pair's contacts.
+    #[serde(default)]
+    pub search_radius: Option<f64>,
 }
 
 pub(crate) fn bad<T>(name: &'static str, value: String, expected: &'static str) -> Result<T> {
@@ -816,6 +820,15 @@ impl Scene {
                         format!("master {}", c.master),
                         "give at most one stiffness rule",
                     );
+                }
+                if let Some(r) = c.search_radius {
+                    if !(r.is_finite() && r > 0.0) {
+                        return bad(
+                            "contact.search_radius",
+                            format!("{r} (master {})", c.master),
+                            "must be finite and positive",
+                        );
+                    }
                 }
                 if !(c.friction.is_finite() && c.friction >= 0.0) {
                     return bad(
