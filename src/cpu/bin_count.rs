@@ -18,7 +18,7 @@ pub fn bin_count(
     let counts = super::as_atomic(counts);
     (0..params.n_facets as usize)
         .into_par_iter()
-        .with_min_len(256)
+        .with_min_len(super::PAR_MIN)
         .for_each(|f| {
             if facet_collapsed(nodes, facets[f]) {
                 return;

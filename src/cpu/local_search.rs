@@ -58,7 +58,7 @@ pub fn local_search(
     let (most, capped) = hits[..n]
         .par_iter_mut()
         .enumerate()
-        .with_min_len(256)
+        .with_min_len(super::PAR_MIN)
         .map(|(i, slot)| {
             let s = slaves[i];
             let p = node(nodes, s);

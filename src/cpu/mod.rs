@@ -35,6 +35,10 @@ use crate::search::layout::{
 };
 use crate::search::{Bins, Prepared, Step, STEPS};
 
+/// Fewest invocations a thread of the CPU path takes at once (below it, splitting costs more
+/// than it gains).
+pub(crate) const PAR_MIN: usize = 256;
+
 // an AtomicU32 is a u32 in memory (same size and bit validity; alignment checked here)
 const _: () = assert!(std::mem::align_of::<AtomicU32>() == std::mem::align_of::<u32>());
 

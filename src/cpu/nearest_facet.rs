@@ -3,6 +3,7 @@
 use rayon::prelude::*;
 
 use super::common::{excluded, facet_node_count, node, share_node};
+use super::PAR_MIN;
 use crate::geometry::{closest_on_quad, closest_on_segment, closest_on_triangle, Projection, V3};
 use crate::search::layout::{
     GpuHit, SearchParams, FLAG_SELF_CONTACT, HIT_BESIDE_FREE_EDGE, NO_FACET, STATUS_CROWDED,
@@ -22,10 +23,6 @@ pub fn project(nodes: &[[f32; 4]], p: V3<f32>, fac: [u32; 4]) -> Projection<f32>
     }
     closest_on_quad(p, [x0, x1, x2, node(nodes, fac[3])])
 }
-
-/// Fewest slaves a thread of the CPU path takes at once (below it, splitting costs more than
-/// it gains).
-const PAR_MIN: usize = 256;
 
 /// Candidates one work item projects at most (WGSL: `CANDIDATE_CHUNK`).
 pub const CANDIDATE_CHUNK: u32 = 1024;

@@ -145,7 +145,7 @@ pub fn penalty(
         .par_iter_mut()
         .zip(out[..n].par_iter_mut())
         .enumerate()
-        .with_min_len(256)
+        .with_min_len(super::PAR_MIN)
         .for_each(|(i, (slave_state, slot))| {
             let hit = hits[i];
             let mut o = ContactOut {
