@@ -12,20 +12,22 @@ const QUAD_CONVERGED: f32 = 1e-4;   // Rust: geometry::QUAD_CONVERGED
 const COS_TENTH_DEGREE: f32 = 0.99999845; // Rust: geometry::COS_TENTH_DEGREE as f32
 // Invocations per workgroup of the one-item-per-invocation kernels (Rust: ITEM_WORKGROUP).
 const ITEM_WORKGROUP: u32 = 64u;
+// Lower corner of an empty box (upper: its negation): no point is within any distance of it.
+const EMPTY_LO: f32 = 3.0e38;
 
 // Rust twin: SearchParams (src/search/layout.rs), 96 bytes.
 struct SearchParams {
     cell_size: f32,
     inv_cell_size: f32,
     radius: f32,
-    bin_margin: f32,
+    box_margin: f32,     // growth of the tree's leaf boxes: the frame's f32 round-off
     dims_x: u32,
     dims_y: u32,
     dims_z: u32,
     n_cells: u32,
     n_facets: u32,
     n_slaves: u32,
-    entry_capacity: u32,
+    tree_levels: u32,    // levels below the tree's root: 2^tree_levels leaf slots
     dim: u32,
     max_local_iterations: u32,
     flags: u32,
@@ -48,7 +50,6 @@ fn grid_lo(p: SearchParams) -> vec3<f32> {
 
 const FLAG_WIDE_LOCAL: u32 = 1u;
 const FLAG_SELF_CONTACT: u32 = 2u;
-const FLAG_RESIDENT: u32 = 4u;       // a device-resident increment: a spill is not an overflow
 
 // Rust twin: GpuHit (src/search/layout.rs), 64 bytes. One per slave node.
 struct Hit {
@@ -62,8 +63,6 @@ struct Hit {
 }
 
 // Status words (Rust twin: STATUS_* in src/search/layout.rs).
-const STATUS_OVERFLOW: u32 = 0u;       // non-zero: the entry buffer was too small, nothing binned
-const STATUS_NEEDED_ENTRIES: u32 = 1u; // entries the binning needs
 const STATUS_BUDGET_EXCEEDED: u32 = 2u; // the motion budget is used up: rerun with a global search
 const STATUS_LOCAL_ITERATIONS: u32 = 3u; // most local-search iterations
 const STATUS_MOTION: u32 = 8u;         // bits of the largest motion since the last global search
@@ -79,7 +78,7 @@ const STATUS_SLIPPING: u32 = 7u;       // of which slipping
 const STATUS_MAX_OVERCLOSURE: u32 = 14u; // bits of the largest overclosure in contact (f32 ≥ 0)
 const STATUS_FORCE_SCALE: u32 = 16u;  // bits of the largest |force component| of a spring in contact
 const STATUS_ROW_SCALE: u32 = 17u;    // bits of the largest bound share of a spring in contact
-const STATUS_SPILLED: u32 = 18u;      // facets whose bin entries did not fit (spilled: every slave sees them)
+const STATUS_FALLBACK: u32 = 18u;     // slaves whose tree walk hit its cap (the chunks finished it)
 const STATUS_BOX: u32 = 20u;          // 6 words: order-preserving bits of the master box, min then max
 const STATUS_COLLAPSED: u32 = 19u;    // master facets collapsed at the global search's positions (skipped)
 const STATUS_NONFINITE: u32 = 26u;    // lowest node with a non-finite coordinate, NO_NODE if none
@@ -137,17 +136,6 @@ fn facet_node_count(f: vec4<u32>) -> u32 {
     return 4u;
 }
 
-// Inclusive cell range covered by a facet's bounding box grown by `margin` (grid-local coords).
-struct CellRange {
-    lo: vec3<u32>,
-    hi: vec3<u32>,
-}
-
-fn cell_coord(x: f32, inv: f32, dims: u32) -> u32 {
-    let c = i32(floor(x * inv));
-    return u32(clamp(c, 0, i32(dims) - 1));
-}
-
 // Whether a facet with corners x0..x3 (n of them) has collapsed: its length (2D) or area (3D),
 // in units of its longest edge, is not above 1e-6 — the model's rule for degenerate facets
 // (src/model/surface.rs) applied to the current positions. Rust twin: cpu::common::facet_collapsed.
@@ -168,27 +156,6 @@ fn facet_collapsed(x0: vec3<f32>, x1: vec3<f32>, x2: vec3<f32>, x3: vec3<f32>, n
         a = cross((x2 - x0) * inv, (x3 - x1) * inv);
     }
     return !(0.5 * length(a) > 1.0e-6);
-}
-
-fn facet_cells(p: SearchParams, x0: vec3<f32>, x1: vec3<f32>, x2: vec3<f32>, x3: vec3<f32>, n: u32) -> CellRange {
-    var lo = min(x0, x1);
-    var hi = max(x0, x1);
-    if (n >= 3u) { lo = min(lo, x2); hi = max(hi, x2); }
-    if (n == 4u) { lo = min(lo, x3); hi = max(hi, x3); }
-    lo = lo - grid_lo(p) - vec3<f32>(p.bin_margin);
-    hi = hi - grid_lo(p) + vec3<f32>(p.bin_margin);
-    var r: CellRange;
-    r.lo = vec3<u32>(cell_coord(lo.x, p.inv_cell_size, p.dims_x),
-                     cell_coord(lo.y, p.inv_cell_size, p.dims_y),
-                     cell_coord(lo.z, p.inv_cell_size, p.dims_z));
-    r.hi = vec3<u32>(cell_coord(hi.x, p.inv_cell_size, p.dims_x),
-                     cell_coord(hi.y, p.inv_cell_size, p.dims_y),
-                     cell_coord(hi.z, p.inv_cell_size, p.dims_z));
-    return r;
-}
-
-fn cell_index(p: SearchParams, c: vec3<u32>) -> u32 {
-    return c.x + p.dims_x * (c.y + p.dims_y * c.z);
 }
 
 // ---- geometry (twin of src/geometry.rs) ----

@@ -106,7 +106,7 @@ fn scatter_forces(@builtin(workgroup_id) wg: vec3<u32>,
     let i = folded_id(wg, nwg, li, ITEM_WORKGROUP);
     if (i >= pp.n_slaves) { return; }
     // the penalty pass did not run (the increment will run again): its outputs are stale
-    if (status[STATUS_OVERFLOW] != 0u || status[STATUS_BUDGET_EXCEEDED] != 0u) { return; }
+    if (status[STATUS_BUDGET_EXCEEDED] != 0u) { return; }
     let o = out[i];
     let hit = hits[i];
     if ((o.status & CSTATUS_MASK) == CSTATUS_OPEN || hit.facet >= pp.n_facets) { return; }

@@ -1,54 +1,67 @@
-// nearest_facet.wgsl — step 4: the globally nearest active facet of each slave node, with work
-// per invocation bounded by CANDIDATE_CHUNK projections however many facets share a cell.
-// CPU mirror: src/cpu/nearest_facet.rs.
+// nearest_facet.wgsl — step 2: the globally nearest active facet of each slave node, by a walk
+// of the bounding-box tree (tree.wgsl) pruned by the best distance found so far, with work per
+// invocation bounded however the data lies. CPU mirror: src/cpu/nearest_facet.rs.
 // Prelude: common.wgsl, search_common.wgsl (projection, self-contact exclusion, free edges).
 //
-// A slave's candidates are the facets binned in its cell (as far as the entry buffer holds
-// them) and the spill (facets whose entries did not fit: bin_scatter.wgsl); they are cut into chunks of
-// CANDIDATE_CHUNK, and each (slave, chunk) pair is one work item. The passes, in order:
-//   nearest_count    one invocation per slave: its cell's candidate count, its chunk count into
-//                    `work` (then scanned by scan.wgsl into each slave's first work item), and its
-//                    `best` record reset (radius², NO_FACET, not crowded, the candidate count).
+// The passes, in order:
+//   nearest_walk     one invocation per slave: a depth-first walk of the tree (stackless: the
+//                    next node after a subtree follows from the heap index), skipping every
+//                    subtree whose box is farther than the best facet found so far (at first
+//                    the radius), at most WALK_VISITS nodes. Its best facet goes into `best`; a
+//                    walk cut off by the cap leaves the facets of the leaf slots from its next
+//                    node on to the chunk passes (they are exactly the ones it did not reach),
+//                    cut into chunks of CANDIDATE_CHUNK: their count into `work` (then scanned
+//                    by scan.wgsl into each slave's first work item).
 //   nearest_args     one invocation: the indirect dispatch of the work items (folded into 2D).
 //   nearest_chunks   one invocation per work item (indirect): the chunk's nearest facet; a slave
-//                    of one chunk stores it, a slave of several lowers its best distance (atomicMin
-//                    on the bits of a non-negative f32, which order as the values).
+//                    of one chunk stores it when not farther than the walk's, a slave of several
+//                    lowers its best distance (atomicMin on the bits of a non-negative f32,
+//                    which order as the values).
 //   nearest_ties     per work item (indirect), slaves of several chunks only: a chunk whose nearest
 //                    facet is at the best distance offers its id (atomicMin): the lowest id wins.
-//   nearest_crowded  per work item (indirect), self-contact only: flags a slave with another
-//                    facet near and facing it (see below).
-//   nearest_facet    one invocation per slave: the hit from the winning facet.
+//   nearest_crowded  one invocation per slave, self-contact only: the crowding check (a second
+//                    walk, bounded by the radius) into the record.
+//   nearest_facet    one invocation per slave: the winner, the hit from it, the counts
+//                    (STATUS_FALLBACK, STATUS_CROWDED).
 //
-// Dispatch: nearest_count and nearest_facet one invocation per slave, nearest_args one, the chunk
+// Dispatch: nearest_walk, nearest_crowded and nearest_facet one invocation per slave,
+//           nearest_args one, the chunk
 //           passes one per work item through the indirect arguments; ITEM_WORKGROUP per
 //           workgroup, folded into 2D.
-// Bindings: 0 params, 1 nodes, 2 facets, 3 slaves (node id per slave), 4 starts (cell starts),
-//           5 entries (bins, then the spill), 6 status (self-contact crowding counted), 7 hits
-//           (one Hit per slave), 8 adjacency (as in local_search.wgsl; self-contact and free
-//           edges), 9 work (chunk counts, scanned to first work items; word n_slaves: total),
-//           10 best (4 words per slave: distance² bits, facet, crowded, candidates), 11 args
-//           (the indirect dispatch: x, y, z). Each entry point binds the subset it uses.
-// Invariants: every facet within the radius of a node is binned in the node's cell (bins are
-//             grown by bin_margin ≥ radius), so looking in that one cell is exact. The nearest
-//             facet is the one at the least distance, ties to the lowest facet id, decided by
-//             comparison (the order of a cell's entries does not matter, so the bins need no
-//             sort); the tracked node is the facet node nearest the slave node, ties to the
-//             lowest node id. A node outside the grid, or with no facet within the radius, gets
-//             facet = NO_FACET. With FLAG_SELF_CONTACT a slave's own facets and the facets
-//             touching them are skipped, and a slave with another facet within the radius that
-//             shares no node with its nearest and faces it (its gap is more than half its
-//             distance: not a neighbour in the same plane) is counted in STATUS_CROWDED (the
-//             schedule then searches globally more often). A slave nearest to a free edge or
-//             corner of the master and off to its side gets HIT_BESIDE_FREE_EDGE in its
-//             candidates word: the master ends there. No loop runs over more than
-//             CANDIDATE_CHUNK candidates, or 32 steps of the work item's binary search.
+// Bindings: 0 params, 1 nodes, 2 facets, 3 slaves (node id per slave), 4 order (active facet
+//           of each leaf slot), 5 boxes (the tree's, tree.wgsl), 6 status (fallbacks and
+//           self-contact crowding counted; nearest_facet only: at most 8 storage buffers per
+//           pass), 7 hits (one Hit per slave), 8 adjacency (as in
+//           local_search.wgsl; self-contact and free edges), 9 work (chunk counts, scanned to
+//           first work items; word n_slaves: total), 10 best (BEST_WORDS per slave, below),
+//           11 args (the indirect dispatch: x, y, z). Each entry point binds the subset it uses.
+// Invariants: the walk skips a subtree only when its box is farther than the best distance by
+//             more than round-off (PRUNE_SLACK; boxes are grown by the frame's round-off), so
+//             every facet at the best distance is projected and the result is the brute
+//             force's: the nearest facet within the radius, ties to the lowest facet id,
+//             decided by comparison; the tracked node is the facet node nearest the slave
+//             node, ties to the lowest node id. No facet within the radius: facet = NO_FACET.
+//             The walk's visits follow the slave's gap, not the radius. With FLAG_SELF_CONTACT
+//             a slave's own facets and the facets touching them are skipped, and a slave with
+//             another facet within the radius that shares no node with its nearest and faces it
+//             (its gap is more than half its distance: not a neighbour in the same plane) is
+//             counted in STATUS_CROWDED (the schedule then searches globally more often); a
+//             crowding walk cut off by the cap counts the slave as crowded (the safe side). A
+//             slave nearest to a free edge or corner of the master and off to its side gets
+//             HIT_BESIDE_FREE_EDGE in its candidates word: the master ends there. Candidates:
+//             the facets projected (walk and chunks). No loop runs over more than WALK_VISITS
+//             nodes, CANDIDATE_CHUNK candidates or 32 steps of a binary search or climb.
+//
+// best record of slave i, words BEST_WORDS·i + : 0 best distance² bits (atomicMin), 1 facet
+// at it from the chunks (atomicMin), 2 crowded (self-contact), 3 candidates, 4 the walk's facet, 5 the first
+// leaf slot left to the chunks, 6 the walk's distance² bits, 7 unused.
 
 @group(0) @binding(0) var<uniform> params: SearchParams;
 @group(0) @binding(1) var<storage, read> nodes: array<vec4<f32>>;
 @group(0) @binding(2) var<storage, read> facets: array<vec4<u32>>;
 @group(0) @binding(3) var<storage, read> slaves: array<u32>;
-@group(0) @binding(4) var<storage, read> starts: array<u32>;
-@group(0) @binding(5) var<storage, read> entries: array<u32>;
+@group(0) @binding(4) var<storage, read> order: array<u32>;
+@group(0) @binding(5) var<storage, read> boxes: array<vec4<f32>>;
 @group(0) @binding(6) var<storage, read_write> status: array<atomic<u32>>;
 @group(0) @binding(7) var<storage, read_write> hits: array<Hit>;
 @group(0) @binding(8) var<storage, read> adjacency: array<u32>;
@@ -56,10 +69,16 @@
 @group(0) @binding(10) var<storage, read_write> best: array<atomic<u32>>;
 @group(0) @binding(11) var<storage, read_write> args: array<u32>;
 
-// Candidates one work item projects at most (Rust twin: CANDIDATE_CHUNK): large enough that
-// a slave of an ordinary grid cell is one work item (the ties pass then costs nothing), far below
-// the 65,535 iterations where Mesa stops a loop.
+// Candidates one work item projects at most (Rust twin: CANDIDATE_CHUNK), far below the 65,535
+// iterations where Mesa stops a loop.
 const CANDIDATE_CHUNK: u32 = 1024u;
+// Tree nodes one walk visits at most (Rust twin: WALK_VISITS).
+const WALK_VISITS: u32 = 512u;
+// Words of a slave's best record (Rust twin: BEST_WORDS).
+const BEST_WORDS: u32 = 8u;
+// A subtree is skipped when its box's distance² exceeds the bound by this factor: more than
+// the round-off of a distance² computed in f32 (Rust twin: PRUNE_SLACK).
+const PRUNE_SLACK: f32 = 1.0001;
 // Workgroups per dimension of the indirect dispatch before folding into y (WebGPU's default).
 const MAX_GROUPS_PER_DIM: u32 = 65535u;
 
@@ -75,35 +94,66 @@ fn share_node(a: vec4<u32>, b: vec4<u32>) -> bool {
     return false;
 }
 
-// The candidates of a node: the written bin entries of its cell, then the spill.
-struct Candidates {
-    start: u32,   // first bin entry of the cell
-    in_cell: u32, // written entries of the cell (those within entry_capacity)
-    n: u32,       // in_cell + the spill
+// Whether tree node k holds nothing within distance² `bound` of p (an empty box never does).
+fn far(k: u32, p: vec3<f32>, bound: f32) -> bool {
+    let lo = boxes[2u * k].xyz;
+    let hi = boxes[2u * k + 1u].xyz;
+    if (lo.x > hi.x) { return true; }
+    let d = max(max(lo - p, p - hi), vec3<f32>(0.0));
+    return dot(d, d) > bound * PRUNE_SLACK;
 }
 
-// The candidates of a node at p; none outside the grid (no facet within the radius there).
-fn candidates(p: vec3<f32>) -> Candidates {
-    var r: Candidates;
-    r.start = 0u;
-    r.in_cell = 0u;
-    r.n = 0u;
-    let g = (p - grid_lo(params)) * params.inv_cell_size;
-    let inside = g.x >= 0.0 && g.y >= 0.0 && g.z >= 0.0
-        && g.x < f32(params.dims_x) && g.y < f32(params.dims_y) && g.z < f32(params.dims_z);
-    if (!inside) { return r; }
-    let c = cell_index(params, vec3<u32>(u32(g.x), u32(g.y), u32(g.z)));
-    let cap = params.entry_capacity;
-    r.start = min(starts[c], cap);
-    r.in_cell = min(starts[c + 1u], cap) - r.start;
-    r.n = r.in_cell + entries[cap];
-    return r;
+// The node a depth-first walk visits after the subtree of node k; 0 when none is left.
+fn next_node(k: u32) -> u32 {
+    var n = k;
+    for (var s = 0u; s < 32u && (n & 1u) == 1u; s++) { n = n >> 1u; }
+    if (n == 0u) { return 0u; }
+    return n + 1u;
 }
 
-// Candidate k of a node's candidates c: a facet id.
-fn candidate(c: Candidates, k: u32) -> u32 {
-    if (k < c.in_cell) { return entries[c.start + k]; }
-    return entries[params.entry_capacity + 1u + k - c.in_cell];
+// The first leaf slot under node k (k ≥ 1).
+fn first_leaf(k: u32) -> u32 {
+    let depth = firstLeadingBit(k);
+    return (k << (params.tree_levels - depth)) - (1u << params.tree_levels);
+}
+
+struct Walk {
+    d2: f32,
+    f: u32,
+    next: u32,        // the node the walk stopped at (0: finished)
+    projections: u32,
+}
+
+// The nearest facet of slave i the walk finds within WALK_VISITS nodes.
+fn walk(i: u32) -> Walk {
+    let slave = slaves[i];
+    let p = nodes[slave].xyz;
+    let leaves = 1u << params.tree_levels;
+    var w: Walk;
+    w.d2 = params.radius * params.radius;
+    w.f = NO_FACET;
+    w.next = 1u;
+    w.projections = 0u;
+    for (var v = 0u; v < WALK_VISITS && w.next != 0u; v++) {
+        let k = w.next;
+        if (far(k, p, w.d2)) {
+            w.next = next_node(k);
+        } else if (k >= leaves) {
+            let f = order[k - leaves];
+            if (!excluded(slave, facets[f])) {
+                let d2 = project_facet(p, facets[f]).dist2;
+                w.projections += 1u;
+                if (d2 < w.d2 || (d2 == w.d2 && f < w.f)) {
+                    w.d2 = d2;
+                    w.f = f;
+                }
+            }
+            w.next = next_node(k);
+        } else {
+            w.next = 2u * k;
+        }
+    }
+    return w;
 }
 
 // The slave of work item t: the largest i with work[i] ≤ t (work is its first item).
@@ -117,29 +167,26 @@ fn work_slave(t: u32) -> u32 {
     return lo;
 }
 
-// The candidates work item t of slave i (candidates c) covers: at most CANDIDATE_CHUNK.
-fn chunk_range(i: u32, t: u32, c: Candidates) -> vec2<u32> {
-    let k0 = (t - work[i]) * CANDIDATE_CHUNK;
-    return vec2<u32>(k0, min(c.n, k0 + CANDIDATE_CHUNK));
-}
-
 struct ChunkBest {
     d2: f32,
     f: u32,
 }
 
-// The nearest facet (within the radius, ties to the lowest id) of slave i among the candidates
-// of its work item t.
+// The nearest facet (within the radius, ties to the lowest id) of slave i among the leaf slots
+// of its work item t: slots start + (t − work[i])·CANDIDATE_CHUNK onwards, below n_facets.
 fn chunk_best(i: u32, t: u32) -> ChunkBest {
     let slave = slaves[i];
     let p = nodes[slave].xyz;
-    let c = candidates(p);
-    let r = chunk_range(i, t, c);
+    let leaves = 1u << params.tree_levels;
+    let j0 = atomicLoad(&best[BEST_WORDS * i + 5u]) + (t - work[i]) * CANDIDATE_CHUNK;
+    let j1 = min(params.n_facets, j0 + CANDIDATE_CHUNK);
     var b: ChunkBest;
     b.d2 = params.radius * params.radius;
     b.f = NO_FACET;
-    for (var k = r.x; k < r.y; k++) {
-        let f = candidate(c, k);
+    for (var j = j0; j < j1; j++) {
+        let k = leaves + j;
+        if (boxes[2u * k].x > boxes[2u * k + 1u].x) { continue; } // collapsed
+        let f = order[j];
         if (excluded(slave, facets[f])) { continue; }
         let d2 = project_facet(p, facets[f]).dist2;
         if (d2 < b.d2 || (d2 == b.d2 && f < b.f)) {
@@ -151,18 +198,26 @@ fn chunk_best(i: u32, t: u32) -> ChunkBest {
 }
 
 @compute @workgroup_size(64)
-fn nearest_count(@builtin(workgroup_id) wg: vec3<u32>,
-                 @builtin(num_workgroups) nwg: vec3<u32>,
-                 @builtin(local_invocation_index) li: u32) {
+fn nearest_walk(@builtin(workgroup_id) wg: vec3<u32>,
+                @builtin(num_workgroups) nwg: vec3<u32>,
+                @builtin(local_invocation_index) li: u32) {
     let i = folded_id(wg, nwg, li, ITEM_WORKGROUP);
     if (i >= params.n_slaves) { return; }
     if (i == 0u) { work[params.n_slaves] = 0u; }
-    let count = candidates(nodes[slaves[i]].xyz).n;
-    work[i] = (count + CANDIDATE_CHUNK - 1u) / CANDIDATE_CHUNK;
-    atomicStore(&best[4u * i], bitcast<u32>(params.radius * params.radius));
-    atomicStore(&best[4u * i + 1u], NO_FACET);
-    atomicStore(&best[4u * i + 2u], 0u);
-    atomicStore(&best[4u * i + 3u], count);
+    let w = walk(i);
+    var start = params.n_facets;
+    if (w.next != 0u) { start = min(first_leaf(w.next), params.n_facets); }
+    let rest = params.n_facets - start;
+    work[i] = (rest + CANDIDATE_CHUNK - 1u) / CANDIDATE_CHUNK;
+    let b = BEST_WORDS * i;
+    atomicStore(&best[b], bitcast<u32>(w.d2));
+    atomicStore(&best[b + 1u], NO_FACET);
+    atomicStore(&best[b + 2u], 0u);
+    atomicStore(&best[b + 3u], w.projections + rest);
+    atomicStore(&best[b + 4u], w.f);
+    atomicStore(&best[b + 5u], start);
+    atomicStore(&best[b + 6u], bitcast<u32>(w.d2));
+    atomicStore(&best[b + 7u], 0u);
 }
 
 @compute @workgroup_size(1)
@@ -183,11 +238,15 @@ fn nearest_chunks(@builtin(workgroup_id) wg: vec3<u32>,
     let i = work_slave(t);
     let b = chunk_best(i, t);
     if (b.f == NO_FACET) { return; }
+    let bits = bitcast<u32>(b.d2);
     if (work[i + 1u] - work[i] == 1u) {
-        atomicStore(&best[4u * i], bitcast<u32>(b.d2));
-        atomicStore(&best[4u * i + 1u], b.f);
+        // the slave's only chunk: no other invocation writes its record
+        if (bits <= atomicLoad(&best[BEST_WORDS * i])) {
+            atomicStore(&best[BEST_WORDS * i], bits);
+            atomicStore(&best[BEST_WORDS * i + 1u], b.f);
+        }
     } else {
-        atomicMin(&best[4u * i], bitcast<u32>(b.d2));
+        atomicMin(&best[BEST_WORDS * i], bits);
     }
 }
 
@@ -200,36 +259,59 @@ fn nearest_ties(@builtin(workgroup_id) wg: vec3<u32>,
     let i = work_slave(t);
     if (work[i + 1u] - work[i] == 1u) { return; }
     let b = chunk_best(i, t);
-    if (b.f != NO_FACET && bitcast<u32>(b.d2) == atomicLoad(&best[4u * i])) {
-        atomicMin(&best[4u * i + 1u], b.f);
+    if (b.f != NO_FACET && bitcast<u32>(b.d2) == atomicLoad(&best[BEST_WORDS * i])) {
+        atomicMin(&best[BEST_WORDS * i + 1u], b.f);
     }
+}
+
+// The winner of slave i's record: the chunks' facet at the best distance, or the walk's when it
+// is at that distance with a lower id.
+fn winner(i: u32) -> u32 {
+    let b = BEST_WORDS * i;
+    let f = atomicLoad(&best[b + 1u]);
+    let walk_f = atomicLoad(&best[b + 4u]);
+    if (walk_f != NO_FACET && atomicLoad(&best[b + 6u]) == atomicLoad(&best[b]) && walk_f < f) {
+        return walk_f;
+    }
+    return f;
+}
+
+// Self-contact: whether slave i has a facet within the radius, other than its nearest best_f
+// and sharing no node with it, that faces it; a walk cut off by the cap says yes.
+fn crowded(i: u32, best_f: u32) -> bool {
+    let slave = slaves[i];
+    let p = nodes[slave].xyz;
+    let leaves = 1u << params.tree_levels;
+    let r2 = params.radius * params.radius;
+    var k = 1u;
+    for (var v = 0u; v < WALK_VISITS; v++) {
+        if (k == 0u) { return false; }
+        if (far(k, p, r2)) {
+            k = next_node(k);
+        } else if (k >= leaves) {
+            let f = order[k - leaves];
+            if (f != best_f && !excluded(slave, facets[f]) && !share_node(facets[f], facets[best_f])) {
+                // near and facing the slave (not merely beside it in its own plane)
+                let pr = project_facet(p, facets[f]);
+                let gap = dot(p - pr.point, pr.normal);
+                if (pr.dist2 <= r2 && 4.0 * gap * gap > pr.dist2) { return true; }
+            }
+            k = next_node(k);
+        } else {
+            k = 2u * k;
+        }
+    }
+    return k != 0u;
 }
 
 @compute @workgroup_size(64)
 fn nearest_crowded(@builtin(workgroup_id) wg: vec3<u32>,
                    @builtin(num_workgroups) nwg: vec3<u32>,
                    @builtin(local_invocation_index) li: u32) {
-    let t = folded_id(wg, nwg, li, ITEM_WORKGROUP);
-    if ((params.flags & FLAG_SELF_CONTACT) == 0u || t >= work[params.n_slaves]) { return; }
-    let i = work_slave(t);
-    let best_f = atomicLoad(&best[4u * i + 1u]);
-    if (best_f == NO_FACET) { return; }
-    let slave = slaves[i];
-    let p = nodes[slave].xyz;
-    let c = candidates(p);
-    let r = chunk_range(i, t, c);
-    let r2 = params.radius * params.radius;
-    for (var k = r.x; k < r.y; k++) {
-        let f = candidate(c, k);
-        if (f == best_f || excluded(slave, facets[f]) || share_node(facets[f], facets[best_f])) { continue; }
-        // near and facing the slave (not merely beside it in its own plane)
-        let pr = project_facet(p, facets[f]);
-        let gap = dot(p - pr.point, pr.normal);
-        if (pr.dist2 <= r2 && 4.0 * gap * gap > pr.dist2) {
-            atomicStore(&best[4u * i + 2u], 1u);
-            return;
-        }
-    }
+    let i = folded_id(wg, nwg, li, ITEM_WORKGROUP);
+    if ((params.flags & FLAG_SELF_CONTACT) == 0u || i >= params.n_slaves) { return; }
+    let f = winner(i);
+    if (f != NO_FACET && crowded(i, f)) { atomicStore(&best[BEST_WORDS * i + 2u], 1u); }
 }
 
 @compute @workgroup_size(64)
@@ -241,15 +323,17 @@ fn nearest_facet(@builtin(workgroup_id) wg: vec3<u32>,
     var hit: Hit;
     hit.facet = NO_FACET;
     hit.node = NO_NODE;
-    hit.candidates = atomicLoad(&best[4u * i + 3u]);
+    let b = BEST_WORDS * i;
+    hit.candidates = atomicLoad(&best[b + 3u]);
     hit.slave = slaves[i];
     hit.point_gap = vec4<f32>(0.0);
     hit.normal_dist = vec4<f32>(0.0);
     hit.weights = vec4<f32>(0.0);
     let p = nodes[slaves[i]].xyz;
-    let best_f = atomicLoad(&best[4u * i + 1u]);
+    if (atomicLoad(&best[b + 5u]) < params.n_facets) { atomicAdd(&status[STATUS_FALLBACK], 1u); }
+    let best_f = winner(i);
     if (best_f != NO_FACET) {
-        if (atomicLoad(&best[4u * i + 2u]) != 0u) { atomicAdd(&status[STATUS_CROWDED], 1u); }
+        if (atomicLoad(&best[b + 2u]) != 0u) { atomicAdd(&status[STATUS_CROWDED], 1u); }
         let fac = facets[best_f];
         let pr = project_facet(p, fac);
         let n = facet_node_count(fac);

@@ -110,7 +110,7 @@ fn penalty(@builtin(workgroup_id) wg: vec3<u32>,
            @builtin(local_invocation_index) li: u32) {
     let i = folded_id(wg, nwg, li, ITEM_WORKGROUP);
     if (i >= pp.n_slaves) { return; }
-    if (atomicLoad(&status[STATUS_OVERFLOW]) != 0u || atomicLoad(&status[STATUS_BUDGET_EXCEEDED]) != 0u) { return; }
+    if (atomicLoad(&status[STATUS_BUDGET_EXCEEDED]) != 0u) { return; }
     let hit = hits[i];
     var o: ContactOut;
     o.force = vec4<f32>(0.0);

@@ -30,7 +30,7 @@ const MAX_PLAN_SLOTS: u32 = 16u;
 const P_CELL_SIZE: u32 = 0u;
 const P_INV_CELL_SIZE: u32 = 1u;
 const P_RADIUS: u32 = 2u;
-const P_BIN_MARGIN: u32 = 3u;
+const P_BOX_MARGIN: u32 = 3u;
 const P_DIMS: u32 = 4u;
 const P_N_CELLS: u32 = 7u;
 const P_DIM: u32 = 11u;
@@ -88,7 +88,10 @@ fn fit_grid() -> bool {
     let b = PLAN_PARAMS;
     plan[b + P_CELL_SIZE] = bitcast<u32>(h);
     plan[b + P_INV_CELL_SIZE] = bitcast<u32>(1.0 / h);
-    plan[b + P_BIN_MARGIN] = bitcast<u32>(r * 1.0001 + 8.0 * 1.1920929e-7 * top);
+    // the tree's round-off margin: 32 ulps of the largest master coordinate in the frame
+    var m = 0.0;
+    for (var a = 0u; a < dim; a++) { m = max(m, max(abs(lo[a]), abs(hi[a]))); }
+    plan[b + P_BOX_MARGIN] = bitcast<u32>(32.0 * 1.1920929e-7 * m);
     for (var a = 0u; a < 3u; a++) {
         plan[b + P_DIMS + a] = dims[a];
         plan[b + P_GRID_LO + a] = bitcast<u32>(g[a]);

@@ -28,8 +28,8 @@ const STAT_ACTIVE: u32 = 4u;         // slaves in contact
 const STAT_SLIPPING: u32 = 5u;       // of which slipping
 const STAT_GLOBAL: u32 = 6u;         // searches that ran globally
 const STAT_BUDGET: u32 = 7u;         // of which because the motion budget was used up
-const STAT_SPILLED: u32 = 8u;        // facets spilled from the bins (all pairs)
-const STAT_NEEDED: u32 = 9u;         // the most bin entries a search needed
+const STAT_FALLBACKS: u32 = 8u;      // slaves whose tree walk hit its cap (all pairs)
+const STAT_COLLAPSED: u32 = 9u;      // master facets collapsed at a global search (all pairs)
 const STAT_NONFINITE: u32 = 10u;     // the lowest node with a non-finite coordinate, NO_NODE if none
 const STAT_LOCAL_CAPPED: u32 = 11u;  // local walks stopped at the iteration cap
 const STAT_MOTION: u32 = 12u;        // f32: the largest motion since a global search
@@ -44,8 +44,8 @@ fn pair_stats() {
     atomicMax(&stats[STAT_MAX_OVERCLOSURE], status[STATUS_MAX_OVERCLOSURE]);
     atomicAdd(&stats[STAT_ACTIVE], status[STATUS_ACTIVE]);
     atomicAdd(&stats[STAT_SLIPPING], status[STATUS_SLIPPING]);
-    atomicAdd(&stats[STAT_SPILLED], status[STATUS_SPILLED]);
-    atomicMax(&stats[STAT_NEEDED], status[STATUS_NEEDED_ENTRIES]);
+    atomicAdd(&stats[STAT_FALLBACKS], status[STATUS_FALLBACK]);
+    atomicAdd(&stats[STAT_COLLAPSED], status[STATUS_COLLAPSED]);
     atomicAdd(&stats[STAT_LOCAL_CAPPED], status[STATUS_LOCAL_CAPPED]);
     atomicMax(&stats[STAT_MOTION], status[STATUS_MOTION]);
     atomicMin(&stats[STAT_NONFINITE], status[STATUS_NONFINITE]);

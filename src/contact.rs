@@ -62,9 +62,9 @@ pub struct StepReport {
     pub slipping: usize,
     /// Searches that ran globally this increment (the schedule's choice, made on the device).
     pub global_searches: usize,
-    /// Facets whose bin entries did not fit this increment: they spilled into a list every
-    /// slave examines, so the search stayed exact; the bins grow for the next increment.
-    pub spilled: usize,
+    /// Slave nodes whose walk of the search tree reached its visit cap this increment and was
+    /// finished in bounded chunks (the search stayed exact; many mean a badly fitting tree).
+    pub fallbacks: usize,
     /// `stable_dt` is finite although no slave node is in contact: it is the limit of springs of
     /// slave nodes within the search radius that have not touched yet (one may close within an
     /// increment, so their limit applies before contact).
@@ -190,8 +190,6 @@ pub struct Contact {
     host_increments: u64,
     /// Spatial dimension.
     dim: u32,
-    /// Device-resident increments: bin entries to grow to at the next one (a spill was seen).
-    grow_to: Option<u32>,
 }
 
 impl Contact {
@@ -347,7 +345,6 @@ impl Contact {
             global_total: 0,
             host_increments: 0,
             dim: model.dim(),
-            grow_to: None,
         })
     }
 
@@ -415,15 +412,6 @@ impl Contact {
         }
         self.host_increment(positions, velocities, dt)?;
         Ok(&self.report)
-    }
-
-    /// Caps the bin entry buffers' starting size (words) of every penalty pair's search; a
-    /// host-array search grows on overflow, a device-resident one spills and grows after its
-    /// statistics are read. Meant for tests of those paths.
-    pub fn set_entry_capacity(&mut self, words: u32) {
-        for pr in &mut self.pairs {
-            pr.search.set_entry_capacity(words);
-        }
     }
 
     /// Global searches the penalty pairs' host-array increments ran since the start (each

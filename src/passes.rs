@@ -13,6 +13,8 @@ pub enum Buf {
     SearchParams,
     /// Uniform `ScanParams` of one scan level.
     ScanParams,
+    /// Uniform `TreeParams` of one refit pass of the search tree.
+    TreeParams,
     /// Uniform `FrameParams` (the grid frame of positions kept on the device).
     FrameParams,
     /// Uniform `PenaltyParams`.
@@ -27,15 +29,12 @@ pub enum Buf {
     Slaves,
     /// The model's node→facet adjacency (CSR over active facets).
     Adjacency,
-    /// The array a scan level works on: the cell counts (search) or the work items
-    /// (nearest facet), with all their levels.
+    /// The array a scan level works on: the nearest facet's work items, with all their levels.
     ScanData,
-    /// Cell counts, then cell starts after the scan (the search's scan buffer).
-    Cells,
-    /// The scatter's cursors (a copy of the cell starts, bumped atomically).
-    Cursor,
-    /// Bin entries: facet ids grouped by cell.
-    Entries,
+    /// The active facet of each leaf slot of the search tree (Morton order).
+    Order,
+    /// The search tree's boxes: two `vec4<f32>` per heap node.
+    Boxes,
     /// The status words (`STATUS_*`).
     Status,
     /// One `Hit` per slave.
@@ -123,8 +122,8 @@ pub enum Items {
     One,
     /// One per nearest-facet work item, dispatched indirectly from `Buf::Args`.
     WorkItems,
-    /// One per word of the cell counts, up to the cell capacity.
-    CellWords,
+    /// One per node of one level of the search tree (a refit pass's bottom level).
+    TreeNodes,
     /// One workgroup per block of `SCAN_BLOCK` words of a scan level.
     ScanBlocks,
 }
@@ -151,27 +150,22 @@ const fn b(index: u32, buf: Buf, access: Access) -> Binding {
 use Access::{Read as R, ReadWrite as RW, Uniform as U};
 use Buf::*;
 
-/// `bin_count.wgsl`: each facet counts itself into the cells it overlaps.
-pub const BIN_COUNT: Pass = Pass {
-    stem: "bin_count",
-    entry: "bin_count",
+/// `tree.wgsl`: one refit pass of the search tree's boxes (the leaves from the facets, or up to
+/// six levels above the last pass's).
+pub const TREE_REFIT: Pass = Pass {
+    stem: "tree",
+    entry: "tree_refit",
     bindings: &[
         b(0, SearchParams, U),
-        b(1, Nodes, R),
-        b(2, Facets, R),
-        b(3, Cells, RW),
+        b(1, TreeParams, U),
+        b(2, Nodes, R),
+        b(3, Facets, R),
+        b(4, Order, R),
+        b(5, Boxes, RW),
+        b(6, Status, RW),
     ],
-    items: Items::Facets,
-    per_workgroup: ITEM_WORKGROUP,
-};
-
-/// `bin_count.wgsl`: the cell counts zeroed (device-resident increments).
-pub const CLEAR_COUNTS: Pass = Pass {
-    stem: "bin_count",
-    entry: "clear_counts",
-    bindings: &[b(0, SearchParams, U), b(3, Cells, RW)],
-    items: Items::CellWords,
-    per_workgroup: ITEM_WORKGROUP,
+    items: Items::TreeNodes,
+    per_workgroup: crate::search::layout::TREE_WORKGROUP,
 };
 
 const SCAN_BINDINGS: &[Binding] = &[b(0, ScanParams, U), b(1, ScanData, RW)];
@@ -194,60 +188,32 @@ pub const SCAN_ADD: Pass = Pass {
     per_workgroup: SCAN_BLOCK,
 };
 
-/// `bin_scatter.wgsl`: the scatter's cursors from the cell starts, the spill emptied.
-pub const COPY_STARTS: Pass = Pass {
-    stem: "bin_scatter",
-    entry: "copy_starts",
-    bindings: &[
-        b(0, SearchParams, U),
-        b(3, Cells, R),
-        b(4, Cursor, RW),
-        b(5, Entries, RW),
-    ],
-    items: Items::CellWords,
-    per_workgroup: ITEM_WORKGROUP,
-};
-
-/// `bin_scatter.wgsl`: facet ids into their cells; what does not fit spills.
-pub const BIN_SCATTER: Pass = Pass {
-    stem: "bin_scatter",
-    entry: "bin_scatter",
-    bindings: &[
-        b(0, SearchParams, U),
-        b(1, Nodes, R),
-        b(2, Facets, R),
-        b(3, Cells, R),
-        b(4, Cursor, RW),
-        b(5, Entries, RW),
-        b(6, Status, RW),
-    ],
-    items: Items::Facets,
-    per_workgroup: ITEM_WORKGROUP,
-};
-
 /// The bindings of the nearest-facet passes that read a work item's candidates.
 const CHUNK_BINDINGS: &[Binding] = &[
     b(0, SearchParams, U),
     b(1, Nodes, R),
     b(2, Facets, R),
     b(3, Slaves, R),
-    b(4, Cells, R),
-    b(5, Entries, R),
+    b(4, Order, R),
+    b(5, Boxes, R),
     b(8, Adjacency, R),
     b(9, Work, RW),
     b(10, Best, RW),
 ];
 
-/// `nearest_facet.wgsl`: candidate and chunk counts per slave, records reset.
-pub const NEAREST_COUNT: Pass = Pass {
+/// `nearest_facet.wgsl`: each slave's pruned walk of the search tree; the chunks of what a
+/// capped walk did not reach counted.
+pub const NEAREST_WALK: Pass = Pass {
     stem: "nearest_facet",
-    entry: "nearest_count",
+    entry: "nearest_walk",
     bindings: &[
         b(0, SearchParams, U),
         b(1, Nodes, R),
+        b(2, Facets, R),
         b(3, Slaves, R),
-        b(4, Cells, R),
-        b(5, Entries, R),
+        b(4, Order, R),
+        b(5, Boxes, R),
+        b(8, Adjacency, R),
         b(9, Work, RW),
         b(10, Best, RW),
     ],
@@ -282,16 +248,26 @@ pub const NEAREST_TIES: Pass = Pass {
     per_workgroup: ITEM_WORKGROUP,
 };
 
-/// `nearest_facet.wgsl`: self-contact crowding per chunk.
+/// `nearest_facet.wgsl`: self-contact's crowding, by a walk bounded by the radius.
 pub const NEAREST_CROWDED: Pass = Pass {
     stem: "nearest_facet",
     entry: "nearest_crowded",
-    bindings: CHUNK_BINDINGS,
-    items: Items::WorkItems,
+    bindings: &[
+        b(0, SearchParams, U),
+        b(1, Nodes, R),
+        b(2, Facets, R),
+        b(3, Slaves, R),
+        b(4, Order, R),
+        b(5, Boxes, R),
+        b(8, Adjacency, R),
+        b(10, Best, RW),
+    ],
+    items: Items::Slaves,
     per_workgroup: ITEM_WORKGROUP,
 };
 
-/// `nearest_facet.wgsl`: the hit of each slave from its winning facet.
+/// `nearest_facet.wgsl`: the hit of each slave from its winning facet; fallbacks and crowding
+/// counted.
 pub const NEAREST_FACET: Pass = Pass {
     stem: "nearest_facet",
     entry: "nearest_facet",
@@ -526,19 +502,16 @@ pub const INTEGRATE: Pass = Pass {
 };
 
 /// Every pass, in the order an increment may run them.
-pub const PASSES: [Pass; 27] = [
+pub const PASSES: [Pass; 24] = [
     TO_LOCAL,
     ANCHOR,
     MOTION,
     SCHEDULE,
     LOCAL_SEARCH,
-    CLEAR_COUNTS,
-    BIN_COUNT,
+    TREE_REFIT,
     SCAN_BLOCKS,
     SCAN_ADD,
-    COPY_STARTS,
-    BIN_SCATTER,
-    NEAREST_COUNT,
+    NEAREST_WALK,
     NEAREST_ARGS,
     NEAREST_CHUNKS,
     NEAREST_TIES,

@@ -44,13 +44,8 @@ const NO_LIMIT_BITS: u32 = 0x7f7f_ffff;
 
 /// Every status word, in index order.
 pub const STATUS_TABLE: [StatusWord; STATUS_WORDS] = [
-    w(STATUS_OVERFLOW, "bin entries overflowed", Owner::Search, 0),
-    w(
-        STATUS_NEEDED_ENTRIES,
-        "bin entries needed",
-        Owner::Search,
-        0,
-    ),
+    w(0, "unused", Owner::Unused, 0),
+    w(1, "unused", Owner::Unused, 0),
     w(
         STATUS_BUDGET_EXCEEDED,
         "motion budget used up",
@@ -133,8 +128,8 @@ pub const STATUS_TABLE: [StatusWord; STATUS_WORDS] = [
         0,
     ),
     w(
-        STATUS_SPILLED,
-        "facets spilled from the bins",
+        STATUS_FALLBACK,
+        "tree walks finished by chunks",
         Owner::Search,
         0,
     ),
@@ -221,13 +216,9 @@ impl Status {
     fn f32(&self, i: usize) -> f32 {
         f32::from_bits(self.0[i])
     }
-    /// The bin entries overflowed: nothing was binned, the search must run again.
-    pub fn overflowed(&self) -> bool {
-        self.0[STATUS_OVERFLOW] != 0
-    }
-    /// Bin entries the binning needed (when it overflowed).
-    pub fn needed_entries(&self) -> u32 {
-        self.0[STATUS_NEEDED_ENTRIES]
+    /// Slaves whose walk of the search tree reached its visit cap (finished by chunks).
+    pub fn fallbacks(&self) -> u32 {
+        self.0[STATUS_FALLBACK]
     }
     /// The motion since the last global search used up the budget.
     pub fn budget_exceeded(&self) -> bool {
@@ -301,8 +292,9 @@ mod tests {
         let mut s = [7u32; STATUS_WORDS];
         reset(&mut s, Owner::Penalty);
         assert_eq!(Status(s).dt_stable(), crate::penalty::layout::NO_LIMIT);
-        assert_eq!(s[STATUS_OVERFLOW], 7, "the search's words are left alone");
+        assert_eq!(s[STATUS_FALLBACK], 7, "the search's words are left alone");
         reset(&mut s, Owner::Search);
-        assert_eq!(s[STATUS_OVERFLOW], 0);
+        assert_eq!(s[STATUS_FALLBACK], 0);
+        assert_eq!(s[0], 7, "an unused word is nobody's");
     }
 }

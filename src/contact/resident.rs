@@ -268,18 +268,6 @@ impl Contact {
         dt: f64,
         ring: bool,
     ) -> Result<()> {
-        if let Some(needed) = self.grow_to.take() {
-            for pr in &mut self.pairs {
-                match pr.search.gpu_mut() {
-                    Some(g) => g.grow_resident_entries(needed)?,
-                    None => {
-                        if let Some(c) = pr.search.cpu_mut() {
-                            c.grow_resident_entries(needed);
-                        }
-                    }
-                }
-            }
-        }
         let dt_ref = *self.dt_ref.get_or_insert(dt);
         let n_nodes = self.n_nodes;
         match (io, self.resident.as_mut()) {
@@ -463,8 +451,8 @@ impl Contact {
     /// The statistics of the device-resident increments the device has finished since the last
     /// call, oldest first, without waiting: on a GPU, those whose staging buffers it has mapped
     /// (a few increments late; call this only after submitting what was encoded); on the CPU
-    /// path, every increment since the last call. A spill seen here grows the bin entries at the
-    /// next increment; a non-finite coordinate is an error naming the node.
+    /// path, every increment since the last call. A non-finite coordinate is an error naming the
+    /// node.
     pub fn collect_stats(&mut self) -> Result<Vec<IncrementStats>> {
         let out = match self.resident.as_mut() {
             Some(Resident::Gpu(inc)) => inc.collect()?,
@@ -472,9 +460,6 @@ impl Contact {
             None => Vec::new(),
         };
         for s in &out {
-            if s.spilled > 0 {
-                self.grow_to = Some(self.grow_to.unwrap_or(0).max(s.needed_entries));
-            }
             if s.nonfinite_node != u32::MAX {
                 return Err(Error::BadParameter {
                     name: "device positions",
@@ -635,9 +620,6 @@ impl Contact {
             pr.schedule.update(plan, &pr.search, positions);
         }
         self.host_increments += 1;
-        if st.spilled > 0 {
-            self.grow_to = Some(self.grow_to.unwrap_or(0).max(st.needed_entries));
-        }
         let limit = |v: f32| {
             if v >= NO_LIMIT {
                 f64::INFINITY
@@ -656,7 +638,7 @@ impl Contact {
             active: st.active as usize,
             slipping: st.slipping as usize,
             global_searches: st.global_searches as usize,
-            spilled: st.spilled as usize,
+            fallbacks: st.fallbacks as usize,
             stable_dt_before_contact: st.active == 0 && limit(st.stable_dt).is_finite(),
         };
         self.global_total += st.global_searches as u64;

@@ -50,58 +50,6 @@ pub fn facet_collapsed(nodes: &[[f32; 4]], fac: [u32; 4]) -> bool {
     !(0.5 * len(a) > 1.0e-6)
 }
 
-/// Cell coordinate along one axis, clamped to the grid (WGSL: `cell_coord`).
-pub fn cell_coord(x: f32, inv: f32, dims: u32) -> u32 {
-    let c = (x * inv).floor() as i64;
-    c.clamp(0, dims as i64 - 1) as u32
-}
-
-/// Inclusive cell range of a facet's bounding box grown by the bin margin (WGSL: `facet_cells`).
-pub fn facet_cells(p: &SearchParams, nodes: &[[f32; 4]], fac: [u32; 4]) -> ([u32; 3], [u32; 3]) {
-    let n = facet_node_count(fac);
-    let mut lo = [f32::INFINITY; 3];
-    let mut hi = [f32::NEG_INFINITY; 3];
-    for &id in &fac[..n] {
-        let x = nodes[id as usize];
-        for a in 0..3 {
-            lo[a] = lo[a].min(x[a]);
-            hi[a] = hi[a].max(x[a]);
-        }
-    }
-    let dims = [p.dims_x, p.dims_y, p.dims_z];
-    let mut clo = [0u32; 3];
-    let mut chi = [0u32; 3];
-    for a in 0..3 {
-        clo[a] = cell_coord(
-            lo[a] - p.grid_lo[a] - p.bin_margin,
-            p.inv_cell_size,
-            dims[a],
-        );
-        chi[a] = cell_coord(
-            hi[a] - p.grid_lo[a] + p.bin_margin,
-            p.inv_cell_size,
-            dims[a],
-        );
-    }
-    (clo, chi)
-}
-
-/// Linear cell index (WGSL: `cell_index`).
-pub fn cell_index(p: &SearchParams, c: [u32; 3]) -> u32 {
-    c[0] + p.dims_x * (c[1] + p.dims_y * c[2])
-}
-
-/// Calls `visit` with every cell index of an inclusive range, z outermost (the WGSL loop order).
-pub fn for_each_cell(p: &SearchParams, lo: [u32; 3], hi: [u32; 3], mut visit: impl FnMut(u32)) {
-    for z in lo[2]..=hi[2] {
-        for y in lo[1]..=hi[1] {
-            for x in lo[0]..=hi[0] {
-                visit(cell_index(p, [x, y, z]));
-            }
-        }
-    }
-}
-
 /// Self-contact exclusion: facet `fac` is slave `s`'s own or touches one of its own facets
 /// (WGSL: `excluded`). `adjacency` as in local_search.wgsl.
 pub fn excluded(

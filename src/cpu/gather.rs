@@ -7,7 +7,7 @@ use crate::penalty::layout::{
     NO_SLAVE,
 };
 use crate::search::layout::{
-    GpuHit, STATUS_BUDGET_EXCEEDED, STATUS_FORCE_SCALE, STATUS_OVERFLOW, STATUS_ROW_SCALE,
+    GpuHit, STATUS_BUDGET_EXCEEDED, STATUS_FORCE_SCALE, STATUS_ROW_SCALE,
 };
 
 /// Bits below the sign that a fixed-point sum may use (WGSL: `FIXED_BITS`).
@@ -93,7 +93,7 @@ pub fn scatter_forces(
     let sf = pow2(fixed_exponent(status[STATUS_FORCE_SCALE], pp.n_slaves));
     let sr = pow2(fixed_exponent(status[STATUS_ROW_SCALE], pp.n_slaves));
     // the penalty pass did not run (the increment will run again): its outputs are stale
-    if status[STATUS_OVERFLOW] != 0 || status[STATUS_BUDGET_EXCEEDED] != 0 {
+    if status[STATUS_BUDGET_EXCEEDED] != 0 {
         return;
     }
     for i in 0..pp.n_slaves as usize {

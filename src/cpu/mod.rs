@@ -6,12 +6,10 @@
 //! atomics uses atomics whose result does not depend on their order (counts), or runs each
 //! slave's work items in order on one thread (the nearest facet's chunks); the rest run one
 //! after another. The results are bitwise the same on one thread or many, and equal the GPU's up
-//! to f32 round-off (exactly for the integer binning). It is also the backend used where no
+//! to f32 round-off (exactly for the tree's boxes). It is also the backend used where no
 //! adapter exists.
 
 pub mod anchor;
-pub mod bin_count;
-pub mod bin_scatter;
 pub mod brute_force;
 pub mod common;
 pub mod gather;
@@ -26,14 +24,13 @@ pub mod scan;
 pub mod schedule;
 pub mod stats;
 pub mod to_local;
+pub mod tree;
 
 use std::sync::atomic::AtomicU32;
 
 use crate::error::Result;
-use crate::search::layout::{
-    GpuHit, ScanLevels, STATUS_NEEDED_ENTRIES, STATUS_OVERFLOW, STATUS_WORDS,
-};
-use crate::search::{Bins, Prepared, Step, STEPS};
+use crate::search::layout::{tree_passes, GpuHit, ScanLevels, STATUS_WORDS};
+use crate::search::{Prepared, Step, STEPS};
 
 /// Fewest invocations a thread of the CPU path takes at once (below it, splitting costs more
 /// than it gains).
@@ -53,12 +50,8 @@ pub(crate) fn as_atomic(words: &mut [u32]) -> &[AtomicU32] {
 /// The buffers of one search on the CPU; they only grow.
 #[derive(Clone, Debug, Default)]
 pub struct CpuWorkspace {
-    /// All scan levels; words 0..=n_cells hold counts, then cell starts.
-    pub scan: Vec<u32>,
-    /// Atomic cursors of the scatter.
-    pub cursor: Vec<u32>,
-    /// Bin entries (facet ids grouped by cell).
-    pub entries: Vec<u32>,
+    /// The search tree's boxes (two vec4 per heap node: lower, upper corner).
+    pub boxes: Vec<[f32; 4]>,
     /// Status words (`STATUS_*`).
     pub status: [u32; STATUS_WORDS],
     /// One result per slave node (the tracked nodes between increments).
@@ -77,10 +70,6 @@ pub struct CpuSearch {
     /// Small sliding: the slaves' anchors (local runs evaluate them instead of searching).
     anchors: Option<Vec<crate::search::layout::Anchor>>,
     ws: CpuWorkspace,
-    entry_capacity: u32,
-    presize: bool,
-    /// Cells of the last search.
-    n_cells: u32,
     /// Device-resident increments: the plan and the nodes they keep.
     resident: Option<Box<resident::CpuResident>>,
 }
@@ -90,36 +79,24 @@ impl Default for CpuSearch {
         Self {
             anchors: None,
             ws: CpuWorkspace::default(),
-            entry_capacity: 0,
-            presize: true,
-            n_cells: 0,
             resident: None,
         }
     }
 }
 
 impl CpuSearch {
-    /// Sets the entry buffer's size (words) and stops sizing it from the host's estimate, so
-    /// that the overflow path can be tested; it still grows on overflow.
-    pub fn set_entry_capacity(&mut self, words: u32) {
-        self.entry_capacity = words;
-        self.presize = false;
-        self.ws.entries.truncate(words as usize);
-    }
-
     /// Runs a global search (`local` false) or the motion check and the local search from
-    /// the tracked nodes of the previous increment. Returns hits, bin entries, regrowths and
-    /// the status words.
+    /// the tracked nodes of the previous increment. Returns the hits and the status words.
     pub fn run_mode(
         &mut self,
         prep: &Prepared,
         local: bool,
-    ) -> Result<(Vec<GpuHit>, u32, u32, [u32; STATUS_WORDS])> {
+    ) -> Result<(Vec<GpuHit>, [u32; STATUS_WORDS])> {
         if !local {
-            let (hits, total, regrowths) = self.run(prep)?;
+            let hits = self.run(prep)?;
             self.ws.reference.clear();
             self.ws.reference.extend_from_slice(&prep.nodes);
-            return Ok((hits, total, regrowths, self.ws.status));
+            return Ok((hits, self.ws.status));
         }
         if self.ws.hits.len() != prep.slaves.len() || self.ws.reference.len() != prep.nodes.len() {
             return Err(crate::error::Error::BadParameter {
@@ -141,7 +118,7 @@ impl CpuSearch {
                 &prep.adjacency,
             );
             self.ws.status = status;
-            return Ok((self.ws.hits.clone(), 0, 0, status));
+            return Ok((self.ws.hits.clone(), status));
         }
         motion::motion(
             &prep.params,
@@ -161,7 +138,7 @@ impl CpuSearch {
             &mut self.ws.hits,
         );
         self.ws.status = status;
-        Ok((self.ws.hits.clone(), 0, 0, status))
+        Ok((self.ws.hits.clone(), status))
     }
 
     /// Small sliding: installs the slaves' anchors.
@@ -169,108 +146,61 @@ impl CpuSearch {
         self.anchors = Some(anchors.to_vec());
     }
 
-    /// Runs a full search (which settles the entry capacity), then only `STEPS[..first]`
-    /// again, and returns the workspace as those steps leave it: the CPU half of a split run.
+    /// Runs only `STEPS[..first]` and returns the workspace as those steps leave it: the CPU
+    /// half of a split run.
     pub fn run_prefix(&mut self, prep: &Prepared, first: usize) -> Result<&CpuWorkspace> {
-        self.run(prep)?;
-        let mut params = prep.params;
-        params.entry_capacity = self.entry_capacity;
-        let levels = ScanLevels::new(params.n_cells + 1);
-        self.ws.scan.iter_mut().for_each(|w| *w = 0);
-        self.ws.entries.iter_mut().for_each(|w| *w = 0);
-        crate::status::reset(&mut self.ws.status, crate::status::Owner::Search);
+        self.reset(prep);
         for step in &STEPS[..first] {
-            run_step(*step, &params, &levels, prep, &mut self.ws);
+            run_step(*step, &prep.params, prep, &mut self.ws);
         }
         Ok(&self.ws)
     }
 
-    /// The bins of the last search: cell starts and entries (in the scatter's order within a cell).
-    pub fn bins(&self) -> Bins {
-        let n = self.n_cells as usize;
-        let total = self.ws.scan.get(n).copied().unwrap_or(0) as usize;
-        Bins {
-            starts: self.ws.scan[..=n].to_vec(),
-            entries: self.ws.entries[..total].to_vec(),
-        }
+    /// The search tree's boxes after the last global search (two vec4 per heap node).
+    pub fn tree_boxes(&self) -> &[[f32; 4]] {
+        &self.ws.boxes
     }
 
-    /// Runs all steps; on overflow grows the entry buffer and runs again.
-    /// Returns the hits, the bin entries written and the number of regrowths.
-    pub fn run(&mut self, prep: &Prepared) -> Result<(Vec<GpuHit>, u32, u32)> {
-        let mut regrowths = 0;
-        if self.presize {
-            self.entry_capacity = presized_capacity(prep, self.entry_capacity);
-        }
-        loop {
-            let mut params = prep.params;
-            params.entry_capacity = self.entry_capacity;
-            let levels = ScanLevels::new(params.n_cells + 1);
-            self.ws.scan.clear();
-            self.ws.scan.resize(levels.words as usize, 0);
-            crate::status::reset(&mut self.ws.status, crate::status::Owner::Search);
-            self.ws
-                .entries
-                .resize(entry_words(self.entry_capacity, prep.facets.len()), 0);
-            self.ws.hits.resize(prep.slaves.len(), GpuHit::miss(0, 0));
-            for step in STEPS {
-                run_step(step, &params, &levels, prep, &mut self.ws);
-            }
-            self.n_cells = params.n_cells;
-            if self.ws.status[STATUS_OVERFLOW] == 0 {
-                let total = self.ws.scan[params.n_cells as usize];
-                return Ok((self.ws.hits.clone(), total, regrowths));
-            }
-            self.entry_capacity = grown_capacity(self.ws.status[STATUS_NEEDED_ENTRIES]);
-            regrowths += 1;
-        }
+    /// Sizes and resets the workspace for a global search of `prep`.
+    fn reset(&mut self, prep: &Prepared) {
+        crate::status::reset(&mut self.ws.status, crate::status::Owner::Search);
+        self.ws.boxes.clear();
+        self.ws
+            .boxes
+            .resize(tree::box_words(prep.params.tree_levels), [0.0; 4]);
+        self.ws.hits.resize(prep.slaves.len(), GpuHit::miss(0, 0));
     }
-}
 
-/// Entry capacity for `prep`: the host's estimate with an eighth more for round-off at cell
-/// boundaries, never less than `current` (the workspace only grows).
-pub fn presized_capacity(prep: &Prepared, current: u32) -> u32 {
-    let want = prep.estimated_entries + prep.estimated_entries / 8 + 64;
-    want.clamp(current as u64, u32::MAX as u64) as u32
-}
-
-/// Words of an entry buffer of `capacity` bin entries for `n_facets` facets: the bins, the
-/// spill's count, and room for every facet to spill.
-pub fn entry_words(capacity: u32, n_facets: usize) -> usize {
-    capacity as usize + 1 + n_facets
-}
-
-/// Capacity after an overflow that needed `needed` words: a quarter more, for headroom.
-pub fn grown_capacity(needed: u32) -> u32 {
-    (needed as u64 + needed as u64 / 4 + 64).min(u32::MAX as u64) as u32
+    /// Runs all steps of a global search. Returns the hits.
+    pub fn run(&mut self, prep: &Prepared) -> Result<Vec<GpuHit>> {
+        self.reset(prep);
+        for step in STEPS {
+            run_step(step, &prep.params, prep, &mut self.ws);
+        }
+        Ok(self.ws.hits.clone())
+    }
 }
 
 /// Runs one step of the search on the CPU workspace (the CPU half of a split run).
 pub fn run_step(
     step: Step,
     params: &crate::search::layout::SearchParams,
-    levels: &ScanLevels,
     prep: &Prepared,
     ws: &mut CpuWorkspace,
 ) {
-    let n_cells = params.n_cells as usize;
     match step {
-        Step::BinCount => {
-            bin_count::bin_count(params, &prep.nodes, &prep.facets, &mut ws.scan[..=n_cells])
-        }
-        Step::Scan => scan::scan(levels, &mut ws.scan),
-        Step::BinScatter => {
-            ws.cursor.resize(ws.cursor.len().max(n_cells + 1), 0);
-            bin_scatter::copy_starts(params, &ws.scan, &mut ws.cursor, &mut ws.entries);
-            bin_scatter::bin_scatter(
-                params,
-                &prep.nodes,
-                &prep.facets,
-                &ws.scan[..=n_cells],
-                &mut ws.cursor,
-                &mut ws.entries,
-                &mut ws.status,
-            )
+        Step::TreeRefit => {
+            for tp in tree_passes(params.tree_levels) {
+                tree::tree_refit(
+                    params,
+                    &tp,
+                    &prep.nodes,
+                    &prep.facets,
+                    &prep.order,
+                    &mut ws.boxes,
+                    &mut ws.status,
+                );
+            }
         }
         Step::NearestFacet => {
             let n = params.n_slaves as usize;
@@ -279,38 +209,21 @@ pub fn run_step(
             ws.work.resize(work_levels.words as usize, 0);
             ws.best.clear();
             ws.best.resize(n * nearest_facet::BEST_WORDS, 0);
-            nearest_facet::nearest_count(
-                params,
-                &prep.nodes,
-                &prep.slaves,
-                &ws.scan[..=n_cells],
-                &ws.entries,
-                &mut ws.work,
-                &mut ws.best,
-            );
-            scan::scan(&work_levels, &mut ws.work);
             let c = nearest_facet::Candidates {
                 params,
                 nodes: &prep.nodes,
                 facets: &prep.facets,
                 slaves: &prep.slaves,
-                starts: &ws.scan[..=n_cells],
-                entries: &ws.entries,
+                order: &prep.order,
+                boxes: &ws.boxes,
                 adjacency: &prep.adjacency,
             };
+            nearest_facet::nearest_walk(&c, &mut ws.work, &mut ws.best);
+            scan::scan(&work_levels, &mut ws.work);
             nearest_facet::nearest_chunks(&c, &ws.work, &mut ws.best);
             nearest_facet::nearest_ties(&c, &ws.work, &mut ws.best);
-            nearest_facet::nearest_crowded(&c, &ws.work, &mut ws.best);
-            nearest_facet::nearest_facet(
-                params,
-                &prep.nodes,
-                &prep.facets,
-                &prep.slaves,
-                &mut ws.status,
-                &mut ws.hits,
-                &prep.adjacency,
-                &ws.best,
-            );
+            nearest_facet::nearest_crowded(&c, &mut ws.best);
+            nearest_facet::nearest_facet(&c, &mut ws.status, &mut ws.hits, &ws.best);
         }
     }
 }

@@ -1,4 +1,5 @@
-//! CPU mirror of `shaders/nearest_facet.wgsl`: the nearest active facet of each slave node.
+//! CPU mirror of `shaders/nearest_facet.wgsl`: the nearest active facet of each slave node, by
+//! a pruned walk of the search tree, finished in bounded chunks where the walk's cap cut it off.
 
 use rayon::prelude::*;
 
@@ -7,6 +8,7 @@ use super::PAR_MIN;
 use crate::geometry::{closest_on_quad, closest_on_segment, closest_on_triangle, Projection, V3};
 use crate::search::layout::{
     GpuHit, SearchParams, FLAG_SELF_CONTACT, HIT_BESIDE_FREE_EDGE, NO_FACET, STATUS_CROWDED,
+    STATUS_FALLBACK,
 };
 
 /// Nearest point on a padded facet (WGSL: `project`).
@@ -27,63 +29,19 @@ pub fn project(nodes: &[[f32; 4]], p: V3<f32>, fac: [u32; 4]) -> Projection<f32>
 /// Candidates one work item projects at most (WGSL: `CANDIDATE_CHUNK`).
 pub const CANDIDATE_CHUNK: u32 = 1024;
 
-/// Words of a slave's `best` record: distance² bits, facet, crowded, candidates.
-pub const BEST_WORDS: usize = 4;
+/// Tree nodes one walk visits at most (WGSL: `WALK_VISITS`).
+pub const WALK_VISITS: u32 = 512;
 
-/// The candidates of a node (WGSL: `Candidates`): the written bin entries of its cell, then
-/// the spill.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-struct NodeCandidates {
-    /// First bin entry of the cell.
-    start: u32,
-    /// Written entries of the cell (those within the entry capacity).
-    in_cell: u32,
-    /// `in_cell` plus the spill.
-    n: u32,
-}
+/// A subtree is skipped when its box's distance² exceeds the bound by this factor
+/// (WGSL: `PRUNE_SLACK`).
+pub const PRUNE_SLACK: f32 = 1.0001;
 
-/// The candidates of a node at p; none outside the grid (WGSL: `candidates`).
-fn candidates(
-    params: &SearchParams,
-    starts: &[u32],
-    entries: &[u32],
-    p: V3<f32>,
-) -> NodeCandidates {
-    let none = NodeCandidates {
-        start: 0,
-        in_cell: 0,
-        n: 0,
-    };
-    let g = [
-        (p.x - params.grid_lo[0]) * params.inv_cell_size,
-        (p.y - params.grid_lo[1]) * params.inv_cell_size,
-        (p.z - params.grid_lo[2]) * params.inv_cell_size,
-    ];
-    let dims = [params.dims_x, params.dims_y, params.dims_z];
-    if !(0..3).all(|a| g[a] >= 0.0 && g[a] < dims[a] as f32) {
-        return none;
-    }
-    let c = super::common::cell_index(params, [g[0] as u32, g[1] as u32, g[2] as u32]) as usize;
-    let cap = params.entry_capacity;
-    let start = starts[c].min(cap);
-    let in_cell = starts[c + 1].min(cap) - start;
-    NodeCandidates {
-        start,
-        in_cell,
-        n: in_cell + entries[cap as usize],
-    }
-}
+/// Words of a slave's `best` record (WGSL: `BEST_WORDS`): distance² bits, the chunks' facet at
+/// it, unused, candidates, the walk's facet, the first leaf slot left to the chunks, the walk's
+/// distance² bits, unused.
+pub const BEST_WORDS: usize = 8;
 
-/// Candidate k of a node's candidates: a facet id (WGSL: `candidate`).
-fn candidate(params: &SearchParams, entries: &[u32], c: NodeCandidates, k: u32) -> u32 {
-    if k < c.in_cell {
-        entries[(c.start + k) as usize]
-    } else {
-        entries[(params.entry_capacity + 1 + k - c.in_cell) as usize]
-    }
-}
-
-/// The inputs every work-item pass reads.
+/// The inputs every pass reads.
 #[derive(Clone, Copy)]
 pub struct Candidates<'a> {
     /// Uniform parameters.
@@ -94,71 +52,200 @@ pub struct Candidates<'a> {
     pub facets: &'a [[u32; 4]],
     /// Node id per slave.
     pub slaves: &'a [u32],
-    /// Cell starts (scanned counts).
-    pub starts: &'a [u32],
-    /// Bin entries.
-    pub entries: &'a [u32],
+    /// Active facet of each leaf slot of the tree.
+    pub order: &'a [u32],
+    /// The tree's boxes (two per heap node).
+    pub boxes: &'a [[f32; 4]],
     /// Node→facet adjacency.
     pub adjacency: &'a [u32],
 }
 
-/// The candidates work item t of slave i (candidates `nc`) covers: at most `CANDIDATE_CHUNK`
-/// (WGSL: `chunk_range`).
-fn chunk_range(work: &[u32], i: usize, t: u32, nc: NodeCandidates) -> (u32, u32) {
-    let k0 = (t - work[i]) * CANDIDATE_CHUNK;
-    (k0, nc.n.min(k0 + CANDIDATE_CHUNK))
+impl Candidates<'_> {
+    /// Whether tree node k holds nothing within distance² `bound` of p (WGSL: `far`).
+    fn far(&self, k: u32, p: V3<f32>, bound: f32) -> bool {
+        let (lo, hi) = (self.boxes[2 * k as usize], self.boxes[2 * k as usize + 1]);
+        if lo[0] > hi[0] {
+            return true;
+        }
+        let pa = p.to_array();
+        let mut d2 = 0.0f32;
+        let mut d = [0.0f32; 3];
+        for a in 0..3 {
+            d[a] = (lo[a] - pa[a]).max(pa[a] - hi[a]).max(0.0);
+        }
+        d2 += d[0] * d[0] + d[1] * d[1] + d[2] * d[2];
+        d2 > bound * PRUNE_SLACK
+    }
+
+    /// Leaf slot count 2^L.
+    fn leaves(&self) -> u32 {
+        1 << self.params.tree_levels
+    }
+
+    fn excluded(&self, slave: u32, f: u32) -> bool {
+        excluded(
+            self.params,
+            self.facets,
+            self.adjacency,
+            slave,
+            self.facets[f as usize],
+        )
+    }
 }
 
-/// The nearest facet (distance², id) of slave i among its work item t's candidates, within the
-/// radius, ties to the lowest id (WGSL: `chunk_best`).
-fn chunk_best(c: &Candidates<'_>, work: &[u32], i: usize, t: u32) -> (f32, u32) {
+/// The node a depth-first walk visits after the subtree of node k; 0 when none is left
+/// (WGSL: `next_node`).
+pub fn next_node(k: u32) -> u32 {
+    let mut n = k;
+    let mut s = 0;
+    while s < 32 && n & 1 == 1 {
+        n >>= 1;
+        s += 1;
+    }
+    if n == 0 {
+        0
+    } else {
+        n + 1
+    }
+}
+
+/// The first leaf slot under node k ≥ 1 of a tree of `levels` levels (WGSL: `first_leaf`).
+pub fn first_leaf(k: u32, levels: u32) -> u32 {
+    let depth = 31 - k.leading_zeros();
+    (k << (levels - depth)) - (1 << levels)
+}
+
+/// What a walk found (WGSL: `Walk`).
+struct Walk {
+    d2: f32,
+    f: u32,
+    next: u32,
+    projections: u32,
+}
+
+/// The nearest facet of slave i the walk finds within `WALK_VISITS` nodes (WGSL: `walk`).
+fn walk(c: &Candidates<'_>, i: usize) -> Walk {
     let slave = c.slaves[i];
     let p = node(c.nodes, slave);
-    let nc = candidates(c.params, c.starts, c.entries, p);
-    let (k0, k1) = chunk_range(work, i, t, nc);
-    let mut b = (c.params.radius * c.params.radius, NO_FACET);
-    for k in k0..k1 {
-        let f = candidate(c.params, c.entries, nc, k);
-        if excluded(c.params, c.facets, c.adjacency, slave, c.facets[f as usize]) {
+    let leaves = c.leaves();
+    let mut w = Walk {
+        d2: c.params.radius * c.params.radius,
+        f: NO_FACET,
+        next: 1,
+        projections: 0,
+    };
+    let mut v = 0;
+    while v < WALK_VISITS && w.next != 0 {
+        v += 1;
+        let k = w.next;
+        if c.far(k, p, w.d2) {
+            w.next = next_node(k);
+        } else if k >= leaves {
+            let f = c.order[(k - leaves) as usize];
+            if !c.excluded(slave, f) {
+                let d2 = project(c.nodes, p, c.facets[f as usize]).dist2;
+                w.projections += 1;
+                if d2 < w.d2 || (d2 == w.d2 && f < w.f) {
+                    w.d2 = d2;
+                    w.f = f;
+                }
+            }
+            w.next = next_node(k);
+        } else {
+            w.next = 2 * k;
+        }
+    }
+    w
+}
+
+/// The nearest facet (distance², id) of slave i among the leaf slots of its work item t, within
+/// the radius, ties to the lowest id (WGSL: `chunk_best`).
+fn chunk_best(c: &Candidates<'_>, work: &[u32], b: &[u32], i: usize, t: u32) -> (f32, u32) {
+    let slave = c.slaves[i];
+    let p = node(c.nodes, slave);
+    let leaves = c.leaves();
+    let j0 = b[5] + (t - work[i]) * CANDIDATE_CHUNK;
+    let j1 = c.params.n_facets.min(j0 + CANDIDATE_CHUNK);
+    let mut best = (c.params.radius * c.params.radius, NO_FACET);
+    for j in j0..j1 {
+        let k = (leaves + j) as usize;
+        if c.boxes[2 * k][0] > c.boxes[2 * k + 1][0] {
+            continue; // collapsed
+        }
+        let f = c.order[j as usize];
+        if c.excluded(slave, f) {
             continue;
         }
         let d2 = project(c.nodes, p, c.facets[f as usize]).dist2;
-        if d2 < b.0 || (d2 == b.0 && f < b.1) {
-            b = (d2, f);
+        if d2 < best.0 || (d2 == best.0 && f < best.1) {
+            best = (d2, f);
         }
     }
-    b
+    best
 }
 
-/// One "invocation" per slave: candidate count, chunk count into `work` (word n_slaves set to 0
-/// for the scan), `best` reset (WGSL: `nearest_count`).
-pub fn nearest_count(
-    params: &SearchParams,
-    nodes: &[[f32; 4]],
-    slaves: &[u32],
-    starts: &[u32],
-    entries: &[u32],
-    work: &mut [u32],
-    best: &mut [u32],
-) {
-    let n = params.n_slaves as usize;
+/// One "invocation" per slave: the tree walk, its best facet into `best`, the chunks of the
+/// leaf slots it did not reach into `work` (word n_slaves set to 0 for the scan)
+/// (WGSL: `nearest_walk`).
+pub fn nearest_walk(c: &Candidates<'_>, work: &mut [u32], best: &mut [u32]) {
+    let n = c.params.n_slaves as usize;
     if n > 0 {
         work[n] = 0;
     }
+    let n_facets = c.params.n_facets;
     work[..n]
         .par_iter_mut()
         .zip(best.par_chunks_mut(BEST_WORDS))
         .enumerate()
         .with_min_len(PAR_MIN)
-        .for_each(|(i, (w, b))| {
-            let count = candidates(params, starts, entries, node(nodes, slaves[i])).n;
-            *w = count.div_ceil(CANDIDATE_CHUNK);
+        .for_each(|(i, (wk, b))| {
+            let w = walk(c, i);
+            let start = if w.next != 0 {
+                first_leaf(w.next, c.params.tree_levels).min(n_facets)
+            } else {
+                n_facets
+            };
+            let rest = n_facets - start;
+            *wk = rest.div_ceil(CANDIDATE_CHUNK);
             b.copy_from_slice(&[
-                (params.radius * params.radius).to_bits(),
+                w.d2.to_bits(),
                 NO_FACET,
                 0,
-                count,
+                w.projections + rest,
+                w.f,
+                start,
+                w.d2.to_bits(),
+                0,
             ]);
+        });
+}
+
+/// The winner of a slave's record `b`: the chunks' facet at the best distance, or the walk's
+/// when it is at that distance with a lower id (WGSL: `winner`).
+fn winner(b: &[u32]) -> u32 {
+    if b[4] != NO_FACET && b[6] == b[0] && b[4] < b[1] {
+        b[4]
+    } else {
+        b[1]
+    }
+}
+
+/// One "invocation" per slave, self-contact only: the crowding flag into the record
+/// (WGSL: `nearest_crowded`).
+pub fn nearest_crowded(c: &Candidates<'_>, best: &mut [u32]) {
+    if c.params.flags & FLAG_SELF_CONTACT == 0 {
+        return;
+    }
+    let n = c.params.n_slaves as usize;
+    best[..BEST_WORDS * n]
+        .par_chunks_mut(BEST_WORDS)
+        .enumerate()
+        .with_min_len(PAR_MIN)
+        .for_each(|(i, b)| {
+            let f = winner(b);
+            if f != NO_FACET && crowded(c, i, f) {
+                b[2] = 1;
+            }
         });
 }
 
@@ -194,13 +281,15 @@ fn per_slave_items(
 /// One "invocation" per work item: the chunk's nearest facet (WGSL: `nearest_chunks`).
 pub fn nearest_chunks(c: &Candidates<'_>, work: &[u32], best: &mut [u32]) {
     per_slave_items(c, work, best, |i, t, b| {
-        let (d2, f) = chunk_best(c, work, i, t);
+        let (d2, f) = chunk_best(c, work, b, i, t);
         if f == NO_FACET {
             return;
         }
         if work[i + 1] - work[i] == 1 {
-            b[0] = d2.to_bits();
-            b[1] = f;
+            if d2.to_bits() <= b[0] {
+                b[0] = d2.to_bits();
+                b[1] = f;
+            }
         } else {
             b[0] = b[0].min(d2.to_bits());
         }
@@ -214,71 +303,73 @@ pub fn nearest_ties(c: &Candidates<'_>, work: &[u32], best: &mut [u32]) {
         if work[i + 1] - work[i] == 1 {
             return;
         }
-        let (d2, f) = chunk_best(c, work, i, t);
+        let (d2, f) = chunk_best(c, work, b, i, t);
         if f != NO_FACET && d2.to_bits() == b[0] {
             b[1] = b[1].min(f);
         }
     });
 }
 
-/// One "invocation" per work item, self-contact only: flags a slave with another facet near and
-/// facing it (WGSL: `nearest_crowded`).
-pub fn nearest_crowded(c: &Candidates<'_>, work: &[u32], best: &mut [u32]) {
-    if c.params.flags & FLAG_SELF_CONTACT == 0 {
-        return;
-    }
+/// Self-contact: whether slave i has a facet within the radius, other than its nearest `best_f`
+/// and sharing no node with it, that faces it; a walk cut off by the cap says yes
+/// (WGSL: `crowded`).
+fn crowded(c: &Candidates<'_>, i: usize, best_f: u32) -> bool {
+    let slave = c.slaves[i];
+    let p = node(c.nodes, slave);
+    let leaves = c.leaves();
     let r2 = c.params.radius * c.params.radius;
-    per_slave_items(c, work, best, |i, t, b| {
-        let best_f = b[1];
-        if best_f == NO_FACET {
-            return;
+    let mut k = 1u32;
+    for _ in 0..WALK_VISITS {
+        if k == 0 {
+            return false;
         }
-        let slave = c.slaves[i];
-        let p = node(c.nodes, slave);
-        let nc = candidates(c.params, c.starts, c.entries, p);
-        let (k0, k1) = chunk_range(work, i, t, nc);
-        for k in k0..k1 {
-            let f = candidate(c.params, c.entries, nc, k);
-            if f == best_f
-                || excluded(c.params, c.facets, c.adjacency, slave, c.facets[f as usize])
-                || share_node(c.facets[f as usize], c.facets[best_f as usize])
+        if c.far(k, p, r2) {
+            k = next_node(k);
+        } else if k >= leaves {
+            let f = c.order[(k - leaves) as usize];
+            if f != best_f
+                && !c.excluded(slave, f)
+                && !share_node(c.facets[f as usize], c.facets[best_f as usize])
             {
-                continue;
+                // near and facing the slave (not merely beside it in its own plane)
+                let pr = project(c.nodes, p, c.facets[f as usize]);
+                let gap = (p - pr.point).dot(pr.normal);
+                if pr.dist2 <= r2 && 4.0 * gap * gap > pr.dist2 {
+                    return true;
+                }
             }
-            let pr = project(c.nodes, p, c.facets[f as usize]);
-            let gap = (p - pr.point).dot(pr.normal);
-            if pr.dist2 <= r2 && 4.0 * gap * gap > pr.dist2 {
-                b[2] = 1;
-                break;
-            }
+            k = next_node(k);
+        } else {
+            k *= 2;
         }
-    });
+    }
+    k != 0
 }
 
 /// One "invocation" per slave node: the hit from the winning facet; writes `hits[i]`
 /// (WGSL: `nearest_facet`).
 pub fn nearest_facet(
-    params: &SearchParams,
-    nodes: &[[f32; 4]],
-    facets: &[[u32; 4]],
-    slaves: &[u32],
+    c: &Candidates<'_>,
     status: &mut [u32],
     hits: &mut [GpuHit],
-    adjacency: &[u32],
     best: &[u32],
 ) {
+    let (params, nodes, facets, slaves, adjacency) =
+        (c.params, c.nodes, c.facets, c.slaves, c.adjacency);
     let n = params.n_slaves as usize;
-    let crowded: u32 = hits[..n]
+    let counts: (u32, u32) = hits[..n]
         .par_iter_mut()
         .enumerate()
         .with_min_len(PAR_MIN)
         .map(|(i, hit)| {
             let p = node(nodes, slaves[i]);
-            let candidates = best[BEST_WORDS * i + 3];
-            let best_f = best[BEST_WORDS * i + 1];
+            let b = &best[BEST_WORDS * i..BEST_WORDS * (i + 1)];
+            let candidates = b[3];
+            let fallback = u32::from(b[5] < params.n_facets);
+            let best_f = winner(b);
             if best_f == NO_FACET {
                 *hit = GpuHit::miss(slaves[i], candidates);
-                return 0;
+                return (fallback, 0);
             }
             let fac = facets[best_f as usize];
             let best_pr = project(nodes, p, fac);
@@ -317,8 +408,9 @@ pub fn nearest_facet(
                 ],
                 weights: best_pr.weights,
             };
-            u32::from(best[BEST_WORDS * i + 2] != 0)
+            (fallback, u32::from(b[2] != 0))
         })
-        .sum();
-    status[STATUS_CROWDED] += crowded;
+        .reduce(|| (0, 0), |x, y| (x.0 + y.0, x.1 + y.1));
+    status[STATUS_FALLBACK] += counts.0;
+    status[STATUS_CROWDED] += counts.1;
 }

@@ -9,7 +9,7 @@ use crate::geometry::{tangent_directions, V3};
 use crate::penalty::layout::*;
 use crate::search::layout::{
     GpuHit, NO_FACET, STATUS_ACTIVE, STATUS_DT_APPROACH, STATUS_DT_STABLE, STATUS_FORCE_SCALE,
-    STATUS_MAX_OVERCLOSURE, STATUS_OVERFLOW, STATUS_ROW_SCALE, STATUS_SLIPPING,
+    STATUS_MAX_OVERCLOSURE, STATUS_ROW_SCALE, STATUS_SLIPPING,
 };
 
 const E_MINUS_1: f32 = 1.718_281_8;
@@ -130,7 +130,7 @@ pub fn penalty(
     out: &mut [ContactOut],
     status: &mut [u32],
 ) {
-    if status[STATUS_OVERFLOW] != 0 || status[crate::search::layout::STATUS_BUDGET_EXCEEDED] != 0 {
+    if status[crate::search::layout::STATUS_BUDGET_EXCEEDED] != 0 {
         return;
     }
     let n = pp.n_slaves as usize;

@@ -2,10 +2,10 @@
 //! (`gpu::global_search::resident`), pass for pass through the mirrors, on f32 host arrays laid
 //! out as the caller's device buffers would be.
 
-use super::{anchor, bin_count, local_search, motion, run_step, schedule, to_local, CpuSearch};
+use super::{anchor, local_search, motion, run_step, schedule, to_local, CpuSearch};
 use crate::error::{Error, Result};
 use crate::search::layout::*;
-use crate::search::{Prepared, Step};
+use crate::search::{Prepared, STEPS};
 
 /// What a CPU search keeps for its device-resident increments.
 #[derive(Clone, Debug)]
@@ -29,22 +29,11 @@ impl CpuSearch {
         anchored: bool,
         frame_origin: [f32; 3],
     ) {
-        let mut params = prep.params;
-        if self.presize {
-            self.entry_capacity = super::presized_capacity(prep, self.entry_capacity);
-        }
-        params.entry_capacity = self.entry_capacity;
-        params.flags |= FLAG_RESIDENT;
-        let plan = fresh_plan(&params, interval);
-        let levels = ScanLevels::new(params.cell_capacity + 1);
-        self.ws.scan.clear();
-        self.ws.scan.resize(levels.words as usize, 0);
-        self.ws.cursor.clear();
-        self.ws.cursor.resize(params.cell_capacity as usize + 1, 0);
-        self.ws.entries.clear();
-        self.ws.entries.resize(
-            super::entry_words(self.entry_capacity, prep.facets.len()),
-            0,
+        let plan = fresh_plan(&prep.params, interval);
+        self.ws.boxes.clear();
+        self.ws.boxes.resize(
+            super::tree::box_words(prep.params.tree_levels),
+            [0.0; 4],
         );
         self.ws.hits.resize(prep.slaves.len(), GpuHit::miss(0, 0));
         self.ws.reference = prep.nodes.clone();
@@ -59,22 +48,6 @@ impl CpuSearch {
             args: [0; 3],
             anchored,
         }));
-    }
-
-    /// Grows the bin entries to hold `needed` (a spill seen in the statistics).
-    pub(crate) fn grow_resident_entries(&mut self, needed: u32) {
-        let Some(r) = self.resident.as_mut() else {
-            return;
-        };
-        if needed <= self.entry_capacity {
-            return;
-        }
-        self.entry_capacity = super::grown_capacity(needed);
-        r.plan[PLAN_PARAMS + 10] = self.entry_capacity;
-        self.ws.entries.resize(
-            super::entry_words(self.entry_capacity, r.prep.facets.len()),
-            0,
-        );
     }
 
     /// The status words, plan and hits of the last device-resident increment.
@@ -170,17 +143,10 @@ impl CpuSearch {
                 &mut self.ws.hits,
             );
         } else {
-            bin_count::clear_counts(&params, &mut self.ws.scan);
-            let levels = ScanLevels::new(params.n_cells + 1);
             prep.params = params;
             self.ws.status = status;
-            for step in [
-                Step::BinCount,
-                Step::Scan,
-                Step::BinScatter,
-                Step::NearestFacet,
-            ] {
-                run_step(step, &params, &levels, prep, &mut self.ws);
+            for step in STEPS {
+                run_step(step, &params, prep, &mut self.ws);
             }
             status = self.ws.status;
             motion::set_reference(
@@ -189,7 +155,6 @@ impl CpuSearch {
                 &mut self.ws.reference,
                 &prep.motion_nodes,
             );
-            self.n_cells = params.n_cells;
         }
         self.ws.status = status;
         Ok((status, &r.prep, &self.ws.hits))

@@ -54,7 +54,11 @@ fn fit_grid(params: &SearchParams, plan: &mut [u32], status: &[u32]) -> bool {
     let b = PLAN_PARAMS;
     plan[b] = h.to_bits();
     plan[b + 1] = (1.0 / h).to_bits();
-    plan[b + 3] = (r * 1.0001 + 8.0 * 1.192_092_9e-7 * top).to_bits();
+    let mut m = 0.0f32;
+    for a in 0..dim {
+        m = m.max(lo[a].abs().max(hi[a].abs()));
+    }
+    plan[b + 3] = (32.0 * 1.192_092_9e-7 * m).to_bits();
     plan[b + 4] = dims[0];
     plan[b + 5] = dims[1];
     plan[b + 6] = dims[2];

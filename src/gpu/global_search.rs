@@ -1,18 +1,18 @@
-//! The GPU executor of the global search: five kernels in one command encoder and one submit.
+//! The GPU executor of the global search: the tree's refit and the nearest-facet passes in one
+//! command encoder and one submit.
 
 use std::sync::Arc;
 
 use super::buffers::{read_back, GrowBuffer};
 use crate::cpu::CpuWorkspace;
-use crate::cpu::{grown_capacity, presized_capacity};
 use crate::device::GpuContext;
 use crate::error::{Error, Result};
 use crate::passes::{self, Buf};
 use crate::search::layout::{
-    Anchor, FrameParams, GpuHit, ScanLevels, ScanParams, SearchParams, ITEM_WORKGROUP, SCAN_BLOCK,
-    STATUS_NEEDED_ENTRIES, STATUS_OVERFLOW, STATUS_WORDS,
+    tree_passes, Anchor, FrameParams, GpuHit, ScanLevels, ScanParams, SearchParams, TreeParams,
+    ITEM_WORKGROUP, SCAN_BLOCK, STATUS_WORDS, TREE_WORKGROUP,
 };
-use crate::search::{Bins, Prepared, Step, STEPS};
+use crate::search::{Prepared, Step, STEPS};
 use crate::status::{owned_runs, Owner};
 use wgpu::BufferUsages as U;
 
@@ -32,18 +32,16 @@ pub struct SharedBuffers<'a> {
     pub status: &'a wgpu::Buffer,
 }
 
-/// Readback layout: status words, then the bin total (padded to 16 bytes), then the hits.
-const READBACK_HITS_OFFSET: u64 = STATUS_BYTES + 16;
+/// Readback layout: status words, then the hits.
+const READBACK_HITS_OFFSET: u64 = STATUS_BYTES.next_multiple_of(16);
 /// Uniform offsets must be multiples of this (WebGPU's default alignment).
 const UNIFORM_STRIDE: u64 = 256;
 
 struct Pipelines {
-    bin_count: wgpu::ComputePipeline,
+    tree_refit: wgpu::ComputePipeline,
     scan_blocks: wgpu::ComputePipeline,
     scan_add: wgpu::ComputePipeline,
-    copy_starts: wgpu::ComputePipeline,
-    bin_scatter: wgpu::ComputePipeline,
-    nearest_count: wgpu::ComputePipeline,
+    nearest_walk: wgpu::ComputePipeline,
     nearest_args: wgpu::ComputePipeline,
     nearest_chunks: wgpu::ComputePipeline,
     nearest_ties: wgpu::ComputePipeline,
@@ -59,12 +57,9 @@ struct BindGroups {
     anchor: wgpu::BindGroup,
     local_search: wgpu::BindGroup,
     motion: wgpu::BindGroup,
-    bin_count: wgpu::BindGroup,
-    scan_blocks: Vec<wgpu::BindGroup>,
-    scan_add: Vec<wgpu::BindGroup>,
-    copy_starts: wgpu::BindGroup,
-    bin_scatter: wgpu::BindGroup,
-    nearest_count: wgpu::BindGroup,
+    /// One per refit pass of the tree.
+    tree_refit: Vec<wgpu::BindGroup>,
+    nearest_walk: wgpu::BindGroup,
     work_scan_blocks: Vec<wgpu::BindGroup>,
     work_scan_add: Vec<wgpu::BindGroup>,
     nearest_args: wgpu::BindGroup,
@@ -76,13 +71,15 @@ struct BindGroups {
 
 struct Buffers {
     params: wgpu::Buffer,
-    scan_params: GrowBuffer,
+    /// `TreeParams` of each refit pass, one every `UNIFORM_STRIDE` bytes.
+    tree_params: GrowBuffer,
     nodes: GrowBuffer,
     facets: GrowBuffer,
     slaves: GrowBuffer,
-    scan: GrowBuffer,
-    cursor: GrowBuffer,
-    entries: GrowBuffer,
+    /// The search tree's leaf order.
+    order: GrowBuffer,
+    /// The search tree's boxes.
+    boxes: GrowBuffer,
     status: wgpu::Buffer,
     status_reset: wgpu::Buffer,
     hits: GrowBuffer,
@@ -109,17 +106,15 @@ pub struct GpuSearch {
     pipelines: Pipelines,
     buffers: Buffers,
     bind_groups: Option<BindGroups>,
-    /// Number of scan levels the bind groups were built for.
-    scan_levels: usize,
+    /// Tree levels the bind groups and tree parameters were built for.
+    tree_levels: Option<u32>,
     /// Number of work-item scan levels the bind groups were built for.
     work_levels: usize,
-    entry_capacity: u32,
-    presize: bool,
     /// Workgroups per dispatch dimension before folding into y (the device limit, or lower
     /// for tests of the folding).
     max_workgroups_per_dim: u32,
-    /// (scan words, cells, bin entries) of the last successful search, for [`GpuSearch::bins`].
-    last: Option<(u32, u32, u32)>,
+    /// A global search has run (its hits are what a local search starts from).
+    searched: bool,
     /// Bumped whenever the bind groups (and so possibly the buffers) are rebuilt.
     generation: u64,
     /// The caller's positions buffer for the next run (positions kept on the device).
@@ -133,9 +128,6 @@ pub struct GpuSearch {
     static_dirty: bool,
     /// Device-resident increments: their pipelines, plan slots and bind groups.
     resident: Option<Box<resident::ResidentSearch>>,
-    /// Device-resident increments: the params the plan started from, and the preparation the
-    /// buffers were sized for.
-    resident_params: Option<(SearchParams, Prepared)>,
 }
 
 impl GpuSearch {
@@ -152,10 +144,9 @@ impl GpuSearch {
         let scope = device.push_error_scope(wgpu::ErrorFilter::Validation);
         let mut modules = std::collections::HashMap::new();
         for pass in [
-            &passes::BIN_COUNT,
+            &passes::TREE_REFIT,
             &passes::SCAN_BLOCKS,
-            &passes::BIN_SCATTER,
-            &passes::NEAREST_COUNT,
+            &passes::NEAREST_WALK,
             &passes::LOCAL_SEARCH,
             &passes::MOTION,
             &passes::TO_LOCAL,
@@ -172,12 +163,10 @@ impl GpuSearch {
         let pipeline =
             |pass: &passes::Pass| super::pipeline(device, &modules[pass.stem], pass, &[]);
         let pipelines = Pipelines {
-            bin_count: pipeline(&passes::BIN_COUNT),
+            tree_refit: pipeline(&passes::TREE_REFIT),
             scan_blocks: pipeline(&passes::SCAN_BLOCKS),
             scan_add: pipeline(&passes::SCAN_ADD),
-            copy_starts: pipeline(&passes::COPY_STARTS),
-            bin_scatter: pipeline(&passes::BIN_SCATTER),
-            nearest_count: pipeline(&passes::NEAREST_COUNT),
+            nearest_walk: pipeline(&passes::NEAREST_WALK),
             nearest_args: pipeline(&passes::NEAREST_ARGS),
             nearest_chunks: pipeline(&passes::NEAREST_CHUNKS),
             nearest_ties: pipeline(&passes::NEAREST_TIES),
@@ -202,18 +191,17 @@ impl GpuSearch {
                 usage: U::UNIFORM | U::COPY_DST,
                 mapped_at_creation: false,
             }),
-            scan_params: GrowBuffer::new(
+            tree_params: GrowBuffer::new(
                 device,
-                "scan params",
+                "tree params",
                 4 * UNIFORM_STRIDE,
                 U::UNIFORM | U::COPY_DST,
             ),
             nodes: GrowBuffer::new(device, "nodes", 0, storage | U::COPY_SRC),
             facets: GrowBuffer::new(device, "facets", 0, storage),
             slaves: GrowBuffer::new(device, "slaves", 0, storage),
-            scan: GrowBuffer::new(device, "cell counts and starts", 0, storage | U::COPY_SRC),
-            cursor: GrowBuffer::new(device, "scatter cursors", 0, storage),
-            entries: GrowBuffer::new(device, "bin entries", 0, storage | U::COPY_SRC),
+            order: GrowBuffer::new(device, "tree order", 0, storage),
+            boxes: GrowBuffer::new(device, "tree boxes", 0, storage | U::COPY_SRC),
             status: device.create_buffer(&wgpu::BufferDescriptor {
                 label: Some("status"),
                 size: STATUS_BYTES,
@@ -264,12 +252,10 @@ impl GpuSearch {
             pipelines,
             buffers,
             bind_groups: None,
-            scan_levels: 0,
+            tree_levels: None,
             work_levels: 0,
-            entry_capacity: 0,
-            presize: true,
             max_workgroups_per_dim: ctx_limit,
-            last: None,
+            searched: false,
             generation: 0,
             device_positions: None,
             to_local_group: None,
@@ -277,7 +263,6 @@ impl GpuSearch {
             anchored: false,
             static_dirty: true,
             resident: None,
-            resident_params: None,
         })
     }
 
@@ -308,13 +293,6 @@ impl GpuSearch {
         self.device_positions = buffer;
     }
 
-    /// Sets the entry buffer's size (words) and stops sizing it from the host's estimate, so
-    /// that the overflow path can be tested; it still grows on overflow.
-    pub fn set_entry_capacity(&mut self, words: u32) {
-        self.entry_capacity = words;
-        self.presize = false;
-    }
-
     /// Folds dispatches into 2D beyond `groups` workgroups per dimension (at most the device
     /// limit), so that tests can exercise the folding with small problems.
     pub fn set_max_workgroups_per_dim(&mut self, groups: u32) {
@@ -323,26 +301,24 @@ impl GpuSearch {
     }
 
     /// Makes every buffer large enough for `prep`; drops the bind groups if one was replaced.
-    fn ensure_buffers(&mut self, prep: &Prepared, levels: &ScanLevels) -> Result<()> {
+    fn ensure_buffers(&mut self, prep: &Prepared) -> Result<()> {
         let (d, l) = (&self.ctx.device, &self.ctx.limits);
         let b = &mut self.buffers;
         let hits_bytes = (prep.slaves.len() * std::mem::size_of::<GpuHit>()) as u64;
         let mut replaced = false;
-        replaced |= b
-            .scan_params
-            .ensure(d, l, levels.levels.len() as u64 * UNIFORM_STRIDE)?;
+        let levels = prep.params.tree_levels;
+        replaced |= b.tree_params.ensure(
+            d,
+            l,
+            tree_passes(levels).len() as u64 * UNIFORM_STRIDE,
+        )?;
         replaced |= b.nodes.ensure(d, l, (prep.n_nodes * 16) as u64)?;
         replaced |= b.facets.ensure(d, l, (prep.facets.len() * 16) as u64)?;
         replaced |= b.slaves.ensure(d, l, (prep.slaves.len() * 4) as u64)?;
-        replaced |= b.scan.ensure(d, l, levels.words as u64 * 4)?;
+        replaced |= b.order.ensure(d, l, (prep.order.len() * 4).max(4) as u64)?;
         replaced |= b
-            .cursor
-            .ensure(d, l, (prep.params.n_cells as u64 + 1) * 4)?;
-        replaced |= b.entries.ensure(
-            d,
-            l,
-            crate::cpu::entry_words(self.entry_capacity, prep.facets.len()) as u64 * 4,
-        )?;
+            .boxes
+            .ensure(d, l, crate::cpu::tree::box_words(levels) as u64 * 16)?;
         replaced |= b.hits.ensure(d, l, hits_bytes)?;
         replaced |= b.reference.ensure(d, l, (prep.n_nodes * 16) as u64)?;
         replaced |= b.anchors.ensure(
@@ -368,9 +344,7 @@ impl GpuSearch {
         )?;
         b.readback.ensure(d, l, READBACK_HITS_OFFSET + hits_bytes)?;
         self.static_dirty |= replaced;
-        if replaced
-            || self.scan_levels != levels.levels.len()
-            || self.work_levels != work.levels.len()
+        if replaced || self.tree_levels != Some(levels) || self.work_levels != work.levels.len()
         {
             self.bind_groups = None;
         }
@@ -387,9 +361,8 @@ impl GpuSearch {
             Buf::Facets => b.facets.buffer.as_entire_binding(),
             Buf::Slaves => b.slaves.buffer.as_entire_binding(),
             Buf::Adjacency => b.adjacency.buffer.as_entire_binding(),
-            Buf::Cells => b.scan.buffer.as_entire_binding(),
-            Buf::Cursor => b.cursor.buffer.as_entire_binding(),
-            Buf::Entries => b.entries.buffer.as_entire_binding(),
+            Buf::Order => b.order.buffer.as_entire_binding(),
+            Buf::Boxes => b.boxes.buffer.as_entire_binding(),
             Buf::Status => b.status.as_entire_binding(),
             Buf::Hits => b.hits.buffer.as_entire_binding(),
             Buf::Reference => b.reference.buffer.as_entire_binding(),
@@ -403,7 +376,7 @@ impl GpuSearch {
         })
     }
 
-    fn bind_groups(&self, levels: &ScanLevels, prep: &Prepared) -> Result<BindGroups> {
+    fn bind_groups(&self, prep: &Prepared) -> Result<BindGroups> {
         let d = &self.ctx.device;
         let b = &self.buffers;
         let p = &self.pipelines;
@@ -427,21 +400,23 @@ impl GpuSearch {
                 .collect::<Result<Vec<_>>>()?;
             Ok::<_, Error>((blocks, add))
         };
-        let n_levels = levels.levels.len();
         let n_work_levels = work_levels(prep).levels.len();
-        let (scan_blocks, scan_add) = scan(&b.scan_params.buffer, &b.scan.buffer, n_levels)?;
         let (work_scan_blocks, work_scan_add) =
             scan(&b.work_scan_params.buffer, &b.work.buffer, n_work_levels)?;
+        let tree_refit = (0..tree_passes(prep.params.tree_levels).len())
+            .map(|i| {
+                super::bind(d, &p.tree_refit, &passes::TREE_REFIT, |buf| match buf {
+                    Buf::TreeParams => Some(tree_pass(&b.tree_params.buffer, i)),
+                    other => self.resource(other),
+                })
+            })
+            .collect::<Result<Vec<_>>>()?;
         Ok(BindGroups {
             anchor: group(&p.anchor, &passes::ANCHOR)?,
             local_search: group(&p.local_search, &passes::LOCAL_SEARCH)?,
             motion: group(&p.motion, &passes::MOTION)?,
-            bin_count: group(&p.bin_count, &passes::BIN_COUNT)?,
-            scan_blocks,
-            scan_add,
-            copy_starts: group(&p.copy_starts, &passes::COPY_STARTS)?,
-            bin_scatter: group(&p.bin_scatter, &passes::BIN_SCATTER)?,
-            nearest_count: group(&p.nearest_count, &passes::NEAREST_COUNT)?,
+            tree_refit,
+            nearest_walk: group(&p.nearest_walk, &passes::NEAREST_WALK)?,
             work_scan_blocks,
             work_scan_add,
             nearest_args: group(&p.nearest_args, &passes::NEAREST_ARGS)?,
@@ -452,33 +427,25 @@ impl GpuSearch {
         })
     }
 
-    /// Runs the search; on overflow grows the entry buffer and runs again.
-    /// Returns the hits, the bin entries written and the number of regrowths.
-    pub fn run(&mut self, prep: &Prepared) -> Result<(Vec<GpuHit>, u32, u32)> {
-        if self.presize {
-            self.entry_capacity = presized_capacity(prep, self.entry_capacity);
-        }
-        self.run_from(prep, 0, None)
+    /// Runs a global search. Returns the hits.
+    pub fn run(&mut self, prep: &Prepared) -> Result<Vec<GpuHit>> {
+        Ok(self.run_with(prep, 0, None, true, false)?.0)
     }
 
-    /// Runs a global search (`local` false; presized like `run`) or the motion check and the
-    /// local search, in one submit.
+    /// Runs a global search (`local` false) or the motion check and the local search, in one
+    /// submit. Returns the hits (empty unless `read_hits`) and the status words.
     pub(crate) fn run_mode(
         &mut self,
         prep: &Prepared,
         local: bool,
         read_hits: bool,
-    ) -> Result<(Vec<GpuHit>, u32, u32, [u32; STATUS_WORDS])> {
-        if local {
-            if self.last.is_none() {
-                return Err(Error::BadParameter {
-                    name: "local search",
-                    value: "before any global search".into(),
-                    expected: "a global search first",
-                });
-            }
-        } else if self.presize {
-            self.entry_capacity = presized_capacity(prep, self.entry_capacity);
+    ) -> Result<(Vec<GpuHit>, [u32; STATUS_WORDS])> {
+        if local && !self.searched {
+            return Err(Error::BadParameter {
+                name: "local search",
+                value: "before any global search".into(),
+                expected: "a global search first",
+            });
         }
         self.run_with(prep, 0, None, read_hits, local)
     }
@@ -491,24 +458,13 @@ impl GpuSearch {
         prep: &Prepared,
         first: usize,
         preload: &CpuWorkspace,
-    ) -> Result<(Vec<GpuHit>, u32, u32, [u32; STATUS_WORDS])> {
-        self.entry_capacity = self.entry_capacity.max(preload.entries.len() as u32);
+    ) -> Result<(Vec<GpuHit>, [u32; STATUS_WORDS])> {
         self.run_with(prep, first, Some(preload), true, false)
     }
 
-    fn run_from(
-        &mut self,
-        prep: &Prepared,
-        first: usize,
-        preload: Option<&CpuWorkspace>,
-    ) -> Result<(Vec<GpuHit>, u32, u32)> {
-        let (hits, total, regrowths, _) = self.run_with(prep, first, preload, true, false)?;
-        Ok((hits, total, regrowths))
-    }
-
-    /// Runs the search steps `STEPS[first..]` in one command encoder and submit, reading back
-    /// once; on overflow grows the entry buffer and runs the whole again. Returns the hits (empty unless `read_hits`), the bin entries, the
-    /// regrowths and the status words.
+    /// Runs the search steps `STEPS[first..]` (or the local search) in one command encoder and
+    /// submit, reading back once. Returns the hits (empty unless `read_hits`) and the status
+    /// words.
     pub(crate) fn run_with(
         &mut self,
         prep: &Prepared,
@@ -516,9 +472,8 @@ impl GpuSearch {
         preload: Option<&CpuWorkspace>,
         read_hits: bool,
         local: bool,
-    ) -> Result<(Vec<GpuHit>, u32, u32, [u32; STATUS_WORDS])> {
-        let levels = ScanLevels::new(prep.params.n_cells + 1);
-        self.ensure_buffers(prep, &levels)?;
+    ) -> Result<(Vec<GpuHit>, [u32; STATUS_WORDS])> {
+        self.ensure_buffers(prep)?;
         if let Some(src) = self.device_positions.clone() {
             let need = prep.n_nodes as u64 * 16;
             if src.size() < need || !src.usage().contains(U::STORAGE) {
@@ -549,13 +504,12 @@ impl GpuSearch {
             );
         }
         self.upload_static(prep);
-        for i in 0..levels.levels.len() {
-            let sp = levels.params(i);
+        for (i, tp) in tree_passes(prep.params.tree_levels).iter().enumerate() {
             super::upload(
                 &self.ctx,
-                &self.buffers.scan_params.buffer,
+                &self.buffers.tree_params.buffer,
                 i as u64 * UNIFORM_STRIDE,
-                bytemuck::bytes_of(&sp),
+                bytemuck::bytes_of(tp),
             );
         }
         let work = work_levels(prep);
@@ -570,15 +524,9 @@ impl GpuSearch {
         if let Some(ws) = preload {
             super::upload(
                 &self.ctx,
-                &self.buffers.scan.buffer,
+                &self.buffers.boxes.buffer,
                 0,
-                bytemuck::cast_slice(&ws.scan),
-            );
-            super::upload(
-                &self.ctx,
-                &self.buffers.entries.buffer,
-                0,
-                bytemuck::cast_slice(&ws.entries),
+                bytemuck::cast_slice(&ws.boxes),
             );
             super::upload(
                 &self.ctx,
@@ -587,64 +535,38 @@ impl GpuSearch {
                 bytemuck::cast_slice(&ws.status),
             );
         }
-        let mut regrowths = 0;
-        loop {
-            if self.bind_groups.is_none() {
-                self.bind_groups = Some(self.bind_groups(&levels, prep)?);
-                self.scan_levels = levels.levels.len();
-                self.work_levels = work_levels(prep).levels.len();
-                self.generation += 1;
-            }
-            if let Some(src) = self.device_positions.clone() {
-                let fresh = matches!(&self.to_local_group, Some((b, g, _)) if *b == src && *g == self.generation);
-                if !fresh {
-                    let group = super::bind(
-                        &self.ctx.device,
-                        &self.pipelines.to_local,
-                        &passes::TO_LOCAL,
-                        |buf| match buf {
-                            Buf::Positions => Some(src.as_entire_binding()),
-                            other => self.resource(other),
-                        },
-                    )?;
-                    self.to_local_group = Some((src, self.generation, group));
-                }
-            }
-            let mut params = prep.params;
-            params.entry_capacity = self.entry_capacity;
-            super::upload(
-                &self.ctx,
-                &self.buffers.params,
-                0,
-                bytemuck::bytes_of(&params),
-            );
-            let (status, total, hits) =
-                self.submit(&params, &levels, prep, first, read_hits, local)?;
-            if status[STATUS_OVERFLOW] == 0 {
-                self.last = Some((levels.words, params.n_cells, total));
-                return Ok((hits, total, regrowths, status));
-            }
-            if first
-                > STEPS
-                    .iter()
-                    .position(|s| *s == Step::BinScatter)
-                    .unwrap_or(0)
-            {
-                return Err(Error::Gpu {
-                    during: "split global search".into(),
-                    message: "the CPU half overflowed its entry buffer".into(),
-                });
-            }
-            self.entry_capacity = grown_capacity(status[STATUS_NEEDED_ENTRIES]);
-            if self.buffers.entries.ensure(
-                &self.ctx.device,
-                &self.ctx.limits,
-                crate::cpu::entry_words(self.entry_capacity, prep.facets.len()) as u64 * 4,
-            )? {
-                self.bind_groups = None;
-            }
-            regrowths += 1;
+        if self.bind_groups.is_none() {
+            self.bind_groups = Some(self.bind_groups(prep)?);
+            self.tree_levels = Some(prep.params.tree_levels);
+            self.work_levels = work_levels(prep).levels.len();
+            self.generation += 1;
         }
+        if let Some(src) = self.device_positions.clone() {
+            let fresh = matches!(&self.to_local_group, Some((b, g, _)) if *b == src && *g == self.generation);
+            if !fresh {
+                let group = super::bind(
+                    &self.ctx.device,
+                    &self.pipelines.to_local,
+                    &passes::TO_LOCAL,
+                    |buf| match buf {
+                        Buf::Positions => Some(src.as_entire_binding()),
+                        other => self.resource(other),
+                    },
+                )?;
+                self.to_local_group = Some((src, self.generation, group));
+            }
+        }
+        super::upload(
+            &self.ctx,
+            &self.buffers.params,
+            0,
+            bytemuck::bytes_of(&prep.params),
+        );
+        let (status, hits) = self.submit(&prep.params, prep, first, read_hits, local)?;
+        if !local {
+            self.searched = true;
+        }
+        Ok((hits, status))
     }
 
     /// Uploads the pair's constants (facets, slaves, adjacency, motion nodes) once, and again
@@ -677,6 +599,12 @@ impl GpuSearch {
             &b.slaves.buffer,
             0,
             bytemuck::cast_slice(&prep.slaves),
+        );
+        super::upload(
+            &self.ctx,
+            &b.order.buffer,
+            0,
+            bytemuck::cast_slice(&prep.order),
         );
         self.static_dirty = false;
     }
@@ -731,55 +659,30 @@ impl GpuSearch {
             .collect())
     }
 
-    /// Reads back the bins of the last search: cell starts (n_cells + 1 words) and the
-    /// entries. A debugging and testing aid (it allocates and waits).
-    pub fn bins(&self) -> Result<Bins> {
-        let Some((_, n_cells, total)) = self.last else {
+    /// Reads back the search tree's boxes after the last global search (two vec4 per heap
+    /// node). A debugging and testing aid (it allocates and waits).
+    pub fn tree_boxes(&self) -> Result<Vec<[f32; 4]>> {
+        let Some(levels) = self.tree_levels.filter(|_| self.searched) else {
             return Err(Error::Gpu {
-                during: "reading bins".into(),
+                during: "reading the search tree".into(),
                 message: "no search has run".into(),
             });
         };
         let d = &self.ctx.device;
-        let scope = d.push_error_scope(wgpu::ErrorFilter::Validation);
-        let starts_bytes = (n_cells as u64 + 1) * 4;
-        let entries_bytes = total as u64 * 4;
+        let bytes = crate::cpu::tree::box_words(levels) as u64 * 16;
         let staging = d.create_buffer(&wgpu::BufferDescriptor {
-            label: Some("bins readback"),
-            size: (starts_bytes + entries_bytes).next_multiple_of(16).max(16),
+            label: Some("tree readback"),
+            size: bytes,
             usage: U::MAP_READ | U::COPY_DST,
             mapped_at_creation: false,
         });
         let mut enc = d.create_command_encoder(&wgpu::CommandEncoderDescriptor {
-            label: Some("bins readback"),
+            label: Some("tree readback"),
         });
-        enc.copy_buffer_to_buffer(&self.buffers.scan.buffer, 0, &staging, 0, starts_bytes);
-        if entries_bytes > 0 {
-            enc.copy_buffer_to_buffer(
-                &self.buffers.entries.buffer,
-                0,
-                &staging,
-                starts_bytes,
-                entries_bytes,
-            );
-        }
+        enc.copy_buffer_to_buffer(&self.buffers.boxes.buffer, 0, &staging, 0, bytes);
         super::submit(&self.ctx, enc);
-        if let Some(e) = pollster::block_on(scope.pop()) {
-            return Err(Error::Gpu {
-                during: "reading bins".into(),
-                message: e.to_string(),
-            });
-        }
-        let bytes = read_back(
-            &self.ctx,
-            &staging,
-            starts_bytes + entries_bytes,
-            "bins readback",
-        )?;
-        Ok(Bins {
-            starts: bytemuck::pod_collect_to_vec(&bytes[..starts_bytes as usize]),
-            entries: bytemuck::pod_collect_to_vec(&bytes[starts_bytes as usize..]),
-        })
+        let raw = read_back(&self.ctx, &staging, bytes, "tree readback")?;
+        Ok(bytemuck::pod_collect_to_vec(&raw))
     }
 
     /// Encodes the steps `STEPS[first..]`, submits once and reads back status, bin total and
@@ -787,12 +690,11 @@ impl GpuSearch {
     fn submit(
         &self,
         params: &SearchParams,
-        levels: &ScanLevels,
         prep: &Prepared,
         first: usize,
         read_hits: bool,
         local: bool,
-    ) -> Result<([u32; STATUS_WORDS], u32, Vec<GpuHit>)> {
+    ) -> Result<([u32; STATUS_WORDS], Vec<GpuHit>)> {
         let n_slaves = prep.slaves.len();
         let (device, b, p) = (&self.ctx.device, &self.buffers, &self.pipelines);
         let bg = self
@@ -804,9 +706,6 @@ impl GpuSearch {
         let mut enc = device.create_command_encoder(&wgpu::CommandEncoderDescriptor {
             label: Some("global search"),
         });
-        if first == 0 && !local {
-            enc.clear_buffer(&b.scan.buffer, 0, Some(levels.words as u64 * 4));
-        }
         if first == 0 {
             reset_status(&mut enc, &b.status_reset, &b.status, Owner::Search);
         }
@@ -851,53 +750,30 @@ impl GpuSearch {
         }
         for step in steps {
             match step {
-                Step::BinCount => dispatch(
-                    &mut enc,
-                    "bin_count",
-                    &[(&p.bin_count, &bg.bin_count, params.n_facets, ITEM_WORKGROUP)],
-                ),
-                Step::Scan => {
-                    let mut work = Vec::new();
-                    scan_work(p, levels, &bg.scan_blocks, &bg.scan_add, &mut work);
-                    dispatch(&mut enc, "scan", &work);
+                Step::TreeRefit => {
+                    let passes = tree_passes(params.tree_levels);
+                    let work: Vec<super::Work<'_>> = passes
+                        .iter()
+                        .zip(&bg.tree_refit)
+                        .map(|(tp, g)| (&p.tree_refit, g, 1u32 << tp.bottom, TREE_WORKGROUP))
+                        .collect();
+                    dispatch(&mut enc, "tree_refit", &work);
                 }
-                Step::BinScatter => dispatch(
-                    &mut enc,
-                    "bin_scatter",
-                    &[
-                        (
-                            &p.copy_starts,
-                            &bg.copy_starts,
-                            params.n_cells + 1,
-                            ITEM_WORKGROUP,
-                        ),
-                        (
-                            &p.bin_scatter,
-                            &bg.bin_scatter,
-                            params.n_facets,
-                            ITEM_WORKGROUP,
-                        ),
-                    ],
-                ),
                 Step::NearestFacet => {
                     let work = work_levels(prep);
                     let mut seq = vec![(
-                        &p.nearest_count,
-                        &bg.nearest_count,
+                        &p.nearest_walk,
+                        &bg.nearest_walk,
                         params.n_slaves,
                         ITEM_WORKGROUP,
                     )];
                     scan_work(p, &work, &bg.work_scan_blocks, &bg.work_scan_add, &mut seq);
                     seq.push((&p.nearest_args, &bg.nearest_args, 1, 1));
-                    dispatch(&mut enc, "nearest_facet: count + scan", &seq);
-                    let mut chunks = vec![
-                        (&p.nearest_chunks, &bg.nearest_chunks),
-                        (&p.nearest_ties, &bg.nearest_ties),
+                    dispatch(&mut enc, "nearest_facet: walk + scan", &seq);
+                    let chunks = [
+                        (&p.nearest_chunks, &bg.nearest_chunks, 0),
+                        (&p.nearest_ties, &bg.nearest_ties, 0),
                     ];
-                    if params.flags & crate::search::layout::FLAG_SELF_CONTACT != 0 {
-                        chunks.push((&p.nearest_crowded, &bg.nearest_crowded));
-                    }
-                    let chunks: Vec<_> = chunks.into_iter().map(|(p, g)| (p, g, 0)).collect();
                     super::run_indirect_pass(
                         &self.ctx,
                         &mut enc,
@@ -905,16 +781,22 @@ impl GpuSearch {
                         &chunks,
                         &b.args,
                     );
-                    dispatch(
-                        &mut enc,
-                        "nearest_facet",
-                        &[(
-                            &p.nearest_facet,
-                            &bg.nearest_facet,
+                    let mut last = Vec::new();
+                    if params.flags & crate::search::layout::FLAG_SELF_CONTACT != 0 {
+                        last.push((
+                            &p.nearest_crowded,
+                            &bg.nearest_crowded,
                             params.n_slaves,
                             ITEM_WORKGROUP,
-                        )],
-                    );
+                        ));
+                    }
+                    last.push((
+                        &p.nearest_facet,
+                        &bg.nearest_facet,
+                        params.n_slaves,
+                        ITEM_WORKGROUP,
+                    ));
+                    dispatch(&mut enc, "nearest_facet", &last);
                 }
             }
         }
@@ -934,13 +816,6 @@ impl GpuSearch {
             0
         };
         enc.copy_buffer_to_buffer(&b.status, 0, &b.readback.buffer, 0, STATUS_BYTES);
-        enc.copy_buffer_to_buffer(
-            &b.scan.buffer,
-            params.n_cells as u64 * 4,
-            &b.readback.buffer,
-            STATUS_BYTES,
-            4,
-        );
         if hits_bytes > 0 {
             enc.copy_buffer_to_buffer(
                 &b.hits.buffer,
@@ -965,17 +840,24 @@ impl GpuSearch {
         )?;
         let status: [u32; STATUS_WORDS] =
             bytemuck::pod_read_unaligned(&bytes[..STATUS_BYTES as usize]);
-        let total: u32 =
-            bytemuck::pod_read_unaligned(&bytes[STATUS_BYTES as usize..STATUS_BYTES as usize + 4]);
         let hits = bytemuck::pod_collect_to_vec(&bytes[READBACK_HITS_OFFSET as usize..]);
         self.ctx.take_uncaptured("contact increment")?;
-        Ok((status, total, hits))
+        Ok((status, hits))
     }
 }
 
 /// The scan levels of the nearest-facet work items: one chunk count per slave and the total.
 fn work_levels(prep: &Prepared) -> ScanLevels {
     ScanLevels::new(prep.slaves.len() as u32 + 1)
+}
+
+/// Refit pass `i`'s parameters in `params` (one uniform block every `UNIFORM_STRIDE` bytes).
+fn tree_pass(params: &wgpu::Buffer, i: usize) -> wgpu::BindingResource<'_> {
+    wgpu::BindingResource::Buffer(wgpu::BufferBinding {
+        buffer: params,
+        offset: i as u64 * UNIFORM_STRIDE,
+        size: wgpu::BufferSize::new(std::mem::size_of::<TreeParams>() as u64),
+    })
 }
 
 /// Scan level `i`'s parameters in `params` (one uniform block every `UNIFORM_STRIDE` bytes).

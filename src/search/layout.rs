@@ -7,16 +7,15 @@ use bytemuck::{Pod, Zeroable};
 pub const ITEM_WORKGROUP: u32 = 64;
 /// Words scanned per workgroup by `scan.wgsl` (WGSL: `SCAN_BLOCK`).
 pub const SCAN_BLOCK: u32 = 1024;
+/// Lower corner of an empty box in the search tree (its upper corner is the negation)
+/// (WGSL: `EMPTY_LO`).
+pub const EMPTY_LO: f32 = 3.0e38;
 /// "No facet" in a hit (WGSL: `NO_FACET`).
 pub const NO_FACET: u32 = u32::MAX;
 /// Flag in [`GpuHit::candidates`]: the closest point lies on a free edge or corner of the master
 /// surface (an edge no other facet shares) and the slave is beside it, off the facets — the
 /// master ends there, so this is no contact whatever the gap (WGSL: `HIT_BESIDE_FREE_EDGE`).
 pub const HIT_BESIDE_FREE_EDGE: u32 = 1 << 31;
-/// Status word: non-zero when the entry buffer overflowed (WGSL: `STATUS_OVERFLOW`).
-pub const STATUS_OVERFLOW: usize = 0;
-/// Status word: the number of bin entries the pass needed (WGSL: `STATUS_NEEDED_ENTRIES`).
-pub const STATUS_NEEDED_ENTRIES: usize = 1;
 /// Status word: the motion since the last global search used up the budget; the local
 /// increment is run again with a global search (WGSL: `STATUS_BUDGET_EXCEEDED`).
 pub const STATUS_BUDGET_EXCEEDED: usize = 2;
@@ -50,9 +49,10 @@ pub const STATUS_FORCE_SCALE: usize = 16;
 /// Status word: bits of the largest bound share of a penalty spring in contact this increment:
 /// the gather's fixed-point row scale (WGSL: `STATUS_ROW_SCALE`).
 pub const STATUS_ROW_SCALE: usize = 17;
-/// Status word: facets whose bin entries did not fit in the entry buffer; they are listed after
-/// it and every slave examines them, so the search stays exact (WGSL: `STATUS_SPILLED`).
-pub const STATUS_SPILLED: usize = 18;
+/// Status word: slaves whose walk of the search tree reached its visit cap (`WALK_VISITS`); the
+/// facets it had not reached were projected in bounded chunks, so the search stayed exact
+/// (WGSL: `STATUS_FALLBACK`).
+pub const STATUS_FALLBACK: usize = 18;
 /// Status word: master facets collapsed at the global search's positions, skipped by the search
 /// (WGSL: `STATUS_COLLAPSED`; counted by bin_scatter).
 pub const STATUS_COLLAPSED: usize = 19;
@@ -85,8 +85,9 @@ pub struct SearchParams {
     pub inv_cell_size: f32,
     /// Search radius: facets farther than this from a slave node are not its partner.
     pub radius: f32,
-    /// Growth of each facet's bounding box when binning (the radius plus a round-off margin).
-    pub bin_margin: f32,
+    /// Growth of the search tree's leaf boxes: 16 f32 round-offs of the frame's extent, so a
+    /// facet's distance computed in f32 is never below its box's.
+    pub box_margin: f32,
     /// Cells along x.
     pub dims_x: u32,
     /// Cells along y.
@@ -99,8 +100,8 @@ pub struct SearchParams {
     pub n_facets: u32,
     /// Slave nodes.
     pub n_slaves: u32,
-    /// Words in the bin entry buffer.
-    pub entry_capacity: u32,
+    /// Levels of the search tree below its root: `2^tree_levels ≥ n_facets` leaf slots.
+    pub tree_levels: u32,
     /// Spatial dimension (2 or 3).
     pub dim: u32,
     /// Local search: the most walk iterations per slave.
@@ -131,10 +132,6 @@ pub const FLAG_WIDE_LOCAL: u32 = 1;
 /// Flag: self-contact, a slave's own facets and their neighbours are skipped
 /// (WGSL: `FLAG_SELF_CONTACT`).
 pub const FLAG_SELF_CONTACT: u32 = 2;
-/// Flag: a device-resident increment; facets whose bin entries do not fit spill (every slave
-/// then examines them) and the increment goes on, instead of raising `STATUS_OVERFLOW` for the
-/// host to grow the buffer and run again (WGSL: `FLAG_RESIDENT`).
-pub const FLAG_RESIDENT: u32 = 4;
 /// Walk iterations of the local search before it gives up (WGSL default).
 pub const MAX_LOCAL_ITERATIONS: u32 = 16;
 
@@ -176,6 +173,43 @@ pub struct FrameParams {
     pub _pad: [u32; 3],
 }
 const _: () = assert!(std::mem::size_of::<FrameParams>() == 32);
+
+/// Parameters of one pass of the tree's refit. WGSL twin: `TreeParams` in tree.wgsl.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Pod, Zeroable)]
+pub struct TreeParams {
+    /// The level whose boxes the pass reads (the leaves, `tree_levels`: computes them).
+    pub bottom: u32,
+    /// Levels above it the pass computes (at most `TREE_LEVELS_PER_PASS` and `bottom`).
+    pub levels: u32,
+    /// Padding.
+    pub _pad: [u32; 2],
+}
+const _: () = assert!(std::mem::size_of::<TreeParams>() == 16);
+
+/// Invocations per workgroup of the tree's refit (WGSL: `TREE_WORKGROUP`).
+pub const TREE_WORKGROUP: u32 = 64;
+/// Levels one refit pass computes in workgroup memory: log2 of `TREE_WORKGROUP`
+/// (WGSL: `TREE_LEVELS_PER_PASS`).
+pub const TREE_LEVELS_PER_PASS: u32 = 6;
+
+/// The refit passes of a tree of `levels` levels below its root, leaves first.
+pub fn tree_passes(levels: u32) -> Vec<TreeParams> {
+    let mut passes = Vec::new();
+    let mut bottom = levels;
+    loop {
+        let up = bottom.min(TREE_LEVELS_PER_PASS);
+        passes.push(TreeParams {
+            bottom,
+            levels: up,
+            _pad: [0; 2],
+        });
+        if bottom == up {
+            return passes;
+        }
+        bottom -= up;
+    }
+}
 
 /// Parameters of one scan level. WGSL twin: `ScanParams` in scan.wgsl.
 #[repr(C)]
@@ -388,11 +422,11 @@ pub struct IncrementStats {
     pub global_searches: u32,
     /// Of which because the motion budget was used up.
     pub budget_searches: u32,
-    /// Facets spilled from full bins (the search stayed exact; the entry buffer grows at the
-    /// next increment the host encodes after reading this).
-    pub spilled: u32,
-    /// The most bin entries a search needed.
-    pub needed_entries: u32,
+    /// Slaves whose walk of the search tree reached its visit cap and was finished by the
+    /// bounded chunks (the search stayed exact; many mean the tree fits the surface badly).
+    pub fallbacks: u32,
+    /// Master facets collapsed at a global search's positions (skipped by the search).
+    pub collapsed: u32,
     /// The lowest model node with a NaN or infinite coordinate, `u32::MAX` when none.
     pub nonfinite_node: u32,
     /// Local walks stopped at the iteration cap.

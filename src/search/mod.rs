@@ -1,6 +1,10 @@
 //! The global contact search of a contact pair: for each slave node, the globally nearest
 //! master facet within the search radius (seed: "Global contact searches").
 //!
+//! The search walks a bounding-box tree over the master facets ([`tree`]: its shape fixed per
+//! pair, its boxes refitted at every global search), pruned by the best distance found so far,
+//! so its work follows each slave's gap rather than the search radius.
+//!
 //! One search is an ordered list of [`Step`]s, run by either executor: the GPU kernels
 //! (`shaders/*.wgsl`, driven by [`crate::gpu`]) or their CPU mirrors ([`crate::cpu`]). Both
 //! work in grid-local f32 coordinates; [`GlobalSearch::run`] converts the result back to model
@@ -8,6 +12,7 @@
 
 pub mod grid;
 pub mod layout;
+pub mod tree;
 
 use crate::cpu::CpuSearch;
 use crate::device::{Device, DeviceKind};
@@ -22,24 +27,17 @@ use std::sync::Arc;
 /// The steps of one global search, in order (shader and CPU mirror of the same name).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Step {
-    /// Count the facets overlapping each cell (`bin_count`).
-    BinCount,
-    /// Exclusive prefix sum of the counts (`scan`).
-    Scan,
-    /// Write facet ids into their cells (`bin_scatter`); detects overflow.
-    BinScatter,
-    /// Nearest facet per slave node (`nearest_facet.wgsl`: its candidates cut into chunks of
-    /// bounded size, the chunks' results combined by atomic minima, ties to the lowest id).
+    /// The search tree's boxes from the positions, leaves up (`tree.wgsl`); collapsed facets
+    /// get empty boxes.
+    TreeRefit,
+    /// Nearest facet per slave node (`nearest_facet.wgsl`: a walk of the tree pruned by the
+    /// best distance, at most `WALK_VISITS` nodes; what a capped walk did not reach projected
+    /// in chunks of bounded size, combined by atomic minima, ties to the lowest id).
     NearestFacet,
 }
 
 /// All steps of a global search, in order.
-pub const STEPS: [Step; 4] = [
-    Step::BinCount,
-    Step::Scan,
-    Step::BinScatter,
-    Step::NearestFacet,
-];
+pub const STEPS: [Step; 2] = [Step::TreeRefit, Step::NearestFacet];
 
 /// The contact partner found for one slave node, in model coordinates.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -80,14 +78,13 @@ pub struct SearchStats {
     pub local_capped: u32,
     /// Largest motion of a pair node since the last global search, model units.
     pub motion: f64,
-    /// The grid used.
+    /// The frame the kernels worked in, and its box (a master node leaving it moves the frame).
     pub grid: Grid,
-    /// Bin entries ((facet, cell) pairs) written.
-    pub entries: u32,
-    /// Facet–node distance evaluations in the nearest-facet step.
+    /// Facet–node distance evaluations in the nearest-facet step (the tree walks' projections
+    /// and the chunks' candidates).
     pub candidates: u64,
-    /// Times the entry buffer overflowed, was grown and the search run again.
-    pub regrowths: u32,
+    /// Slaves whose tree walk reached its visit cap and was finished in chunks (global searches).
+    pub fallbacks: u32,
     /// Global searches: active master facets that had collapsed at these positions (zero
     /// length or area, by the model's rule for degenerate facets), skipped by the search; local
     /// searches pass over them too, uncounted.
@@ -107,20 +104,10 @@ pub struct SearchResult {
     pub stats: SearchStats,
 }
 
-/// The bins of a search: cell `c` holds facets `entries[starts[c]..starts[c + 1]]` (active
-/// facet indices, increasing).
-#[derive(Clone, Debug, PartialEq, Eq)]
-pub struct Bins {
-    /// Start of each cell's entries; n_cells + 1 words, the last is the total.
-    pub starts: Vec<u32>,
-    /// Facet indices grouped by cell.
-    pub entries: Vec<u32>,
-}
-
 /// Input of one search in the kernels' layout: grid-local f32 nodes, active facets, slaves.
 #[derive(Clone, Debug)]
 pub struct Prepared {
-    /// Uniform parameters (entry_capacity is filled in by the executor).
+    /// Uniform parameters.
     pub params: SearchParams,
     /// The grid (its origin is the local frame).
     pub grid: Grid,
@@ -130,9 +117,9 @@ pub struct Prepared {
     pub facets: Arc<[[u32; 4]]>,
     /// Slave node ids (the pair's constant, shared).
     pub slaves: Arc<[u32]>,
-    /// Bin entries the host expects (from f64 bounding boxes); executors size the entry
-    /// buffer from it, and the kernels' overflow check catches any shortfall.
-    pub estimated_entries: u64,
+    /// The active facet of each leaf slot of the search tree, in Morton order (the pair's
+    /// constant, shared).
+    pub order: Arc<[u32]>,
     /// Active facets of each model node: words 0..=n_nodes are starts within this same array,
     /// then the lists (local_search.wgsl's layout).
     pub adjacency: Arc<[u32]>,
@@ -209,6 +196,8 @@ pub struct GlobalSearch {
     motion_nodes: Arc<[u32]>,
     /// Active facets, padded: the kernels' facet list.
     facets: Arc<[[u32; 4]]>,
+    /// The search tree's leaf order ([`tree::morton_order`] of the facet centroids).
+    order: Arc<[u32]>,
     /// The slaves, shared with every `Prepared`.
     slave_ids: Arc<[u32]>,
     schedule: Schedule,
@@ -310,10 +299,26 @@ impl GlobalSearch {
             .map(|&f| master.facets[f as usize].padded())
             .collect();
         let slave_ids: Arc<[u32]> = slaves.into();
+        let centroids: Vec<[f64; 3]> = facets
+            .iter()
+            .map(|fac| {
+                let n = crate::cpu::common::facet_node_count(*fac);
+                let mut c = [0.0; 3];
+                for &id in &fac[..n] {
+                    let x = model.positions()[id as usize];
+                    for a in 0..3 {
+                        c[a] += x[a] / n as f64;
+                    }
+                }
+                c
+            })
+            .collect();
+        let order = tree::morton_order(&centroids, model.dim()).into();
         Ok(Self {
             executor,
             master,
             facets,
+            order,
             slave_ids,
             radius,
             dim: model.dim(),
@@ -368,15 +373,6 @@ impl GlobalSearch {
     /// The search radius in use, model units.
     pub fn radius(&self) -> f64 {
         self.radius
-    }
-
-    /// Caps the bin entry buffer's starting size (words); the search grows it on overflow.
-    /// Meant for tests of the overflow path.
-    pub fn set_entry_capacity(&mut self, words: u32) {
-        match &mut self.executor {
-            Executor::Gpu(g) => g.set_entry_capacity(words),
-            Executor::Cpu(c) => c.set_entry_capacity(words),
-        }
     }
 
     /// Folds GPU dispatches into 2D beyond `groups` workgroups per dimension (no effect on the
@@ -439,7 +435,7 @@ impl GlobalSearch {
             // small sliding's first increment: the global search alone, to anchor the slaves;
             // then the same increment from the anchors
             let anchoring = self.sliding != crate::model::Sliding::Finite && self.anchors.is_none();
-            let (raw, entries, regrowths, status) = match &mut self.executor {
+            let (raw, status) = match &mut self.executor {
                 Executor::Gpu(g) => g.run_mode(&prepared, local, true)?,
                 Executor::Cpu(c) => c.run_mode(&prepared, local)?,
             };
@@ -477,15 +473,7 @@ impl GlobalSearch {
                 continue;
             }
             return Ok((
-                self.finish(
-                    prepared.grid.frame,
-                    prepared.grid,
-                    raw,
-                    entries,
-                    regrowths,
-                    trigger,
-                    &status,
-                ),
+                self.finish(prepared.grid.frame, prepared.grid, raw, trigger, &status),
                 status,
             ));
         }
@@ -526,7 +514,7 @@ impl GlobalSearch {
             g.set_device_positions(Some(positions.clone()));
             let run = g.run_mode(&prepared, local, read_hits);
             g.set_device_positions(None);
-            let (raw, entries, regrowths, status) = run?;
+            let (raw, status) = run?;
             if Status(status).frame_stale() {
                 let host = g.read_positions(positions, prepared.n_nodes)?;
                 return Ok(self.execute(&host, Some(Trigger::Frame))?.0);
@@ -546,8 +534,6 @@ impl GlobalSearch {
                 prepared.grid.frame,
                 prepared.grid,
                 raw,
-                entries,
-                regrowths,
                 global.unwrap_or(Trigger::Local),
                 &status,
             ));
@@ -673,7 +659,7 @@ impl GlobalSearch {
             nodes: Vec::new(),
             facets: self.facets.clone(),
             slaves: self.slave_ids.clone(),
-            estimated_entries: 0,
+            order: self.order.clone(),
             adjacency: self.adjacency.clone(),
             motion_nodes: self.motion_nodes.clone(),
             local,
@@ -691,7 +677,7 @@ impl GlobalSearch {
     ) -> Result<SearchResult> {
         let prepared = self.prepare(positions)?;
         let first = first_gpu_step.min(STEPS.len());
-        let (raw, entries, regrowths, status) = match &mut self.executor {
+        let (raw, status) = match &mut self.executor {
             Executor::Gpu(g) => {
                 let mut cpu = CpuSearch::default();
                 let ws = cpu.run_prefix(&prepared, first)?;
@@ -705,16 +691,13 @@ impl GlobalSearch {
             prepared.grid.frame,
             prepared.grid,
             raw,
-            entries,
-            regrowths,
             Trigger::Requested,
             &status,
         ))
     }
 
-    /// Readies this search for device-resident increments at `positions` (they size the bin
-    /// entries; the grid is fitted on the device at every global search, within
-    /// `Grid::cell_budget` cells). The kernels work relative to the origin of the grid the host
+    /// Readies this search for device-resident increments at `positions` (the frame's box is
+    /// fitted on the device at every global search, within `Grid::cell_budget` cells). The kernels work relative to the origin of the grid the host
     /// fits at `positions` (near the master, snapped to a power of two: [`GlobalSearch::
     /// resident_frame`]): the positions the increments read are in the model frame when
     /// `caller_frame` (the caller's f32 buffers; the kernels subtract the origin in f32), or
@@ -841,7 +824,7 @@ impl GlobalSearch {
                 _ => Trigger::Local,
             }
         };
-        self.finish(origin, grid, raw, 0, 0, trigger, status)
+        self.finish(origin, grid, raw, trigger, status)
     }
 
     /// The GPU executor, if this search runs on one.
@@ -878,23 +861,26 @@ impl GlobalSearch {
         &self.master
     }
 
-    /// The bins of the last search (read back from the GPU on a GPU device): for tests of the
-    /// binning steps and for debugging.
-    pub fn bins(&self) -> Result<Bins> {
+    /// The search tree's boxes after the last global search (two vec4 per heap node, lower
+    /// then upper corner, local frame; read back from the GPU on a GPU device): for tests of
+    /// the refit and for debugging.
+    pub fn tree_boxes(&self) -> Result<Vec<[f32; 4]>> {
         match &self.executor {
-            Executor::Gpu(g) => g.bins(),
-            Executor::Cpu(c) => Ok(c.bins()),
+            Executor::Gpu(g) => g.tree_boxes(),
+            Executor::Cpu(c) => Ok(c.tree_boxes().to_vec()),
         }
     }
 
-    #[allow(clippy::too_many_arguments)]
+    /// The search tree's leaf order: the active facet of each leaf slot.
+    pub fn tree_order(&self) -> &[u32] {
+        &self.order
+    }
+
     fn finish(
         &self,
         o: [f64; 3],
         grid: Grid,
         raw: Vec<GpuHit>,
-        entries: u32,
-        regrowths: u32,
         trigger: Trigger,
         status: &[u32; layout::STATUS_WORDS],
     ) -> SearchResult {
@@ -935,9 +921,8 @@ impl GlobalSearch {
                 local_capped: Status(*status).local_capped(),
                 motion: Status(*status).motion() as f64,
                 grid,
-                entries,
                 candidates,
-                regrowths,
+                fallbacks: Status(*status).fallbacks(),
                 collapsed_facets: Status(*status).collapsed(),
             },
         }
@@ -956,7 +941,6 @@ impl GlobalSearch {
         let mut lo = [f64::INFINITY; 3];
         let mut hi = [f64::NEG_INFINITY; 3];
         let mut extent_sum = 0.0;
-        let mut boxes = Vec::with_capacity(self.master.active.len());
         for &f in &self.master.active {
             let facet = &self.master.facets[f as usize];
             let mut flo = [f64::INFINITY; 3];
@@ -973,7 +957,6 @@ impl GlobalSearch {
                 hi[a] = hi[a].max(fhi[a]);
             }
             extent_sum += (0..3).map(|a| fhi[a] - flo[a]).fold(0.0, f64::max);
-            boxes.push((flo, fhi));
         }
         let n_facets = self.facets.len();
         let grid = Grid::fit(
@@ -985,21 +968,18 @@ impl GlobalSearch {
             self.dim,
         )?;
         let nodes = self.in_frame(positions, grid.frame)?;
-        let max_extent = (0..3)
-            .map(|a| grid.dims[a] as f64 * grid.cell_size)
-            .fold(0.0, f64::max);
         let params = SearchParams {
             cell_size: grid.cell_size as f32,
             inv_cell_size: (1.0 / grid.cell_size) as f32,
             radius: self.radius as f32,
-            bin_margin: (self.radius * 1.0001 + 8.0 * f32::EPSILON as f64 * max_extent) as f32,
+            box_margin: box_margin(lo, hi, grid.frame),
             dims_x: grid.dims[0],
             dims_y: grid.dims[1],
             dims_z: grid.dims[2],
             n_cells: grid.n_cells(),
             n_facets: n_facets as u32,
             n_slaves: self.slave_ids.len() as u32,
-            entry_capacity: 0,
+            tree_levels: tree::levels(n_facets),
             dim: self.dim,
             max_local_iterations: layout::MAX_LOCAL_ITERATIONS,
             flags: self.flags(),
@@ -1010,28 +990,13 @@ impl GlobalSearch {
             cell_capacity: grid.n_cells(),
             _pad: [0; 3],
         };
-        let margin = params.bin_margin as f64;
-        let estimated_entries = boxes
-            .iter()
-            .map(|(flo, fhi)| {
-                (0..3)
-                    .map(|a| {
-                        let cell = |x: f64| {
-                            (((x - grid.origin[a]) / grid.cell_size).floor())
-                                .clamp(0.0, grid.dims[a] as f64 - 1.0)
-                        };
-                        (cell(fhi[a] + margin) - cell(flo[a] - margin) + 1.0) as u64
-                    })
-                    .product::<u64>()
-            })
-            .sum();
         Ok(Prepared {
             params,
             grid,
             nodes,
             facets: self.facets.clone(),
             slaves: self.slave_ids.clone(),
-            estimated_entries,
+            order: self.order.clone(),
             adjacency: self.adjacency.clone(),
             motion_nodes: self.motion_nodes.clone(),
             local: false,
@@ -1108,4 +1073,15 @@ impl GlobalSearch {
             }),
         }
     }
+}
+
+/// The growth of the search tree's leaf boxes for a master within `[lo, hi]` (model units) in
+/// the frame at `frame`: 32 f32 round-offs of the largest coordinate there, more than the error
+/// of a closest point computed in f32 (WGSL: the schedule's device fit, the same rule).
+pub fn box_margin(lo: [f64; 3], hi: [f64; 3], frame: [f64; 3]) -> f32 {
+    let m = (0..3)
+        .map(|a| (lo[a] - frame[a]).abs().max((hi[a] - frame[a]).abs()))
+        .filter(|m| m.is_finite())
+        .fold(0.0, f64::max);
+    (32.0 * f32::EPSILON as f64 * m) as f32
 }

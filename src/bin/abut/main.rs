@@ -636,14 +636,10 @@ fn search(a: &SearchArgs) -> abut::Result<()> {
         .count();
     let s = &result.stats;
     println!(
-        "grid: {}×{}×{} cells of {:.4}, {} bin entries, {:.1} facets examined per node, {} regrowths",
-        s.grid.dims[0],
-        s.grid.dims[1],
-        s.grid.dims[2],
-        s.grid.cell_size,
-        s.entries,
+        "tree over {} facets: {:.1} facets projected per node, {} walks finished in chunks",
+        search.tree_order().len(),
         s.candidates as f64 / cloud.len() as f64,
-        s.regrowths
+        s.fallbacks
     );
     println!(
         "found: {found} of {} slave nodes within the radius, {penetrating} penetrating (gap < 0)",

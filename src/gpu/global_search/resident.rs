@@ -2,7 +2,7 @@
 //! caller's command encoder, the choice between the local and the global search made on the
 //! device (`schedule.wgsl`) and carried out through indirect dispatches, nothing read back.
 
-use super::{scan_level, GpuSearch, UNIFORM_STRIDE};
+use super::{scan_level, tree_pass, GpuSearch, UNIFORM_STRIDE};
 use crate::error::{Error, Result};
 use crate::passes::{self, Buf};
 use crate::search::layout::*;
@@ -15,12 +15,8 @@ use wgpu::BufferUsages as U;
 struct Slots {
     /// Local increments: one invocation per slave (local_search).
     local_slaves: u64,
-    /// Global: one per word of the cell counts (clear_counts, copy_starts).
-    cell_words: u64,
-    /// Global: one per facet (bin_count, bin_scatter).
-    facets: u64,
-    /// Global: one per block of each level of the cell scan.
-    cell_levels: Vec<u64>,
+    /// Global: one per node of each refit pass's bottom level (tree_refit).
+    tree_passes: Vec<u64>,
     /// Global: one per block of each level of the work-item scan.
     work_levels: Vec<u64>,
     /// Global: one per slave (nearest_count, nearest_facet).
@@ -34,13 +30,14 @@ struct Slots {
 /// What a search keeps for its device-resident increments.
 pub(crate) struct ResidentSearch {
     schedule: wgpu::ComputePipeline,
-    clear_counts: wgpu::ComputePipeline,
     set_reference: wgpu::ComputePipeline,
-    /// Scan parameters of the cell levels (sized for the cell capacity) and of the work levels.
-    cell_scan_params: wgpu::Buffer,
+    /// Scan parameters of the work levels.
     work_scan_params: wgpu::Buffer,
-    cell_levels: ScanLevels,
     work_levels: ScanLevels,
+    /// Refit passes of the tree.
+    tree_passes: usize,
+    /// Self-contact: the crowding pass runs.
+    self_contact: bool,
     slots: Slots,
     groups: Option<Groups>,
     n_nodes: u32,
@@ -58,19 +55,14 @@ struct Groups {
     motion: wgpu::BindGroup,
     anchor: wgpu::BindGroup,
     local_search: wgpu::BindGroup,
-    clear_counts: wgpu::BindGroup,
-    bin_count: wgpu::BindGroup,
-    copy_starts: wgpu::BindGroup,
-    bin_scatter: wgpu::BindGroup,
-    nearest_count: wgpu::BindGroup,
+    tree_refit: Vec<wgpu::BindGroup>,
+    nearest_walk: wgpu::BindGroup,
     nearest_args: wgpu::BindGroup,
     nearest_chunks: wgpu::BindGroup,
     nearest_ties: wgpu::BindGroup,
     nearest_crowded: wgpu::BindGroup,
     nearest_facet: wgpu::BindGroup,
     set_reference: wgpu::BindGroup,
-    scan_blocks: Vec<wgpu::BindGroup>,
-    scan_add: Vec<wgpu::BindGroup>,
     work_scan_blocks: Vec<wgpu::BindGroup>,
     work_scan_add: Vec<wgpu::BindGroup>,
     /// to_local on the caller's positions buffer.
@@ -99,7 +91,6 @@ fn add_slot(plan: &mut [u32], items: u32, per: u32, kind: u32, max_dim: u32) -> 
 fn initial_plan(
     params: &SearchParams,
     interval: u32,
-    cell_levels: &ScanLevels,
     work_levels: &ScanLevels,
     n_nodes_watched: u32,
     max_dim: u32,
@@ -109,14 +100,12 @@ fn initial_plan(
     let iw = ITEM_WORKGROUP;
     let mut slots = Slots {
         local_slaves: add_slot(&mut plan, params.n_slaves, iw, l, max_dim)?,
-        cell_words: add_slot(&mut plan, params.cell_capacity + 1, iw, g, max_dim)?,
-        facets: add_slot(&mut plan, params.n_facets, iw, g, max_dim)?,
         ..Default::default()
     };
-    for level in &cell_levels.levels {
+    for tp in tree_passes(params.tree_levels) {
         slots
-            .cell_levels
-            .push(add_slot(&mut plan, level.1, SCAN_BLOCK, g, max_dim)?);
+            .tree_passes
+            .push(add_slot(&mut plan, 1 << tp.bottom, TREE_WORKGROUP, g, max_dim)?);
     }
     for level in &work_levels.levels {
         slots
@@ -148,12 +137,10 @@ impl GpuSearch {
         let scope = d.push_error_scope(wgpu::ErrorFilter::Validation);
         let made = (|| -> Result<_> {
             let module = |stem| super::super::module(d, stem);
-            let (sched, count, motion) =
-                (module("schedule")?, module("bin_count")?, module("motion")?);
+            let (sched, motion) = (module("schedule")?, module("motion")?);
             let pipe = |m, p| super::super::pipeline(d, m, p, &[]);
             Ok((
                 pipe(&sched, &passes::SCHEDULE),
-                pipe(&count, &passes::CLEAR_COUNTS),
                 pipe(&motion, &passes::SET_REFERENCE),
             ))
         })();
@@ -163,20 +150,20 @@ impl GpuSearch {
                 message: e.to_string(),
             });
         }
-        let (schedule, clear_counts, set_reference) = made?;
-        let mut params = prep.params;
-        if self.presize {
-            self.entry_capacity = crate::cpu::presized_capacity(prep, self.entry_capacity);
-        }
-        params.entry_capacity = self.entry_capacity;
-        params.flags |= FLAG_RESIDENT;
-        let cell_levels = ScanLevels::new(params.cell_capacity + 1);
+        let (schedule, set_reference) = made?;
+        let params = prep.params;
         let work_levels = ScanLevels::new(params.n_slaves + 1);
-        // buffers sized for the capacity: a grid fitted on the device never needs more
-        let mut sized = prep.clone();
-        sized.params.n_cells = params.cell_capacity;
-        self.ensure_buffers(&sized, &cell_levels)?;
+        let sized = prep.clone();
+        self.ensure_buffers(&sized)?;
         self.upload_static(prep);
+        for (i, tp) in tree_passes(params.tree_levels).iter().enumerate() {
+            super::super::upload(
+                &self.ctx,
+                &self.buffers.tree_params.buffer,
+                i as u64 * UNIFORM_STRIDE,
+                bytemuck::bytes_of(tp),
+            );
+        }
         super::super::upload(
             &self.ctx,
             &self.buffers.nodes.buffer,
@@ -206,12 +193,10 @@ impl GpuSearch {
             }
             buffer
         };
-        let cell_scan_params = uniform("resident cell scan params", &cell_levels);
         let work_scan_params = uniform("resident work scan params", &work_levels);
         let (plan, slots) = initial_plan(
             &params,
             interval,
-            &cell_levels,
             &work_levels,
             prep.motion_nodes.len() as u32,
             self.max_workgroups_per_dim,
@@ -223,20 +208,19 @@ impl GpuSearch {
             bytemuck::cast_slice(&plan),
         );
         if self.bind_groups.is_none() {
-            self.bind_groups = Some(self.bind_groups(&cell_levels, &sized)?);
-            self.scan_levels = cell_levels.levels.len();
+            self.bind_groups = Some(self.bind_groups(&sized)?);
+            self.tree_levels = Some(params.tree_levels);
             self.work_levels = work_levels.levels.len();
             self.generation += 1;
         }
         self.anchored = anchored;
         self.resident = Some(Box::new(ResidentSearch {
             schedule,
-            clear_counts,
             set_reference,
-            cell_scan_params,
             work_scan_params,
-            cell_levels,
             work_levels,
+            tree_passes: tree_passes(params.tree_levels).len(),
+            self_contact: params.flags & FLAG_SELF_CONTACT != 0,
             slots,
             groups: None,
             n_nodes: prep.n_nodes as u32,
@@ -244,42 +228,6 @@ impl GpuSearch {
             n_slaves: params.n_slaves,
             anchored,
         }));
-        self.resident_params = Some((params, sized));
-        Ok(())
-    }
-
-    /// Grows the bin entries to hold `needed` (a spill seen in the statistics) and tells the
-    /// plan; the spilled increments were exact, this makes the next ones fast again.
-    pub(crate) fn grow_resident_entries(&mut self, needed: u32) -> Result<()> {
-        let Some((mut params, sized)) = self.resident_params.clone() else {
-            return Ok(());
-        };
-        if needed <= self.entry_capacity {
-            return Ok(());
-        }
-        self.entry_capacity = crate::cpu::grown_capacity(needed);
-        params.entry_capacity = self.entry_capacity;
-        let words = crate::cpu::entry_words(self.entry_capacity, sized.facets.len()) as u64;
-        if self
-            .buffers
-            .entries
-            .ensure(&self.ctx.device, &self.ctx.limits, words * 4)?
-        {
-            self.bind_groups = None;
-        }
-        let levels = ScanLevels::new(params.cell_capacity + 1);
-        if self.bind_groups.is_none() {
-            self.bind_groups = Some(self.bind_groups(&levels, &sized)?);
-            self.generation += 1;
-        }
-        // the plan's copy of the params is what the passes see
-        super::super::upload(
-            &self.ctx,
-            &self.buffers.plan,
-            4 * (PLAN_PARAMS + 10) as u64,
-            bytemuck::bytes_of(&params.entry_capacity),
-        );
-        self.resident_params = Some((params, sized));
         Ok(())
     }
 
@@ -341,11 +289,6 @@ impl GpuSearch {
                     .collect::<Result<Vec<_>>>()?;
                 Ok::<_, Error>((blocks, add))
             };
-            let (scan_blocks, scan_add) = scan(
-                &r.cell_scan_params,
-                &self.buffers.scan.buffer,
-                r.cell_levels.levels.len(),
-            )?;
             let (work_scan_blocks, work_scan_add) = scan(
                 &r.work_scan_params,
                 &self.buffers.work.buffer,
@@ -355,25 +298,28 @@ impl GpuSearch {
                 super::super::bind(d, pipe, pass, |buf| self.resident_resource(buf))
             };
             let p = &self.pipelines;
+            let tree_refit = (0..r.tree_passes)
+                .map(|i| {
+                    super::super::bind(d, &p.tree_refit, &passes::TREE_REFIT, |buf| match buf {
+                        Buf::TreeParams => Some(tree_pass(&self.buffers.tree_params.buffer, i)),
+                        other => self.resident_resource(other),
+                    })
+                })
+                .collect::<Result<Vec<_>>>()?;
             let groups = Groups {
                 generation,
                 schedule: group(&r.schedule, &passes::SCHEDULE)?,
                 motion: group(&p.motion, &passes::MOTION)?,
                 anchor: group(&p.anchor, &passes::ANCHOR)?,
                 local_search: group(&p.local_search, &passes::LOCAL_SEARCH)?,
-                clear_counts: group(&r.clear_counts, &passes::CLEAR_COUNTS)?,
-                bin_count: group(&p.bin_count, &passes::BIN_COUNT)?,
-                copy_starts: group(&p.copy_starts, &passes::COPY_STARTS)?,
-                bin_scatter: group(&p.bin_scatter, &passes::BIN_SCATTER)?,
-                nearest_count: group(&p.nearest_count, &passes::NEAREST_COUNT)?,
+                tree_refit,
+                nearest_walk: group(&p.nearest_walk, &passes::NEAREST_WALK)?,
                 nearest_args: group(&p.nearest_args, &passes::NEAREST_ARGS)?,
                 nearest_chunks: group(&p.nearest_chunks, &passes::NEAREST_CHUNKS)?,
                 nearest_ties: group(&p.nearest_ties, &passes::NEAREST_TIES)?,
                 nearest_crowded: group(&p.nearest_crowded, &passes::NEAREST_CROWDED)?,
                 nearest_facet: group(&p.nearest_facet, &passes::NEAREST_FACET)?,
                 set_reference: group(&r.set_reference, &passes::SET_REFERENCE)?,
-                scan_blocks,
-                scan_add,
                 work_scan_blocks,
                 work_scan_add,
                 to_local: None,
@@ -459,24 +405,13 @@ impl GpuSearch {
         }
         let s = &r.slots;
         let plan = &b.plan;
-        let mut global = vec![
-            Indirect(&r.clear_counts, &g.clear_counts, plan, s.cell_words),
-            Indirect(&p.bin_count, &g.bin_count, plan, s.facets),
-        ];
-        for (i, &slot) in s.cell_levels.iter().enumerate() {
-            global.push(Indirect(&p.scan_blocks, &g.scan_blocks[i], plan, slot));
-        }
-        for i in (0..s.cell_levels.len().saturating_sub(1)).rev() {
-            global.push(Indirect(
-                &p.scan_add,
-                &g.scan_add[i],
-                plan,
-                s.cell_levels[i],
-            ));
-        }
-        global.push(Indirect(&p.copy_starts, &g.copy_starts, plan, s.cell_words));
-        global.push(Indirect(&p.bin_scatter, &g.bin_scatter, plan, s.facets));
-        global.push(Indirect(&p.nearest_count, &g.nearest_count, plan, s.slaves));
+        let mut global: Vec<_> = s
+            .tree_passes
+            .iter()
+            .zip(&g.tree_refit)
+            .map(|(&slot, group)| Indirect(&p.tree_refit, group, plan, slot))
+            .collect();
+        global.push(Indirect(&p.nearest_walk, &g.nearest_walk, plan, s.slaves));
         for (i, &slot) in s.work_levels.iter().enumerate() {
             global.push(Indirect(&p.scan_blocks, &g.work_scan_blocks[i], plan, slot));
         }
@@ -491,12 +426,8 @@ impl GpuSearch {
         global.push(Indirect(&p.nearest_args, &g.nearest_args, plan, s.one));
         global.push(Indirect(&p.nearest_chunks, &g.nearest_chunks, &b.args, 0));
         global.push(Indirect(&p.nearest_ties, &g.nearest_ties, &b.args, 0));
-        if self
-            .resident_params
-            .as_ref()
-            .is_some_and(|(q, _)| q.flags & FLAG_SELF_CONTACT != 0)
-        {
-            global.push(Indirect(&p.nearest_crowded, &g.nearest_crowded, &b.args, 0));
+        if r.self_contact {
+            global.push(Indirect(&p.nearest_crowded, &g.nearest_crowded, plan, s.slaves));
         }
         global.push(Indirect(&p.nearest_facet, &g.nearest_facet, plan, s.slaves));
         global.push(Indirect(

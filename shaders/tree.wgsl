@@ -1,0 +1,121 @@
+// tree.wgsl — the bounding-box tree of the global search, refitted at every global search.
+// CPU mirror: src/cpu/tree.rs.
+//
+// The tree is a complete binary tree over the active facets in Morton order (the order is the
+// pair's constant, from the host: search::tree), in heap layout: node 1 is the root, node k's
+// children are 2k and 2k + 1, level l holds nodes 2^l .. 2^(l+1) − 1, and leaf slot j is node
+// 2^L + j (L = params.tree_levels) holding facet order[j], or nothing when j ≥ n_facets.
+// boxes[2k] is node k's lower corner and boxes[2k + 1] its upper one (xyz, local frame; w 0).
+// An empty box (no facet below, or only collapsed ones) has lo > hi.
+//
+// Bindings: 0 params (uniform SearchParams: n_facets, tree_levels, box_margin), 1 tree (uniform
+//           TreeParams of this pass), 2 nodes (local xyz), 3 facets, 4 order (active facet of
+//           each leaf slot), 5 boxes (2 vec4 per node, 2^(L+1) nodes), 6 status
+//           (STATUS_COLLAPSED counted).
+// Dispatch: tree_refit one invocation per node of level `bottom` (2^bottom of them),
+//           TREE_WORKGROUP per workgroup, folded into 2D; one pass per group of up to
+//           TREE_LEVELS_PER_PASS levels, bottom = L first (the leaves, from the facets), then
+//           up to the root. Passes run in order, each after the last (separate dispatches).
+// Invariants: a leaf's box is its facet's nodes' box grown by box_margin (≥ 16 f32 ulps of the
+//             frame's extent: the round-off of a closest point computed in f32), so a facet's
+//             computed distance from any point is never below its box's; an inner node's box is
+//             the union of its children's. min/max are exact, so the boxes are the same bits on
+//             every device and in the CPU mirror, whatever the order of execution. A facet
+//             collapsed at these positions (facet_collapsed) gets an empty box (no slave finds
+//             it) and is counted in STATUS_COLLAPSED. The loop runs at most
+//             TREE_LEVELS_PER_PASS times.
+
+// Rust twin: TreeParams (src/search/layout.rs), 16 bytes.
+struct TreeParams {
+    bottom: u32,  // the level whose boxes this pass reads (the leaves: computes)
+    levels: u32,  // levels above it this pass computes (≤ TREE_LEVELS_PER_PASS, ≤ bottom)
+    _pad0: u32,
+    _pad1: u32,
+}
+
+@group(0) @binding(0) var<uniform> params: SearchParams;
+@group(0) @binding(1) var<uniform> tree: TreeParams;
+@group(0) @binding(2) var<storage, read> nodes: array<vec4<f32>>;
+@group(0) @binding(3) var<storage, read> facets: array<vec4<u32>>;
+@group(0) @binding(4) var<storage, read> order: array<u32>;
+@group(0) @binding(5) var<storage, read_write> boxes: array<vec4<f32>>;
+@group(0) @binding(6) var<storage, read_write> status: array<atomic<u32>>;
+
+// Invocations per workgroup (Rust twin: TREE_WORKGROUP) and the levels one pass reduces in
+// workgroup memory (log2 of it; Rust twin: TREE_LEVELS_PER_PASS).
+const TREE_WORKGROUP: u32 = 64u;
+const TREE_LEVELS_PER_PASS: u32 = 6u;
+
+var<workgroup> wlo: array<vec3<f32>, 64>;
+var<workgroup> whi: array<vec3<f32>, 64>;
+
+// The box of leaf slot j: its facet's nodes, grown by the margin; empty past the facets or
+// for a collapsed facet.
+fn leaf_box(j: u32) -> array<vec3<f32>, 2> {
+    var b = array<vec3<f32>, 2>(vec3<f32>(EMPTY_LO), vec3<f32>(-EMPTY_LO));
+    if (j >= params.n_facets) { return b; }
+    let fac = facets[order[j]];
+    let n = facet_node_count(fac);
+    let x0 = nodes[fac.x].xyz;
+    let x1 = nodes[fac.y].xyz;
+    var x2 = x1;
+    var x3 = x1;
+    if (n >= 3u) { x2 = nodes[fac.z].xyz; }
+    if (n == 4u) { x3 = nodes[fac.w].xyz; }
+    if (facet_collapsed(x0, x1, x2, x3, n)) {
+        atomicAdd(&status[STATUS_COLLAPSED], 1u);
+        return b;
+    }
+    let m = vec3<f32>(params.box_margin);
+    b[0] = min(min(x0, x1), min(x2, x3)) - m;
+    b[1] = max(max(x0, x1), max(x2, x3)) + m;
+    return b;
+}
+
+@compute @workgroup_size(64)
+fn tree_refit(@builtin(workgroup_id) wg: vec3<u32>,
+              @builtin(num_workgroups) nwg: vec3<u32>,
+              @builtin(local_invocation_index) li: u32) {
+    let k = folded_id(wg, nwg, li, TREE_WORKGROUP);
+    let width = 1u << tree.bottom;  // nodes of level `bottom`: width .. 2·width − 1
+    var lo = vec3<f32>(EMPTY_LO);
+    var hi = vec3<f32>(-EMPTY_LO);
+    if (k < width) {
+        if (tree.bottom == params.tree_levels) {
+            let b = leaf_box(k);
+            lo = b[0];
+            hi = b[1];
+            boxes[2u * (width + k)] = vec4<f32>(lo, 0.0);
+            boxes[2u * (width + k) + 1u] = vec4<f32>(hi, 0.0);
+        } else {
+            lo = boxes[2u * (width + k)].xyz;
+            hi = boxes[2u * (width + k) + 1u].xyz;
+        }
+    }
+    wlo[li] = lo;
+    whi[li] = hi;
+    // this workgroup's first node at the current level, and the lanes still holding a box
+    var first = width + (k - li);
+    var span = TREE_WORKGROUP;
+    for (var s = 0u; s < TREE_LEVELS_PER_PASS; s++) {
+        if (s >= tree.levels) { break; }
+        workgroupBarrier();
+        span = span / 2u;
+        first = first / 2u;
+        let live = li < span;
+        if (live) {
+            lo = min(wlo[2u * li], wlo[2u * li + 1u]);
+            hi = max(whi[2u * li], whi[2u * li + 1u]);
+        }
+        workgroupBarrier();
+        if (live) {
+            wlo[li] = lo;
+            whi[li] = hi;
+            let node = first + li;
+            if (node < (width >> s)) {  // within level bottom − s − 1
+                boxes[2u * node] = vec4<f32>(lo, 0.0);
+                boxes[2u * node + 1u] = vec4<f32>(hi, 0.0);
+            }
+        }
+    }
+}

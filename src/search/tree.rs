@@ -1,0 +1,108 @@
+//! The search tree's shape, fixed per pair on the host: the active facets in Morton order of
+//! their centroids, the leaves of a complete binary tree whose boxes the kernels refit at every
+//! global search (`shaders/tree.wgsl`).
+//!
+//! A surface's topology does not change during a run, so facets next to each other on it stay
+//! next to each other however it moves or deforms: the order taken once keeps each subtree a
+//! compact patch of surface, and refitting the boxes (exact, one pass per six levels) costs far
+//! less than binning or sorting again. The search stays exact whatever the order; only its work
+//! grows if a patch is torn far apart.
+
+/// Levels below the root of a tree over `n` leaves: the least `L` with `2^L ≥ n`.
+pub fn levels(n: usize) -> u32 {
+    n.max(1).next_power_of_two().trailing_zeros()
+}
+
+/// Spreads the low 21 bits of `x` to every third bit.
+fn spread3(x: u64) -> u64 {
+    let mut x = x & 0x1f_ffff;
+    x = (x | x << 32) & 0x1f00000000ffff;
+    x = (x | x << 16) & 0x1f0000ff0000ff;
+    x = (x | x << 8) & 0x100f00f00f00f00f;
+    x = (x | x << 4) & 0x10c30c30c30c30c3;
+    (x | x << 2) & 0x1249249249249249
+}
+
+/// Spreads the low 32 bits of `x` to every second bit.
+fn spread2(x: u64) -> u64 {
+    let mut x = x & 0xffff_ffff;
+    x = (x | x << 16) & 0x0000ffff0000ffff;
+    x = (x | x << 8) & 0x00ff00ff00ff00ff;
+    x = (x | x << 4) & 0x0f0f0f0f0f0f0f0f;
+    x = (x | x << 2) & 0x3333333333333333;
+    (x | x << 1) & 0x5555555555555555
+}
+
+/// The indices of `points` (`dim` = 2 or 3 coordinates used) in Morton order of their
+/// positions quantised in their bounding box (21 bits per axis in 3D, 32 in 2D); ties (equal
+/// codes) by index, so the order is deterministic.
+pub fn morton_order(points: &[[f64; 3]], dim: u32) -> Vec<u32> {
+    let axes = if dim == 2 { 2 } else { 3 };
+    let mut lo = [f64::INFINITY; 3];
+    let mut hi = [f64::NEG_INFINITY; 3];
+    for p in points {
+        for a in 0..axes {
+            lo[a] = lo[a].min(p[a]);
+            hi[a] = hi[a].max(p[a]);
+        }
+    }
+    let bits = if axes == 2 { 32 } else { 21 };
+    let top = ((1u64 << bits) - 1) as f64;
+    let mut keyed: Vec<(u64, u32)> = points
+        .iter()
+        .enumerate()
+        .map(|(i, p)| {
+            let q = |a: usize| {
+                let span = hi[a] - lo[a];
+                if span > 0.0 && span.is_finite() {
+                    (((p[a] - lo[a]) / span) * top).clamp(0.0, top) as u64
+                } else {
+                    0
+                }
+            };
+            let code = if axes == 2 {
+                spread2(q(0)) | spread2(q(1)) << 1
+            } else {
+                spread3(q(0)) | spread3(q(1)) << 1 | spread3(q(2)) << 2
+            };
+            (code, i as u32)
+        })
+        .collect();
+    keyed.sort_unstable();
+    keyed.into_iter().map(|(_, i)| i).collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn levels_cover_the_leaves() {
+        assert_eq!(levels(0), 0);
+        assert_eq!(levels(1), 0);
+        assert_eq!(levels(2), 1);
+        assert_eq!(levels(3), 2);
+        assert_eq!(levels(1024), 10);
+        assert_eq!(levels(1025), 11);
+    }
+
+    #[test]
+    fn morton_order_follows_the_z_curve() {
+        // a 4×4 grid of points: the Z curve visits each 2×2 quadrant in turn
+        let pts: Vec<[f64; 3]> = (0..16)
+            .map(|i| [(i % 4) as f64, (i / 4) as f64, 0.0])
+            .collect();
+        let order = morton_order(&pts, 2);
+        assert_eq!(order, vec![0, 1, 4, 5, 2, 3, 6, 7, 8, 9, 12, 13, 10, 11, 14, 15]);
+        // 3D: the first octant's 8 corners come first
+        let pts: Vec<[f64; 3]> = (0..64)
+            .map(|i| [(i % 4) as f64, (i / 4 % 4) as f64, (i / 16) as f64])
+            .collect();
+        let order = morton_order(&pts, 3);
+        let mut first: Vec<u32> = order[..8].to_vec();
+        first.sort_unstable();
+        assert_eq!(first, vec![0, 1, 4, 5, 16, 17, 20, 21]);
+        // equal points: by index
+        assert_eq!(morton_order(&[[1.0; 3]; 3], 3), vec![0, 1, 2]);
+    }
+}
