@@ -4,13 +4,12 @@
 // Prelude: common.wgsl, search_common.wgsl (projection, self-contact exclusion, free edges).
 //
 // The passes, in order:
-//   nearest_walk     one invocation per slave: a depth-first walk of the tree (stackless: the
-//                    next node after a subtree follows from the heap index), skipping every
-//                    subtree whose box is farther than the best facet found so far (at first
-//                    the radius), at most WALK_VISITS nodes. Its best facet goes into `best`; a
-//                    walk cut off by the cap leaves the facets of the leaf slots from its next
-//                    node on to the chunk passes (they are exactly the ones it did not reach),
-//                    cut into chunks of CANDIDATE_CHUNK: their count into `work` (then scanned
+//   nearest_walk     one invocation per slave: a depth-first walk of the tree, the nearer child
+//                    first, skipping every subtree whose box is farther than the best facet
+//                    found so far (at first the radius), at most WALK_VISITS nodes. Its best
+//                    facet goes into `best`; a walk cut off by the cap leaves the leaf slots from
+//                    the lowest one it had not finished on to the chunk passes (every facet it
+//                    did not reach is among them), cut into chunks of CANDIDATE_CHUNK: their count into `work` (then scanned
 //                    by scan.wgsl into each slave's first work item).
 //   nearest_args     one invocation: the indirect dispatch of the work items (folded into 2D).
 //   nearest_chunks   one invocation per work item (indirect): the chunk's nearest facet; a slave
@@ -73,7 +72,7 @@
 // iterations where Mesa stops a loop.
 const CANDIDATE_CHUNK: u32 = 1024u;
 // Tree nodes one walk visits at most (Rust twin: WALK_VISITS).
-const WALK_VISITS: u32 = 512u;
+const WALK_VISITS: u32 = 2048u;
 // Words of a slave's best record (Rust twin: BEST_WORDS).
 const BEST_WORDS: u32 = 8u;
 // A subtree is skipped when its box's distance² exceeds the bound by this factor: more than
@@ -120,24 +119,49 @@ fn first_leaf(k: u32) -> u32 {
 struct Walk {
     d2: f32,
     f: u32,
-    next: u32,        // the node the walk stopped at (0: finished)
+    next: u32,        // 0: finished; else 1 + the first leaf slot left to the chunks
     projections: u32,
 }
 
-// The nearest facet of slave i the walk finds within WALK_VISITS nodes.
+// Distance² from p to tree node k's box; EMPTY_LO for an empty box (never within a bound).
+fn box_d2(k: u32, p: vec3<f32>) -> f32 {
+    let lo = boxes[2u * k].xyz;
+    let hi = boxes[2u * k + 1u].xyz;
+    if (lo.x > hi.x) { return EMPTY_LO; }
+    let d = max(max(lo - p, p - hi), vec3<f32>(0.0));
+    return dot(d, d);
+}
+
+// Distance² from p to the centre of tree node k's box: the walk's choice between two children
+// whose boxes are equally near (both holding p, say).
+fn centre_d2(k: u32, p: vec3<f32>) -> f32 {
+    let d = 0.5 * (boxes[2u * k].xyz + boxes[2u * k + 1u].xyz) - p;
+    return dot(d, d);
+}
+
+// The nearest facet of slave i a depth-first walk finds within WALK_VISITS nodes: at an inner
+// node the nearer child's box first, the farther one kept on a stack (at most one per level:
+// 32 levels hold any tree a buffer can) and skipped when popped if the best distance has
+// shrunk below it. A walk cut off by the cap leaves `next` at the lowest first leaf slot of
+// the subtrees it kept.
 fn walk(i: u32) -> Walk {
     let slave = slaves[i];
     let p = nodes[slave].xyz;
     let leaves = 1u << params.tree_levels;
+    var stack: array<u32, 32>;
+    var sp = 0u;
     var w: Walk;
     w.d2 = params.radius * params.radius;
     w.f = NO_FACET;
-    w.next = 1u;
+    w.next = 0u;
     w.projections = 0u;
-    for (var v = 0u; v < WALK_VISITS && w.next != 0u; v++) {
-        let k = w.next;
-        if (far(k, p, w.d2)) {
-            w.next = next_node(k);
+    var k = select(1u, 0u, far(1u, p, w.d2));
+    for (var v = 0u; v < WALK_VISITS; v++) {
+        if (k == 0u) {
+            if (sp == 0u) { break; }
+            sp -= 1u;
+            k = stack[sp];
+            if (far(k, p, w.d2)) { k = 0u; }
         } else if (k >= leaves) {
             let f = order[k - leaves];
             if (!excluded(slave, facets[f])) {
@@ -148,10 +172,34 @@ fn walk(i: u32) -> Walk {
                     w.f = f;
                 }
             }
-            w.next = next_node(k);
+            k = 0u;
         } else {
-            w.next = 2u * k;
+            let bound = w.d2 * PRUNE_SLACK;
+            let dl = box_d2(2u * k, p);
+            let dr = box_d2(2u * k + 1u, p);
+            let near_l = dl <= bound;
+            let near_r = dr <= bound;
+            if (near_l && near_r) {
+                let right_first = dr < dl || (dr == dl && centre_d2(2u * k + 1u, p) < centre_d2(2u * k, p));
+                let first = select(2u * k, 2u * k + 1u, right_first);
+                stack[sp] = select(2u * k + 1u, 2u * k, right_first);
+                sp += 1u;
+                k = first;
+            } else if (near_l) {
+                k = 2u * k;
+            } else if (near_r) {
+                k = 2u * k + 1u;
+            } else {
+                k = 0u;
+            }
         }
+    }
+    if (k != 0u || sp != 0u) {
+        // cut off: the chunks take every leaf slot from the lowest one still pending
+        var lowest = 0xffffffffu;
+        if (k != 0u) { lowest = first_leaf(k); }
+        for (var s = 0u; s < sp; s++) { lowest = min(lowest, first_leaf(stack[s])); }
+        w.next = lowest + 1u;
     }
     return w;
 }
@@ -206,7 +254,7 @@ fn nearest_walk(@builtin(workgroup_id) wg: vec3<u32>,
     if (i == 0u) { work[params.n_slaves] = 0u; }
     let w = walk(i);
     var start = params.n_facets;
-    if (w.next != 0u) { start = min(first_leaf(w.next), params.n_facets); }
+    if (w.next != 0u) { start = min(w.next - 1u, params.n_facets); }
     let rest = params.n_facets - start;
     work[i] = (rest + CANDIDATE_CHUNK - 1u) / CANDIDATE_CHUNK;
     let b = BEST_WORDS * i;

@@ -242,11 +242,8 @@ fn read(device: &Device, buffer: &wgpu::Buffer, bytes: u64) -> Vec<u8> {
     out
 }
 
-fn resident_steps(device: &Device, s: &Scene, steps: usize, cap: Option<u32>) -> Vec<Step> {
+fn resident_steps(device: &Device, s: &Scene, steps: usize) -> Vec<Step> {
     let mut c = Contact::new(device, &s.model).unwrap();
-    if let Some(w) = cap {
-        c.set_entry_capacity(w);
-    }
     let n = s.model.positions().len();
     let mut out = Vec::new();
     if device.is_gpu() {
@@ -357,11 +354,11 @@ fn resident_increments_match_host_arrays() {
         );
         assert!(cpu_host[6].forces[s.jumper] == [0.0; 3]);
         let what = format!("balanced {balanced}");
-        let cpu_dev = resident_steps(&Device::cpu(), &s, steps, None);
+        let cpu_dev = resident_steps(&Device::cpu(), &s, steps);
         assert_same(&format!("{what}, CPU path"), &cpu_host, &cpu_dev, s.jumper);
         for g in gpus() {
             let host = host_steps(g, &s, steps);
-            let dev = resident_steps(g, &s, steps, None);
+            let dev = resident_steps(g, &s, steps);
             assert_same(&format!("{what}, {g}"), &host, &dev, s.jumper);
             // and the device-resident increment on the GPU against the CPU path's
             assert_same(
@@ -571,7 +568,7 @@ fn a_jump_past_the_budget_is_caught_in_the_same_increment() {
             ..s
         };
         for d in &devices {
-            let steps = resident_steps(d, &moved, jump + 2, None);
+            let steps = resident_steps(d, &moved, jump + 2);
             for (k, st) in steps.iter().enumerate() {
                 let pushed = st.forces[jumper][2] > 0.0;
                 assert_eq!(
@@ -584,85 +581,6 @@ fn a_jump_past_the_budget_is_caught_in_the_same_increment() {
             }
         }
     }
-}
-
-/// Bins far too small for the model spill: every increment stays exact (the same forces as the
-/// host-array increment), the statistics say so, and once read the entries grow and the spill
-/// stops.
-#[test]
-fn bins_that_do_not_fit_spill_and_stay_exact() {
-    let s = scene(7, false, 3);
-    let steps = 10;
-    let host = host_steps(&Device::cpu(), &s, steps);
-    let mut devices = vec![Device::cpu()];
-    devices.extend(gpus().iter().cloned());
-    for d in &devices {
-        let dev = resident_steps(d, &s, steps, Some(16));
-        assert_same(&format!("{d}, 16 bin entries"), &host, &dev, s.jumper);
-        // the spill of each global search
-        let spilled = spill_counts(d, &s, steps);
-        assert!(spilled.len() >= 3, "{d}: global searches {spilled:?}");
-        assert!(spilled[0] > 0, "{d}: nothing spilled from 16 entries");
-        assert_eq!(
-            spilled[spilled.len() - 1],
-            0,
-            "{d}: still spilling after the statistics were read: {spilled:?}"
-        );
-    }
-}
-
-/// Facets spilled in each global search, the statistics collected after every increment.
-fn spill_counts(device: &Device, s: &Scene, steps: usize) -> Vec<u32> {
-    let mut c = Contact::new(device, &s.model).unwrap();
-    c.set_entry_capacity(16);
-    let n = s.model.positions().len();
-    let mut out = Vec::new();
-    for k in 0..steps {
-        let (x, v) = (s.motion)(k);
-        if device.is_gpu() {
-            let b = buffers(device, n);
-            let (d, q) = device.wgpu().unwrap();
-            q.write_buffer(&b.x, 0, bytemuck::cast_slice(&vec4(&x)));
-            q.write_buffer(&b.v, 0, bytemuck::cast_slice(&vec4(&v)));
-            let mut enc = d.create_command_encoder(&Default::default());
-            c.encode_increment(
-                ResidentIo::Gpu {
-                    encoder: &mut enc,
-                    positions: &b.x,
-                    velocities: &b.v,
-                    forces: &b.f,
-                },
-                s.dt,
-            )
-            .unwrap();
-            q.submit([enc.finish()]);
-            let st: IncrementStats =
-                bytemuck::pod_read_unaligned(&read(device, c.stats_buffer().unwrap(), 64));
-            if st.global_searches > 0 {
-                out.push(st.spilled);
-            }
-            // what the lagged ring brings back grows the bins at the next increment
-            for _ in 0..4 {
-                c.collect_stats().unwrap();
-            }
-        } else {
-            let mut f = vec![[0.0f32; 4]; n];
-            c.encode_increment(
-                ResidentIo::Cpu {
-                    positions: &vec4(&x),
-                    velocities: &vec4(&v),
-                    forces: &mut f,
-                },
-                s.dt,
-            )
-            .unwrap();
-            let st = c.collect_stats().unwrap()[0];
-            if st.global_searches > 0 {
-                out.push(st.spilled);
-            }
-        }
-    }
-    out
 }
 
 /// Host arrays far from the model origin, and a pair that travels far during the run: the frame

@@ -44,8 +44,8 @@ fn check_scene(
     for gpu in gpus() {
         let g = run(gpu, model, pair);
         assert_eq!(
-            g.stats.entries, cpu.stats.entries,
-            "{what}: bin entries on {gpu}"
+            g.stats.fallbacks, cpu.stats.fallbacks,
+            "{what}: walks finished in chunks on {gpu}"
         );
         let c = assert_same_search(
             &g,
@@ -296,11 +296,10 @@ fn gpu_runs_are_bitwise_identical() {
     }
 }
 
-/// An entry buffer far too small: the overflow is detected, the buffer grown, the search run
-/// again, and the result is the same as without overflow. Dispatches folded into 2D by a low
-/// per-dimension cap give the same bytes as well.
+/// Dispatches folded into 2D by a low per-dimension cap give the same bytes, and a second run
+/// on the same search the same bytes again.
 #[test]
-fn overflow_regrowth_and_dispatch_folding() {
+fn dispatch_folding_gives_the_same_bytes() {
     let plate = plate_quads(40, 40, 1.0, 1.0, 0.2, 41, &|x, _| 0.1 * x);
     let slaves = point_cloud(10_000, [0.0, 0.0, -0.1], [1.0, 1.0, 0.2], 42);
     let (m, p) = scene(
@@ -313,18 +312,10 @@ fn overflow_regrowth_and_dispatch_folding() {
     let mut devices = vec![Device::cpu()];
     devices.extend(gpus().iter().cloned());
     for d in &devices {
-        let reference = run(d, &m, p);
-        assert_eq!(
-            reference.stats.regrowths, 0,
-            "{d}: the host estimate should size the buffer"
-        );
-        let mut small = GlobalSearch::new(d, &m, p).unwrap();
-        small.set_entry_capacity(16);
-        let r = small.run(m.positions()).unwrap();
-        assert!(r.stats.regrowths >= 1, "{d}: no overflow was detected");
-        assert_eq!(r.raw, reference.raw, "{d}: result after regrowth differs");
-        let again = small.run(m.positions()).unwrap();
-        assert_eq!(again.stats.regrowths, 0, "{d}: the grown buffer is kept");
+        let mut search = GlobalSearch::new(d, &m, p).unwrap();
+        let reference = search.run(m.positions()).unwrap();
+        let again = search.run(m.positions()).unwrap();
+        assert_eq!(again.raw, reference.raw, "{d}: a second run differs");
         let mut folded = GlobalSearch::new(d, &m, p).unwrap();
         folded.set_max_workgroups_per_dim(3);
         let f = folded.run(m.positions()).unwrap();
@@ -383,9 +374,10 @@ fn bad_positions_at_run_time_are_errors() {
     assert!(e.to_string().contains("node 7"), "{e}");
 }
 
-/// The binning steps give the same integers on every executor (counts, starts, each cell's facets),
-/// and a split run — the CPU mirror up to step k, the GPU from there — gives the CPU's result
-/// for every k: each kernel is checked on its own against its mirror.
+/// The tree's refit gives the same bits on every executor (min and max are exact), its boxes
+/// hold what they must (each leaf its facet's nodes, each inner node its children), and a split
+/// run — the CPU mirror up to step k, the GPU from there — gives the CPU's result for every k:
+/// each kernel is checked on its own against its mirror.
 #[test]
 fn each_step_matches_its_mirror_in_split_runs() {
     let plate = plate_triangles(30, 30, 1.0, 1.0, 0.3, 61, &|x, y| {
@@ -402,27 +394,38 @@ fn each_step_matches_its_mirror_in_split_runs() {
     let master = m.surface(m.pair(p).unwrap().master).unwrap();
     let mut cpu_search = GlobalSearch::new(&Device::cpu(), &m, p).unwrap();
     let cpu = cpu_search.run(m.positions()).unwrap();
-    let cpu_bins = cpu_search.bins().unwrap();
-    assert_eq!(cpu_bins.entries.len() as u32, cpu.stats.entries);
-    // the order within a cell is the scatter's (the tie rule does not depend on it): compare
-    // each cell's set of facets
-    let cells = |b: &abut::search::Bins| -> Vec<Vec<u32>> {
-        (0..b.starts.len() - 1)
-            .map(|c| {
-                let mut cell = b.entries[b.starts[c] as usize..b.starts[c + 1] as usize].to_vec();
-                cell.sort_unstable();
-                cell
-            })
-            .collect()
-    };
-    let cpu_cells = cells(&cpu_bins);
+    let cpu_boxes = cpu_search.tree_boxes().unwrap();
+    let order = cpu_search.tree_order().to_vec();
+    let leaves = order.len().next_power_of_two();
+    assert_eq!(cpu_boxes.len(), 4 * leaves);
+    let frame = cpu.stats.grid.frame;
+    for (j, &f) in order.iter().enumerate() {
+        let (lo, hi) = (cpu_boxes[2 * (leaves + j)], cpu_boxes[2 * (leaves + j) + 1]);
+        for &n in master.facets[master.active[f as usize] as usize].nodes() {
+            let x = m.positions()[n as usize];
+            for a in 0..3 {
+                let xl = (x[a] - frame[a]) as f32;
+                assert!(lo[a] <= xl && xl <= hi[a], "leaf {j}: node {n} outside its box");
+            }
+        }
+    }
+    for k in 1..leaves {
+        for a in 0..3 {
+            let (l, r) = (2 * k, 2 * k + 1);
+            assert_eq!(cpu_boxes[2 * k][a], cpu_boxes[2 * l][a].min(cpu_boxes[2 * r][a]));
+            assert_eq!(
+                cpu_boxes[2 * k + 1][a],
+                cpu_boxes[2 * l + 1][a].max(cpu_boxes[2 * r + 1][a])
+            );
+        }
+    }
     let tol = tolerance(&cpu, 0.05);
     for gpu in gpus() {
         let mut search = GlobalSearch::new(gpu, &m, p).unwrap();
         search.run(m.positions()).unwrap();
         assert!(
-            cells(&search.bins().unwrap()) == cpu_cells,
-            "{gpu}: bins differ from the CPU mirror's"
+            search.tree_boxes().unwrap()[2..] == cpu_boxes[2..],
+            "{gpu}: tree boxes differ from the CPU mirror's"
         );
         for k in 0..=abut::search::STEPS.len() {
             let r = search.run_split(m.positions(), k).unwrap();
@@ -436,8 +439,8 @@ fn each_step_matches_its_mirror_in_split_runs() {
                 &format!("{gpu}: CPU steps before {k}, GPU after"),
             );
             assert!(
-                cells(&search.bins().unwrap()) == cpu_cells,
-                "{gpu}: split at {k}: bins differ"
+                search.tree_boxes().unwrap()[2..] == cpu_boxes[2..],
+                "{gpu}: split at {k}: tree boxes differ"
             );
         }
     }

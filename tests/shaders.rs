@@ -4,8 +4,8 @@
 
 use abut::gpu::shaders::{source, COMMON, KERNELS};
 use abut::search::layout::{
-    GpuHit, ScanParams, SearchParams, ITEM_WORKGROUP, NO_FACET, SCAN_BLOCK, STATUS_NEEDED_ENTRIES,
-    STATUS_OVERFLOW,
+    GpuHit, ScanParams, SearchParams, TreeParams, EMPTY_LO, ITEM_WORKGROUP, NO_FACET, SCAN_BLOCK,
+    STATUS_COLLAPSED, STATUS_FALLBACK, TREE_LEVELS_PER_PASS, TREE_WORKGROUP,
 };
 
 fn parse(stem: &str) -> naga::Module {
@@ -123,17 +123,38 @@ fn wgsl_twins_match_rust() {
         abut::geometry::QUAD_ITERATIONS
     );
     assert_eq!(
-        constant_u32(&m, "STATUS_OVERFLOW") as usize,
-        STATUS_OVERFLOW
-    );
-    assert_eq!(
-        constant_u32(&m, "STATUS_NEEDED_ENTRIES") as usize,
-        STATUS_NEEDED_ENTRIES
+        constant_u32(&m, "STATUS_FALLBACK") as usize,
+        STATUS_FALLBACK
     );
     assert_eq!(
         constant_u32(&m, "CANDIDATE_CHUNK"),
         abut::cpu::nearest_facet::CANDIDATE_CHUNK
     );
+    assert_eq!(
+        constant_u32(&m, "WALK_VISITS"),
+        abut::cpu::nearest_facet::WALK_VISITS
+    );
+    assert_eq!(
+        constant_u32(&m, "BEST_WORDS") as usize,
+        abut::cpu::nearest_facet::BEST_WORDS
+    );
+    assert!(source("nearest_facet").unwrap().contains(&format!(
+        "PRUNE_SLACK: f32 = {:?}",
+        abut::cpu::nearest_facet::PRUNE_SLACK
+    )));
+    let t = parse("tree");
+    assert_eq!(constant_u32(&t, "TREE_WORKGROUP"), TREE_WORKGROUP);
+    assert_eq!(constant_u32(&t, "TREE_LEVELS_PER_PASS"), TREE_LEVELS_PER_PASS);
+    assert_eq!(1 << TREE_LEVELS_PER_PASS, TREE_WORKGROUP);
+    assert_eq!(
+        constant_u32(&t, "STATUS_COLLAPSED") as usize,
+        STATUS_COLLAPSED
+    );
+    assert_eq!(
+        struct_size(&t, "TreeParams") as usize,
+        std::mem::size_of::<TreeParams>()
+    );
+    assert!(COMMON.contains(&format!("EMPTY_LO: f32 = {EMPTY_LO:.1e}")));
     assert_eq!(
         constant_u32(&m, "STATUS_CROWDED") as usize,
         abut::search::layout::STATUS_CROWDED
@@ -200,7 +221,7 @@ fn resident_twins_match_rust() {
         ("MAX_PLAN_SLOTS", l::MAX_PLAN_SLOTS),
         ("STATUS_BOX", l::STATUS_BOX),
         ("STATUS_NONFINITE", l::STATUS_NONFINITE),
-        ("STATUS_SPILLED", l::STATUS_SPILLED),
+        ("STATUS_FALLBACK", l::STATUS_FALLBACK),
         ("STATUS_BUDGET_EXCEEDED", l::STATUS_BUDGET_EXCEEDED),
     ] {
         assert_eq!(constant_u32(&m, name) as usize, v, "{name}");
@@ -214,7 +235,6 @@ fn resident_twins_match_rust() {
         ("TRIGGER_BUDGET", l::TRIGGER_BUDGET),
         ("TRIGGER_CROWDED", l::TRIGGER_CROWDED),
         ("TRIGGER_REQUESTED", l::TRIGGER_REQUESTED),
-        ("FLAG_RESIDENT", l::FLAG_RESIDENT),
     ] {
         assert_eq!(constant_u32(&m, name), v, "{name}");
     }

@@ -7,7 +7,7 @@ use super::common::{excluded, facet_node_count, node, share_node};
 use super::PAR_MIN;
 use crate::geometry::{closest_on_quad, closest_on_segment, closest_on_triangle, Projection, V3};
 use crate::search::layout::{
-    GpuHit, SearchParams, FLAG_SELF_CONTACT, HIT_BESIDE_FREE_EDGE, NO_FACET, STATUS_CROWDED,
+    GpuHit, SearchParams, EMPTY_LO, FLAG_SELF_CONTACT, HIT_BESIDE_FREE_EDGE, NO_FACET, STATUS_CROWDED,
     STATUS_FALLBACK,
 };
 
@@ -30,7 +30,7 @@ pub fn project(nodes: &[[f32; 4]], p: V3<f32>, fac: [u32; 4]) -> Projection<f32>
 pub const CANDIDATE_CHUNK: u32 = 1024;
 
 /// Tree nodes one walk visits at most (WGSL: `WALK_VISITS`).
-pub const WALK_VISITS: u32 = 512;
+pub const WALK_VISITS: u32 = 2048;
 
 /// A subtree is skipped when its box's distance² exceeds the bound by this factor
 /// (WGSL: `PRUNE_SLACK`).
@@ -123,23 +123,60 @@ struct Walk {
     projections: u32,
 }
 
-/// The nearest facet of slave i the walk finds within `WALK_VISITS` nodes (WGSL: `walk`).
+/// Distance² from p to tree node k's box; `EMPTY_LO` for an empty box (WGSL: `box_d2`).
+fn box_d2(c: &Candidates<'_>, k: u32, p: V3<f32>) -> f32 {
+    let (lo, hi) = (c.boxes[2 * k as usize], c.boxes[2 * k as usize + 1]);
+    if lo[0] > hi[0] {
+        return EMPTY_LO;
+    }
+    let pa = p.to_array();
+    let mut d = [0.0f32; 3];
+    for a in 0..3 {
+        d[a] = (lo[a] - pa[a]).max(pa[a] - hi[a]).max(0.0);
+    }
+    d[0] * d[0] + d[1] * d[1] + d[2] * d[2]
+}
+
+/// Distance² from p to the centre of tree node k's box (WGSL: `centre_d2`): the walk's choice
+/// between two children whose boxes are equally near (both holding p, say).
+fn centre_d2(c: &Candidates<'_>, k: u32, p: V3<f32>) -> f32 {
+    let (lo, hi) = (c.boxes[2 * k as usize], c.boxes[2 * k as usize + 1]);
+    let pa = p.to_array();
+    let mut d = [0.0f32; 3];
+    for a in 0..3 {
+        d[a] = 0.5 * (lo[a] + hi[a]) - pa[a];
+    }
+    d[0] * d[0] + d[1] * d[1] + d[2] * d[2]
+}
+
+/// Levels a walk's stack holds (WGSL: the `stack` array's length).
+const STACK: usize = 32;
+
+/// The nearest facet of slave i a depth-first walk finds within `WALK_VISITS` nodes, the nearer
+/// child first (WGSL: `walk`).
 fn walk(c: &Candidates<'_>, i: usize) -> Walk {
     let slave = c.slaves[i];
     let p = node(c.nodes, slave);
     let leaves = c.leaves();
+    let mut stack = [0u32; STACK];
+    let mut sp = 0usize;
     let mut w = Walk {
         d2: c.params.radius * c.params.radius,
         f: NO_FACET,
-        next: 1,
+        next: 0,
         projections: 0,
     };
-    let mut v = 0;
-    while v < WALK_VISITS && w.next != 0 {
-        v += 1;
-        let k = w.next;
-        if c.far(k, p, w.d2) {
-            w.next = next_node(k);
+    let mut k = if c.far(1, p, w.d2) { 0 } else { 1 };
+    for _ in 0..WALK_VISITS {
+        if k == 0 {
+            if sp == 0 {
+                break;
+            }
+            sp -= 1;
+            k = stack[sp];
+            if c.far(k, p, w.d2) {
+                k = 0;
+            }
         } else if k >= leaves {
             let f = c.order[(k - leaves) as usize];
             if !c.excluded(slave, f) {
@@ -150,10 +187,36 @@ fn walk(c: &Candidates<'_>, i: usize) -> Walk {
                     w.f = f;
                 }
             }
-            w.next = next_node(k);
+            k = 0;
         } else {
-            w.next = 2 * k;
+            let bound = w.d2 * PRUNE_SLACK;
+            let (l, r) = (2 * k, 2 * k + 1);
+            let (dl, dr) = (box_d2(c, l, p), box_d2(c, r, p));
+            match (dl <= bound, dr <= bound) {
+                (true, true) => {
+                    let right_first = dr < dl || (dr == dl && centre_d2(c, r, p) < centre_d2(c, l, p));
+                    let (first, second) = if right_first { (r, l) } else { (l, r) };
+                    stack[sp] = second;
+                    sp += 1;
+                    k = first;
+                }
+                (true, false) => k = l,
+                (false, true) => k = r,
+                (false, false) => k = 0,
+            }
         }
+    }
+    if k != 0 || sp != 0 {
+        let levels = c.params.tree_levels;
+        let mut lowest = if k != 0 {
+            first_leaf(k, levels)
+        } else {
+            u32::MAX
+        };
+        for &s in &stack[..sp] {
+            lowest = lowest.min(first_leaf(s, levels));
+        }
+        w.next = lowest + 1;
     }
     w
 }
@@ -201,7 +264,7 @@ pub fn nearest_walk(c: &Candidates<'_>, work: &mut [u32], best: &mut [u32]) {
         .for_each(|(i, (wk, b))| {
             let w = walk(c, i);
             let start = if w.next != 0 {
-                first_leaf(w.next, c.params.tree_levels).min(n_facets)
+                (w.next - 1).min(n_facets)
             } else {
                 n_facets
             };

@@ -34,8 +34,8 @@ fn spread2(x: u64) -> u64 {
 }
 
 /// The indices of `points` (`dim` = 2 or 3 coordinates used) in Morton order of their
-/// positions quantised in their bounding box (21 bits per axis in 3D, 32 in 2D); ties (equal
-/// codes) by index, so the order is deterministic.
+/// positions quantised in cubic cells over their bounding box (21 bits of its longest side per
+/// axis in 3D, 32 in 2D); ties (equal codes) by index, so the order is deterministic.
 pub fn morton_order(points: &[[f64; 3]], dim: u32) -> Vec<u32> {
     let axes = if dim == 2 { 2 } else { 3 };
     let mut lo = [f64::INFINITY; 3];
@@ -48,12 +48,14 @@ pub fn morton_order(points: &[[f64; 3]], dim: u32) -> Vec<u32> {
     }
     let bits = if axes == 2 { 32 } else { 21 };
     let top = ((1u64 << bits) - 1) as f64;
+    // one scale for every axis (cubic cells): a flat or tilted surface is then cut into square
+    // patches, not into thin slabs across it along its shortest axis
+    let span = (0..axes).map(|a| hi[a] - lo[a]).fold(0.0, f64::max);
     let mut keyed: Vec<(u64, u32)> = points
         .iter()
         .enumerate()
         .map(|(i, p)| {
             let q = |a: usize| {
-                let span = hi[a] - lo[a];
                 if span > 0.0 && span.is_finite() {
                     (((p[a] - lo[a]) / span) * top).clamp(0.0, top) as u64
                 } else {
