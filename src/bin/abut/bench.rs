@@ -38,6 +38,11 @@ pub struct BenchArgs {
     /// kernel's bandwidth, and an H100 estimate. Writes resident.md to --out.
     #[arg(long)]
     pub resident: bool,
+    /// Only the global search against parry3d (one thread and rayon), every device, 10^6
+    /// slaves on 10^5 triangles within 0.5, 1 and 3 facet sizes, and the floor at 10^6 facets.
+    /// Writes search.md and search.json to --out.
+    #[arg(long)]
+    pub search: bool,
 }
 
 /// Enforcement of a configuration.
@@ -730,6 +735,9 @@ fn plot(rows: &[Row], front: &[usize], path: &std::path::Path, title: &str) -> R
 pub fn bench(a: &BenchArgs) -> abut::Result<()> {
     if a.resident {
         return crate::resident_bench::run(a);
+    }
+    if a.search {
+        return crate::search_bench::run(a);
     }
     let mut devices: Vec<Device> = Device::all_gpus()
         .into_iter()

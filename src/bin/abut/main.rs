@@ -3,6 +3,7 @@
 
 mod bench;
 mod resident_bench;
+mod search_bench;
 mod verify;
 
 use std::process::ExitCode;
