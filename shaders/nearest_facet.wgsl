@@ -27,7 +27,10 @@
 //           nearest_args one, the chunk
 //           passes one per work item through the indirect arguments; ITEM_WORKGROUP per
 //           workgroup, folded into 2D.
-// Bindings: 0 params, 1 nodes, 2 facets, 3 slaves (node id per slave), 4 order (active facet
+// Bindings: 0 params, 1 nodes, 2 facets, 3 slaves (node id per slave, then the slaves' indices
+//           in Morton order of their start positions: nearest_walk's invocation t walks for
+//           slave slaves[n_slaves + t], so neighbouring invocations walk the same branches and
+//           read the same boxes), 4 order (active facet
 //           of each leaf slot), 5 boxes (the tree's, tree.wgsl), 6 status (fallbacks and
 //           self-contact crowding counted; nearest_facet only: at most 8 storage buffers per
 //           pass), 7 hits (one Hit per slave), 8 adjacency (as in
@@ -148,7 +151,8 @@ fn walk(i: u32) -> Walk {
     let slave = slaves[i];
     let p = nodes[slave].xyz;
     let leaves = 1u << params.tree_levels;
-    var stack: array<u32, 32>;
+    var stack: array<u32, 32>;     // subtrees kept for later
+    var stack_d2: array<f32, 32>;  // their boxes' distance²
     var sp = 0u;
     var w: Walk;
     w.d2 = params.radius * params.radius;
@@ -161,7 +165,7 @@ fn walk(i: u32) -> Walk {
             if (sp == 0u) { break; }
             sp -= 1u;
             k = stack[sp];
-            if (far(k, p, w.d2)) { k = 0u; }
+            if (stack_d2[sp] > w.d2 * PRUNE_SLACK) { k = 0u; }
         } else if (k >= leaves) {
             let f = order[k - leaves];
             if (!excluded(slave, facets[f])) {
@@ -183,6 +187,7 @@ fn walk(i: u32) -> Walk {
                 let right_first = dr < dl || (dr == dl && centre_d2(2u * k + 1u, p) < centre_d2(2u * k, p));
                 let first = select(2u * k, 2u * k + 1u, right_first);
                 stack[sp] = select(2u * k + 1u, 2u * k, right_first);
+                stack_d2[sp] = select(dr, dl, right_first);
                 sp += 1u;
                 k = first;
             } else if (near_l) {
@@ -221,19 +226,19 @@ struct ChunkBest {
 }
 
 // The nearest facet (within the radius, ties to the lowest id) of slave i among the leaf slots
-// of its work item t: slots start + (t − work[i])·CANDIDATE_CHUNK onwards, below n_facets.
+// of its work item t: slots start + (t − work[i])·CANDIDATE_CHUNK onwards (empty ones skipped).
 fn chunk_best(i: u32, t: u32) -> ChunkBest {
     let slave = slaves[i];
     let p = nodes[slave].xyz;
     let leaves = 1u << params.tree_levels;
     let j0 = atomicLoad(&best[BEST_WORDS * i + 5u]) + (t - work[i]) * CANDIDATE_CHUNK;
-    let j1 = min(params.n_facets, j0 + CANDIDATE_CHUNK);
+    let j1 = min(leaves, j0 + CANDIDATE_CHUNK);
     var b: ChunkBest;
     b.d2 = params.radius * params.radius;
     b.f = NO_FACET;
     for (var j = j0; j < j1; j++) {
         let k = leaves + j;
-        if (boxes[2u * k].x > boxes[2u * k + 1u].x) { continue; } // collapsed
+        if (boxes[2u * k].x > boxes[2u * k + 1u].x) { continue; } // no facet, or collapsed
         let f = order[j];
         if (excluded(slave, facets[f])) { continue; }
         let d2 = project_facet(p, facets[f]).dist2;
@@ -249,13 +254,15 @@ fn chunk_best(i: u32, t: u32) -> ChunkBest {
 fn nearest_walk(@builtin(workgroup_id) wg: vec3<u32>,
                 @builtin(num_workgroups) nwg: vec3<u32>,
                 @builtin(local_invocation_index) li: u32) {
-    let i = folded_id(wg, nwg, li, ITEM_WORKGROUP);
-    if (i >= params.n_slaves) { return; }
-    if (i == 0u) { work[params.n_slaves] = 0u; }
+    let t = folded_id(wg, nwg, li, ITEM_WORKGROUP);
+    if (t >= params.n_slaves) { return; }
+    if (t == 0u) { work[params.n_slaves] = 0u; }
+    let i = slaves[params.n_slaves + t];
     let w = walk(i);
-    var start = params.n_facets;
-    if (w.next != 0u) { start = min(w.next - 1u, params.n_facets); }
-    let rest = params.n_facets - start;
+    let leaves = 1u << params.tree_levels;
+    var start = leaves;
+    if (w.next != 0u) { start = min(w.next - 1u, leaves); }
+    let rest = leaves - start;
     work[i] = (rest + CANDIDATE_CHUNK - 1u) / CANDIDATE_CHUNK;
     let b = BEST_WORDS * i;
     atomicStore(&best[b], bitcast<u32>(w.d2));
@@ -378,7 +385,7 @@ fn nearest_facet(@builtin(workgroup_id) wg: vec3<u32>,
     hit.normal_dist = vec4<f32>(0.0);
     hit.weights = vec4<f32>(0.0);
     let p = nodes[slaves[i]].xyz;
-    if (atomicLoad(&best[b + 5u]) < params.n_facets) { atomicAdd(&status[STATUS_FALLBACK], 1u); }
+    if (atomicLoad(&best[b + 5u]) < (1u << params.tree_levels)) { atomicAdd(&status[STATUS_FALLBACK], 1u); }
     let best_f = winner(i);
     if (best_f != NO_FACET) {
         if (atomicLoad(&best[b + 2u]) != 0u) { atomicAdd(&status[STATUS_CROWDED], 1u); }

@@ -1,14 +1,15 @@
 // tree.wgsl — the bounding-box tree of the global search, refitted at every global search.
 // CPU mirror: src/cpu/tree.rs.
 //
-// The tree is a complete binary tree over the active facets in Morton order (the order is the
-// pair's constant, from the host: search::tree), in heap layout: node 1 is the root, node k's
-// children are 2k and 2k + 1, level l holds nodes 2^l .. 2^(l+1) − 1, and leaf slot j is node
-// 2^L + j (L = params.tree_levels) holding facet order[j], or nothing when j ≥ n_facets.
+// The tree is a complete binary tree over the active facets (their placement in the leaf slots
+// is the pair's constant, from the host: search::tree::leaf_order, median splits along the
+// longest side), in heap layout: node 1 is the root, node k's children are 2k and 2k + 1, level
+// l holds nodes 2^l .. 2^(l+1) − 1, and leaf slot j is node 2^L + j (L = params.tree_levels)
+// holding facet order[j], or nothing when order[j] = NO_FACET.
 // boxes[2k] is node k's lower corner and boxes[2k + 1] its upper one (xyz, local frame; w 0).
 // An empty box (no facet below, or only collapsed ones) has lo > hi.
 //
-// Bindings: 0 params (uniform SearchParams: n_facets, tree_levels, box_margin), 1 tree (uniform
+// Bindings: 0 params (uniform SearchParams: tree_levels, box_margin), 1 tree (uniform
 //           TreeParams of this pass), 2 nodes (local xyz), 3 facets, 4 order (active facet of
 //           each leaf slot), 5 boxes (2 vec4 per node, 2^(L+1) nodes), 6 status
 //           (STATUS_COLLAPSED counted).
@@ -49,11 +50,11 @@ const TREE_LEVELS_PER_PASS: u32 = 6u;
 var<workgroup> wlo: array<vec3<f32>, 64>;
 var<workgroup> whi: array<vec3<f32>, 64>;
 
-// The box of leaf slot j: its facet's nodes, grown by the margin; empty past the facets or
-// for a collapsed facet.
+// The box of leaf slot j: its facet's nodes, grown by the margin; empty for a slot with no
+// facet or a collapsed facet.
 fn leaf_box(j: u32) -> array<vec3<f32>, 2> {
     var b = array<vec3<f32>, 2>(vec3<f32>(EMPTY_LO), vec3<f32>(-EMPTY_LO));
-    if (j >= params.n_facets) { return b; }
+    if (order[j] == NO_FACET) { return b; }
     let fac = facets[order[j]];
     let n = facet_node_count(fac);
     let x0 = nodes[fac.x].xyz;

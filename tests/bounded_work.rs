@@ -168,7 +168,10 @@ fn searched_like_the_oracle(
         let what = format!("{name}, {gpu}");
         assert_same_search(&r, &cpu_r, master, m.positions(), radius, tol, &what);
         check_oracle(&r, &what);
-        assert_eq!(r.stats.fallbacks, cpu_r.stats.fallbacks, "{what}: fallbacks");
+        assert_eq!(
+            r.stats.fallbacks, cpu_r.stats.fallbacks,
+            "{what}: fallbacks"
+        );
         let again = search.run(m.positions()).unwrap();
         assert_eq!(r.contacts, again.contacts, "{what}: two runs differ");
     }
@@ -216,7 +219,10 @@ fn hundred_thousand_facets_within_the_radius() {
         let mut counts = per_slave(&wide);
         counts.sort_unstable();
         let median = counts[counts.len() / 2];
-        assert!(median < 100, "{name}: median {median} projections per slave");
+        assert!(
+            median < 100,
+            "{name}: median {median} projections per slave"
+        );
         assert!(
             (wide.stats.fallbacks as usize) * 100 <= slaves.len(),
             "{name}: {} of {} walks cut off",
@@ -253,7 +259,11 @@ fn hundred_thousand_facets_at_one_distance() {
         let theta = std::f64::consts::PI * (0.1 + 0.8 * i as f64 / rings as f64);
         for j in 0..sectors {
             let phi = 2.0 * std::f64::consts::PI * j as f64 / sectors as f64;
-            nodes.push([theta.sin() * phi.cos(), theta.sin() * phi.sin(), theta.cos()]);
+            nodes.push([
+                theta.sin() * phi.cos(),
+                theta.sin() * phi.sin(),
+                theta.cos(),
+            ]);
         }
     }
     let id = |i: usize, j: usize| (i * sectors + j % sectors) as u32;
@@ -277,7 +287,11 @@ fn hundred_thousand_facets_at_one_distance() {
         ]
     }));
     let r = searched_like_the_oracle(m, s, &slaves, 2.0, "sphere");
-    assert_eq!(r.stats.fallbacks as usize, slaves.len(), "walks not cut off");
+    assert_eq!(
+        r.stats.fallbacks as usize,
+        slaves.len(),
+        "walks not cut off"
+    );
     let per_slave = r.stats.candidates as f64 / slaves.len() as f64;
     assert!(
         per_slave > 65_536.0,

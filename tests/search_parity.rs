@@ -405,14 +405,20 @@ fn each_step_matches_its_mirror_in_split_runs() {
             let x = m.positions()[n as usize];
             for a in 0..3 {
                 let xl = (x[a] - frame[a]) as f32;
-                assert!(lo[a] <= xl && xl <= hi[a], "leaf {j}: node {n} outside its box");
+                assert!(
+                    lo[a] <= xl && xl <= hi[a],
+                    "leaf {j}: node {n} outside its box"
+                );
             }
         }
     }
     for k in 1..leaves {
         for a in 0..3 {
             let (l, r) = (2 * k, 2 * k + 1);
-            assert_eq!(cpu_boxes[2 * k][a], cpu_boxes[2 * l][a].min(cpu_boxes[2 * r][a]));
+            assert_eq!(
+                cpu_boxes[2 * k][a],
+                cpu_boxes[2 * l][a].min(cpu_boxes[2 * r][a])
+            );
             assert_eq!(
                 cpu_boxes[2 * k + 1][a],
                 cpu_boxes[2 * l + 1][a].max(cpu_boxes[2 * r + 1][a])

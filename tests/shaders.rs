@@ -144,7 +144,10 @@ fn wgsl_twins_match_rust() {
     )));
     let t = parse("tree");
     assert_eq!(constant_u32(&t, "TREE_WORKGROUP"), TREE_WORKGROUP);
-    assert_eq!(constant_u32(&t, "TREE_LEVELS_PER_PASS"), TREE_LEVELS_PER_PASS);
+    assert_eq!(
+        constant_u32(&t, "TREE_LEVELS_PER_PASS"),
+        TREE_LEVELS_PER_PASS
+    );
     assert_eq!(1 << TREE_LEVELS_PER_PASS, TREE_WORKGROUP);
     assert_eq!(
         constant_u32(&t, "STATUS_COLLAPSED") as usize,

@@ -6,9 +6,7 @@ use crate::penalty::layout::{
     ContactOut, PairNode, PenaltyParams, CSTATUS_MASK, CSTATUS_OPEN, HEAVY_SHIFT, HEAVY_SLAVE,
     NO_SLAVE,
 };
-use crate::search::layout::{
-    GpuHit, STATUS_BUDGET_EXCEEDED, STATUS_FORCE_SCALE, STATUS_ROW_SCALE,
-};
+use crate::search::layout::{GpuHit, STATUS_BUDGET_EXCEEDED, STATUS_FORCE_SCALE, STATUS_ROW_SCALE};
 
 /// Bits below the sign that a fixed-point sum may use (WGSL: `FIXED_BITS`).
 pub const FIXED_BITS: i32 = 60;

@@ -65,23 +65,13 @@ pub struct CpuWorkspace {
 }
 
 /// The CPU executor of the global search.
-#[derive(Clone, Debug)]
+#[derive(Clone, Debug, Default)]
 pub struct CpuSearch {
     /// Small sliding: the slaves' anchors (local runs evaluate them instead of searching).
     anchors: Option<Vec<crate::search::layout::Anchor>>,
     ws: CpuWorkspace,
     /// Device-resident increments: the plan and the nodes they keep.
     resident: Option<Box<resident::CpuResident>>,
-}
-
-impl Default for CpuSearch {
-    fn default() -> Self {
-        Self {
-            anchors: None,
-            ws: CpuWorkspace::default(),
-            resident: None,
-        }
-    }
 }
 
 impl CpuSearch {
@@ -214,6 +204,7 @@ pub fn run_step(
                 nodes: &prep.nodes,
                 facets: &prep.facets,
                 slaves: &prep.slaves,
+                walk_order: &prep.walk_order,
                 order: &prep.order,
                 boxes: &ws.boxes,
                 adjacency: &prep.adjacency,

@@ -7,8 +7,8 @@ use super::common::{excluded, facet_node_count, node, share_node};
 use super::PAR_MIN;
 use crate::geometry::{closest_on_quad, closest_on_segment, closest_on_triangle, Projection, V3};
 use crate::search::layout::{
-    GpuHit, SearchParams, EMPTY_LO, FLAG_SELF_CONTACT, HIT_BESIDE_FREE_EDGE, NO_FACET, STATUS_CROWDED,
-    STATUS_FALLBACK,
+    GpuHit, SearchParams, EMPTY_LO, FLAG_SELF_CONTACT, HIT_BESIDE_FREE_EDGE, NO_FACET,
+    STATUS_CROWDED, STATUS_FALLBACK,
 };
 
 /// Nearest point on a padded facet (WGSL: `project`).
@@ -52,6 +52,8 @@ pub struct Candidates<'a> {
     pub facets: &'a [[u32; 4]],
     /// Node id per slave.
     pub slaves: &'a [u32],
+    /// The slaves in the order the walks take them (Morton order of their start positions).
+    pub walk_order: &'a [u32],
     /// Active facet of each leaf slot of the tree.
     pub order: &'a [u32],
     /// The tree's boxes (two per heap node).
@@ -158,7 +160,7 @@ fn walk(c: &Candidates<'_>, i: usize) -> Walk {
     let slave = c.slaves[i];
     let p = node(c.nodes, slave);
     let leaves = c.leaves();
-    let mut stack = [0u32; STACK];
+    let mut stack = [(0u32, 0.0f32); STACK]; // subtrees kept for later, their boxes' distance²
     let mut sp = 0usize;
     let mut w = Walk {
         d2: c.params.radius * c.params.radius,
@@ -173,8 +175,9 @@ fn walk(c: &Candidates<'_>, i: usize) -> Walk {
                 break;
             }
             sp -= 1;
-            k = stack[sp];
-            if c.far(k, p, w.d2) {
+            let d2;
+            (k, d2) = stack[sp];
+            if d2 > w.d2 * PRUNE_SLACK {
                 k = 0;
             }
         } else if k >= leaves {
@@ -194,8 +197,13 @@ fn walk(c: &Candidates<'_>, i: usize) -> Walk {
             let (dl, dr) = (box_d2(c, l, p), box_d2(c, r, p));
             match (dl <= bound, dr <= bound) {
                 (true, true) => {
-                    let right_first = dr < dl || (dr == dl && centre_d2(c, r, p) < centre_d2(c, l, p));
-                    let (first, second) = if right_first { (r, l) } else { (l, r) };
+                    let right_first =
+                        dr < dl || (dr == dl && centre_d2(c, r, p) < centre_d2(c, l, p));
+                    let (first, second) = if right_first {
+                        (r, (l, dl))
+                    } else {
+                        (l, (r, dr))
+                    };
                     stack[sp] = second;
                     sp += 1;
                     k = first;
@@ -213,7 +221,7 @@ fn walk(c: &Candidates<'_>, i: usize) -> Walk {
         } else {
             u32::MAX
         };
-        for &s in &stack[..sp] {
+        for &(s, _) in &stack[..sp] {
             lowest = lowest.min(first_leaf(s, levels));
         }
         w.next = lowest + 1;
@@ -228,12 +236,12 @@ fn chunk_best(c: &Candidates<'_>, work: &[u32], b: &[u32], i: usize, t: u32) -> 
     let p = node(c.nodes, slave);
     let leaves = c.leaves();
     let j0 = b[5] + (t - work[i]) * CANDIDATE_CHUNK;
-    let j1 = c.params.n_facets.min(j0 + CANDIDATE_CHUNK);
+    let j1 = leaves.min(j0 + CANDIDATE_CHUNK);
     let mut best = (c.params.radius * c.params.radius, NO_FACET);
     for j in j0..j1 {
         let k = (leaves + j) as usize;
         if c.boxes[2 * k][0] > c.boxes[2 * k + 1][0] {
-            continue; // collapsed
+            continue; // no facet, or collapsed
         }
         let f = c.order[j as usize];
         if c.excluded(slave, f) {
@@ -247,7 +255,7 @@ fn chunk_best(c: &Candidates<'_>, work: &[u32], b: &[u32], i: usize, t: u32) -> 
     best
 }
 
-/// One "invocation" per slave: the tree walk, its best facet into `best`, the chunks of the
+/// One "invocation" per slave, in `walk_order`: the tree walk, its best facet into `best`, the chunks of the
 /// leaf slots it did not reach into `work` (word n_slaves set to 0 for the scan)
 /// (WGSL: `nearest_walk`).
 pub fn nearest_walk(c: &Candidates<'_>, work: &mut [u32], best: &mut [u32]) {
@@ -255,22 +263,20 @@ pub fn nearest_walk(c: &Candidates<'_>, work: &mut [u32], best: &mut [u32]) {
     if n > 0 {
         work[n] = 0;
     }
-    let n_facets = c.params.n_facets;
-    work[..n]
-        .par_iter_mut()
-        .zip(best.par_chunks_mut(BEST_WORDS))
-        .enumerate()
+    let n_slots = c.leaves();
+    // invocation t walks for slave walk_order[t]; the records are written by slave
+    let walks: Vec<(u32, [u32; BEST_WORDS])> = c.walk_order[..n]
+        .par_iter()
         .with_min_len(PAR_MIN)
-        .for_each(|(i, (wk, b))| {
-            let w = walk(c, i);
+        .map(|&i| {
+            let w = walk(c, i as usize);
             let start = if w.next != 0 {
-                (w.next - 1).min(n_facets)
+                (w.next - 1).min(n_slots)
             } else {
-                n_facets
+                n_slots
             };
-            let rest = n_facets - start;
-            *wk = rest.div_ceil(CANDIDATE_CHUNK);
-            b.copy_from_slice(&[
+            let rest = n_slots - start;
+            let record = [
                 w.d2.to_bits(),
                 NO_FACET,
                 0,
@@ -279,8 +285,15 @@ pub fn nearest_walk(c: &Candidates<'_>, work: &mut [u32], best: &mut [u32]) {
                 start,
                 w.d2.to_bits(),
                 0,
-            ]);
-        });
+            ];
+            (rest.div_ceil(CANDIDATE_CHUNK), record)
+        })
+        .collect();
+    for (&i, (chunks, record)) in c.walk_order[..n].iter().zip(walks) {
+        let i = i as usize;
+        work[i] = chunks;
+        best[BEST_WORDS * i..BEST_WORDS * (i + 1)].copy_from_slice(&record);
+    }
 }
 
 /// The winner of a slave's record `b`: the chunks' facet at the best distance, or the walk's
@@ -411,12 +424,7 @@ fn crowded(c: &Candidates<'_>, i: usize, best_f: u32) -> bool {
 
 /// One "invocation" per slave node: the hit from the winning facet; writes `hits[i]`
 /// (WGSL: `nearest_facet`).
-pub fn nearest_facet(
-    c: &Candidates<'_>,
-    status: &mut [u32],
-    hits: &mut [GpuHit],
-    best: &[u32],
-) {
+pub fn nearest_facet(c: &Candidates<'_>, status: &mut [u32], hits: &mut [GpuHit], best: &[u32]) {
     let (params, nodes, facets, slaves, adjacency) =
         (c.params, c.nodes, c.facets, c.slaves, c.adjacency);
     let n = params.n_slaves as usize;
@@ -428,7 +436,7 @@ pub fn nearest_facet(
             let p = node(nodes, slaves[i]);
             let b = &best[BEST_WORDS * i..BEST_WORDS * (i + 1)];
             let candidates = b[3];
-            let fallback = u32::from(b[5] < params.n_facets);
+            let fallback = u32::from(b[5] < c.leaves());
             let best_f = winner(b);
             if best_f == NO_FACET {
                 *hit = GpuHit::miss(slaves[i], candidates);

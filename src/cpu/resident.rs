@@ -31,10 +31,9 @@ impl CpuSearch {
     ) {
         let plan = fresh_plan(&prep.params, interval);
         self.ws.boxes.clear();
-        self.ws.boxes.resize(
-            super::tree::box_words(prep.params.tree_levels),
-            [0.0; 4],
-        );
+        self.ws
+            .boxes
+            .resize(super::tree::box_words(prep.params.tree_levels), [0.0; 4]);
         self.ws.hits.resize(prep.slaves.len(), GpuHit::miss(0, 0));
         self.ws.reference = prep.nodes.clone();
         self.resident = Some(Box::new(CpuResident {

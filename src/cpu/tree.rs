@@ -4,7 +4,7 @@ use rayon::prelude::*;
 
 use super::common::{facet_collapsed, facet_node_count, node};
 use super::PAR_MIN;
-use crate::search::layout::{SearchParams, TreeParams, EMPTY_LO, STATUS_COLLAPSED};
+use crate::search::layout::{SearchParams, TreeParams, EMPTY_LO, NO_FACET, STATUS_COLLAPSED};
 
 /// The lower and upper corner of an empty box.
 const EMPTY: [[f32; 4]; 2] = [
@@ -26,7 +26,7 @@ fn leaf_box(
     order: &[u32],
     j: usize,
 ) -> ([[f32; 4]; 2], bool) {
-    if j >= params.n_facets as usize {
+    if order[j] == NO_FACET {
         return (EMPTY, false);
     }
     let fac = facets[order[j] as usize];

@@ -307,14 +307,12 @@ impl GpuSearch {
         let hits_bytes = (prep.slaves.len() * std::mem::size_of::<GpuHit>()) as u64;
         let mut replaced = false;
         let levels = prep.params.tree_levels;
-        replaced |= b.tree_params.ensure(
-            d,
-            l,
-            tree_passes(levels).len() as u64 * UNIFORM_STRIDE,
-        )?;
+        replaced |=
+            b.tree_params
+                .ensure(d, l, tree_passes(levels).len() as u64 * UNIFORM_STRIDE)?;
         replaced |= b.nodes.ensure(d, l, (prep.n_nodes * 16) as u64)?;
         replaced |= b.facets.ensure(d, l, (prep.facets.len() * 16) as u64)?;
-        replaced |= b.slaves.ensure(d, l, (prep.slaves.len() * 4) as u64)?;
+        replaced |= b.slaves.ensure(d, l, (prep.slaves.len() * 8) as u64)?;
         replaced |= b.order.ensure(d, l, (prep.order.len() * 4).max(4) as u64)?;
         replaced |= b
             .boxes
@@ -344,8 +342,7 @@ impl GpuSearch {
         )?;
         b.readback.ensure(d, l, READBACK_HITS_OFFSET + hits_bytes)?;
         self.static_dirty |= replaced;
-        if replaced || self.tree_levels != Some(levels) || self.work_levels != work.levels.len()
-        {
+        if replaced || self.tree_levels != Some(levels) || self.work_levels != work.levels.len() {
             self.bind_groups = None;
         }
         Ok(())
@@ -599,6 +596,12 @@ impl GpuSearch {
             &b.slaves.buffer,
             0,
             bytemuck::cast_slice(&prep.slaves),
+        );
+        super::upload(
+            &self.ctx,
+            &b.slaves.buffer,
+            (prep.slaves.len() * 4) as u64,
+            bytemuck::cast_slice(&prep.walk_order),
         );
         super::upload(
             &self.ctx,

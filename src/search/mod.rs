@@ -117,9 +117,13 @@ pub struct Prepared {
     pub facets: Arc<[[u32; 4]]>,
     /// Slave node ids (the pair's constant, shared).
     pub slaves: Arc<[u32]>,
-    /// The active facet of each leaf slot of the search tree, in Morton order (the pair's
-    /// constant, shared).
+    /// The active facet of each leaf slot of the search tree, `NO_FACET` for an empty slot
+    /// ([`tree::leaf_order`]; the pair's constant, shared).
     pub order: Arc<[u32]>,
+    /// The slaves' indices in Morton order of their positions at the start: the order the
+    /// tree walks take them in, so neighbouring invocations walk the same branches (the pair's
+    /// constant, shared).
+    pub walk_order: Arc<[u32]>,
     /// Active facets of each model node: words 0..=n_nodes are starts within this same array,
     /// then the lists (local_search.wgsl's layout).
     pub adjacency: Arc<[u32]>,
@@ -196,8 +200,10 @@ pub struct GlobalSearch {
     motion_nodes: Arc<[u32]>,
     /// Active facets, padded: the kernels' facet list.
     facets: Arc<[[u32; 4]]>,
-    /// The search tree's leaf order ([`tree::morton_order`] of the facet centroids).
+    /// The search tree's leaf slots ([`tree::leaf_order`] of the facet centroids).
     order: Arc<[u32]>,
+    /// The slaves in Morton order of their start positions (indices into `slave_ids`).
+    walk_order: Arc<[u32]>,
     /// The slaves, shared with every `Prepared`.
     slave_ids: Arc<[u32]>,
     schedule: Schedule,
@@ -313,12 +319,18 @@ impl GlobalSearch {
                 c
             })
             .collect();
-        let order = tree::morton_order(&centroids, model.dim()).into();
+        let order = tree::leaf_order(&centroids, model.dim()).into();
+        let slave_points: Vec<[f64; 3]> = slave_ids
+            .iter()
+            .map(|&s| model.positions()[s as usize])
+            .collect();
+        let walk_order = tree::morton_order(&slave_points, model.dim()).into();
         Ok(Self {
             executor,
             master,
             facets,
             order,
+            walk_order,
             slave_ids,
             radius,
             dim: model.dim(),
@@ -660,6 +672,7 @@ impl GlobalSearch {
             facets: self.facets.clone(),
             slaves: self.slave_ids.clone(),
             order: self.order.clone(),
+            walk_order: self.walk_order.clone(),
             adjacency: self.adjacency.clone(),
             motion_nodes: self.motion_nodes.clone(),
             local,
@@ -871,7 +884,7 @@ impl GlobalSearch {
         }
     }
 
-    /// The search tree's leaf order: the active facet of each leaf slot.
+    /// The search tree's leaf slots: the active facet of each, `NO_FACET` when empty.
     pub fn tree_order(&self) -> &[u32] {
         &self.order
     }
@@ -997,6 +1010,7 @@ impl GlobalSearch {
             facets: self.facets.clone(),
             slaves: self.slave_ids.clone(),
             order: self.order.clone(),
+            walk_order: self.walk_order.clone(),
             adjacency: self.adjacency.clone(),
             motion_nodes: self.motion_nodes.clone(),
             local: false,

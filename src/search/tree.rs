@@ -74,6 +74,48 @@ pub fn morton_order(points: &[[f64; 3]], dim: u32) -> Vec<u32> {
     keyed.into_iter().map(|(_, i)| i).collect()
 }
 
+/// The leaf slots of a complete binary tree of `levels(points.len())` levels over `points`
+/// (`dim` = 2 or 3 coordinates used): each node's points split at their median along the
+/// longest side of their bounding box, the lower half (rounded up) to the left child, so every
+/// subtree is a compact patch however flat or tilted the surface. Slots a subtree does not
+/// fill hold `u32::MAX` (no facet). Deterministic: equal coordinates are ordered by index.
+pub fn leaf_order(points: &[[f64; 3]], dim: u32) -> Vec<u32> {
+    let axes = if dim == 2 { 2 } else { 3 };
+    let levels = levels(points.len());
+    let mut slots = vec![u32::MAX; 1 << levels];
+    let mut idx: Vec<u32> = (0..points.len() as u32).collect();
+    // (first slot, slot count, the points' range in idx)
+    let mut todo = vec![(0usize, 1usize << levels, 0usize, idx.len())];
+    while let Some((slot, width, a, b)) = todo.pop() {
+        let part = &mut idx[a..b];
+        if part.len() <= 1 || width == 1 {
+            slots[slot..slot + part.len()].copy_from_slice(part);
+            continue;
+        }
+        let mut lo = [f64::INFINITY; 3];
+        let mut hi = [f64::NEG_INFINITY; 3];
+        for &i in part.iter() {
+            for ax in 0..axes {
+                lo[ax] = lo[ax].min(points[i as usize][ax]);
+                hi[ax] = hi[ax].max(points[i as usize][ax]);
+            }
+        }
+        let axis = (0..axes)
+            .max_by(|&x, &y| (hi[x] - lo[x]).total_cmp(&(hi[y] - lo[y])))
+            .unwrap_or(0);
+        let half = part.len().div_ceil(2);
+        part.select_nth_unstable_by(half - 1, |&x, &y| {
+            points[x as usize][axis]
+                .total_cmp(&points[y as usize][axis])
+                .then(x.cmp(&y))
+        });
+        let w = width / 2;
+        todo.push((slot, w, a, a + half));
+        todo.push((slot + w, w, a + half, b));
+    }
+    slots
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -89,13 +131,38 @@ mod tests {
     }
 
     #[test]
+    fn leaf_order_splits_the_longest_side_at_the_median() {
+        // 5 points on a line along y: 3 to the left subtree (slots 0..4), 2 to the right
+        let pts: Vec<[f64; 3]> = [3.0, 0.0, 4.0, 1.0, 2.0]
+            .iter()
+            .map(|&y| [0.0, y, 0.0])
+            .collect();
+        let slots = leaf_order(&pts, 3);
+        assert_eq!(slots.len(), 8);
+        assert_eq!(slots, vec![1, 3, 4, u32::MAX, 0, u32::MAX, 2, u32::MAX]);
+        // every point exactly once
+        let pts: Vec<[f64; 3]> = (0..1000)
+            .map(|i| [(i % 37) as f64, (i % 11) as f64 * 0.01, 0.0])
+            .collect();
+        let mut seen: Vec<u32> = leaf_order(&pts, 2)
+            .into_iter()
+            .filter(|&i| i != u32::MAX)
+            .collect();
+        seen.sort_unstable();
+        assert_eq!(seen, (0..1000).collect::<Vec<u32>>());
+    }
+
+    #[test]
     fn morton_order_follows_the_z_curve() {
         // a 4×4 grid of points: the Z curve visits each 2×2 quadrant in turn
         let pts: Vec<[f64; 3]> = (0..16)
             .map(|i| [(i % 4) as f64, (i / 4) as f64, 0.0])
             .collect();
         let order = morton_order(&pts, 2);
-        assert_eq!(order, vec![0, 1, 4, 5, 2, 3, 6, 7, 8, 9, 12, 13, 10, 11, 14, 15]);
+        assert_eq!(
+            order,
+            vec![0, 1, 4, 5, 2, 3, 6, 7, 8, 9, 12, 13, 10, 11, 14, 15]
+        );
         // 3D: the first octant's 8 corners come first
         let pts: Vec<[f64; 3]> = (0..64)
             .map(|i| [(i % 4) as f64, (i / 4 % 4) as f64, (i / 16) as f64])

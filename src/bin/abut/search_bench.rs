@@ -212,11 +212,18 @@ pub fn run(a: &BenchArgs) -> abut::Result<()> {
         eprintln!("search within {r} facet sizes, {slaves} slaves");
         rows.extend(race(&sc, r, &devices)?);
     }
-    eprintln!("the floor: 1,000 slaves on {} facets", 2 * floor_side * floor_side);
+    eprintln!(
+        "the floor: 1,000 slaves on {} facets",
+        2 * floor_side * floor_side
+    );
     let floor_scene = scene(floor_side, 1_000)?;
     let floor = race(&floor_scene, 1.0, &devices)?;
     let mut md = String::new();
-    let _ = writeln!(md, "# abut bench --search{}\n", if a.quick { " --quick" } else { "" });
+    let _ = writeln!(
+        md,
+        "# abut bench --search{}\n",
+        if a.quick { " --quick" } else { "" }
+    );
     let _ = writeln!(md, "- machine: {}", machine());
     for d in &devices {
         let _ = writeln!(md, "- device: {d}");
@@ -247,7 +254,11 @@ pub fn run(a: &BenchArgs) -> abut::Result<()> {
         }
     };
     table(&mut md, &rows);
-    let _ = writeln!(md, "\n## The floor: 1,000 slaves on {} facets, radius 1 facet\n", floor_scene.tris.len());
+    let _ = writeln!(
+        md,
+        "\n## The floor: 1,000 slaves on {} facets, radius 1 facet\n",
+        floor_scene.tris.len()
+    );
     table(&mut md, &floor);
     std::fs::create_dir_all(&a.out).map_err(|e| io_err(&a.out, e))?;
     let md_path = a.out.join("search.md");
@@ -259,8 +270,11 @@ pub fn run(a: &BenchArgs) -> abut::Result<()> {
         "floor": floor,
     });
     let json_path = a.out.join("search.json");
-    std::fs::write(&json_path, serde_json::to_string_pretty(&json).unwrap_or_default())
-        .map_err(|e| io_err(&json_path, e))?;
+    std::fs::write(
+        &json_path,
+        serde_json::to_string_pretty(&json).unwrap_or_default(),
+    )
+    .map_err(|e| io_err(&json_path, e))?;
     println!("{md}");
     println!("wrote {} and {}", md_path.display(), json_path.display());
     Ok(())

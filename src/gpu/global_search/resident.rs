@@ -103,9 +103,13 @@ fn initial_plan(
         ..Default::default()
     };
     for tp in tree_passes(params.tree_levels) {
-        slots
-            .tree_passes
-            .push(add_slot(&mut plan, 1 << tp.bottom, TREE_WORKGROUP, g, max_dim)?);
+        slots.tree_passes.push(add_slot(
+            &mut plan,
+            1 << tp.bottom,
+            TREE_WORKGROUP,
+            g,
+            max_dim,
+        )?);
     }
     for level in &work_levels.levels {
         slots
@@ -427,7 +431,12 @@ impl GpuSearch {
         global.push(Indirect(&p.nearest_chunks, &g.nearest_chunks, &b.args, 0));
         global.push(Indirect(&p.nearest_ties, &g.nearest_ties, &b.args, 0));
         if r.self_contact {
-            global.push(Indirect(&p.nearest_crowded, &g.nearest_crowded, plan, s.slaves));
+            global.push(Indirect(
+                &p.nearest_crowded,
+                &g.nearest_crowded,
+                plan,
+                s.slaves,
+            ));
         }
         global.push(Indirect(&p.nearest_facet, &g.nearest_facet, plan, s.slaves));
         global.push(Indirect(
