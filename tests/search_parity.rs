@@ -399,8 +399,19 @@ fn each_step_matches_its_mirror_in_split_runs() {
     let leaves = order.len().next_power_of_two();
     assert_eq!(cpu_boxes.len(), 4 * leaves);
     let frame = cpu.stats.grid.frame;
+    let mut placed: Vec<u32> = order.iter().copied().filter(|&f| f != u32::MAX).collect();
+    placed.sort_unstable();
+    assert_eq!(
+        placed,
+        (0..master.active.len() as u32).collect::<Vec<_>>(),
+        "every active facet in exactly one leaf slot"
+    );
     for (j, &f) in order.iter().enumerate() {
         let (lo, hi) = (cpu_boxes[2 * (leaves + j)], cpu_boxes[2 * (leaves + j) + 1]);
+        if f == u32::MAX {
+            assert!(lo[0] > hi[0], "leaf {j}: an empty slot with a box");
+            continue;
+        }
         for &n in master.facets[master.active[f as usize] as usize].nodes() {
             let x = m.positions()[n as usize];
             for a in 0..3 {

@@ -1,12 +1,15 @@
-//! The uniform bucket grid of the global search, sized on the host.
+//! The frame of the search kernels and the box it covers, fitted on the host (and on the device
+//! for device-resident increments, `schedule.wgsl`). The search itself walks a tree
+//! (`search::tree`); the box, kept as a grid of cells, is what `to_local` checks a master node
+//! against (one leaving it moves the frame) and what the frame's extent is measured by.
 
 use crate::error::{Error, Result};
 
 /// Largest number of cells a grid may have.
 pub const MAX_CELLS: u64 = 1 << 24;
 
-/// A uniform grid of cubic cells covering the master surface's bounding box grown by the
-/// search radius, and the frame the kernels work in: coordinates are stored relative to
+/// The box the kernels' frame covers — the master surface's bounding box grown by the search
+/// radius, as a grid of cubic cells — and the frame itself: coordinates are stored relative to
 /// `frame` in f32, so a small mesh far from the model origin keeps its precision. The frame
 /// comes from the master's own extent, not from the radius, so that a search radius far larger
 /// than the master (10⁶ model sizes, say) does not turn the gaps into round-off.
