@@ -1,5 +1,5 @@
 //! Criterion benches of abut's kernels, on every adapter found and the CPU mirror: the global
-//! search (bin_count → scan → bin_scatter → nearest_facet), a tracked increment
+//! search (tree_refit → nearest_facet), a tracked increment
 //! (motion + local_search) and a penalty increment (search, then nodal_normals + penalty,
 //! scatter_forces and gather), on a plate of 2,500 quads with 10,000 slave nodes around it.
 //! The speed-against-error report is `abut bench`; this is the statistics of single kernels.

@@ -1,4 +1,4 @@
-// scan.wgsl — step 2 of the bucket sort: exclusive prefix sum of the cell counts, in place.
+// scan.wgsl — exclusive prefix sum in place: the nearest facet's chunk counts into first work items.
 // CPU mirror: src/cpu/scan.rs.
 //
 // The array is scanned in blocks of SCAN_BLOCK words; each block's total goes to the next level,

@@ -1,5 +1,6 @@
 // schedule.wgsl — the schedule of a device-resident increment, decided on the device: whether
-// this increment searches globally, the grid it searches in, and the dispatch sizes of every
+// this increment searches globally, the frame's box (a grid of cells: to_local checks the master
+// against it) and the search tree's round-off margin, and the dispatch sizes of every
 // pass that depends on that choice. CPU mirror: src/cpu/schedule.rs.
 //
 // Bindings: 1 plan (the search's plan words, PLAN_* in common.wgsl; its SearchParams words are
@@ -50,7 +51,9 @@ fn cell_count(ext: vec3<f32>, h: f32, dim: u32) -> f32 {
     return n;
 }
 
-// Fits the grid to the plan's box into the plan's SearchParams words; false when it cannot.
+// Fits the grid to the plan's box into the plan's SearchParams words, with the tree's box margin
+// (32 ulps of the largest master coordinate in the frame, as search::box_margin on the host);
+// false when it cannot.
 fn fit_grid() -> bool {
     if (status[STATUS_BOX] > status[STATUS_BOX + 3u]) { return false; } // no finite master node
     let dim = param(P_DIM);

@@ -1,7 +1,7 @@
 //! The device-resident increment (`Contact::encode_increment`) against the host-array one
 //! (`Contact::penalty_step`): the same forces and statistics over increments with local and
 //! global searches, friction, balanced pairs and a motion-budget trigger; no readback and no
-//! wait per increment; a jump past the budget caught in the same increment; bins that spill.
+//! wait per increment; a jump past the budget caught in the same increment.
 
 mod common;
 

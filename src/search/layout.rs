@@ -54,7 +54,7 @@ pub const STATUS_ROW_SCALE: usize = 17;
 /// (WGSL: `STATUS_FALLBACK`).
 pub const STATUS_FALLBACK: usize = 18;
 /// Status word: master facets collapsed at the global search's positions, skipped by the search
-/// (WGSL: `STATUS_COLLAPSED`; counted by bin_scatter).
+/// (WGSL: `STATUS_COLLAPSED`; counted by tree_refit).
 pub const STATUS_COLLAPSED: usize = 19;
 /// Status words: order-preserving bits (`ordered_bits`) of the box of the master nodes the
 /// increment's positions put the master in, min xyz then max xyz (WGSL: `STATUS_BOX`; raised by
