@@ -1,6 +1,6 @@
 //! The CPU path runs its kernels' invocations on all cores (rayon), and its results are the
-//! same bits on one thread and on many: global searches (crowded cells whose slaves have many
-//! work items, self-contact), local searches and penalty increments with friction.
+//! same bits on one thread and on many: global searches (walks cut off and finished by many
+//! chunks, self-contact), local searches and penalty increments with friction.
 
 use abut::mesh::{plate_quads, point_cloud, sphere_triangles};
 use abut::model::Stiffness;
@@ -19,8 +19,9 @@ fn bytes<T: bytemuck::Pod>(v: &[T]) -> Vec<u8> {
     bytemuck::cast_slice(v).to_vec()
 }
 
-/// A dense plate (40 × 40 quads, 3,000 slaves over it, some slaves with 10⁴ facets in their
-/// cell through a wide radius) and a self-contact sphere: global then local searches.
+/// A dense plate (40 × 40 quads, 3,000 slaves over it, a narrow and a wide radius), a
+/// self-contact sphere, and slaves at a sphere's centre whose walks are cut off: global then
+/// local searches.
 fn searches() -> Vec<Vec<u8>> {
     let mut out = Vec::new();
     for radius in [0.05, 3.0] {
@@ -58,6 +59,21 @@ fn searches() -> Vec<Vec<u8>> {
     let p = m.add_pair(Pair::new(set, s).search_radius(0.3)).unwrap();
     let mut search = GlobalSearch::new(&Device::cpu(), &m, p).unwrap();
     let g = search.run(m.positions()).unwrap();
+    out.push(bytes(&g.raw));
+    // slaves near the centre of a sphere of 20,000 triangles: every facet nearly as far, the
+    // walks reach their cap and the chunks (several per slave) finish them
+    let sphere = sphere_triangles(100, 100, 1.0, [0.0; 3]);
+    let mut m = Model::new_3d();
+    m.add_nodes(&sphere.positions, &vec![1.0; sphere.positions.len()])
+        .unwrap();
+    let s = m.add_surface(Surface::triangles(&sphere.facets)).unwrap();
+    let inside = point_cloud(300, [-0.01; 3], [0.01; 3], 9);
+    let r = m.add_nodes(&inside, &vec![1.0; inside.len()]).unwrap();
+    let set = m.add_node_set(&r.to_vec()).unwrap();
+    let p = m.add_pair(Pair::new(set, s).search_radius(2.0)).unwrap();
+    let mut search = GlobalSearch::new(&Device::cpu(), &m, p).unwrap();
+    let g = search.run(m.positions()).unwrap();
+    assert_eq!(g.stats.fallbacks, 300, "the walks were not cut off");
     out.push(bytes(&g.raw));
     out
 }
