@@ -65,10 +65,28 @@ pub struct StepReport {
     /// Slave nodes whose walk of the search tree reached its visit cap this increment and was
     /// finished in bounded chunks (the search stayed exact; many mean a badly fitting tree).
     pub fallbacks: usize,
+    /// Small and infinitesimal sliding (penalty pairs): slave nodes that got no anchor at the
+    /// first increment — they project onto no master facet — and so are not constrained
+    /// ([`Contact::anchoring`] names them).
+    pub unanchored: usize,
     /// `stable_dt` is finite although no slave node is in contact: it is the limit of springs of
     /// slave nodes within the search radius that have not touched yet (one may close within an
     /// increment, so their limit applies before contact).
     pub stable_dt_before_contact: bool,
+}
+
+/// Small or infinitesimal sliding: what one pass of a pair anchored at the first increment.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct Anchoring {
+    /// The pair.
+    pub pair: PairId,
+    /// The slave nodes of this pass (the master's nodes for a balanced pair's second pass).
+    pub slaves: usize,
+    /// Of which anchored to a master facet.
+    pub anchored: usize,
+    /// The others (model node ids): they project onto no master facet — beyond a free edge,
+    /// or beyond the pair's stated search radius — and are not constrained.
+    pub unanchored: Vec<u32>,
 }
 
 /// Contact output variables of one pair after an increment (when requested).
@@ -418,6 +436,29 @@ impl Contact {
     /// pass of a balanced pair counts).
     pub fn global_searches(&self) -> u64 {
         self.global_total
+    }
+
+    /// Small and infinitesimal sliding: each anchored pass's count of anchored slave nodes and
+    /// the nodes left unconstrained, after the first increment (empty before it and for
+    /// finite sliding). Penalty passes first, then kinematic ones.
+    pub fn anchoring(&self) -> Vec<Anchoring> {
+        let penalty = self.pairs.iter().map(|p| (p.id, &p.search));
+        let kinematic = self.kinematic.iter().flat_map(|k| {
+            std::iter::once((k.id, &k.search)).chain(k.back.iter().map(|b| (k.id, &b.0)))
+        });
+        penalty
+            .chain(kinematic)
+            .filter(|(_, s)| s.anchors().is_some())
+            .map(|(pair, s)| {
+                let unanchored = s.unanchored();
+                Anchoring {
+                    pair,
+                    slaves: s.slaves().len(),
+                    anchored: s.slaves().len() - unanchored.len(),
+                    unanchored,
+                }
+            })
+            .collect()
     }
 
     /// Whether any pair is enforced by penalty.

@@ -22,7 +22,8 @@ pub mod search;
 pub mod status;
 
 pub use contact::{
-    Contact, ContactStatus, KinematicReport, OverclosureReport, PairOutput, ResidentIo, StepReport,
+    Anchoring, Contact, ContactStatus, KinematicReport, OverclosureReport, PairOutput, ResidentIo,
+    StepReport,
 };
 pub use device::{Device, Traffic};
 pub use error::{Error, Result};

@@ -617,3 +617,67 @@ damping = 0.1
         assert!((axis.pressure / exact - 1.0).abs() < 0.02);
     }
 }
+
+/// Small sliding in a scene: the face nodes of a disc beyond the end of a short rigid flat
+/// project onto no facet; the summary counts the anchored ones, names the others and warns
+/// (finite sliding: neither).
+#[test]
+fn a_scene_names_the_slave_nodes_small_sliding_left_out() {
+    for sliding in ["small", "finite"] {
+        let text = format!(
+            r#"
+title = "axisymmetric disc under a short rigid flat"
+[run]
+end_time = 2.0
+[[material]]
+name = "m"
+young = 1.0
+poisson = 0.3
+density = 1.0
+[[part]]
+name = "disc"
+shape = "rect"
+axisymmetric = true
+material = "m"
+origin = [0.0, 0.0, 0.0]
+size = [1.0, 0.5, 0.0]
+divisions = [8, 4, 0]
+[[part]]
+name = "flat"
+shape = "line"
+origin = [-0.5, -0.0005, 0.0]
+size = [1.1, 0.0, 0.0]
+divisions = [4, 0, 0]
+motion = "velocity"
+velocity = [0.0, 2.5e-4, 0.0]
+mass = 1.0
+[[boundary]]
+part = "disc"
+face = "y+"
+fix = ["y"]
+[[contact]]
+slave = "disc"
+slave_face = "y-"
+master = "flat"
+master_face = "y+"
+sliding = "{sliding}"
+stiffness_per_area = 1000.0
+"#
+        );
+        let s = run(&Scene::parse(&text).unwrap(), &Device::cpu(), None).unwrap();
+        if sliding == "small" {
+            // the flat ends at x = 0.6: the nodes at 0.625, 0.75, 0.875 and 1 are beyond it
+            assert_eq!(s.anchored_slaves, 5, "{s:?}");
+            assert_eq!(s.unanchored_slaves.len(), 4, "{:?}", s.unanchored_slaves);
+            assert_eq!(s.warnings.len(), 1, "{:?}", s.warnings);
+            assert!(
+                s.warnings[0].contains("4 of 9 slave nodes") && s.warnings[0].contains("not"),
+                "{}",
+                s.warnings[0]
+            );
+        } else {
+            assert_eq!(s.anchored_slaves, 0);
+            assert!(s.unanchored_slaves.is_empty() && s.warnings.is_empty());
+        }
+    }
+}

@@ -327,3 +327,119 @@ fn planes_that_stop_representing_the_master_are_reported() {
         }
     }
 }
+
+/// A rigid cylinder's arc (120°) over a long row of slave nodes, pressed in at the middle, the
+/// arc drawn finely (facets a twentieth of the slave spacing) and coarsely (the reverse), no
+/// search radius stated: with small and infinitesimal sliding every slave whose normal meets
+/// the arc is anchored however far it starts (up to a whole radius away: hundreds of fine
+/// facets), the slaves beyond the arc's ends are named, the counts are reported
+/// (`Contact::anchoring`, `StepReport::unanchored`), and the forces equal finite sliding's.
+#[test]
+fn every_slave_that_projects_is_anchored_however_far() {
+    use abut::mesh::arc_segments;
+    // pressed in by less than a fine facet's length: within finite sliding's default radius
+    let delta = 0.001;
+    let centre = [0.0, 1.0 - delta, 0.0];
+    for (segments, n_slaves) in [(1200usize, 61usize), (24, 601)] {
+        let arc = arc_segments(
+            centre,
+            1.0,
+            210f64.to_radians(),
+            330f64.to_radians(),
+            segments,
+            1.0,
+        );
+        let xs: Vec<f64> = (0..n_slaves)
+            .map(|k| -2.4 + 4.8 * k as f64 / (n_slaves - 1) as f64)
+            .collect();
+        // the f64 expectation: a slave is left out when its nearest point on the arc is one of
+        // the arc's two end nodes (beyond the free ends)
+        let ends = [arc.positions[0], arc.positions[segments]];
+        let beyond: Vec<bool> = xs
+            .iter()
+            .map(|&x| {
+                let p = [x, 0.0];
+                let mut best = (f64::INFINITY, false);
+                for s in &arc.facets {
+                    let (a, b) = (arc.positions[s[0] as usize], arc.positions[s[1] as usize]);
+                    let ab = [b[0] - a[0], b[1] - a[1]];
+                    let t = (((p[0] - a[0]) * ab[0] + (p[1] - a[1]) * ab[1])
+                        / (ab[0] * ab[0] + ab[1] * ab[1]))
+                        .clamp(0.0, 1.0);
+                    let q = [a[0] + t * ab[0], a[1] + t * ab[1]];
+                    let d = ((p[0] - q[0]).powi(2) + (p[1] - q[1]).powi(2)).sqrt();
+                    let at_end = ends
+                        .iter()
+                        .any(|e| (e[0] - q[0]).abs() + (e[1] - q[1]).abs() < 1e-12);
+                    if d < best.0 - 1e-12 {
+                        best = (d, at_end);
+                    }
+                }
+                best.1
+            })
+            .collect();
+        let expected_out = beyond.iter().filter(|&&b| b).count();
+        assert!(
+            expected_out > 0 && expected_out < n_slaves / 2,
+            "the case needs slaves on both sides of the arc's ends: {expected_out}"
+        );
+        for d in devices() {
+            let mut forces: Vec<Vec<[f64; 3]>> = Vec::new();
+            for sliding in [Sliding::Finite, Sliding::Small, Sliding::Infinitesimal] {
+                let mut m = Model::new_2d();
+                let arc2: Vec<[f64; 2]> = arc.positions.iter().map(|p| [p[0], p[1]]).collect();
+                m.add_nodes_2d(&arc2, &vec![1e6; arc2.len()]).unwrap();
+                let s = m.add_surface(Surface::segments(&arc.facets)).unwrap();
+                let row: Vec<[f64; 2]> = xs.iter().map(|&x| [x, 0.0]).collect();
+                let r = m.add_nodes_2d(&row, &vec![1.0; row.len()]).unwrap();
+                let set = m.add_node_set(&r.to_vec()).unwrap();
+                m.add_pair(
+                    Pair::new(set, s)
+                        .sliding(sliding)
+                        .enforce(Enforce::Penalty(Penalty {
+                            stiffness: Stiffness::Absolute(1e3),
+                            ..Default::default()
+                        })),
+                )
+                .unwrap();
+                let mut c = Contact::new(&d, &m).unwrap();
+                let v = vec![[0.0; 3]; m.positions().len()];
+                let rep = c.penalty_step(m.positions(), &v, 1e-4).unwrap().clone();
+                let what = format!("{segments} segments, {n_slaves} slaves, {sliding:?}, {d}");
+                assert!(rep.active > 0, "{what}: nothing in contact");
+                let anchoring = c.anchoring();
+                if sliding == Sliding::Finite {
+                    assert!(anchoring.is_empty(), "{what}: {anchoring:?}");
+                    assert_eq!(rep.unanchored, 0, "{what}");
+                } else {
+                    assert_eq!(anchoring.len(), 1, "{what}");
+                    let a = &anchoring[0];
+                    let out: Vec<u32> = (0..n_slaves)
+                        .filter(|&k| beyond[k])
+                        .map(|k| r.start + k as u32)
+                        .collect();
+                    assert_eq!(a.unanchored, out, "{what}: the slaves left out");
+                    assert_eq!(a.anchored, n_slaves - out.len(), "{what}");
+                    assert_eq!(a.slaves, n_slaves, "{what}");
+                    assert_eq!(rep.unanchored, out.len(), "{what}: the report");
+                }
+                forces.push(rep.forces.clone());
+            }
+            let scale = forces[0]
+                .iter()
+                .flatten()
+                .fold(0.0f64, |x, f| x.max(f.abs()));
+            assert!(scale > 0.0);
+            for (k, f) in forces.iter().enumerate().skip(1) {
+                for (i, (a, b)) in forces[0].iter().zip(f).enumerate() {
+                    for ax in 0..3 {
+                        assert!(
+                            (a[ax] - b[ax]).abs() <= 1e-5 * scale,
+                            "{segments} segments, {d}: sliding {k}, node {i}: {a:?} finite, {b:?}"
+                        );
+                    }
+                }
+            }
+        }
+    }
+}

@@ -639,6 +639,7 @@ impl Contact {
             slipping: st.slipping as usize,
             global_searches: st.global_searches as usize,
             fallbacks: st.fallbacks as usize,
+            unanchored: self.pairs.iter().map(|p| p.search.unanchored().len()).sum(),
             stable_dt_before_contact: st.active == 0 && limit(st.stable_dt).is_finite(),
         };
         self.global_total += st.global_searches as u64;

@@ -173,6 +173,14 @@ pub struct Summary {
     /// In words: what governed, by how much contact lowered the increment, and — when it did
     /// so before any contact force acted — why.
     pub increment_note: String,
+    /// Small and infinitesimal sliding: slave nodes anchored to a master facet at the start,
+    /// over every anchored pass.
+    pub anchored_slaves: usize,
+    /// Small and infinitesimal sliding: slave nodes (model node ids) that project onto no
+    /// master facet at the start and so are not constrained.
+    pub unanchored_slaves: Vec<u32>,
+    /// What a user should know before trusting the results (also printed by `abut run`).
+    pub warnings: Vec<String>,
     /// First time a contact force acted (start of its increment; NaN if none).
     pub contact_start: f64,
     /// Last time a contact force acted (end of its increment).
@@ -594,8 +602,32 @@ pub fn run(scene: &Scene, device: &Device, output: Option<&Path>) -> Result<Summ
         contact_start,
         scene.run.contact_safety,
     );
+    let anchoring = contact.as_ref().map(|c| c.anchoring()).unwrap_or_default();
+    let mut warnings = Vec::new();
+    for a in anchoring.iter().filter(|a| !a.unanchored.is_empty()) {
+        let shown: Vec<String> = a.unanchored.iter().take(8).map(|n| n.to_string()).collect();
+        warnings.push(format!(
+            "contact pair {}: {} of {} slave nodes project onto no master facet and are not \
+             constrained (small sliding anchors each slave once, at the start): nodes {}{}",
+            a.pair.0,
+            a.unanchored.len(),
+            a.slaves,
+            shown.join(", "),
+            if a.unanchored.len() > shown.len() {
+                ", …"
+            } else {
+                ""
+            }
+        ));
+    }
     let summary = Summary {
         title: scene.title.clone(),
+        anchored_slaves: anchoring.iter().map(|a| a.anchored).sum(),
+        unanchored_slaves: anchoring
+            .iter()
+            .flat_map(|a| a.unanchored.iter().copied())
+            .collect(),
+        warnings,
         reference: scene.reference.clone(),
         device: device.to_string(),
         built: built_list,

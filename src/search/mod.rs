@@ -216,6 +216,9 @@ pub struct GlobalSearch {
     sliding: crate::model::Sliding,
     /// Small sliding: the anchors, fixed at the first global search.
     anchors: Option<Vec<layout::Anchor>>,
+    /// Small sliding: how far the anchoring search reaches (the pair's stated search radius);
+    /// `None`: every master facet, however far a slave starts (the seed's one global search).
+    anchor_reach: Option<f64>,
     /// Device-resident increments: the origin the kernels' frame is relative to.
     resident_origin: Option<[f64; 3]>,
     /// Device-resident increments: the extent of the grid the frame was fitted to.
@@ -237,6 +240,7 @@ impl GlobalSearch {
         let slaves = model.node_set(p.slave)?.to_vec();
         let radius = p.search_radius.unwrap_or_else(|| master.mean_facet_size());
         let mut search = Self::from_parts(device, model, master, slaves, radius)?;
+        search.set_anchor_reach(p.search_radius);
         if let Some(schedule) = p.schedule {
             search.set_schedule(schedule)?;
         }
@@ -344,6 +348,7 @@ impl GlobalSearch {
             crowded: false,
             sliding: crate::model::Sliding::Finite,
             anchors: None,
+            anchor_reach: None,
             resident_origin: None,
             resident_span: 0.0,
         })
@@ -352,6 +357,55 @@ impl GlobalSearch {
     /// Sets the sliding formulation (before the first increment).
     pub fn set_sliding(&mut self, sliding: crate::model::Sliding) {
         self.sliding = sliding;
+    }
+
+    /// Small sliding: how far the anchoring search reaches — `Some(r)`: facets within `r` of a
+    /// slave (the pair's stated search radius); `None` (the default of a search made with
+    /// [`GlobalSearch::from_parts`], and of a pair without a radius): every master facet, so
+    /// every slave that projects onto the master is anchored however far it starts. Before the
+    /// first increment.
+    pub fn set_anchor_reach(&mut self, reach: Option<f64>) {
+        self.anchor_reach = reach;
+    }
+
+    /// Small sliding: the slave nodes (model node ids) that got no anchor at the first
+    /// increment — none of the master's facets lies along their normal from the slave (beyond
+    /// a free edge) or within the anchoring search's reach — and so are not constrained; empty
+    /// for finite sliding and before the first increment.
+    pub fn unanchored(&self) -> Vec<u32> {
+        match &self.anchors {
+            Some(a) => a
+                .iter()
+                .zip(self.slave_ids.iter())
+                .filter(|(a, _)| a.facet == NO_FACET)
+                .map(|(_, &s)| s)
+                .collect(),
+            None => Vec::new(),
+        }
+    }
+
+    /// The reach of the anchoring search at `positions`: the stated one, or one that holds
+    /// every master facet from every slave (twice the diagonal of their common box).
+    fn anchoring_radius(&self, positions: &[[f64; 3]]) -> f64 {
+        if let Some(r) = self.anchor_reach {
+            return r;
+        }
+        let mut lo = [f64::INFINITY; 3];
+        let mut hi = [f64::NEG_INFINITY; 3];
+        let master_nodes = self.master.nodes();
+        for x in master_nodes
+            .iter()
+            .chain(self.slave_ids.iter())
+            .filter_map(|&n| positions.get(n as usize))
+        {
+            for a in 0..3 {
+                lo[a] = lo[a].min(x[a]);
+                hi[a] = hi[a].max(x[a]);
+            }
+        }
+        let d2: f64 = (0..3).map(|a| (hi[a] - lo[a]).powi(2)).sum();
+        // within f32 (the kernels square the radius), and never below the search's own
+        (2.0 * d2.sqrt()).min(1.0e18).max(self.radius)
     }
 
     /// Small sliding: the anchors (after the first increment).
@@ -439,14 +493,21 @@ impl GlobalSearch {
     ) -> Result<(SearchResult, [u32; layout::STATUS_WORDS])> {
         let mut anchored_first = false;
         loop {
+            // small sliding's first increment: the global search alone, to anchor the slaves,
+            // reaching as far as the pair allows; then the same increment from the anchors
+            let anchoring = self.sliding != crate::model::Sliding::Finite && self.anchors.is_none();
             let prepared = match global {
+                Some(_) if anchoring => {
+                    let reach = self.anchoring_radius(positions);
+                    let own = std::mem::replace(&mut self.radius, reach);
+                    let prepared = self.prepare(positions);
+                    self.radius = own;
+                    prepared?
+                }
                 Some(_) => self.prepare(positions)?,
                 None => self.prepare_local(positions)?,
             };
             let local = global.is_none();
-            // small sliding's first increment: the global search alone, to anchor the slaves;
-            // then the same increment from the anchors
-            let anchoring = self.sliding != crate::model::Sliding::Finite && self.anchors.is_none();
             let (raw, status) = match &mut self.executor {
                 Executor::Gpu(g) => g.run_mode(&prepared, local, true)?,
                 Executor::Cpu(c) => c.run_mode(&prepared, local)?,

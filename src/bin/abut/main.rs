@@ -173,6 +173,9 @@ fn run_scene(a: &RunArgs) -> abut::Result<()> {
     println!("device: {device}");
     println!("scene: {}", scene.title);
     let summary = abut::scene::run(&scene, &device, a.output.as_deref())?;
+    for w in &summary.warnings {
+        eprintln!("abut: warning: {w}");
+    }
     // the per-node and per-sample lists go to summary.json only: here, how many there are
     let mut shown = serde_json::to_value(&summary).unwrap_or_default();
     for key in ["contact_nodes", "curve"] {
