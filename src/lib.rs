@@ -16,6 +16,7 @@ pub mod mesh;
 pub mod model;
 pub mod passes;
 pub mod penalty;
+pub mod query;
 #[cfg(feature = "solver")]
 pub mod scene;
 pub mod search;
