@@ -99,6 +99,33 @@ impl fmt::Debug for GpuContext {
     }
 }
 
+/// A graphics API to take a GPU adapter from ([`Device::choose`]).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Backend {
+    /// Vulkan (Linux, Windows, Android; Mesa's lavapipe is a software Vulkan adapter).
+    Vulkan,
+    /// OpenGL / OpenGL ES (Mesa's llvmpipe is a software GL adapter).
+    Gl,
+    /// Metal (macOS, iOS).
+    Metal,
+    /// Direct3D 12 (Windows).
+    Dx12,
+    /// Any of them, the best adapter first.
+    Any,
+}
+
+impl Backend {
+    fn wgpu(self) -> wgpu::Backends {
+        match self {
+            Backend::Vulkan => wgpu::Backends::VULKAN,
+            Backend::Gl => wgpu::Backends::GL,
+            Backend::Metal => wgpu::Backends::METAL,
+            Backend::Dx12 => wgpu::Backends::DX12,
+            Backend::Any => wgpu::Backends::all(),
+        }
+    }
+}
+
 /// Which executor a [`Device`] runs.
 #[derive(Clone, Debug)]
 pub enum DeviceKind {
@@ -151,6 +178,27 @@ impl Device {
         }
         Err(last_err.unwrap_or_else(|| Error::NoAdapter {
             detail: search_detail(),
+        }))
+    }
+
+    /// The best GPU adapter of `backend` whose name contains `name` (case-insensitive; `None`:
+    /// any name), chosen in code: the environment's `WGPU_BACKEND` and `WGPU_ADAPTER_NAME` do
+    /// not apply. [`Error::NoAdapter`] names what was asked when there is none. The device
+    /// prints its name and backend (`lavapipe` and `llvmpipe` are told apart by the backend).
+    pub fn choose(backend: Backend, name: Option<&str>) -> Result<Self> {
+        let name = name.map(str::to_lowercase);
+        let mut last_err = None;
+        for adapter in ranked(backend.wgpu(), name.as_deref()) {
+            match GpuContext::new(adapter) {
+                Ok(ctx) => return Ok(Self::from_context(ctx)),
+                Err(e) => last_err = Some(e),
+            }
+        }
+        Err(last_err.unwrap_or_else(|| Error::NoAdapter {
+            detail: format!(
+                ": backend {backend:?}{}",
+                name.map_or(String::new(), |n| format!(", name containing \"{n}\""))
+            ),
         }))
     }
 
@@ -326,9 +374,18 @@ pub(crate) fn instance_flags() -> wgpu::InstanceFlags {
 }
 
 /// Adapters of `backends` that can run compute shaders, filtered by the environment
-/// (`WGPU_BACKEND` narrows `backends` further), best first.
+/// (`WGPU_BACKEND` narrows `backends` further, `WGPU_ADAPTER_NAME` the names), best first.
 fn ranked_adapters(backends: wgpu::Backends) -> Vec<wgpu::Adapter> {
     let backends = wgpu::Backends::from_env().map_or(backends, |env| env & backends);
+    let name = std::env::var("WGPU_ADAPTER_NAME")
+        .ok()
+        .map(|n| n.to_lowercase());
+    ranked(backends, name.as_deref())
+}
+
+/// Adapters of `backends` that can run compute shaders and whose lowercased name contains
+/// `name` (already lowercase), best first.
+fn ranked(backends: wgpu::Backends, name: Option<&str>) -> Vec<wgpu::Adapter> {
     if backends.is_empty() {
         return Vec::new();
     }
@@ -337,19 +394,13 @@ fn ranked_adapters(backends: wgpu::Backends) -> Vec<wgpu::Adapter> {
     desc.flags = instance_flags();
     let instance = wgpu::Instance::new(desc);
     let mut adapters = pollster::block_on(instance.enumerate_adapters(backends));
-    let name = std::env::var("WGPU_ADAPTER_NAME")
-        .ok()
-        .map(|n| n.to_lowercase());
     adapters.retain(|a| {
         let info = a.get_info();
         let compute = a
             .get_downlevel_capabilities()
             .flags
             .contains(wgpu::DownlevelFlags::COMPUTE_SHADERS);
-        compute
-            && name
-                .as_ref()
-                .is_none_or(|n| info.name.to_lowercase().contains(n))
+        compute && name.is_none_or(|n| info.name.to_lowercase().contains(n))
     });
     adapters.sort_by_key(|a| {
         let info = a.get_info();

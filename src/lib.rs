@@ -26,7 +26,7 @@ pub use contact::{
     Anchoring, Contact, ContactStatus, KinematicReport, OverclosureReport, PairOutput, ResidentIo,
     StepReport,
 };
-pub use device::{Device, Traffic};
+pub use device::{Backend, Device, Traffic};
 pub use error::{Error, Result};
 pub use kinematic::BodyState;
 pub use model::{

@@ -1,8 +1,9 @@
 //! Adapter choice: the environment narrows it, a missing adapter is an error for `gpu()` and a
-//! CPU fallback with a notice for `auto()`, `ABUT_BACKEND` selects the path, and every device
-//! says what it is. One test, so that changing the environment races with nothing.
+//! CPU fallback with a notice for `auto()`, `ABUT_BACKEND` selects the path, `Device::choose`
+//! takes a backend and a name in code whatever the environment says, and every device says
+//! what it is. One test, so that changing the environment races with nothing.
 
-use abut::{Device, Error};
+use abut::{Backend, Device, Error};
 
 fn with_env<T>(vars: &[(&str, Option<&str>)], f: impl FnOnce() -> T) -> T {
     let saved: Vec<(String, Option<String>)> = vars
@@ -62,11 +63,51 @@ fn adapter_choice_follows_the_environment() {
             )
             .unwrap()
             .is_gpu()));
-            // WGPU_BACKEND narrows: each backend found alone is chosen alone
+            // WGPU_BACKEND narrows: each backend found alone is chosen alone; and in code,
+            // Device::choose takes that backend (and a name) whatever the environment says
             for d in Device::all_gpus().into_iter().flatten() {
                 let b = d.backend_name();
                 let only = with_env(&[("WGPU_BACKEND", Some(&b))], Device::gpu).unwrap();
                 assert_eq!(only.backend_name(), b);
+                let backend = match b.as_str() {
+                    "vulkan" => Backend::Vulkan,
+                    "gl" => Backend::Gl,
+                    "metal" => Backend::Metal,
+                    "dx12" => Backend::Dx12,
+                    other => panic!("an unexpected backend {other}"),
+                };
+                let info = d.to_string();
+                let name = info.split(" (").next().unwrap().to_string();
+                let chosen = with_env(
+                    &[
+                        ("WGPU_BACKEND", Some("metal")),
+                        ("WGPU_ADAPTER_NAME", Some("no-such-adapter-anywhere")),
+                    ],
+                    || Device::choose(backend, Some(&name.to_uppercase())),
+                )
+                .unwrap();
+                assert_eq!(chosen.backend_name(), b, "{info}");
+                assert!(chosen.to_string().starts_with(&name), "{chosen}");
+                assert!(
+                    chosen.to_string().contains(&format!("{b} backend")),
+                    "{chosen}"
+                );
+                assert!(Device::choose(Backend::Any, Some(&name)).is_ok());
+            }
+            let e = Device::choose(Backend::Any, Some("no-such-adapter-anywhere")).unwrap_err();
+            assert!(matches!(e, Error::NoAdapter { .. }), "{e}");
+            assert!(e.to_string().contains("no-such-adapter-anywhere"), "{e}");
+            // the backends CI requires are there by name of backend alone
+            if let Ok(list) = std::env::var("ABUT_REQUIRE_BACKENDS") {
+                for want in list.split(',').map(str::trim) {
+                    let backend = match want {
+                        "vulkan" => Backend::Vulkan,
+                        "gl" => Backend::Gl,
+                        _ => continue,
+                    };
+                    let d = Device::choose(backend, None).unwrap();
+                    assert_eq!(d.backend_name(), want);
+                }
             }
         }
         Err(e) if !require => eprintln!("\n*** SKIPPED the GPU half: {e} ***\n"),
