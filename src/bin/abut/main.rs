@@ -133,7 +133,56 @@ enum BackendArg {
     Cpu,
 }
 
+/// Mesa's drivers look for a Wayland display through `XDG_RUNTIME_DIR` when abut asks for
+/// adapters, and print `error: XDG_RUNTIME_DIR is invalid or not set in the environment.` — on
+/// every headless machine, before abut's first line, where a new user reads it as abut failing.
+/// abut draws nothing: when the variable does not name a directory, point it at a private one
+/// (mode 0700, under the temporary directory) before any adapter is probed.
+fn quiet_display_probe() {
+    let valid =
+        std::env::var_os("XDG_RUNTIME_DIR").is_some_and(|d| std::path::Path::new(&d).is_dir());
+    if valid {
+        return;
+    }
+    let user = std::env::var("USER")
+        .or_else(|_| std::env::var("LOGNAME"))
+        .unwrap_or_else(|_| "user".into());
+    for name in [
+        format!("abut-runtime-{user}"),
+        format!("abut-runtime-{user}-{}", std::process::id()),
+    ] {
+        let dir = std::env::temp_dir().join(name);
+        let mut builder = std::fs::DirBuilder::new();
+        #[cfg(unix)]
+        std::os::unix::fs::DirBuilderExt::mode(&mut builder, 0o700);
+        let _ = builder.create(&dir);
+        #[cfg(unix)]
+        let ours = {
+            use std::os::unix::fs::{MetadataExt, PermissionsExt};
+            std::fs::metadata(&dir).is_ok_and(|m| {
+                m.is_dir() && m.permissions().mode() & 0o777 == 0o700 && {
+                    // owned by this process's user: a file made here has the same owner
+                    let probe = dir.join(format!(".probe-{}", std::process::id()));
+                    let same = std::fs::write(&probe, b"")
+                        .and_then(|_| std::fs::metadata(&probe))
+                        .is_ok_and(|p| p.uid() == m.uid());
+                    let _ = std::fs::remove_file(&probe);
+                    same
+                }
+            })
+        };
+        #[cfg(not(unix))]
+        let ours = dir.is_dir();
+        if ours {
+            // at the start of main, before any thread exists
+            std::env::set_var("XDG_RUNTIME_DIR", &dir);
+            return;
+        }
+    }
+}
+
 fn main() -> ExitCode {
+    quiet_display_probe();
     let cli = Cli::parse();
     let command = cli
         .command
@@ -641,7 +690,7 @@ fn search(a: &SearchArgs) -> abut::Result<()> {
     let s = &result.stats;
     println!(
         "tree over {} facets: {:.1} facets projected per node, {} walks finished in chunks",
-        search.tree_order().len(),
+        search.master().active.len(),
         s.candidates as f64 / cloud.len() as f64,
         s.fallbacks
     );
