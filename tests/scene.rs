@@ -681,3 +681,47 @@ stiffness_per_area = 1000.0
         }
     }
 }
+
+/// A failed run into a directory an earlier run succeeded in leaves neither the earlier run's
+/// files (which would pass for its own) nor partial ones — whether it fails before its first
+/// increment (a mesh file that is not there) or in the middle (a fixed increment far beyond the
+/// stable one: the energy stops being finite).
+#[test]
+fn a_failed_run_into_a_used_directory_leaves_nothing_that_looks_valid() {
+    let text = std::fs::read_to_string(concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/scenes/bar_impact.toml"
+    ))
+    .unwrap()
+    .replace("end_time = 25.0", "end_time = 2.0");
+    let good = Scene::parse(&text).unwrap();
+    let unstable = Scene::parse(
+        &text
+            .replace("end_time = 2.0", "end_time = 25.0")
+            .replace("[run]\n", "[run]\ndt = 1.0\n"),
+    )
+    .unwrap();
+    let dir = std::env::temp_dir().join(format!("abut-scene-used-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    let listing = |d: &std::path::Path| -> Vec<String> {
+        let mut v: Vec<String> = std::fs::read_dir(d)
+            .unwrap()
+            .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+            .collect();
+        v.sort();
+        v
+    };
+    run(&good, &Device::cpu(), Some(&dir)).unwrap();
+    assert_eq!(listing(&dir), vec!["history.csv", "summary.json"]);
+    let e = run(&unstable, &Device::cpu(), Some(&dir));
+    assert!(e.is_err(), "the unstable run failed");
+    assert!(listing(&dir).is_empty(), "{:?}", listing(&dir));
+    run(&good, &Device::cpu(), Some(&dir)).unwrap();
+    let missing = Scene::parse(&format!(
+        "{text}\n[[part]]\nname = \"mesh\"\nshape = \"mesh\"\nfile = \"no-such-mesh.msh\"\nmaterial = \"unit\"\n"
+    ));
+    let missing = missing.unwrap();
+    assert!(run(&missing, &Device::cpu(), Some(&dir)).is_err());
+    assert!(listing(&dir).is_empty(), "{:?}", listing(&dir));
+    std::fs::remove_dir_all(&dir).unwrap();
+}

@@ -290,11 +290,45 @@ fn stress6(s: [[f64; 3]; 3]) -> [f64; 6] {
     [s[0][0], s[1][1], s[2][2], s[0][1], s[1][2], s[2][0]]
 }
 
+/// The files a run writes into its output directory, and their names while it runs.
+const OUTPUTS: [&str; 3] = ["history.csv", "summary.json", "vtk"];
+const PARTIALS: [&str; 3] = [
+    ".history.csv.partial",
+    ".summary.json.partial",
+    ".vtk.partial",
+];
+
+/// Removes `names` (files or directories) from `dir`, what is not there ignored.
+fn remove_all(dir: &Path, names: &[&str]) {
+    for n in names {
+        let p = dir.join(n);
+        if p.is_dir() {
+            let _ = std::fs::remove_dir_all(&p);
+        } else {
+            let _ = std::fs::remove_file(&p);
+        }
+    }
+}
+
 /// Runs `scene` on `device`. With `output`, writes `history.csv` (time, energies, contact
 /// force, balance error every `output_every` increments) and `summary.json` there; both are
-/// written to temporary names and renamed only when the run succeeded, so a failed run leaves
-/// nothing that looks valid.
+/// written to temporary names and renamed only when the run succeeded. A run into a directory
+/// first removes what an earlier run wrote there, and a failed run removes its partial files:
+/// a failed run leaves nothing that looks valid, and no earlier run's files pass for its own.
 pub fn run(scene: &Scene, device: &Device, output: Option<&Path>) -> Result<Summary> {
+    if let Some(dir) = output.filter(|d| d.is_dir()) {
+        remove_all(dir, &OUTPUTS);
+        remove_all(dir, &PARTIALS);
+    }
+    let result = run_into(scene, device, output);
+    if let (Err(_), Some(dir)) = (&result, output.filter(|d| d.is_dir())) {
+        remove_all(dir, &PARTIALS);
+    }
+    result
+}
+
+/// [`run`] itself: the outputs written under their partial names, renamed at the end.
+fn run_into(scene: &Scene, device: &Device, output: Option<&Path>) -> Result<Summary> {
     let built = scene.build()?;
     let (mut solver, model) = (built.solver, built.model);
     let x0 = solver.x.clone();
