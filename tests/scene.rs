@@ -72,6 +72,47 @@ fn bad_scene_files_name_the_key_and_line() {
         let e = Scene::parse(text).unwrap_err().to_string();
         assert!(e.contains(key), "{key}: {e}");
     }
+    // every numeric key is checked where it is read: infinite, NaN, absurdly large or small
+    // values are named by key, not found later as an increment of zero or a NaN velocity
+    let block = "title = \"x\"\n[run]\nend_time = 1.0\ngravity = [0, 0, -9.8]\n[[material]]\nname = \"m\"\nyoung = 1.0\npoisson = 0.3\ndensity = 1.0\n[[part]]\nname = \"a\"\nshape = \"block\"\nmaterial = \"m\"\norigin = [0,0,0]\nsize = [1,1,1]\ndivisions = [2,2,2]\nvelocity = [0,0,0]\n[[part]]\nname = \"p\"\nshape = \"plate\"\norigin = [0,0,-0.1]\nsize = [2,2,0]\ndivisions = [2,2,0]\n[[contact]]\nslave = \"a\"\nslave_face = \"z-\"\nmaster = \"p\"\nmaster_face = \"z+\"\n[[boundary]]\npart = \"a\"\nface = \"z+\"\nload = [0, 0, -1]\n";
+    assert!(
+        Scene::parse(block).is_ok(),
+        "{:?}",
+        Scene::parse(block).err()
+    );
+    for (from, to, key) in [
+        ("young = 1.0", "young = inf", "material.young"),
+        ("young = 1.0", "young = 1e300", "material.young"),
+        ("density = 1.0", "density = inf", "material.density"),
+        (
+            "gravity = [0, 0, -9.8]",
+            "gravity = [0, 0, nan]",
+            "run.gravity",
+        ),
+        ("origin = [0,0,0]", "origin = [nan,0,0]", "part.origin"),
+        ("size = [1,1,1]", "size = [1e-300,1,1]", "part.size"),
+        (
+            "velocity = [0,0,0]",
+            "velocity = [0,inf,0]",
+            "part.velocity",
+        ),
+        ("load = [0, 0, -1]", "load = [0, 0, nan]", "boundary.load"),
+        (
+            "master_face = \"z+\"",
+            "master_face = \"z+\"\nstiffness = 1e300",
+            "contact.stiffness",
+        ),
+        (
+            "master_face = \"z+\"",
+            "master_face = \"z+\"\npenalty_scale = 1e30",
+            "contact.penalty_scale",
+        ),
+    ] {
+        let text = block.replace(from, to);
+        assert_ne!(text, block, "{from}");
+        let e = Scene::parse(&text).unwrap_err().to_string();
+        assert!(e.contains(key), "{key}: {e}");
+    }
     let e = Scene::parse("title = \"x\"\n[run]\nend_time = \"soon\"\n")
         .unwrap_err()
         .to_string();

@@ -315,6 +315,38 @@ pub struct ContactSpec {
     pub search_radius: Option<f64>,
 }
 
+/// The largest magnitude, and the inverse of the smallest non-zero one, a scene's quantities may
+/// have in its units: everything derived from them (increments, stiffnesses, masses, forces)
+/// then stays well within f64, and a typo such as `young = 1e300` is caught where it is read.
+const MAGNITUDE: f64 = 1e100;
+
+/// `Ok` when every one of `values` is finite and, where not zero, within 1e±100.
+fn finite_values(key: &'static str, values: &[f64], what: &str) -> Result<()> {
+    match values.iter().find(|v| {
+        !v.is_finite() || (**v != 0.0 && !(1.0 / MAGNITUDE..=MAGNITUDE).contains(&v.abs()))
+    }) {
+        None => Ok(()),
+        Some(v) => bad(
+            key,
+            format!("{v} in {values:?} ({what})"),
+            "must be finite, and where not zero within 1e±100 in the scene's units",
+        ),
+    }
+}
+
+/// `Ok` when `v` is finite, positive and within 1e±100.
+fn positive(key: &'static str, v: f64, what: &str) -> Result<()> {
+    if v.is_finite() && (1.0 / MAGNITUDE..=MAGNITUDE).contains(&v) {
+        Ok(())
+    } else {
+        bad(
+            key,
+            format!("{v} ({what})"),
+            "must be finite and positive, within 1e±100 in the scene's units",
+        )
+    }
+}
+
 pub(crate) fn bad<T>(name: &'static str, value: String, expected: &'static str) -> Result<T> {
     Err(Error::BadParameter {
         name,
@@ -479,6 +511,7 @@ impl Scene {
                     return bad(key, v.to_string(), "must be finite and not negative");
                 }
             }
+            finite_values("run.gravity", &r.gravity, "run")?;
             if self.part.is_empty() {
                 return bad("part", "none".into(), "a scene needs at least one [[part]]");
             }
@@ -537,6 +570,13 @@ impl Scene {
                         "must be finite and positive",
                     );
                 }
+                let what = format!("part {}", p.name);
+                finite_values("part.origin", &p.origin, &what)?;
+                finite_values("part.velocity", &p.velocity, &what)?;
+                finite_values("part.size", &p.size, &what)?;
+                for x in &p.points {
+                    finite_values("part.points", x, &what)?;
+                }
                 if p.grading.iter().any(|g| !(g.is_finite() && g.abs() > 0.0)) {
                     return bad(
                         "part.grading",
@@ -558,24 +598,21 @@ impl Scene {
                         "a bar runs along one axis: exactly one non-zero component",
                     );
                 }
-                if matches!(p.shape.as_str(), "arc" | "sphere") && !(p.radius > 0.0) {
-                    return bad(
-                        "part.radius",
-                        format!("{} (part {})", p.radius, p.name),
-                        "must be positive",
-                    );
+                if matches!(p.shape.as_str(), "arc" | "sphere") {
+                    positive("part.radius", p.radius, &what)?;
                 }
-                if p.shape == "points" && (p.points.is_empty() || !(p.mass > 0.0)) {
-                    return bad(
-                        "part.points / part.mass",
-                        format!("part {}", p.name),
-                        "points need at least one position and a positive mass",
-                    );
+                if p.shape == "points" {
+                    if p.points.is_empty() {
+                        return bad(
+                            "part.points",
+                            format!("part {}", p.name),
+                            "points need at least one position",
+                        );
+                    }
+                    positive("part.mass", p.mass, &what)?;
                 }
                 for (key, v) in [("part.area", p.area), ("part.thickness", p.thickness)] {
-                    if !(v.is_finite() && v > 0.0) {
-                        return bad(key, format!("{v} (part {})", p.name), "must be positive");
-                    }
+                    positive(key, v, &what)?;
                 }
                 if p.axisymmetric && (p.shape != "rect" || p.origin[0] < 0.0) {
                     return bad(
@@ -592,12 +629,12 @@ impl Scene {
                             "rigid parts only: fixed, free or velocity",
                         );
                     }
-                    if m != "fixed" && !(p.mass.is_finite() && p.mass > 0.0) {
-                        return bad(
+                    if m != "fixed" {
+                        positive(
                             "part.mass",
-                            format!("{} (part {})", p.mass, p.name),
-                            "a moving rigid part needs a positive mass",
-                        );
+                            p.mass,
+                            &format!("moving rigid part {}", p.name),
+                        )?;
                     }
                 }
                 if p.shape == "mesh" {
@@ -642,11 +679,14 @@ impl Scene {
         }
         for (i, m) in self.material.iter().enumerate() {
             let r: Result<()> = (|| {
-                if !(m.young > 0.0 && m.density > 0.0 && m.poisson > -1.0 && m.poisson < 0.5) {
+                let what = format!("material {}", m.name);
+                positive("material.young", m.young, &what)?;
+                positive("material.density", m.density, &what)?;
+                if !(m.poisson > -1.0 && m.poisson < 0.5) {
                     return bad(
-                        "material",
-                        m.name.clone(),
-                        "needs young > 0, density > 0 and −1 < poisson < 0.5",
+                        "material.poisson",
+                        format!("{} ({what})", m.poisson),
+                        "must lie in (−1, 0.5)",
                     );
                 }
                 Ok(())
@@ -672,6 +712,19 @@ impl Scene {
                         format!("{} (body {})", b.surface, b.name),
                         "must be plane, sphere, cylinder, line or circle",
                     );
+                }
+                let what = format!("body {}", b.name);
+                finite_values("rigid.point", &b.point, &what)?;
+                finite_values("rigid.direction", &b.direction, &what)?;
+                finite_values("rigid.velocity", &b.velocity, &what)?;
+                positive("rigid.mass", b.mass, &what)?;
+                if matches!(b.surface.as_str(), "sphere" | "cylinder" | "circle") {
+                    positive("rigid.radius", b.radius, &what)?;
+                }
+                if let Some(i) = &b.inertia {
+                    for row in i {
+                        finite_values("rigid.inertia", row, &what)?;
+                    }
                 }
                 if let Some(f) = b
                     .fix
@@ -724,6 +777,13 @@ impl Scene {
                             "must be x, y or z",
                         );
                     }
+                }
+                let what = format!("part {}, face {}", b.part, b.face);
+                if let Some(d) = &b.displacement {
+                    finite_values("boundary.displacement", d, &what)?;
+                }
+                if let Some(l) = &b.load {
+                    finite_values("boundary.load", l, &what)?;
                 }
                 if b.displacement.is_some() && !(b.ramp.is_finite() && b.ramp > 0.0) {
                     return bad(
@@ -820,6 +880,24 @@ impl Scene {
                         format!("master {}", c.master),
                         "give at most one stiffness rule",
                     );
+                }
+                let what = format!("master {}", c.master);
+                if let Some(k) = c.stiffness {
+                    positive("contact.stiffness", k, &what)?;
+                }
+                if let Some(k) = c.stiffness_per_area {
+                    positive("contact.stiffness_per_area", k, &what)?;
+                }
+                if let Some(f) = c.penalty_scale {
+                    // a factor on the default stiffness: beyond 10⁸ either way it is a typo, and
+                    // it would set increments far below any the run could take
+                    if !(f.is_finite() && (1e-8..=1e8).contains(&f)) {
+                        return bad(
+                            "contact.penalty_scale",
+                            format!("{f} ({what})"),
+                            "a factor on the default stiffness within 1e±8",
+                        );
+                    }
                 }
                 if let Some(r) = c.search_radius {
                     if !(r.is_finite() && r > 0.0) {
