@@ -365,6 +365,32 @@ fn bad_decks_name_the_file_line_and_what_was_expected() {
             );
         }
     }
+    // a set that names itself does not grow (24 times: 2^24 members once), members given
+    // twice are kept once, and GENERATE up to the largest label stops instead of wrapping
+    let mut deck = String::from("*NODE\n1,0,0,0\n2,1,0,0\n3,0,1,0\n*NSET, NSET=A\n1, 2, 2, 1\n");
+    for _ in 0..24 {
+        deck.push_str("*NSET, NSET=A\nA, A, 3\n");
+    }
+    let d = inp::parse(&deck, Path::new("self.inp")).unwrap();
+    let a = &d.mesh.node_sets["A"];
+    assert_eq!(a.len(), 3, "{a:?}");
+    let e = inp::parse(
+        "*NODE\n1,0,0,0\n*NSET, NSET=B, GENERATE\n18446744073709551614, 18446744073709551615\n",
+        Path::new("wrap.inp"),
+    )
+    .unwrap_err()
+    .to_string();
+    assert!(e.contains("node 18446744073709551614"), "{e}");
+    let d = inp::parse(
+        "*NODE\n1,0,0,0\n2,0,0,1\n*NSET, NSET=C, GENERATE\n1, 2, 18446744073709551615\n",
+        Path::new("step.inp"),
+    )
+    .unwrap();
+    assert_eq!(
+        d.mesh.node_sets["C"].len(),
+        1,
+        "an increment past the end stops"
+    );
     let e = gmsh::parse(
         b"$MeshFormat\n4.1 0 8\n$EndMeshFormat\n$Nodes\n1 2 1 2\n",
         "bad.msh",

@@ -107,6 +107,17 @@ fn bad_scene_files_name_the_key_and_line() {
             "master_face = \"z+\"\npenalty_scale = 1e30",
             "contact.penalty_scale",
         ),
+        // sizes refused before anything is allocated, with the size they would need
+        (
+            "divisions = [2,2,0]",
+            "divisions = [10000000,10000000,0]",
+            "bytes",
+        ),
+        (
+            "divisions = [2,2,2]",
+            "divisions = [10000000,2,2]",
+            "part.divisions",
+        ),
     ] {
         let text = block.replace(from, to);
         assert_ne!(text, block, "{from}");

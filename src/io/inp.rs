@@ -462,7 +462,9 @@ fn parse_lines(lines: &[Line]) -> Result<Deck> {
                         let mut v = a;
                         while v <= b {
                             set.extend(p.members(d, &v.to_string(), nodes)?);
-                            v += s;
+                            // the last label may be u64::MAX: stop instead of wrapping
+                            let Some(next) = v.checked_add(s) else { break };
+                            v = next;
                         }
                     } else {
                         for s in f {
@@ -475,7 +477,11 @@ fn parse_lines(lines: &[Line]) -> Result<Deck> {
                 } else {
                     &mut p.deck.mesh.element_sets
                 };
-                sets.entry(name.to_uppercase()).or_default().extend(set);
+                // each member once, in the order first given (a set that names itself, or
+                // nodes listed twice, does not grow)
+                let members = sets.entry(name.to_uppercase()).or_default();
+                let mut seen: std::collections::HashSet<u32> = members.iter().copied().collect();
+                members.extend(set.into_iter().filter(|m| seen.insert(*m)));
             }
             "SURFACE" => {
                 only(l, &kw, &opts, &["NAME", "TYPE"])?;

@@ -315,6 +315,14 @@ pub struct ContactSpec {
     pub search_radius: Option<f64>,
 }
 
+/// What a part may take in memory, estimated from its divisions before anything is built.
+const MAX_SCENE_BYTES: u128 = 16 << 30;
+/// Bytes per node of a built part, generously: positions, velocities, forces, masses, the
+/// contact arrays, the mesh's indices (f64 and u32 arrays over the whole run).
+const BYTES_PER_NODE: u128 = 400;
+/// Bytes per cell: up to six tetrahedra (a block's hexahedron) with their state.
+const BYTES_PER_CELL: u128 = 6 * 200;
+
 /// The largest magnitude, and the inverse of the smallest non-zero one, a scene's quantities may
 /// have in its units: everything derived from them (increments, stiffnesses, masses, forces)
 /// then stays well within f64, and a typo such as `young = 1e300` is caught where it is read.
@@ -551,6 +559,25 @@ impl Scene {
                         "part.divisions",
                         format!("{:?} (part {})", p.divisions, p.name),
                         "must be positive for each axis the shape uses",
+                    );
+                }
+                // the memory the part would take, estimated before anything is allocated
+                let (nodes, cells) = p
+                    .divisions
+                    .iter()
+                    .take(axes)
+                    .fold((1u128, 1u128), |(n, c), &d| {
+                        (n * (d as u128 + 1), c * d as u128)
+                    });
+                let bytes = nodes * BYTES_PER_NODE + cells * BYTES_PER_CELL;
+                if bytes > MAX_SCENE_BYTES {
+                    return bad(
+                        "part.divisions",
+                        format!(
+                            "{:?} (part {}): {nodes} nodes and {cells} cells, about {:.1e} bytes",
+                            p.divisions, p.name, bytes as f64
+                        ),
+                        "a part must fit in 16 GiB (nodes, elements and their state)",
                     );
                 }
                 let sized = match p.shape.as_str() {
