@@ -393,11 +393,20 @@ fn run_into(scene: &Scene, device: &Device, output: Option<&Path>) -> Result<Sum
             let mut f = std::io::BufWriter::new(
                 std::fs::File::create(dir.join(".history.csv.partial")).map_err(io)?,
             );
-            writeln!(
-                f,
+            let mut header =
                 "time,kinetic,internal,external_work,contact_work,balance_error,contact_force"
-            )
-            .map_err(io)?;
+                    .to_string();
+            for name in built
+                .parts
+                .iter()
+                .map(|p| &p.name)
+                .chain(built.bodies.iter().map(|b| &b.0))
+            {
+                for q in ["ux", "uy", "uz", "vx", "vy", "vz"] {
+                    header.push_str(&format!(",{name}.{q}"));
+                }
+            }
+            writeln!(f, "{header}").map_err(io)?;
             Some(f)
         }
         None => None,
@@ -524,8 +533,7 @@ fn run_into(scene: &Scene, device: &Device, output: Option<&Path>) -> Result<Sum
         if let Some(f) = history.as_mut() {
             if k % scene.run.output_every.max(1) == 0 {
                 let e = &solver.energy;
-                writeln!(
-                    f,
+                let mut row = format!(
                     "{},{},{},{},{},{},{}",
                     solver.time,
                     e.kinetic,
@@ -534,8 +542,24 @@ fn run_into(scene: &Scene, device: &Device, output: Option<&Path>) -> Result<Sum
                     e.contact_work,
                     solver.balance_error(),
                     force
-                )
-                .map_err(io)?;
+                );
+                // each part's mean displacement and velocity (mass-weighted), each rigid body's
+                for p in &built.parts {
+                    let (u, v) = part_motion(&solver, &x0, p.base..p.base + p.count);
+                    for c in u.iter().chain(&v) {
+                        row.push_str(&format!(",{c}"));
+                    }
+                }
+                for (_, k) in &built.bodies {
+                    let b = &solver.bodies[*k].state;
+                    for a in 0..3 {
+                        row.push_str(&format!(",{}", b.position[a] - bodies0[*k][a]));
+                    }
+                    for a in 0..3 {
+                        row.push_str(&format!(",{}", b.velocity[a]));
+                    }
+                }
+                writeln!(f, "{row}").map_err(io)?;
             }
         }
     }
@@ -729,6 +753,30 @@ fn run_into(scene: &Scene, device: &Device, output: Option<&Path>) -> Result<Sum
         }
     }
     Ok(summary)
+}
+
+/// The mean displacement (from `x0`) and velocity of `nodes`, weighted by their masses (plain
+/// means when the nodes carry no mass).
+fn part_motion(
+    solver: &crate::explicit::Solver,
+    x0: &[[f64; 3]],
+    nodes: std::ops::Range<usize>,
+) -> ([f64; 3], [f64; 3]) {
+    let total: f64 = nodes.clone().map(|n| solver.mass[n]).sum();
+    let count = nodes.len().max(1) as f64;
+    let (mut u, mut v) = ([0.0; 3], [0.0; 3]);
+    for n in nodes {
+        let w = if total > 0.0 {
+            solver.mass[n] / total
+        } else {
+            1.0 / count
+        };
+        for a in 0..3 {
+            u[a] += w * (solver.x[n][a] - x0[n][a]);
+            v[a] += w * solver.v[n][a];
+        }
+    }
+    (u, v)
 }
 
 /// The summary's account of the increment: its governing limit and a note in words.
