@@ -7,10 +7,11 @@
 //   nearest_walk     one invocation per slave: a depth-first walk of the tree, the nearer child
 //                    first, skipping every subtree whose box is farther than the best facet
 //                    found so far (at first the radius), at most WALK_VISITS nodes. Its best
-//                    facet goes into `best`; a walk cut off by the cap leaves the leaf slots from
-//                    the lowest one it had not finished on to the chunk passes (every facet it
-//                    did not reach is among them), cut into chunks of CANDIDATE_CHUNK: their count into `work` (then scanned
-//                    by scan.wgsl into each slave's first work item).
+//                    facet goes into `best`; a walk cut off by the cap leaves the leaf slots
+//                    from the lowest one it had not finished on to the chunk passes (every
+//                    facet it did not reach is among them), cut into chunks of
+//                    CANDIDATE_CHUNK: their count into `work` (then scanned by scan.wgsl into
+//                    each slave's first work item).
 //   nearest_args     one invocation: the indirect dispatch of the work items (folded into 2D).
 //   nearest_chunks   one invocation per work item (indirect): the chunk's nearest facet; a slave
 //                    of one chunk stores it when not farther than the walk's, a slave of several
@@ -24,19 +25,18 @@
 //                    (STATUS_FALLBACK, STATUS_CROWDED).
 //
 // Dispatch: nearest_walk, nearest_crowded and nearest_facet one invocation per slave,
-//           nearest_args one, the chunk
-//           passes one per work item through the indirect arguments; ITEM_WORKGROUP per
-//           workgroup, folded into 2D.
+//           nearest_args one, the chunk passes one per work item through the indirect
+//           arguments; ITEM_WORKGROUP per workgroup, folded into 2D.
 // Bindings: 0 params, 1 nodes, 2 facets, 3 slaves (node id per slave, then the slaves' indices
 //           in Morton order of their start positions: nearest_walk's invocation t walks for
 //           slave slaves[n_slaves + t], so neighbouring invocations walk the same branches and
-//           read the same boxes), 4 order (active facet
-//           of each leaf slot), 5 boxes (the tree's, tree.wgsl), 6 status (fallbacks and
-//           self-contact crowding counted; nearest_facet only: at most 8 storage buffers per
-//           pass), 7 hits (one Hit per slave), 8 adjacency (as in
-//           local_search.wgsl; self-contact and free edges), 9 work (chunk counts, scanned to
-//           first work items; word n_slaves: total), 10 best (BEST_WORDS per slave, below),
-//           11 args (the indirect dispatch: x, y, z). Each entry point binds the subset it uses.
+//           read the same boxes), 4 order (active facet of each leaf slot), 5 boxes (the
+//           tree's, tree.wgsl), 6 status (fallbacks and self-contact crowding counted;
+//           nearest_facet only: at most 8 storage buffers per pass), 7 hits (one Hit per
+//           slave), 8 adjacency (as in local_search.wgsl; self-contact and free edges), 9 work
+//           (chunk counts, scanned to first work items; word n_slaves: total), 10 best
+//           (BEST_WORDS per slave, below), 11 args (the indirect dispatch: x, y, z). Each entry
+//           point binds the subset it uses.
 // Invariants: the walk skips a subtree only when its box is farther than the best distance by
 //             more than round-off (PRUNE_SLACK; boxes are grown by the frame's round-off), so
 //             every facet at the best distance is projected and the result is the brute
@@ -54,9 +54,9 @@
 //             the facets projected (walk and chunks). No loop runs over more than WALK_VISITS
 //             nodes, CANDIDATE_CHUNK candidates or 32 steps of a binary search or climb.
 //
-// best record of slave i, words BEST_WORDS·i + : 0 best distance² bits (atomicMin), 1 facet
-// at it from the chunks (atomicMin), 2 crowded (self-contact), 3 candidates, 4 the walk's facet, 5 the first
-// leaf slot left to the chunks, 6 the walk's distance² bits, 7 unused.
+// best record of slave i, words BEST_WORDS·i + : 0 best distance² bits (atomicMin), 1 facet at
+// it from the chunks (atomicMin), 2 crowded (self-contact), 3 candidates, 4 the walk's facet,
+// 5 the first leaf slot left to the chunks, 6 the walk's distance² bits, 7 unused.
 
 @group(0) @binding(0) var<uniform> params: SearchParams;
 @group(0) @binding(1) var<storage, read> nodes: array<vec4<f32>>;
