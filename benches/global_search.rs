@@ -197,7 +197,7 @@ fn main() {
         for g in &gpus {
             let (_setup, first, steady, r) = time_search(g, &m, p, reps);
             gpu_steady.get_or_insert(steady);
-            found = r.contacts.iter().flatten().count();
+            found = r.contacts().flatten().count();
             row += &format!(
                 " {} | {} | {:.0} |",
                 ms(first),
@@ -212,7 +212,7 @@ fn main() {
             p,
             if case.slaves >= 100_000 { 2 } else { 5 },
         );
-        found = found.max(cpu_r.contacts.iter().flatten().count());
+        found = found.max(cpu_r.contacts().flatten().count());
         let reference = first_result.unwrap_or(cpu_r);
         let master = m.surface(m.pair(p).unwrap().master).unwrap();
         let brute = if (case.slaves as f64) * (tris.len() as f64) <= 1e8 {
@@ -249,8 +249,7 @@ fn main() {
         let parry_query = t.elapsed();
         let tol = 1e-5;
         let agree = reference
-            .contacts
-            .iter()
+            .contacts()
             .zip(&proj)
             .filter(|(a, b)| match (a, b) {
                 (Some(a), Some(b)) => (a.distance - *b as f64).abs() < tol,

@@ -4,6 +4,12 @@
 // Prelude: common.wgsl, search_common.wgsl (projection, self-contact exclusion, free edges).
 //
 // The passes, in order:
+//   walk_gather      one invocation per slave: its position and node id copied into
+//                    `walk_points` in the order the walks take the slaves (Morton order of their
+//                    start positions), so that the walk reads them in sequence instead of one
+//                    scattered read per slave; every later pass keeps its per-slave record (work,
+//                    best) at this walk position t, and only nearest_facet maps it back to the
+//                    caller's order.
 //   nearest_walk     one invocation per slave: a depth-first walk of the tree, the nearer child
 //                    first, skipping every subtree whose box is farther than the best facet
 //                    found so far (at first the radius), at most WALK_VISITS nodes. Its best
@@ -24,19 +30,20 @@
 //   nearest_facet    one invocation per slave: the winner, the hit from it, the counts
 //                    (STATUS_FALLBACK, STATUS_CROWDED).
 //
-// Dispatch: nearest_walk, nearest_crowded and nearest_facet one invocation per slave,
+// Dispatch: walk_gather, nearest_walk, nearest_crowded and nearest_facet one invocation per slave,
 //           nearest_args one, the chunk passes one per work item through the indirect
 //           arguments; ITEM_WORKGROUP per workgroup, folded into 2D.
 // Bindings: 0 params, 1 nodes, 2 facets, 3 slaves (node id per slave, then the slaves' indices
-//           in Morton order of their start positions: nearest_walk's invocation t walks for
-//           slave slaves[n_slaves + t], so neighbouring invocations walk the same branches and
-//           read the same boxes), 4 order (active facet of each leaf slot), 5 boxes (the
-//           tree's, tree.wgsl), 6 status (fallbacks and self-contact crowding counted;
-//           nearest_facet only: at most 8 storage buffers per pass), 7 hits (one Hit per
-//           slave), 8 adjacency (as in local_search.wgsl; self-contact and free edges), 9 work
-//           (chunk counts, scanned to first work items; word n_slaves: total), 10 best
-//           (BEST_WORDS per slave, below), 11 args (the indirect dispatch: x, y, z). Each entry
-//           point binds the subset it uses.
+//           in Morton order of their start positions: walk position t is slave
+//           slaves[n_slaves + t], so neighbouring invocations walk the same branches and read
+//           the same boxes), 4 order (active facet of each leaf slot), 5 boxes (the tree's,
+//           tree.wgsl), 6 status (fallbacks and self-contact crowding counted), 7 hits (one Hit
+//           per slave, caller's order), 8 adjacency (as in local_search.wgsl; self-contact and
+//           free edges), 9 work (chunk counts per walk position, scanned to first work items;
+//           word n_slaves: total), 10 best (BEST_WORDS per walk position, below), 11 args (the
+//           indirect dispatch: x, y, z), 12 walk_points (per walk position: the slave's
+//           grid-local position as f32 bits, xyz, and its node id, w). Each entry point binds
+//           the subset it uses, at most 8 storage buffers (WebGPU's default limit).
 // Invariants: the walk skips a subtree only when its box is farther than the best distance by
 //             more than round-off (PRUNE_SLACK; boxes are grown by the frame's round-off), so
 //             every facet at the best distance is projected and the result is the brute
@@ -54,7 +61,7 @@
 //             the facets projected (walk and chunks). No loop runs over more than WALK_VISITS
 //             nodes, CANDIDATE_CHUNK candidates or 32 steps of a binary search or climb.
 //
-// best record of slave i, words BEST_WORDS·i + : 0 best distance² bits (atomicMin), 1 facet at
+// best record of walk position t, words BEST_WORDS·t + : 0 best distance² bits (atomicMin), 1 facet at
 // it from the chunks (atomicMin), 2 crowded (self-contact), 3 candidates, 4 the walk's facet,
 // 5 the first leaf slot left to the chunks, 6 the walk's distance² bits, 7 unused.
 
@@ -70,6 +77,7 @@
 @group(0) @binding(9) var<storage, read_write> work: array<u32>;
 @group(0) @binding(10) var<storage, read_write> best: array<atomic<u32>>;
 @group(0) @binding(11) var<storage, read_write> args: array<u32>;
+@group(0) @binding(12) var<storage, read_write> walk_points: array<vec4<u32>>;
 
 // Candidates one work item projects at most (Rust twin: CANDIDATE_CHUNK), far below the 65,535
 // iterations where Mesa stops a loop.
@@ -142,14 +150,26 @@ fn centre_d2(k: u32, p: vec3<f32>) -> f32 {
     return dot(d, d);
 }
 
-// The nearest facet of slave i a depth-first walk finds within WALK_VISITS nodes: at an inner
+// The slave at walk position t: grid-local position, model node id.
+struct WalkPoint {
+    p: vec3<f32>,
+    node: u32,
+}
+
+fn walk_point(t: u32) -> WalkPoint {
+    let w = walk_points[t];
+    return WalkPoint(bitcast<vec3<f32>>(w.xyz), w.w);
+}
+
+// The nearest facet of the slave at walk position t a depth-first walk finds within WALK_VISITS nodes: at an inner
 // node the nearer child's box first, the farther one kept on a stack (at most one per level:
 // 32 levels hold any tree a buffer can) and skipped when popped if the best distance has
 // shrunk below it. A walk cut off by the cap leaves `next` at the lowest first leaf slot of
 // the subtrees it kept.
-fn walk(i: u32) -> Walk {
-    let slave = slaves[i];
-    let p = nodes[slave].xyz;
+fn walk(t: u32) -> Walk {
+    let wp = walk_point(t);
+    let slave = wp.node;
+    let p = wp.p;
     let leaves = 1u << params.tree_levels;
     var stack: array<u32, 32>;     // subtrees kept for later
     var stack_d2: array<f32, 32>;  // their boxes' distance²
@@ -209,7 +229,7 @@ fn walk(i: u32) -> Walk {
     return w;
 }
 
-// The slave of work item t: the largest i with work[i] ≤ t (work is its first item).
+// The walk position of work item t: the largest s with work[s] ≤ t (work is its first item).
 fn work_slave(t: u32) -> u32 {
     var lo = 0u;
     var hi = params.n_slaves; // work[lo] ≤ t < work[hi]
@@ -225,11 +245,13 @@ struct ChunkBest {
     f: u32,
 }
 
-// The nearest facet (within the radius, ties to the lowest id) of slave i among the leaf slots
-// of its work item t: slots start + (t − work[i])·CANDIDATE_CHUNK onwards (empty ones skipped).
+// The nearest facet (within the radius, ties to the lowest id) of the slave at walk position i
+// among the leaf slots of its work item t: slots start + (t − work[i])·CANDIDATE_CHUNK onwards
+// (empty ones skipped).
 fn chunk_best(i: u32, t: u32) -> ChunkBest {
-    let slave = slaves[i];
-    let p = nodes[slave].xyz;
+    let wp = walk_point(i);
+    let slave = wp.node;
+    let p = wp.p;
     let leaves = 1u << params.tree_levels;
     let j0 = atomicLoad(&best[BEST_WORDS * i + 5u]) + (t - work[i]) * CANDIDATE_CHUNK;
     let j1 = min(leaves, j0 + CANDIDATE_CHUNK);
@@ -251,20 +273,29 @@ fn chunk_best(i: u32, t: u32) -> ChunkBest {
 }
 
 @compute @workgroup_size(64)
+fn walk_gather(@builtin(workgroup_id) wg: vec3<u32>,
+               @builtin(num_workgroups) nwg: vec3<u32>,
+               @builtin(local_invocation_index) li: u32) {
+    let t = folded_id(wg, nwg, li, ITEM_WORKGROUP);
+    if (t >= params.n_slaves) { return; }
+    let slave = slaves[slaves[params.n_slaves + t]];
+    walk_points[t] = vec4<u32>(bitcast<vec3<u32>>(nodes[slave].xyz), slave);
+}
+
+@compute @workgroup_size(64)
 fn nearest_walk(@builtin(workgroup_id) wg: vec3<u32>,
                 @builtin(num_workgroups) nwg: vec3<u32>,
                 @builtin(local_invocation_index) li: u32) {
     let t = folded_id(wg, nwg, li, ITEM_WORKGROUP);
     if (t >= params.n_slaves) { return; }
     if (t == 0u) { work[params.n_slaves] = 0u; }
-    let i = slaves[params.n_slaves + t];
-    let w = walk(i);
+    let w = walk(t);
     let leaves = 1u << params.tree_levels;
     var start = leaves;
     if (w.next != 0u) { start = min(w.next - 1u, leaves); }
     let rest = leaves - start;
-    work[i] = (rest + CANDIDATE_CHUNK - 1u) / CANDIDATE_CHUNK;
-    let b = BEST_WORDS * i;
+    work[t] = (rest + CANDIDATE_CHUNK - 1u) / CANDIDATE_CHUNK;
+    let b = BEST_WORDS * t;
     atomicStore(&best[b], bitcast<u32>(w.d2));
     atomicStore(&best[b + 1u], NO_FACET);
     atomicStore(&best[b + 2u], 0u);
@@ -319,7 +350,7 @@ fn nearest_ties(@builtin(workgroup_id) wg: vec3<u32>,
     }
 }
 
-// The winner of slave i's record: the chunks' facet at the best distance, or the walk's when it
+// The winner of walk position i's record: the chunks' facet at the best distance, or the walk's when it
 // is at that distance with a lower id.
 fn winner(i: u32) -> u32 {
     let b = BEST_WORDS * i;
@@ -331,11 +362,13 @@ fn winner(i: u32) -> u32 {
     return f;
 }
 
-// Self-contact: whether slave i has a facet within the radius, other than its nearest best_f
-// and sharing no node with it, that faces it; a walk cut off by the cap says yes.
+// Self-contact: whether the slave at walk position i has a facet within the radius, other than
+// its nearest best_f and sharing no node with it, that faces it; a walk cut off by the cap says
+// yes.
 fn crowded(i: u32, best_f: u32) -> bool {
-    let slave = slaves[i];
-    let p = nodes[slave].xyz;
+    let wp = walk_point(i);
+    let slave = wp.node;
+    let p = wp.p;
     let leaves = 1u << params.tree_levels;
     let r2 = params.radius * params.radius;
     var k = 1u;
@@ -373,18 +406,20 @@ fn nearest_crowded(@builtin(workgroup_id) wg: vec3<u32>,
 fn nearest_facet(@builtin(workgroup_id) wg: vec3<u32>,
                  @builtin(num_workgroups) nwg: vec3<u32>,
                  @builtin(local_invocation_index) li: u32) {
+    // invocation i: walk position i, written to the hit of slave slaves[n_slaves + i]
     let i = folded_id(wg, nwg, li, ITEM_WORKGROUP);
     if (i >= params.n_slaves) { return; }
+    let wp = walk_point(i);
     var hit: Hit;
     hit.facet = NO_FACET;
     hit.node = NO_NODE;
     let b = BEST_WORDS * i;
     hit.candidates = atomicLoad(&best[b + 3u]);
-    hit.slave = slaves[i];
+    hit.slave = wp.node;
     hit.point_gap = vec4<f32>(0.0);
     hit.normal_dist = vec4<f32>(0.0);
     hit.weights = vec4<f32>(0.0);
-    let p = nodes[slaves[i]].xyz;
+    let p = wp.p;
     if (atomicLoad(&best[b + 5u]) < (1u << params.tree_levels)) { atomicAdd(&status[STATUS_FALLBACK], 1u); }
     let best_f = winner(i);
     if (best_f != NO_FACET) {
@@ -412,5 +447,5 @@ fn nearest_facet(@builtin(workgroup_id) wg: vec3<u32>,
             hit.candidates |= HIT_BESIDE_FREE_EDGE;
         }
     }
-    hits[i] = hit;
+    hits[slaves[params.n_slaves + i]] = hit;
 }

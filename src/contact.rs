@@ -646,11 +646,10 @@ impl Contact {
             let left = if kr.anchored {
                 // on the anchors' planes, moved with the corrected masters
                 result
-                    .contacts
-                    .iter()
+                    .contacts()
                     .zip(&kr.slaves)
                     .filter_map(|(cp, &s)| {
-                        let cp = (*cp)?;
+                        let cp = cp?;
                         let nodes = kr.master.facets[cp.facet as usize].nodes();
                         let mut x0 = [0.0; 3];
                         for (j, &n) in nodes.iter().enumerate() {
@@ -756,7 +755,7 @@ impl Contact {
         for search in searches {
             let result = search.run(x)?;
             let master = search.master();
-            for (&s, c) in result.slaves.iter().zip(&result.contacts) {
+            for (&s, c) in result.slaves.iter().zip(result.contacts()) {
                 let Some(c) = c else { continue };
                 let nodes = master.facets[c.facet as usize].nodes();
                 let xs: Vec<V3<f64>> = nodes
@@ -914,7 +913,7 @@ fn fill_output(o: &mut PairOutput, outs: &[ContactOut], areas: &[f32], search: S
     o.contact_energy = 0.0;
     o.frictional_dissipation = 0.0;
     for (k, c) in outs.iter().enumerate().take(n) {
-        let found = search.contacts.get(k).is_some_and(|h| h.is_some());
+        let found = search.contact(k).is_some();
         o.cstatus
             .push(found.then_some(match c.status & CSTATUS_MASK {
                 CSTATUS_STICK => ContactStatus::Stick,

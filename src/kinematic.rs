@@ -186,10 +186,9 @@ pub fn anchored_pass(
     dx: &mut [[f64; 3]],
 ) -> Vec<SlaveCorrection> {
     let geometry: Vec<Option<SlaveGeometry>> = search
-        .contacts
-        .iter()
+        .contacts()
         .map(|c| {
-            let c = (*c)?;
+            let c = c?;
             Some(SlaveGeometry {
                 normal: V3::from_array(c.normal),
                 weights: c.weights,
@@ -269,8 +268,7 @@ fn correct(
 pub fn facets_from(search: &SearchResult) -> Vec<Option<u32>> {
     // a slave beside a free edge of the master is off its facets: no contact
     search
-        .contacts
-        .iter()
+        .contacts()
         .map(|c| c.filter(|c| !c.beside_free_edge).map(|c| c.facet))
         .collect()
 }

@@ -47,6 +47,9 @@ pub enum Buf {
     Anchors,
     /// Nearest-facet work items: chunk counts per slave, scanned.
     Work,
+    /// The slaves in the order the tree walks take them: grid-local position (f32 bits, xyz)
+    /// and model node id (w), one `vec4<u32>` per slave.
+    WalkPoints,
     /// Nearest-facet record per slave (distance² bits, facet, crowded, candidates).
     Best,
     /// Indirect dispatch arguments (x, y, z).
@@ -193,13 +196,28 @@ const CHUNK_BINDINGS: &[Binding] = &[
     b(0, SearchParams, U),
     b(1, Nodes, R),
     b(2, Facets, R),
-    b(3, Slaves, R),
     b(4, Order, R),
     b(5, Boxes, R),
     b(8, Adjacency, R),
     b(9, Work, RW),
     b(10, Best, RW),
+    b(12, WalkPoints, RW),
 ];
+
+/// `nearest_facet.wgsl`: the slaves' positions and node ids gathered in the order the walks
+/// take them.
+pub const WALK_GATHER: Pass = Pass {
+    stem: "nearest_facet",
+    entry: "walk_gather",
+    bindings: &[
+        b(0, SearchParams, U),
+        b(1, Nodes, R),
+        b(3, Slaves, R),
+        b(12, WalkPoints, RW),
+    ],
+    items: Items::Slaves,
+    per_workgroup: ITEM_WORKGROUP,
+};
 
 /// `nearest_facet.wgsl`: each slave's pruned walk of the search tree; the chunks of what a
 /// capped walk did not reach counted.
@@ -210,12 +228,12 @@ pub const NEAREST_WALK: Pass = Pass {
         b(0, SearchParams, U),
         b(1, Nodes, R),
         b(2, Facets, R),
-        b(3, Slaves, R),
         b(4, Order, R),
         b(5, Boxes, R),
         b(8, Adjacency, R),
         b(9, Work, RW),
         b(10, Best, RW),
+        b(12, WalkPoints, RW),
     ],
     items: Items::Slaves,
     per_workgroup: ITEM_WORKGROUP,
@@ -256,11 +274,11 @@ pub const NEAREST_CROWDED: Pass = Pass {
         b(0, SearchParams, U),
         b(1, Nodes, R),
         b(2, Facets, R),
-        b(3, Slaves, R),
         b(4, Order, R),
         b(5, Boxes, R),
         b(8, Adjacency, R),
         b(10, Best, RW),
+        b(12, WalkPoints, RW),
     ],
     items: Items::Slaves,
     per_workgroup: ITEM_WORKGROUP,
@@ -280,6 +298,7 @@ pub const NEAREST_FACET: Pass = Pass {
         b(7, Hits, RW),
         b(8, Adjacency, R),
         b(10, Best, RW),
+        b(12, WalkPoints, RW),
     ],
     items: Items::Slaves,
     per_workgroup: ITEM_WORKGROUP,
@@ -502,7 +521,7 @@ pub const INTEGRATE: Pass = Pass {
 };
 
 /// Every pass, in the order an increment may run them.
-pub const PASSES: [Pass; 24] = [
+pub const PASSES: [Pass; 25] = [
     TO_LOCAL,
     ANCHOR,
     MOTION,
@@ -511,6 +530,7 @@ pub const PASSES: [Pass; 24] = [
     TREE_REFIT,
     SCAN_BLOCKS,
     SCAN_ADD,
+    WALK_GATHER,
     NEAREST_WALK,
     NEAREST_ARGS,
     NEAREST_CHUNKS,

@@ -150,8 +150,7 @@ impl PointQuery {
         self.positions[..self.n_nodes].copy_from_slice(nodes);
         self.positions[self.n_nodes..].copy_from_slice(points);
         let r = self.search.run(&self.positions)?;
-        Ok(r.contacts
-            .iter()
+        Ok(r.contacts()
             .zip(points)
             .map(|(c, p)| c.as_ref().map(|c| self.hit(c.facet, *p)))
             .collect())

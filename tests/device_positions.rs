@@ -100,7 +100,7 @@ fn positions_on_the_device_give_the_host_results() {
                 frames += 1;
             }
             let mut compared = 0;
-            for (i, (ha, hb)) in a.contacts.iter().zip(&b.contacts).enumerate() {
+            for (i, (ha, hb)) in a.contacts().zip(b.contacts()).enumerate() {
                 match (ha, hb) {
                     (Some(ha), Some(hb)) => {
                         compared += 1;
@@ -123,7 +123,7 @@ fn positions_on_the_device_give_the_host_results() {
                     }
                     (None, None) => {}
                     (Some(h), None) | (None, Some(h)) => assert!(
-                        (h.distance - 2.0 * h_radius(h)).abs() < 1e-5,
+                        (h.distance - 2.0 * h_radius(&h)).abs() < 1e-5,
                         "{g} k={k}: slave {i} found by one side only at {}",
                         h.distance
                     ),
@@ -137,7 +137,7 @@ fn positions_on_the_device_give_the_host_results() {
         );
         // without hits: nothing read back but the status
         let quiet = on_device.step_device(&buffer, false).unwrap();
-        assert!(quiet.contacts.is_empty());
+        assert!(quiet.is_empty());
         // an unusable buffer is an error, not a panic
         let small = wd.create_buffer(&wgpu::BufferDescriptor {
             label: Some("small"),

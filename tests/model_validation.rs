@@ -150,9 +150,9 @@ fn degenerate_facets_are_reported_excluded_and_never_found() {
         .unwrap()
         .run(m.positions())
         .unwrap();
-    assert_eq!(res.contacts[0].unwrap().facet, 0);
-    assert!((res.contacts[0].unwrap().distance - 1.5).abs() < 1e-6);
-    assert_eq!(res.contacts[1].unwrap().facet, 0);
+    assert_eq!(res.contact(0).unwrap().facet, 0);
+    assert!((res.contact(0).unwrap().distance - 1.5).abs() < 1e-6);
+    assert_eq!(res.contact(1).unwrap().facet, 0);
     // all degenerate: an error
     let e = m.add_surface(Surface::triangles(&[[1, 4, 5]])).unwrap_err();
     assert!(matches!(e, Error::AllFacetsDegenerate { count: 1 }), "{e}");

@@ -716,7 +716,7 @@ fn edge_and_vertex_contact_is_counted_once_and_continuous() {
             o.force[0]
         );
         assert_eq!(
-            o.search.as_ref().unwrap().contacts[0].unwrap().facet,
+            o.search.as_ref().unwrap().contact(0).unwrap().facet,
             0,
             "{d}: tie to the lower id"
         );

@@ -41,7 +41,7 @@ fn plate_scene(radius: f64, shift: [f64; 3]) -> (Model, PairId) {
 fn check_oracle(r: &SearchResult, m: &Model, p: PairId, radius: f64, tol: f64, what: &str) {
     let pair = m.pair(p).unwrap();
     let master = m.surface(pair.master).unwrap();
-    let all: Vec<usize> = (0..r.contacts.len()).collect();
+    let all: Vec<usize> = (0..r.len()).collect();
     let c = assert_matches_oracle(r, master, m.positions(), radius, tol, &all, what);
     assert!(
         c.found > 100,
@@ -155,17 +155,13 @@ fn check_collapsed(m: &Model, p: PairId, pos: &[[f64; 3]], collapsed: u32, what:
         let before = s.run(m.positions()).unwrap();
         assert_eq!(before.stats.collapsed_facets, 0, "{what}: {d}");
         assert!(
-            before
-                .contacts
-                .iter()
-                .flatten()
-                .any(|c| c.facet == collapsed),
+            before.contacts().flatten().any(|c| c.facet == collapsed),
             "{what}: {d}: no slave was on facet {collapsed} before it collapsed: not a test"
         );
         let r = s.run(pos).unwrap();
         assert_eq!(r.stats.collapsed_facets, 1, "{what}: {d}: counted");
         let mut found = 0;
-        for c in r.contacts.iter().flatten() {
+        for c in r.contacts().flatten() {
             assert_ne!(
                 c.facet, collapsed,
                 "{what}: {d}: a slave was given the collapsed facet"
@@ -182,7 +178,7 @@ fn check_collapsed(m: &Model, p: PairId, pos: &[[f64; 3]], collapsed: u32, what:
         // local increments pass over it too
         for _ in 0..3 {
             let l = s.step(pos).unwrap();
-            for c in l.contacts.iter().flatten() {
+            for c in l.contacts().flatten() {
                 assert_ne!(c.facet, collapsed, "{what}: {d}: local search");
             }
         }
@@ -261,7 +257,7 @@ fn facet_sizes_varying_a_hundredfold() {
             let r = run(&d, &m, p);
             let pair = m.pair(p).unwrap();
             let master = m.surface(pair.master).unwrap();
-            let all: Vec<usize> = (0..r.contacts.len()).collect();
+            let all: Vec<usize> = (0..r.len()).collect();
             let c = assert_matches_oracle(&r, master, m.positions(), radius, tol, &all, &what);
             if radius >= 3.0 * hmax {
                 assert!(c.found >= 600, "{what}: too few contacts: {c:?}");

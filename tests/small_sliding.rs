@@ -50,7 +50,7 @@ fn the_small_sliding_plane_follows_a_rotating_master_the_infinitesimal_one_does_
                     "{d}: no search after the first"
                 );
                 assert_eq!(r.stats.candidates, 0, "{d}: no facet examined");
-                let c = r.contacts[0].unwrap();
+                let c = r.contact(0).unwrap();
                 let expect_normal = rotate_x([0.0, 0.0, 1.0], th);
                 match sliding {
                     Sliding::Small => {
@@ -231,7 +231,7 @@ fn anchored_parity_and_kinematic_small_sliding() {
     let cpu = run(&Device::cpu());
     for g in gpus() {
         for (a, b) in run(g).iter().zip(&cpu) {
-            for (x, y) in a.contacts.iter().zip(&b.contacts) {
+            for (x, y) in a.contacts().zip(b.contacts()) {
                 match (x, y) {
                     (Some(x), Some(y)) => {
                         assert_eq!(x.facet, y.facet, "{g}: anchors are fixed");

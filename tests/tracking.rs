@@ -62,13 +62,13 @@ fn track(
         }
         t.max_iterations = t.max_iterations.max(r.stats.local_iterations);
         let tol = 1e-4 * radius;
-        for (i, gc) in g.contacts.iter().enumerate() {
+        for (i, gc) in g.contacts().enumerate() {
             let Some(gc) = gc else { continue };
             if gc.distance > zone {
                 continue;
             }
             t.compared += 1;
-            let excess = match r.contacts[i] {
+            let excess = match r.contact(i) {
                 Some(tc) if tc.facet == gc.facet => 0.0,
                 Some(tc) => facet_distance(master, &x, r.slaves[i], tc.facet) - gc.distance,
                 None => f64::INFINITY,
@@ -456,7 +456,9 @@ fn local_search_parity_and_determinism() {
         let run = |d: &Device| -> Vec<Vec<abut::search::layout::GpuHit>> {
             let mut s = GlobalSearch::new(d, &m, p).unwrap();
             s.set_schedule(schedule).unwrap();
-            (0..60).map(|k| s.step(&at(k)).unwrap().raw).collect()
+            (0..60)
+                .map(|k| s.step(&at(k)).unwrap().raw.to_vec())
+                .collect()
         };
         let cpu = run(&Device::cpu());
         for g in gpus() {

@@ -27,6 +27,7 @@ pub mod to_local;
 pub mod tree;
 
 use std::sync::atomic::AtomicU32;
+use std::sync::Arc;
 
 use crate::error::Result;
 use crate::search::layout::{tree_passes, GpuHit, ScanLevels, STATUS_WORDS};
@@ -47,6 +48,90 @@ pub(crate) fn as_atomic(words: &mut [u32]) -> &[AtomicU32] {
     unsafe { &*(words as *mut [u32] as *const [AtomicU32]) }
 }
 
+/// Writes to distinct elements of a slice from several threads: a mirror's invocations that
+/// each write one element chosen by a permutation (as a shader's scattered store does). On
+/// x86-64 a 64-byte, 64-aligned element is written with non-temporal stores (one whole cache
+/// line, not read first: a scattered write then costs a third of a plain store's time at 10^6
+/// elements); every thread that wrote calls [`Scatter::fence`] before its task ends.
+pub(crate) struct Scatter<'a, T> {
+    ptr: *mut T,
+    len: usize,
+    /// Which elements were written (checked in debug builds: each at most once).
+    #[cfg(debug_assertions)]
+    written: Vec<AtomicU32>,
+    _slice: std::marker::PhantomData<&'a mut [T]>,
+}
+
+// SAFETY: `write` stores each element at most once (asserted in debug builds; the callers'
+// indices are permutations), so no two threads touch the same element, and the exclusive
+// borrow of the slice keeps every other access out while the Scatter lives.
+unsafe impl<T: Send> Sync for Scatter<'_, T> {}
+
+impl<'a, T: Copy> Scatter<'a, T> {
+    /// Scattered writes into `out`.
+    pub(crate) fn new(out: &'a mut [T]) -> Self {
+        Self {
+            ptr: out.as_mut_ptr(),
+            len: out.len(),
+            #[cfg(debug_assertions)]
+            written: (0..out.len()).map(|_| AtomicU32::new(0)).collect(),
+            _slice: std::marker::PhantomData,
+        }
+    }
+
+    /// Whether `write` uses non-temporal stores for T.
+    const STREAM: bool = cfg!(target_arch = "x86_64")
+        && std::mem::size_of::<T>() == 64
+        && std::mem::align_of::<T>() == 64;
+
+    /// Stores `value` at `i`. Panics when `i` is out of range (and, in debug builds, when `i`
+    /// was written before).
+    pub(crate) fn write(&self, i: usize, value: T) {
+        assert!(i < self.len, "scattered write {i} beyond {}", self.len);
+        #[cfg(debug_assertions)]
+        assert_eq!(
+            self.written[i].swap(1, std::sync::atomic::Ordering::Relaxed),
+            0,
+            "element {i} written twice"
+        );
+        #[cfg(target_arch = "x86_64")]
+        if Self::STREAM {
+            use std::arch::x86_64::{__m128i, _mm_loadu_si128, _mm_stream_si128};
+            let src = (&value as *const T).cast::<__m128i>();
+            // SAFETY: i is in range and no other thread writes element i (see the Sync impl);
+            // the element is 64 bytes, 64-aligned: four aligned 16-byte stores cover it, read
+            // from the 64 bytes of `value`. SSE2 is part of x86-64.
+            unsafe {
+                let dst = self.ptr.add(i).cast::<__m128i>();
+                for k in 0..4 {
+                    _mm_stream_si128(dst.add(k), _mm_loadu_si128(src.add(k)));
+                }
+            }
+            return;
+        }
+        // SAFETY: i is in range, and no other thread writes element i (see the Sync impl).
+        unsafe { self.ptr.add(i).write(value) }
+    }
+
+    /// Orders this thread's non-temporal stores before its later stores (the end of its
+    /// task), so that whoever joins the task sees them.
+    pub(crate) fn fence(&self) {
+        #[cfg(target_arch = "x86_64")]
+        if Self::STREAM {
+            // SAFETY: sfence has no preconditions; SSE is part of x86-64.
+            #[allow(unused_unsafe)]
+            unsafe {
+                std::arch::x86_64::_mm_sfence()
+            }
+        }
+    }
+}
+
+/// The hits to write: in place when no result shares them any more, else a copy.
+pub(crate) fn hits_mut(hits: &mut Arc<Vec<GpuHit>>) -> &mut Vec<GpuHit> {
+    Arc::make_mut(hits)
+}
+
 /// The buffers of one search on the CPU; they only grow.
 #[derive(Clone, Debug, Default)]
 pub struct CpuWorkspace {
@@ -54,14 +139,18 @@ pub struct CpuWorkspace {
     pub boxes: Vec<[f32; 4]>,
     /// Status words (`STATUS_*`).
     pub status: [u32; STATUS_WORDS],
-    /// One result per slave node (the tracked nodes between increments).
-    pub hits: Vec<GpuHit>,
+    /// One result per slave node (the tracked nodes between increments), shared with the last
+    /// result returned: the next search writes in place when the caller has dropped it, and
+    /// copies it first when not.
+    pub hits: Arc<Vec<GpuHit>>,
     /// Positions at the last global search (motion budget).
     pub reference: Vec<[f32; 4]>,
     /// Nearest-facet work items: each slave's chunk count, scanned to its first item.
     pub work: Vec<u32>,
-    /// Nearest-facet record per slave (`nearest_facet::BEST_WORDS` words).
+    /// Nearest-facet record per walk position (`nearest_facet::BEST_WORDS` words).
     pub best: Vec<u32>,
+    /// The slaves' positions and node ids in walk order (`nearest_facet::walk_gather`).
+    pub walk_points: Vec<[u32; 4]>,
 }
 
 /// The CPU executor of the global search.
@@ -81,7 +170,7 @@ impl CpuSearch {
         &mut self,
         prep: &Prepared,
         local: bool,
-    ) -> Result<(Vec<GpuHit>, [u32; STATUS_WORDS])> {
+    ) -> Result<(Arc<Vec<GpuHit>>, [u32; STATUS_WORDS])> {
         if !local {
             let hits = self.run(prep)?;
             self.ws.reference.clear();
@@ -104,7 +193,7 @@ impl CpuSearch {
                 &prep.slaves,
                 anchors,
                 &mut status,
-                &mut self.ws.hits,
+                hits_mut(&mut self.ws.hits),
                 &prep.adjacency,
             );
             self.ws.status = status;
@@ -125,7 +214,7 @@ impl CpuSearch {
             &prep.slaves,
             &prep.adjacency,
             &mut status,
-            &mut self.ws.hits,
+            hits_mut(&mut self.ws.hits),
         );
         self.ws.status = status;
         Ok((self.ws.hits.clone(), status))
@@ -158,11 +247,11 @@ impl CpuSearch {
         self.ws
             .boxes
             .resize(tree::box_words(prep.params.tree_levels), [0.0; 4]);
-        self.ws.hits.resize(prep.slaves.len(), GpuHit::miss(0, 0));
+        hits_mut(&mut self.ws.hits).resize(prep.slaves.len(), GpuHit::miss(0, 0));
     }
 
     /// Runs all steps of a global search. Returns the hits.
-    pub fn run(&mut self, prep: &Prepared) -> Result<Vec<GpuHit>> {
+    pub fn run(&mut self, prep: &Prepared) -> Result<Arc<Vec<GpuHit>>> {
         self.reset(prep);
         for step in STEPS {
             run_step(step, &prep.params, prep, &mut self.ws);
@@ -199,22 +288,35 @@ pub fn run_step(
             ws.work.resize(work_levels.words as usize, 0);
             ws.best.clear();
             ws.best.resize(n * nearest_facet::BEST_WORDS, 0);
+            ws.walk_points.resize(n, [0; 4]);
+            nearest_facet::walk_gather(
+                &prep.nodes,
+                &prep.slaves,
+                &prep.walk_order,
+                &mut ws.walk_points,
+            );
+
             let c = nearest_facet::Candidates {
                 params,
                 nodes: &prep.nodes,
                 facets: &prep.facets,
                 slaves: &prep.slaves,
                 walk_order: &prep.walk_order,
+                walk_points: &ws.walk_points,
                 order: &prep.order,
                 boxes: &ws.boxes,
                 adjacency: &prep.adjacency,
             };
             nearest_facet::nearest_walk(&c, &mut ws.work, &mut ws.best);
+
             scan::scan(&work_levels, &mut ws.work);
             nearest_facet::nearest_chunks(&c, &ws.work, &mut ws.best);
+
             nearest_facet::nearest_ties(&c, &ws.work, &mut ws.best);
+
             nearest_facet::nearest_crowded(&c, &mut ws.best);
-            nearest_facet::nearest_facet(&c, &mut ws.status, &mut ws.hits, &ws.best);
+
+            nearest_facet::nearest_facet(&c, &mut ws.status, hits_mut(&mut ws.hits), &ws.best);
         }
     }
 }

@@ -41,6 +41,19 @@ pub const PRUNE_SLACK: f32 = 1.0001;
 /// distance² bits, unused.
 pub const BEST_WORDS: usize = 8;
 
+/// The slave at walk position t (WGSL: `walk_point`): grid-local position and node id.
+fn walk_point(c: &Candidates<'_>, t: usize) -> (V3<f32>, u32) {
+    let w = c.walk_points[t];
+    (
+        V3::new(
+            f32::from_bits(w[0]),
+            f32::from_bits(w[1]),
+            f32::from_bits(w[2]),
+        ),
+        w[3],
+    )
+}
+
 /// The inputs every pass reads.
 #[derive(Clone, Copy)]
 pub struct Candidates<'a> {
@@ -54,6 +67,9 @@ pub struct Candidates<'a> {
     pub slaves: &'a [u32],
     /// The slaves in the order the walks take them (Morton order of their start positions).
     pub walk_order: &'a [u32],
+    /// Per walk position: the slave's position (f32 bits, xyz) and node id (w), from
+    /// [`walk_gather`].
+    pub walk_points: &'a [[u32; 4]],
     /// Active facet of each leaf slot of the tree.
     pub order: &'a [u32],
     /// The tree's boxes (two per heap node).
@@ -154,11 +170,10 @@ fn centre_d2(c: &Candidates<'_>, k: u32, p: V3<f32>) -> f32 {
 /// Levels a walk's stack holds (WGSL: the `stack` array's length).
 const STACK: usize = 32;
 
-/// The nearest facet of slave i a depth-first walk finds within `WALK_VISITS` nodes, the nearer
-/// child first (WGSL: `walk`).
-fn walk(c: &Candidates<'_>, i: usize) -> Walk {
-    let slave = c.slaves[i];
-    let p = node(c.nodes, slave);
+/// The nearest facet of the slave at walk position t a depth-first walk finds within
+/// `WALK_VISITS` nodes, the nearer child first (WGSL: `walk`).
+fn walk(c: &Candidates<'_>, t: usize) -> Walk {
+    let (p, slave) = walk_point(c, t);
     let leaves = c.leaves();
     let mut stack = [(0u32, 0.0f32); STACK]; // subtrees kept for later, their boxes' distance²
     let mut sp = 0usize;
@@ -229,11 +244,10 @@ fn walk(c: &Candidates<'_>, i: usize) -> Walk {
     w
 }
 
-/// The nearest facet (distance², id) of slave i among the leaf slots of its work item t, within
-/// the radius, ties to the lowest id (WGSL: `chunk_best`).
+/// The nearest facet (distance², id) of the slave at walk position i among the leaf slots of its
+/// work item t, within the radius, ties to the lowest id (WGSL: `chunk_best`).
 fn chunk_best(c: &Candidates<'_>, work: &[u32], b: &[u32], i: usize, t: u32) -> (f32, u32) {
-    let slave = c.slaves[i];
-    let p = node(c.nodes, slave);
+    let (p, slave) = walk_point(c, i);
     let leaves = c.leaves();
     let j0 = b[5] + (t - work[i]) * CANDIDATE_CHUNK;
     let j1 = leaves.min(j0 + CANDIDATE_CHUNK);
@@ -255,8 +269,27 @@ fn chunk_best(c: &Candidates<'_>, work: &[u32], b: &[u32], i: usize, t: u32) -> 
     best
 }
 
-/// One "invocation" per slave, in `walk_order`: the tree walk, its best facet into `best`, the chunks of the
-/// leaf slots it did not reach into `work` (word n_slaves set to 0 for the scan)
+/// One "invocation" per slave: walk position t gets the position and node id of slave
+/// `walk_order[t]` (WGSL: `walk_gather`).
+pub fn walk_gather(
+    nodes: &[[f32; 4]],
+    slaves: &[u32],
+    walk_order: &[u32],
+    walk_points: &mut [[u32; 4]],
+) {
+    walk_points
+        .par_iter_mut()
+        .zip(walk_order)
+        .with_min_len(PAR_MIN)
+        .for_each(|(w, &i)| {
+            let slave = slaves[i as usize];
+            let x = nodes[slave as usize];
+            *w = [x[0].to_bits(), x[1].to_bits(), x[2].to_bits(), slave];
+        });
+}
+
+/// One "invocation" per walk position t: the tree walk, its best facet into `best`, the chunks
+/// of the leaf slots it did not reach into `work` (word n_slaves set to 0 for the scan)
 /// (WGSL: `nearest_walk`).
 pub fn nearest_walk(c: &Candidates<'_>, work: &mut [u32], best: &mut [u32]) {
     let n = c.params.n_slaves as usize;
@@ -264,19 +297,20 @@ pub fn nearest_walk(c: &Candidates<'_>, work: &mut [u32], best: &mut [u32]) {
         work[n] = 0;
     }
     let n_slots = c.leaves();
-    // invocation t walks for slave walk_order[t]; the records are written by slave
-    let walks: Vec<(u32, [u32; BEST_WORDS])> = c.walk_order[..n]
-        .par_iter()
+    best[..BEST_WORDS * n]
+        .par_chunks_mut(BEST_WORDS)
+        .zip(&mut work[..n])
+        .enumerate()
         .with_min_len(PAR_MIN)
-        .map(|&i| {
-            let w = walk(c, i as usize);
+        .for_each(|(t, (b, chunks))| {
+            let w = walk(c, t);
             let start = if w.next != 0 {
                 (w.next - 1).min(n_slots)
             } else {
                 n_slots
             };
             let rest = n_slots - start;
-            let record = [
+            b.copy_from_slice(&[
                 w.d2.to_bits(),
                 NO_FACET,
                 0,
@@ -285,15 +319,9 @@ pub fn nearest_walk(c: &Candidates<'_>, work: &mut [u32], best: &mut [u32]) {
                 start,
                 w.d2.to_bits(),
                 0,
-            ];
-            (rest.div_ceil(CANDIDATE_CHUNK), record)
-        })
-        .collect();
-    for (&i, (chunks, record)) in c.walk_order[..n].iter().zip(walks) {
-        let i = i as usize;
-        work[i] = chunks;
-        best[BEST_WORDS * i..BEST_WORDS * (i + 1)].copy_from_slice(&record);
-    }
+            ]);
+            *chunks = rest.div_ceil(CANDIDATE_CHUNK);
+        });
 }
 
 /// The winner of a slave's record `b`: the chunks' facet at the best distance, or the walk's
@@ -386,12 +414,11 @@ pub fn nearest_ties(c: &Candidates<'_>, work: &[u32], best: &mut [u32]) {
     });
 }
 
-/// Self-contact: whether slave i has a facet within the radius, other than its nearest `best_f`
-/// and sharing no node with it, that faces it; a walk cut off by the cap says yes
-/// (WGSL: `crowded`).
+/// Self-contact: whether the slave at walk position i has a facet within the radius, other than
+/// its nearest `best_f` and sharing no node with it, that faces it; a walk cut off by the cap
+/// says yes (WGSL: `crowded`).
 fn crowded(c: &Candidates<'_>, i: usize, best_f: u32) -> bool {
-    let slave = c.slaves[i];
-    let p = node(c.nodes, slave);
+    let (p, slave) = walk_point(c, i);
     let leaves = c.leaves();
     let r2 = c.params.radius * c.params.radius;
     let mut k = 1u32;
@@ -422,64 +449,79 @@ fn crowded(c: &Candidates<'_>, i: usize, best_f: u32) -> bool {
     k != 0
 }
 
-/// One "invocation" per slave node: the hit from the winning facet; writes `hits[i]`
-/// (WGSL: `nearest_facet`).
+/// One "invocation" per walk position t: the hit from the winning facet, written to the hit of
+/// its slave `walk_order[t]` (WGSL: `nearest_facet`). The invocations write disjoint hits (the
+/// walk order is a permutation), through relaxed atomic stores so that they may run on any
+/// thread: the bytes do not depend on the threads.
 pub fn nearest_facet(c: &Candidates<'_>, status: &mut [u32], hits: &mut [GpuHit], best: &[u32]) {
-    let (params, nodes, facets, slaves, adjacency) =
-        (c.params, c.nodes, c.facets, c.slaves, c.adjacency);
+    let (params, nodes, facets, adjacency) = (c.params, c.nodes, c.facets, c.adjacency);
     let n = params.n_slaves as usize;
-    let counts: (u32, u32) = hits[..n]
-        .par_iter_mut()
+    let out = super::Scatter::new(&mut hits[..n]);
+    let store = |i: u32, hit: GpuHit| out.write(i as usize, hit);
+    let hit_of = |t: usize, i: u32| {
+        let (p, slave) = walk_point(c, t);
+        let b = &best[BEST_WORDS * t..BEST_WORDS * (t + 1)];
+        let candidates = b[3];
+        let fallback = u32::from(b[5] < c.leaves());
+        let best_f = winner(b);
+        if best_f == NO_FACET {
+            store(i, GpuHit::miss(slave, candidates));
+            return (fallback, 0);
+        }
+        let fac = facets[best_f as usize];
+        let best_pr = project(nodes, p, fac);
+        let mut best_node = u32::MAX;
+        let mut best_nd2 = 0.0f32;
+        for &id in &fac[..facet_node_count(fac)] {
+            let d2 = (node(nodes, id) - p).length2();
+            if best_node == u32::MAX || d2 < best_nd2 || (d2 == best_nd2 && id < best_node) {
+                best_node = id;
+                best_nd2 = d2;
+            }
+        }
+        let q = best_pr.point;
+        let beside = super::common::beside_free_edge(
+            nodes,
+            facets,
+            adjacency,
+            best_f,
+            fac,
+            best_pr.weights,
+            p,
+            q,
+            best_pr.normal,
+        );
+        let hit = GpuHit {
+            facet: best_f,
+            node: best_node,
+            candidates: candidates | if beside { HIT_BESIDE_FREE_EDGE } else { 0 },
+            slave,
+            point_gap: [q.x, q.y, q.z, (p - q).dot(best_pr.normal)],
+            normal_dist: [
+                best_pr.normal.x,
+                best_pr.normal.y,
+                best_pr.normal.z,
+                best_pr.dist2.sqrt(),
+            ],
+            weights: best_pr.weights,
+        };
+        store(i, hit);
+        (fallback, u32::from(b[2] != 0))
+    };
+    let counts: (u32, u32) = c.walk_order[..n]
+        .par_iter()
         .enumerate()
         .with_min_len(PAR_MIN)
-        .map(|(i, hit)| {
-            let p = node(nodes, slaves[i]);
-            let b = &best[BEST_WORDS * i..BEST_WORDS * (i + 1)];
-            let candidates = b[3];
-            let fallback = u32::from(b[5] < c.leaves());
-            let best_f = winner(b);
-            if best_f == NO_FACET {
-                *hit = GpuHit::miss(slaves[i], candidates);
-                return (fallback, 0);
-            }
-            let fac = facets[best_f as usize];
-            let best_pr = project(nodes, p, fac);
-            let mut best_node = u32::MAX;
-            let mut best_nd2 = 0.0f32;
-            for &id in &fac[..facet_node_count(fac)] {
-                let d2 = (node(nodes, id) - p).length2();
-                if best_node == u32::MAX || d2 < best_nd2 || (d2 == best_nd2 && id < best_node) {
-                    best_node = id;
-                    best_nd2 = d2;
-                }
-            }
-            let q = best_pr.point;
-            let beside = super::common::beside_free_edge(
-                nodes,
-                facets,
-                adjacency,
-                best_f,
-                fac,
-                best_pr.weights,
-                p,
-                q,
-                best_pr.normal,
-            );
-            *hit = GpuHit {
-                facet: best_f,
-                node: best_node,
-                candidates: candidates | if beside { HIT_BESIDE_FREE_EDGE } else { 0 },
-                slave: slaves[i],
-                point_gap: [q.x, q.y, q.z, (p - q).dot(best_pr.normal)],
-                normal_dist: [
-                    best_pr.normal.x,
-                    best_pr.normal.y,
-                    best_pr.normal.z,
-                    best_pr.dist2.sqrt(),
-                ],
-                weights: best_pr.weights,
-            };
-            (fallback, u32::from(b[2] != 0))
+        .fold(
+            || (0, 0),
+            |acc, (t, &i)| {
+                let (f, c) = hit_of(t, i);
+                (acc.0 + f, acc.1 + c)
+            },
+        )
+        .map(|acc| {
+            out.fence();
+            acc
         })
         .reduce(|| (0, 0), |x, y| (x.0 + y.0, x.1 + y.1));
     status[STATUS_FALLBACK] += counts.0;

@@ -34,7 +34,7 @@ impl CpuSearch {
         self.ws
             .boxes
             .resize(super::tree::box_words(prep.params.tree_levels), [0.0; 4]);
-        self.ws.hits.resize(prep.slaves.len(), GpuHit::miss(0, 0));
+        super::hits_mut(&mut self.ws.hits).resize(prep.slaves.len(), GpuHit::miss(0, 0));
         self.ws.reference = prep.nodes.clone();
         self.resident = Some(Box::new(CpuResident {
             prep: prep.clone(),
@@ -115,7 +115,7 @@ impl CpuSearch {
                 &prep.slaves,
                 anchors,
                 &mut status,
-                &mut self.ws.hits,
+                super::hits_mut(&mut self.ws.hits),
                 &prep.adjacency,
             );
             self.ws.status = status;
@@ -139,7 +139,7 @@ impl CpuSearch {
                 &prep.slaves,
                 &prep.adjacency,
                 &mut status,
-                &mut self.ws.hits,
+                super::hits_mut(&mut self.ws.hits),
             );
         } else {
             prep.params = params;

@@ -41,6 +41,7 @@ struct Pipelines {
     tree_refit: wgpu::ComputePipeline,
     scan_blocks: wgpu::ComputePipeline,
     scan_add: wgpu::ComputePipeline,
+    walk_gather: wgpu::ComputePipeline,
     nearest_walk: wgpu::ComputePipeline,
     nearest_args: wgpu::ComputePipeline,
     nearest_chunks: wgpu::ComputePipeline,
@@ -59,6 +60,7 @@ struct BindGroups {
     motion: wgpu::BindGroup,
     /// One per refit pass of the tree.
     tree_refit: Vec<wgpu::BindGroup>,
+    walk_gather: wgpu::BindGroup,
     nearest_walk: wgpu::BindGroup,
     work_scan_blocks: Vec<wgpu::BindGroup>,
     work_scan_add: Vec<wgpu::BindGroup>,
@@ -76,6 +78,8 @@ struct Buffers {
     nodes: GrowBuffer,
     facets: GrowBuffer,
     slaves: GrowBuffer,
+    /// The slaves' positions and node ids in walk order (`walk_gather`).
+    walk_points: GrowBuffer,
     /// The search tree's leaf order.
     order: GrowBuffer,
     /// The search tree's boxes.
@@ -166,6 +170,7 @@ impl GpuSearch {
             tree_refit: pipeline(&passes::TREE_REFIT),
             scan_blocks: pipeline(&passes::SCAN_BLOCKS),
             scan_add: pipeline(&passes::SCAN_ADD),
+            walk_gather: pipeline(&passes::WALK_GATHER),
             nearest_walk: pipeline(&passes::NEAREST_WALK),
             nearest_args: pipeline(&passes::NEAREST_ARGS),
             nearest_chunks: pipeline(&passes::NEAREST_CHUNKS),
@@ -200,6 +205,7 @@ impl GpuSearch {
             nodes: GrowBuffer::new(device, "nodes", 0, storage | U::COPY_SRC),
             facets: GrowBuffer::new(device, "facets", 0, storage),
             slaves: GrowBuffer::new(device, "slaves", 0, storage),
+            walk_points: GrowBuffer::new(device, "walk points", 0, storage),
             order: GrowBuffer::new(device, "tree order", 0, storage),
             boxes: GrowBuffer::new(device, "tree boxes", 0, storage | U::COPY_SRC),
             status: device.create_buffer(&wgpu::BufferDescriptor {
@@ -313,6 +319,9 @@ impl GpuSearch {
         replaced |= b.nodes.ensure(d, l, (prep.n_nodes * 16) as u64)?;
         replaced |= b.facets.ensure(d, l, (prep.facets.len() * 16) as u64)?;
         replaced |= b.slaves.ensure(d, l, (prep.slaves.len() * 8) as u64)?;
+        replaced |= b
+            .walk_points
+            .ensure(d, l, (prep.slaves.len() * 16) as u64)?;
         replaced |= b.order.ensure(d, l, (prep.order.len() * 4).max(4) as u64)?;
         replaced |= b
             .boxes
@@ -357,6 +366,7 @@ impl GpuSearch {
             Buf::Nodes => b.nodes.buffer.as_entire_binding(),
             Buf::Facets => b.facets.buffer.as_entire_binding(),
             Buf::Slaves => b.slaves.buffer.as_entire_binding(),
+            Buf::WalkPoints => b.walk_points.buffer.as_entire_binding(),
             Buf::Adjacency => b.adjacency.buffer.as_entire_binding(),
             Buf::Order => b.order.buffer.as_entire_binding(),
             Buf::Boxes => b.boxes.buffer.as_entire_binding(),
@@ -413,6 +423,7 @@ impl GpuSearch {
             local_search: group(&p.local_search, &passes::LOCAL_SEARCH)?,
             motion: group(&p.motion, &passes::MOTION)?,
             tree_refit,
+            walk_gather: group(&p.walk_gather, &passes::WALK_GATHER)?,
             nearest_walk: group(&p.nearest_walk, &passes::NEAREST_WALK)?,
             work_scan_blocks,
             work_scan_add,
@@ -764,12 +775,20 @@ impl GpuSearch {
                 }
                 Step::NearestFacet => {
                     let work = work_levels(prep);
-                    let mut seq = vec![(
-                        &p.nearest_walk,
-                        &bg.nearest_walk,
-                        params.n_slaves,
-                        ITEM_WORKGROUP,
-                    )];
+                    let mut seq = vec![
+                        (
+                            &p.walk_gather,
+                            &bg.walk_gather,
+                            params.n_slaves,
+                            ITEM_WORKGROUP,
+                        ),
+                        (
+                            &p.nearest_walk,
+                            &bg.nearest_walk,
+                            params.n_slaves,
+                            ITEM_WORKGROUP,
+                        ),
+                    ];
                     scan_work(p, &work, &bg.work_scan_blocks, &bg.work_scan_add, &mut seq);
                     seq.push((&p.nearest_args, &bg.nearest_args, 1, 1));
                     dispatch(&mut enc, "nearest_facet: walk + scan", &seq);

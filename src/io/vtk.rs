@@ -94,11 +94,7 @@ impl Frame {
                     f.force[s][a] += finite(fs[a]);
                 }
                 if facets.is_some() {
-                    if let Some(Some(c)) = o
-                        .search
-                        .as_ref()
-                        .map(|r| r.contacts.get(i).copied().flatten())
-                    {
+                    if let Some(c) = o.search.as_ref().and_then(|r| r.contact(i)) {
                         let k = base + c.facet as usize;
                         if k < f.facet_force.len() {
                             for a in 0..3 {

@@ -227,7 +227,7 @@ pub struct ScanParams {
 const _: () = assert!(std::mem::size_of::<ScanParams>() == 16);
 
 /// The raw search result of one slave node, grid-local f32. WGSL twin: `Hit` in common.wgsl.
-#[repr(C)]
+#[repr(C, align(64))]
 #[derive(Clone, Copy, Debug, PartialEq, Pod, Zeroable)]
 pub struct GpuHit {
     /// Index into the active facet list, [`NO_FACET`] when none lies within the radius.

@@ -91,17 +91,72 @@ pub struct SearchStats {
     pub collapsed_facets: u32,
 }
 
-/// The result of a global search: one entry per slave node, in node-set order.
+/// The result of a search: one entry per slave node, in node-set order. It holds the kernels'
+/// raw f32 hits (shared with the search, not copied) and decodes a slave's [`ContactPoint`]
+/// in model coordinates when asked ([`SearchResult::contact`], [`SearchResult::contacts`]),
+/// so that a search of 10^6 slaves does not build 10^6 f64 records nobody reads.
 #[derive(Clone, Debug)]
 pub struct SearchResult {
-    /// The slave nodes (model node ids), in the order of `contacts` (shared, not copied).
+    /// The slave nodes (model node ids), in the order of the hits (shared, not copied).
     pub slaves: Arc<[u32]>,
-    /// The partner of each slave node, `None` when no facet lies within the search radius.
-    pub contacts: Vec<Option<ContactPoint>>,
-    /// The raw grid-local f32 results the kernels wrote (for parity checks).
-    pub raw: Vec<GpuHit>,
+    /// The raw results the kernels wrote, one per slave (grid-local f32, relative to
+    /// `frame`; for parity checks). Empty when the hits were not read back
+    /// ([`GlobalSearch::step_device`] with `read_hits` false).
+    pub raw: Arc<Vec<GpuHit>>,
+    /// The origin of the kernels' local frame, model units: a raw point plus `frame` is the
+    /// point in model coordinates.
+    pub frame: [f64; 3],
+    /// The master's facet id of each active facet (raw hits name active facets).
+    active: Arc<[u32]>,
     /// What the search did.
     pub stats: SearchStats,
+}
+
+impl SearchResult {
+    /// Slave nodes with a result (the slave count; 0 when the hits were not read back).
+    pub fn len(&self) -> usize {
+        self.raw.len()
+    }
+
+    /// Whether there is no result (no slave, or the hits were not read back).
+    pub fn is_empty(&self) -> bool {
+        self.raw.is_empty()
+    }
+
+    /// The partner of slave `i` (index into `slaves`) in model coordinates; `None` when no
+    /// facet lies within the search radius, or when `i` is beyond [`SearchResult::len`].
+    pub fn contact(&self, i: usize) -> Option<ContactPoint> {
+        self.raw.get(i).and_then(|h| self.decode(h))
+    }
+
+    /// The partner of every slave node, in order (`None` where no facet lies within the search
+    /// radius), decoded as the iterator goes.
+    pub fn contacts(&self) -> impl ExactSizeIterator<Item = Option<ContactPoint>> + Clone + '_ {
+        self.raw.iter().map(|h| self.decode(h))
+    }
+
+    /// A raw hit in model coordinates.
+    fn decode(&self, h: &GpuHit) -> Option<ContactPoint> {
+        let o = self.frame;
+        (h.facet != NO_FACET).then(|| ContactPoint {
+            facet: self.active[h.facet as usize],
+            tracked_node: h.node,
+            point: [
+                o[0] + h.point_gap[0] as f64,
+                o[1] + h.point_gap[1] as f64,
+                o[2] + h.point_gap[2] as f64,
+            ],
+            normal: [
+                h.normal_dist[0] as f64,
+                h.normal_dist[1] as f64,
+                h.normal_dist[2] as f64,
+            ],
+            gap: h.point_gap[3] as f64,
+            distance: h.normal_dist[3] as f64,
+            weights: h.weights.map(|w| w as f64),
+            beside_free_edge: h.candidates & layout::HIT_BESIDE_FREE_EDGE != 0,
+        })
+    }
 }
 
 /// Input of one search in the kernels' layout: grid-local f32 nodes, active facets, slaves.
@@ -206,6 +261,8 @@ pub struct GlobalSearch {
     walk_order: Arc<[u32]>,
     /// The slaves, shared with every `Prepared`.
     slave_ids: Arc<[u32]>,
+    /// The master's facet id of each active facet, shared with every result.
+    active: Arc<[u32]>,
     schedule: Schedule,
     self_contact: bool,
     /// Grid and parameters of the last global search: the frame local increments work in.
@@ -331,6 +388,7 @@ impl GlobalSearch {
         let walk_order = tree::morton_order(&slave_points, model.dim()).into();
         Ok(Self {
             executor,
+            active: master.active.as_slice().into(),
             master,
             facets,
             order,
@@ -509,7 +567,10 @@ impl GlobalSearch {
             };
             let local = global.is_none();
             let (raw, status) = match &mut self.executor {
-                Executor::Gpu(g) => g.run_mode(&prepared, local, true)?,
+                Executor::Gpu(g) => {
+                    let (hits, status) = g.run_mode(&prepared, local, true)?;
+                    (Arc::new(hits), status)
+                }
                 Executor::Cpu(c) => c.run_mode(&prepared, local)?,
             };
             if local && Status(status).budget_exceeded() {
@@ -606,7 +667,7 @@ impl GlobalSearch {
             return Ok(self.finish(
                 prepared.grid.frame,
                 prepared.grid,
-                raw,
+                Arc::new(raw),
                 global.unwrap_or(Trigger::Local),
                 &status,
             ));
@@ -755,7 +816,8 @@ impl GlobalSearch {
             Executor::Gpu(g) => {
                 let mut cpu = CpuSearch::default();
                 let ws = cpu.run_prefix(&prepared, first)?;
-                g.run_split(&prepared, first, ws)?
+                let (hits, status) = g.run_split(&prepared, first, ws)?;
+                (Arc::new(hits), status)
             }
             Executor::Cpu(c) => c.run_mode(&prepared, false)?,
         };
@@ -898,7 +960,7 @@ impl GlobalSearch {
                 _ => Trigger::Local,
             }
         };
-        self.finish(origin, grid, raw, trigger, status)
+        self.finish(origin, grid, Arc::new(raw), trigger, status)
     }
 
     /// The GPU executor, if this search runs on one.
@@ -954,39 +1016,19 @@ impl GlobalSearch {
         &self,
         o: [f64; 3],
         grid: Grid,
-        raw: Vec<GpuHit>,
+        raw: Arc<Vec<GpuHit>>,
         trigger: Trigger,
         status: &[u32; layout::STATUS_WORDS],
     ) -> SearchResult {
-        let mut candidates = 0u64;
-        let contacts = raw
+        let candidates = raw
             .iter()
-            .map(|h| {
-                candidates += (h.candidates & !layout::HIT_BESIDE_FREE_EDGE) as u64;
-                (h.facet != NO_FACET).then(|| ContactPoint {
-                    facet: self.master.active[h.facet as usize],
-                    tracked_node: h.node,
-                    point: [
-                        o[0] + h.point_gap[0] as f64,
-                        o[1] + h.point_gap[1] as f64,
-                        o[2] + h.point_gap[2] as f64,
-                    ],
-                    normal: [
-                        h.normal_dist[0] as f64,
-                        h.normal_dist[1] as f64,
-                        h.normal_dist[2] as f64,
-                    ],
-                    gap: h.point_gap[3] as f64,
-                    distance: h.normal_dist[3] as f64,
-                    weights: h.weights.map(|w| w as f64),
-                    beside_free_edge: h.candidates & layout::HIT_BESIDE_FREE_EDGE != 0,
-                })
-            })
-            .collect();
+            .map(|h| (h.candidates & !layout::HIT_BESIDE_FREE_EDGE) as u64)
+            .sum();
         SearchResult {
             slaves: self.slave_ids.clone(),
-            contacts,
             raw,
+            frame: o,
+            active: self.active.clone(),
             stats: SearchStats {
                 trigger,
                 local_iterations: Status(*status).local_iterations(),

@@ -95,7 +95,7 @@ pub fn assert_same_search(
 ) -> Compared {
     assert_eq!(a.slaves, b.slaves);
     let mut c = Compared::default();
-    for (i, (x, y)) in a.contacts.iter().zip(&b.contacts).enumerate() {
+    for (i, (x, y)) in a.contacts().zip(b.contacts()).enumerate() {
         let node = a.slaves[i];
         c.checked += 1;
         match (x, y) {
@@ -183,7 +183,7 @@ pub fn assert_matches_oracle(
     let mut c = Compared::default();
     for (k, &i) in which.iter().enumerate() {
         c.checked += 1;
-        match (&r.contacts[i], &oracle[k]) {
+        match (&r.contact(i), &oracle[k]) {
             (None, None) => {}
             (Some(h), None) => {
                 assert!(

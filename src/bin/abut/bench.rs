@@ -450,7 +450,7 @@ fn search_rows(devices: &[Device], slaves: usize) -> abut::Result<Vec<SearchRow>
         let steady = t.elapsed().as_secs_f64() / reps as f64;
         // found by both: the distances; by one side only: agreement when it is at the radius
         let mut worst = 0.0f64;
-        for (j, hit) in r.contacts.iter().enumerate() {
+        for (j, hit) in r.contacts().enumerate() {
             let p = parry[j];
             let diff = match (hit, p.is_finite()) {
                 (Some(h), true) => (h.distance - p).abs(),

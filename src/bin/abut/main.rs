@@ -680,13 +680,8 @@ fn search(a: &SearchArgs) -> abut::Result<()> {
         search.run(model.positions())?;
     }
     let steady = t2.elapsed() / a.repeat.max(1) as u32;
-    let found = result.contacts.iter().flatten().count();
-    let penetrating = result
-        .contacts
-        .iter()
-        .flatten()
-        .filter(|c| c.gap < 0.0)
-        .count();
+    let found = result.contacts().flatten().count();
+    let penetrating = result.contacts().flatten().filter(|c| c.gap < 0.0).count();
     let s = &result.stats;
     println!(
         "tree over {} facets: {:.1} facets projected per node, {} walks finished in chunks",
@@ -718,7 +713,7 @@ fn search(a: &SearchArgs) -> abut::Result<()> {
     );
     let (mut max_dist_err, mut facet_diff, mut presence_diff) = (0.0f64, 0, 0);
     for (k, &i) in idx.iter().enumerate() {
-        match (&result.contacts[i], &oracle[k]) {
+        match (&result.contact(i), &oracle[k]) {
             (Some(c), Some(o)) => {
                 max_dist_err = max_dist_err.max((c.distance - o.contact.distance).abs());
                 if c.facet != o.contact.facet {

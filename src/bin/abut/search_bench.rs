@@ -116,8 +116,7 @@ fn abut_run<'a>(device: &Device, sc: &'a Scene, radius: f64) -> abut::Result<Run
     Ok(Box::new(move || {
         let r = search.run(sc.model.positions())?;
         let d = r
-            .contacts
-            .iter()
+            .contacts()
             .map(|c| c.as_ref().map_or(f64::INFINITY, |c| c.distance))
             .collect();
         Ok((d, Some(r.stats.candidates as f64 / n)))

@@ -19,7 +19,7 @@ struct Slots {
     tree_passes: Vec<u64>,
     /// Global: one per block of each level of the work-item scan.
     work_levels: Vec<u64>,
-    /// Global: one per slave (nearest_count, nearest_facet).
+    /// Global: one per slave (walk_gather, nearest_walk, nearest_crowded, nearest_facet).
     slaves: u64,
     /// Global: one invocation (nearest_args).
     one: u64,
@@ -56,6 +56,7 @@ struct Groups {
     anchor: wgpu::BindGroup,
     local_search: wgpu::BindGroup,
     tree_refit: Vec<wgpu::BindGroup>,
+    walk_gather: wgpu::BindGroup,
     nearest_walk: wgpu::BindGroup,
     nearest_args: wgpu::BindGroup,
     nearest_chunks: wgpu::BindGroup,
@@ -317,6 +318,7 @@ impl GpuSearch {
                 anchor: group(&p.anchor, &passes::ANCHOR)?,
                 local_search: group(&p.local_search, &passes::LOCAL_SEARCH)?,
                 tree_refit,
+                walk_gather: group(&p.walk_gather, &passes::WALK_GATHER)?,
                 nearest_walk: group(&p.nearest_walk, &passes::NEAREST_WALK)?,
                 nearest_args: group(&p.nearest_args, &passes::NEAREST_ARGS)?,
                 nearest_chunks: group(&p.nearest_chunks, &passes::NEAREST_CHUNKS)?,
@@ -415,6 +417,7 @@ impl GpuSearch {
             .zip(&g.tree_refit)
             .map(|(&slot, group)| Indirect(&p.tree_refit, group, plan, slot))
             .collect();
+        global.push(Indirect(&p.walk_gather, &g.walk_gather, plan, s.slaves));
         global.push(Indirect(&p.nearest_walk, &g.nearest_walk, plan, s.slaves));
         for (i, &slot) in s.work_levels.iter().enumerate() {
             global.push(Indirect(&p.scan_blocks, &g.work_scan_blocks[i], plan, slot));
