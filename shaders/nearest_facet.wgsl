@@ -161,69 +161,94 @@ fn walk_point(t: u32) -> WalkPoint {
     return WalkPoint(bitcast<vec3<f32>>(w.xyz), w.w);
 }
 
-// The nearest facet of the slave at walk position t a depth-first walk finds within WALK_VISITS nodes: at an inner
-// node the nearer child's box first, the farther one kept on a stack (at most one per level:
-// 32 levels hold any tree a buffer can) and skipped when popped if the best distance has
-// shrunk below it. A walk cut off by the cap leaves `next` at the lowest first leaf slot of
-// the subtrees it kept.
+// The nearest facet of the slave at walk position t a depth-first walk finds within
+// WALK_VISITS nodes: at an inner node the nearer child's box first; the farther one is left
+// pending and, when the walk comes back to it, skipped if its box is farther than the best
+// distance found by then. No stack in memory: the pending subtrees are one bit per depth
+// (`pending`, bit d: the sibling of the walk's ancestor at depth d), the deepest taken first,
+// and the ancestors are those of the node the walk was last at (heap layout: parent k/2,
+// sibling k^1). A walk cut off by the cap leaves `next` at the lowest first leaf slot of the
+// subtrees still pending.
 fn walk(t: u32) -> Walk {
     let wp = walk_point(t);
     let slave = wp.node;
     let p = wp.p;
     let leaves = 1u << params.tree_levels;
-    var stack: array<u32, 32>;     // subtrees kept for later
-    var stack_d2: array<f32, 32>;  // their boxes' distance²
-    var sp = 0u;
+    var pending = 0u;
+    var last = 1u;
     var w: Walk;
     w.d2 = params.radius * params.radius;
     w.f = NO_FACET;
     w.next = 0u;
     w.projections = 0u;
     var k = select(1u, 0u, far(1u, p, w.d2));
-    for (var v = 0u; v < WALK_VISITS; v++) {
-        if (k == 0u) {
-            if (sp == 0u) { break; }
-            sp -= 1u;
-            k = stack[sp];
-            if (stack_d2[sp] > w.d2 * PRUNE_SLACK) { k = 0u; }
-        } else if (k >= leaves) {
-            let f = order[k - leaves];
-            if (!excluded(slave, facets[f])) {
-                let d2 = project_facet(p, facets[f]).dist2;
-                w.projections += 1u;
-                if (d2 < w.d2 || (d2 == w.d2 && f < w.f)) {
-                    w.d2 = d2;
-                    w.f = f;
+    var v = 0u;
+    // Two loops, so that the lanes of a SIMD group that reach a leaf wait for the others and
+    // project together, instead of every lane paying for a projection whenever one needs it.
+    for (var leaf = 0u; leaf < WALK_VISITS; leaf++) {
+        // inner nodes and returns to pending subtrees, until a leaf, the end or the cap
+        for (; v < WALK_VISITS && k < leaves; v++) {
+            if (k == 0u) {
+                // back to the deepest pending subtree not farther than the best distance
+                // (each one skipped counts as a visit)
+                for (; v < WALK_VISITS && pending != 0u; v++) {
+                    let depth = firstLeadingBit(pending);
+                    pending &= ~(1u << depth);
+                    last = (last >> (firstLeadingBit(last) - depth)) ^ 1u;
+                    if (box_d2(last, p) <= w.d2 * PRUNE_SLACK) {
+                        k = last;
+                        break;
+                    }
+                }
+                if (k == 0u) { break; }
+            } else {
+                let bound = w.d2 * PRUNE_SLACK;
+                let dl = box_d2(2u * k, p);
+                let dr = box_d2(2u * k + 1u, p);
+                let near_l = dl <= bound;
+                let near_r = dr <= bound;
+                if (near_l && near_r) {
+                    let right_first = dr < dl || (dr == dl && centre_d2(2u * k + 1u, p) < centre_d2(2u * k, p));
+                    pending |= 1u << (firstLeadingBit(k) + 1u);
+                    k = select(2u * k, 2u * k + 1u, right_first);
+                } else if (near_l) {
+                    k = 2u * k;
+                } else if (near_r) {
+                    k = 2u * k + 1u;
+                } else {
+                    last = k;
+                    k = 0u;
                 }
             }
-            k = 0u;
-        } else {
-            let bound = w.d2 * PRUNE_SLACK;
-            let dl = box_d2(2u * k, p);
-            let dr = box_d2(2u * k + 1u, p);
-            let near_l = dl <= bound;
-            let near_r = dr <= bound;
-            if (near_l && near_r) {
-                let right_first = dr < dl || (dr == dl && centre_d2(2u * k + 1u, p) < centre_d2(2u * k, p));
-                let first = select(2u * k, 2u * k + 1u, right_first);
-                stack[sp] = select(2u * k + 1u, 2u * k, right_first);
-                stack_d2[sp] = select(dr, dl, right_first);
-                sp += 1u;
-                k = first;
-            } else if (near_l) {
-                k = 2u * k;
-            } else if (near_r) {
-                k = 2u * k + 1u;
-            } else {
-                k = 0u;
+        }
+        if (v >= WALK_VISITS || k < leaves) { break; }
+        // the leaf
+        v++;
+        let f = order[k - leaves];
+        if (!excluded(slave, facets[f])) {
+            let d2 = project_facet(p, facets[f]).dist2;
+            w.projections += 1u;
+            if (d2 < w.d2 || (d2 == w.d2 && f < w.f)) {
+                w.d2 = d2;
+                w.f = f;
             }
         }
+        last = k;
+        k = 0u;
     }
-    if (k != 0u || sp != 0u) {
+    if (k != 0u || pending != 0u) {
         // cut off: the chunks take every leaf slot from the lowest one still pending
         var lowest = 0xffffffffu;
-        if (k != 0u) { lowest = first_leaf(k); }
-        for (var s = 0u; s < sp; s++) { lowest = min(lowest, first_leaf(stack[s])); }
+        var at = last;
+        if (k != 0u) {
+            lowest = first_leaf(k);
+            at = k;
+        }
+        for (var s = 0u; s < 32u && pending != 0u; s++) {
+            let depth = firstLeadingBit(pending);
+            pending &= ~(1u << depth);
+            lowest = min(lowest, first_leaf((at >> (firstLeadingBit(at) - depth)) ^ 1u));
+        }
         w.next = lowest + 1u;
     }
     return w;

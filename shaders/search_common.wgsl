@@ -83,18 +83,20 @@ fn vertex_free(a: u32) -> bool {
 // the side of it (more than 1e-3 of the facet's size from the normal through c).
 fn beside_free_edge(f: u32, fac: vec4<u32>, w: vec4<f32>, p: vec3<f32>, c: vec3<f32>, nrm: vec3<f32>) -> bool {
     let n = facet_node_count(fac);
-    var h = 0.0;
     var on = 0u;
     var a = NO_NODE;
     var b = NO_NODE;
     for (var j = 0u; j < n; j++) {
-        h = max(h, length(nodes[fac[(j + 1u) % n]].xyz - nodes[fac[j]].xyz));
         if (w[j] != 0.0) {
             on += 1u;
             if (a == NO_NODE) { a = fac[j]; } else { b = fac[j]; }
         }
     }
-    if (on == n) { return false; }
+    if (on == n) { return false; } // inside the facet
+    var h = 0.0;
+    for (var j = 0u; j < n; j++) {
+        h = max(h, length(nodes[fac[(j + 1u) % n]].xyz - nodes[fac[j]].xyz));
+    }
     let d = p - c;
     let lateral = d - dot(d, nrm) * nrm;
     if (dot(lateral, lateral) <= 1e-6 * h * h) { return false; }

@@ -134,14 +134,8 @@ pub fn beside_free_edge(
     nrm: V3<f32>,
 ) -> bool {
     let n = facet_node_count(fac);
-    let mut h = 0.0f32;
     let (mut on, mut a, mut b) = (0, NO_NODE, NO_NODE);
     for j in 0..n {
-        h = h.max(
-            (node(nodes, fac[(j + 1) % n]) - node(nodes, fac[j]))
-                .length2()
-                .sqrt(),
-        );
         if w[j] != 0.0 {
             on += 1;
             if a == NO_NODE {
@@ -152,7 +146,15 @@ pub fn beside_free_edge(
         }
     }
     if on == n {
-        return false;
+        return false; // inside the facet
+    }
+    let mut h = 0.0f32;
+    for j in 0..n {
+        h = h.max(
+            (node(nodes, fac[(j + 1) % n]) - node(nodes, fac[j]))
+                .length2()
+                .sqrt(),
+        );
     }
     let d = p - c;
     let lateral = d - nrm * d.dot(nrm);

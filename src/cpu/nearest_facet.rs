@@ -167,16 +167,26 @@ fn centre_d2(c: &Candidates<'_>, k: u32, p: V3<f32>) -> f32 {
     d[0] * d[0] + d[1] * d[1] + d[2] * d[2]
 }
 
-/// Levels a walk's stack holds (WGSL: the `stack` array's length).
-const STACK: usize = 32;
+/// The depth of heap node k ≥ 1 (WGSL: `firstLeadingBit(k)`).
+fn depth(k: u32) -> u32 {
+    31 - k.leading_zeros()
+}
+
+/// The ancestor of heap node `at` at depth `d` ≤ its own depth.
+fn ancestor(at: u32, d: u32) -> u32 {
+    at >> (depth(at) - d)
+}
 
 /// The nearest facet of the slave at walk position t a depth-first walk finds within
-/// `WALK_VISITS` nodes, the nearer child first (WGSL: `walk`).
+/// `WALK_VISITS` nodes, the nearer child first, the pending siblings one bit per depth
+/// (WGSL: `walk`).
 fn walk(c: &Candidates<'_>, t: usize) -> Walk {
     let (p, slave) = walk_point(c, t);
     let leaves = c.leaves();
-    let mut stack = [(0u32, 0.0f32); STACK]; // subtrees kept for later, their boxes' distance²
-    let mut sp = 0usize;
+    // bit d: the sibling of the walk's ancestor at depth d is still to visit
+    let mut pending = 0u32;
+    // the node the walk was last at: its ancestors are the walk's path
+    let mut last = 1u32;
     let mut w = Walk {
         d2: c.params.radius * c.params.radius,
         f: NO_FACET,
@@ -184,60 +194,72 @@ fn walk(c: &Candidates<'_>, t: usize) -> Walk {
         projections: 0,
     };
     let mut k = if c.far(1, p, w.d2) { 0 } else { 1 };
-    for _ in 0..WALK_VISITS {
-        if k == 0 {
-            if sp == 0 {
-                break;
-            }
-            sp -= 1;
-            let d2;
-            (k, d2) = stack[sp];
-            if d2 > w.d2 * PRUNE_SLACK {
-                k = 0;
-            }
-        } else if k >= leaves {
-            let f = c.order[(k - leaves) as usize];
-            if !c.excluded(slave, f) {
-                let d2 = project(c.nodes, p, c.facets[f as usize]).dist2;
-                w.projections += 1;
-                if d2 < w.d2 || (d2 == w.d2 && f < w.f) {
-                    w.d2 = d2;
-                    w.f = f;
+    let mut v = 0;
+    // two loops as in the shader (its SIMD lanes project together)
+    for _leaf in 0..WALK_VISITS {
+        // inner nodes and returns to pending subtrees, until a leaf, the end or the cap
+        while v < WALK_VISITS && k < leaves {
+            if k == 0 {
+                if pending == 0 {
+                    break;
+                }
+                let d = depth(pending);
+                pending &= !(1 << d);
+                last = ancestor(last, d) ^ 1;
+                k = if box_d2(c, last, p) > w.d2 * PRUNE_SLACK {
+                    0
+                } else {
+                    last
+                };
+            } else {
+                let bound = w.d2 * PRUNE_SLACK;
+                let (l, r) = (2 * k, 2 * k + 1);
+                let (dl, dr) = (box_d2(c, l, p), box_d2(c, r, p));
+                match (dl <= bound, dr <= bound) {
+                    (true, true) => {
+                        let right_first =
+                            dr < dl || (dr == dl && centre_d2(c, r, p) < centre_d2(c, l, p));
+                        pending |= 1 << (depth(k) + 1);
+                        k = if right_first { r } else { l };
+                    }
+                    (true, false) => k = l,
+                    (false, true) => k = r,
+                    (false, false) => {
+                        last = k;
+                        k = 0;
+                    }
                 }
             }
-            k = 0;
-        } else {
-            let bound = w.d2 * PRUNE_SLACK;
-            let (l, r) = (2 * k, 2 * k + 1);
-            let (dl, dr) = (box_d2(c, l, p), box_d2(c, r, p));
-            match (dl <= bound, dr <= bound) {
-                (true, true) => {
-                    let right_first =
-                        dr < dl || (dr == dl && centre_d2(c, r, p) < centre_d2(c, l, p));
-                    let (first, second) = if right_first {
-                        (r, (l, dl))
-                    } else {
-                        (l, (r, dr))
-                    };
-                    stack[sp] = second;
-                    sp += 1;
-                    k = first;
-                }
-                (true, false) => k = l,
-                (false, true) => k = r,
-                (false, false) => k = 0,
+            v += 1;
+        }
+        if v >= WALK_VISITS || k < leaves {
+            break;
+        }
+        // the leaf
+        v += 1;
+        let f = c.order[(k - leaves) as usize];
+        if !c.excluded(slave, f) {
+            let d2 = project(c.nodes, p, c.facets[f as usize]).dist2;
+            w.projections += 1;
+            if d2 < w.d2 || (d2 == w.d2 && f < w.f) {
+                w.d2 = d2;
+                w.f = f;
             }
         }
+        last = k;
+        k = 0;
     }
-    if k != 0 || sp != 0 {
+    if k != 0 || pending != 0 {
         let levels = c.params.tree_levels;
-        let mut lowest = if k != 0 {
-            first_leaf(k, levels)
+        let (mut lowest, at) = if k != 0 {
+            (first_leaf(k, levels), k)
         } else {
-            u32::MAX
+            (u32::MAX, last)
         };
-        for &(s, _) in &stack[..sp] {
-            lowest = lowest.min(first_leaf(s, levels));
+        while pending != 0 {
+            let d = depth(pending);
+            pending &= !(1 << d);
+            lowest = lowest.min(first_leaf(ancestor(at, d) ^ 1, levels));
         }
         w.next = lowest + 1;
     }

@@ -88,6 +88,18 @@ pub fn read_back(
     bytes: u64,
     during: &str,
 ) -> Result<Vec<u8>> {
+    read_back_with(ctx, buffer, bytes, during, <[u8]>::to_vec)
+}
+
+/// Like [`read_back`], handing the mapped bytes to `take` instead of copying them first (one
+/// copy of a large readback instead of two).
+pub fn read_back_with<T>(
+    ctx: &crate::device::GpuContext,
+    buffer: &wgpu::Buffer,
+    bytes: u64,
+    during: &str,
+    take: impl FnOnce(&[u8]) -> T,
+) -> Result<T> {
     if let Ok(mut t) = ctx.traffic.lock() {
         t.read_back_bytes += bytes;
         t.waits += 1;
@@ -112,13 +124,12 @@ pub fn read_back(
         during: during.into(),
         message: e.to_string(),
     })?;
-    let out = slice
-        .get_mapped_range()
-        .map_err(|e| Error::DeviceLost {
-            during: during.into(),
-            message: e.to_string(),
-        })?
-        .to_vec();
+    let view = slice.get_mapped_range().map_err(|e| Error::DeviceLost {
+        during: during.into(),
+        message: e.to_string(),
+    })?;
+    let out = take(&view);
+    drop(view);
     buffer.unmap();
     Ok(out)
 }

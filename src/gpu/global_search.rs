@@ -3,7 +3,7 @@
 
 use std::sync::Arc;
 
-use super::buffers::{read_back, GrowBuffer};
+use super::buffers::{read_back, read_back_with, GrowBuffer};
 use crate::cpu::CpuWorkspace;
 use crate::device::GpuContext;
 use crate::error::{Error, Result};
@@ -132,6 +132,9 @@ pub struct GpuSearch {
     static_dirty: bool,
     /// Device-resident increments: their pipelines, plan slots and bind groups.
     resident: Option<Box<resident::ResidentSearch>>,
+    /// The hits last read back, shared with the result returned: the next readback reuses
+    /// the allocation when the caller has dropped that result.
+    hits_cache: Arc<Vec<GpuHit>>,
 }
 
 impl GpuSearch {
@@ -262,6 +265,7 @@ impl GpuSearch {
             work_levels: 0,
             max_workgroups_per_dim: ctx_limit,
             searched: false,
+            hits_cache: Arc::default(),
             generation: 0,
             device_positions: None,
             to_local_group: None,
@@ -436,7 +440,7 @@ impl GpuSearch {
     }
 
     /// Runs a global search. Returns the hits.
-    pub fn run(&mut self, prep: &Prepared) -> Result<Vec<GpuHit>> {
+    pub fn run(&mut self, prep: &Prepared) -> Result<Arc<Vec<GpuHit>>> {
         Ok(self.run_with(prep, 0, None, true, false)?.0)
     }
 
@@ -447,7 +451,7 @@ impl GpuSearch {
         prep: &Prepared,
         local: bool,
         read_hits: bool,
-    ) -> Result<(Vec<GpuHit>, [u32; STATUS_WORDS])> {
+    ) -> Result<(Arc<Vec<GpuHit>>, [u32; STATUS_WORDS])> {
         if local && !self.searched {
             return Err(Error::BadParameter {
                 name: "local search",
@@ -466,7 +470,7 @@ impl GpuSearch {
         prep: &Prepared,
         first: usize,
         preload: &CpuWorkspace,
-    ) -> Result<(Vec<GpuHit>, [u32; STATUS_WORDS])> {
+    ) -> Result<(Arc<Vec<GpuHit>>, [u32; STATUS_WORDS])> {
         self.run_with(prep, first, Some(preload), true, false)
     }
 
@@ -480,7 +484,7 @@ impl GpuSearch {
         preload: Option<&CpuWorkspace>,
         read_hits: bool,
         local: bool,
-    ) -> Result<(Vec<GpuHit>, [u32; STATUS_WORDS])> {
+    ) -> Result<(Arc<Vec<GpuHit>>, [u32; STATUS_WORDS])> {
         self.ensure_buffers(prep)?;
         if let Some(src) = self.device_positions.clone() {
             let need = prep.n_nodes as u64 * 16;
@@ -570,10 +574,20 @@ impl GpuSearch {
             0,
             bytemuck::bytes_of(&prep.params),
         );
-        let (status, hits) = self.submit(&prep.params, prep, first, read_hits, local)?;
+        if !read_hits {
+            let status = self.submit(&prep.params, prep, first, false, &mut Vec::new(), local)?;
+            return Ok((Arc::default(), status));
+        }
+        let mut hits = std::mem::take(&mut self.hits_cache);
+        if Arc::get_mut(&mut hits).is_none() {
+            hits = Arc::default(); // the last result is still held: a fresh allocation
+        }
+        let out = Arc::get_mut(&mut hits).expect("unique");
+        let status = self.submit(&prep.params, prep, first, true, out, local)?;
         if !local {
             self.searched = true;
         }
+        self.hits_cache = hits.clone();
         Ok((hits, status))
     }
 
@@ -699,16 +713,17 @@ impl GpuSearch {
         Ok(bytemuck::pod_collect_to_vec(&raw))
     }
 
-    /// Encodes the steps `STEPS[first..]`, submits once and reads back status, bin total and
-    /// hits.
+    /// Encodes the steps `STEPS[first..]`, submits once and reads back the status words and,
+    /// when `read_hits`, the hits into `hits` (resized to one per slave).
     fn submit(
         &self,
         params: &SearchParams,
         prep: &Prepared,
         first: usize,
         read_hits: bool,
+        hits: &mut Vec<GpuHit>,
         local: bool,
-    ) -> Result<([u32; STATUS_WORDS], Vec<GpuHit>)> {
+    ) -> Result<[u32; STATUS_WORDS]> {
         let n_slaves = prep.slaves.len();
         let (device, b, p) = (&self.ctx.device, &self.buffers, &self.pipelines);
         let bg = self
@@ -854,17 +869,25 @@ impl GpuSearch {
                 message: e.to_string(),
             });
         }
-        let bytes = read_back(
+        let status = read_back_with(
             &self.ctx,
             &b.readback.buffer,
             READBACK_HITS_OFFSET + hits_bytes,
             "global search readback",
+            |bytes| {
+                let status: [u32; STATUS_WORDS] =
+                    bytemuck::pod_read_unaligned(&bytes[..STATUS_BYTES as usize]);
+                let raw = &bytes[READBACK_HITS_OFFSET as usize..];
+                hits.resize(
+                    raw.len() / std::mem::size_of::<GpuHit>(),
+                    bytemuck::Zeroable::zeroed(),
+                );
+                bytemuck::cast_slice_mut::<GpuHit, u8>(hits).copy_from_slice(raw);
+                status
+            },
         )?;
-        let status: [u32; STATUS_WORDS] =
-            bytemuck::pod_read_unaligned(&bytes[..STATUS_BYTES as usize]);
-        let hits = bytemuck::pod_collect_to_vec(&bytes[READBACK_HITS_OFFSET as usize..]);
         self.ctx.take_uncaptured("contact increment")?;
-        Ok((status, hits))
+        Ok(status)
     }
 }
 

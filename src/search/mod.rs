@@ -567,10 +567,7 @@ impl GlobalSearch {
             };
             let local = global.is_none();
             let (raw, status) = match &mut self.executor {
-                Executor::Gpu(g) => {
-                    let (hits, status) = g.run_mode(&prepared, local, true)?;
-                    (Arc::new(hits), status)
-                }
+                Executor::Gpu(g) => g.run_mode(&prepared, local, true)?,
                 Executor::Cpu(c) => c.run_mode(&prepared, local)?,
             };
             if local && Status(status).budget_exceeded() {
@@ -667,7 +664,7 @@ impl GlobalSearch {
             return Ok(self.finish(
                 prepared.grid.frame,
                 prepared.grid,
-                Arc::new(raw),
+                raw,
                 global.unwrap_or(Trigger::Local),
                 &status,
             ));
@@ -816,8 +813,7 @@ impl GlobalSearch {
             Executor::Gpu(g) => {
                 let mut cpu = CpuSearch::default();
                 let ws = cpu.run_prefix(&prepared, first)?;
-                let (hits, status) = g.run_split(&prepared, first, ws)?;
-                (Arc::new(hits), status)
+                g.run_split(&prepared, first, ws)?
             }
             Executor::Cpu(c) => c.run_mode(&prepared, false)?,
         };
