@@ -189,18 +189,12 @@ fn walk(t: u32) -> Walk {
         // inner nodes and returns to pending subtrees, until a leaf, the end or the cap
         for (; v < WALK_VISITS && k < leaves; v++) {
             if (k == 0u) {
-                // back to the deepest pending subtree not farther than the best distance
-                // (each one skipped counts as a visit)
-                for (; v < WALK_VISITS && pending != 0u; v++) {
-                    let depth = firstLeadingBit(pending);
-                    pending &= ~(1u << depth);
-                    last = (last >> (firstLeadingBit(last) - depth)) ^ 1u;
-                    if (box_d2(last, p) <= w.d2 * PRUNE_SLACK) {
-                        k = last;
-                        break;
-                    }
-                }
-                if (k == 0u) { break; }
+                // back to the deepest pending subtree; skipped if farther than the best distance
+                if (pending == 0u) { break; }
+                let depth = firstLeadingBit(pending);
+                pending &= ~(1u << depth);
+                last = (last >> (firstLeadingBit(last) - depth)) ^ 1u;
+                k = select(last, 0u, box_d2(last, p) > w.d2 * PRUNE_SLACK);
             } else {
                 let bound = w.d2 * PRUNE_SLACK;
                 let dl = box_d2(2u * k, p);

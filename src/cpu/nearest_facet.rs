@@ -141,30 +141,47 @@ struct Walk {
     projections: u32,
 }
 
-/// Distance² from p to tree node k's box; `EMPTY_LO` for an empty box (WGSL: `box_d2`).
-fn box_d2(c: &Candidates<'_>, k: u32, p: V3<f32>) -> f32 {
-    let (lo, hi) = (c.boxes[2 * k as usize], c.boxes[2 * k as usize + 1]);
-    if lo[0] > hi[0] {
-        return EMPTY_LO;
-    }
-    let pa = p.to_array();
-    let mut d = [0.0f32; 3];
-    for a in 0..3 {
-        d[a] = (lo[a] - pa[a]).max(pa[a] - hi[a]).max(0.0);
-    }
-    d[0] * d[0] + d[1] * d[1] + d[2] * d[2]
+/// Distance² from p (w = 0) to tree node k's box; `EMPTY_LO` for an empty box (WGSL: `box_d2`).
+#[inline]
+fn box_d2(c: &Candidates<'_>, k: u32, p: glam::Vec4) -> f32 {
+    let b: &[[f32; 4]; 2] = c.boxes[2 * k as usize..2 * k as usize + 2]
+        .try_into()
+        .expect("two vec4");
+    box_d2_of(
+        glam::Vec4::from_array(b[0]),
+        glam::Vec4::from_array(b[1]),
+        p,
+    )
 }
 
-/// Distance² from p to the centre of tree node k's box (WGSL: `centre_d2`): the walk's choice
-/// between two children whose boxes are equally near (both holding p, say).
-fn centre_d2(c: &Candidates<'_>, k: u32, p: V3<f32>) -> f32 {
-    let (lo, hi) = (c.boxes[2 * k as usize], c.boxes[2 * k as usize + 1]);
-    let pa = p.to_array();
-    let mut d = [0.0f32; 3];
-    for a in 0..3 {
-        d[a] = 0.5 * (lo[a] + hi[a]) - pa[a];
+/// Distance² from p (w = 0) to the box [lo, hi] (WGSL: `box_d2`, the same operations in the
+/// same order: the components in SIMD lanes, the sum in x, y, z order); `EMPTY_LO` for an
+/// empty box.
+#[inline]
+fn box_d2_of(lo: glam::Vec4, hi: glam::Vec4, p: glam::Vec4) -> f32 {
+    if lo.x > hi.x {
+        return EMPTY_LO;
     }
-    d[0] * d[0] + d[1] * d[1] + d[2] * d[2]
+    let d = (lo - p).max(p - hi).max(glam::Vec4::ZERO);
+    let d = d * d;
+    d.x + d.y + d.z
+}
+
+/// Distance² from p (w = 0) to the centre of the box [lo, hi] (WGSL: `centre_d2`).
+#[inline]
+fn centre_d2_of(lo: glam::Vec4, hi: glam::Vec4, p: glam::Vec4) -> f32 {
+    let d = 0.5 * (lo + hi) - p;
+    let d = d * d;
+    d.x + d.y + d.z
+}
+
+/// The boxes of inner node k's two children (lower and upper corner of each).
+#[inline]
+fn children(c: &Candidates<'_>, k: u32) -> [glam::Vec4; 4] {
+    let b: &[[f32; 4]; 4] = c.boxes[4 * k as usize..4 * k as usize + 4]
+        .try_into()
+        .expect("four vec4");
+    b.map(glam::Vec4::from_array)
 }
 
 /// The depth of heap node k ≥ 1 (WGSL: `firstLeadingBit(k)`).
@@ -193,6 +210,7 @@ fn walk(c: &Candidates<'_>, t: usize) -> Walk {
         next: 0,
         projections: 0,
     };
+    let p4 = glam::Vec4::new(p.x, p.y, p.z, 0.0);
     let mut k = if c.far(1, p, w.d2) { 0 } else { 1 };
     let mut v = 0;
     // two loops as in the shader (its SIMD lanes project together)
@@ -206,7 +224,7 @@ fn walk(c: &Candidates<'_>, t: usize) -> Walk {
                 let d = depth(pending);
                 pending &= !(1 << d);
                 last = ancestor(last, d) ^ 1;
-                k = if box_d2(c, last, p) > w.d2 * PRUNE_SLACK {
+                k = if box_d2(c, last, p4) > w.d2 * PRUNE_SLACK {
                     0
                 } else {
                     last
@@ -214,11 +232,13 @@ fn walk(c: &Candidates<'_>, t: usize) -> Walk {
             } else {
                 let bound = w.d2 * PRUNE_SLACK;
                 let (l, r) = (2 * k, 2 * k + 1);
-                let (dl, dr) = (box_d2(c, l, p), box_d2(c, r, p));
+                let [lo_l, hi_l, lo_r, hi_r] = children(c, k);
+                let (dl, dr) = (box_d2_of(lo_l, hi_l, p4), box_d2_of(lo_r, hi_r, p4));
                 match (dl <= bound, dr <= bound) {
                     (true, true) => {
-                        let right_first =
-                            dr < dl || (dr == dl && centre_d2(c, r, p) < centre_d2(c, l, p));
+                        let right_first = dr < dl
+                            || (dr == dl
+                                && centre_d2_of(lo_r, hi_r, p4) < centre_d2_of(lo_l, hi_l, p4));
                         pending |= 1 << (depth(k) + 1);
                         k = if right_first { r } else { l };
                     }
