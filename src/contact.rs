@@ -73,6 +73,54 @@ pub struct StepReport {
     /// slave nodes within the search radius that have not touched yet (one may close within an
     /// increment, so their limit applies before contact).
     pub stable_dt_before_contact: bool,
+    /// Pair nodes (slave or master, per pair) whose velocity carries them farther than their
+    /// pair's search radius within this increment: the search cannot follow them, and a slave
+    /// may pass through its master unseen (tunnelling). Host-array increments only.
+    pub fast_nodes: usize,
+    /// The fastest of them.
+    pub fastest: Option<FastNode>,
+}
+
+/// A pair node that moves farther than its pair's search radius within one increment.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct FastNode {
+    /// The model node.
+    pub node: usize,
+    /// Its pair (a meshed pair's id).
+    pub pair: PairId,
+    /// Its speed times the increment, model length units.
+    pub distance: f64,
+    /// The pair's search radius.
+    pub radius: f64,
+}
+
+/// The pair nodes of `searches` (slaves and master nodes) that `velocities` carry farther than
+/// the pair's search radius within `dt`: their count and the fastest (relative to its radius).
+fn fast_nodes<'a>(
+    searches: impl Iterator<Item = (PairId, &'a GlobalSearch)>,
+    velocities: &[[f64; 3]],
+    dt: f64,
+) -> (usize, Option<FastNode>) {
+    let (mut count, mut fastest) = (0, None::<FastNode>);
+    for (pair, s) in searches {
+        let radius = s.radius();
+        for &n in s.motion_nodes() {
+            let v = velocities[n as usize];
+            let distance = (v[0] * v[0] + v[1] * v[1] + v[2] * v[2]).sqrt() * dt;
+            if distance > radius {
+                count += 1;
+                if fastest.is_none_or(|f| distance / radius > f.distance / f.radius) {
+                    fastest = Some(FastNode {
+                        node: n as usize,
+                        pair,
+                        distance,
+                        radius,
+                    });
+                }
+            }
+        }
+    }
+    (count, fastest)
 }
 
 /// Small or infinitesimal sliding: what one pass of a pair anchored at the first increment.
@@ -171,6 +219,11 @@ pub struct KinematicReport {
     pub kinetic_energy_change: f64,
     /// Sum over slaves of the resisting force magnitudes (first pass).
     pub total_force: f64,
+    /// Nodes of meshed kinematic pairs that the velocities carry farther than their pair's
+    /// search radius within this increment (see [`StepReport::fast_nodes`]).
+    pub fast_nodes: usize,
+    /// The fastest of them.
+    pub fastest: Option<FastNode>,
 }
 
 /// The strain-free adjustment of initially overclosed slave nodes.
@@ -411,14 +464,7 @@ impl Contact {
             }
         }
         validate_positions(positions, 0, self.dim)?;
-        validate_positions(velocities, 0, 3).map_err(|e| match e {
-            Error::NonFiniteCoordinate { node, axis, value } => Error::BadParameter {
-                name: "velocity",
-                value: format!("{value} (node {node}, axis {axis})"),
-                expected: "must be finite",
-            },
-            e => e,
-        })?;
+        validate_velocities(velocities)?;
         if self.pairs.is_empty() {
             self.report = StepReport {
                 forces: vec![[0.0; 3]; self.n_nodes],
@@ -429,6 +475,8 @@ impl Contact {
             return Ok(&self.report);
         }
         self.host_increment(positions, velocities, dt)?;
+        (self.report.fast_nodes, self.report.fastest) =
+            fast_nodes(self.pairs.iter().map(|p| (p.id, &p.search)), velocities, dt);
         Ok(&self.report)
     }
 
@@ -524,6 +572,7 @@ impl Contact {
             }
         }
         validate_positions(x, 0, 3)?;
+        validate_velocities(v)?;
         if let Some(r) = self.rigid.iter().find(|r| r.body.0 >= bodies.len()) {
             return Err(Error::IndexOutOfRange {
                 what: "rigid body states".into(),
@@ -555,6 +604,13 @@ impl Contact {
         };
         let before = ke(v, &self.masses) + bodies_kinetic_energy(&self.rigid, bodies);
         let mut report = KinematicReport::default();
+        (report.fast_nodes, report.fastest) = fast_nodes(
+            self.kinematic.iter().flat_map(|k| {
+                std::iter::once((k.id, &k.search)).chain(k.back.iter().map(|b| (k.id, &b.0)))
+            }),
+            v,
+            dt,
+        );
         let masses = &self.masses;
         for kr in &mut self.kinematic {
             let result = kr.search.step(x)?;
@@ -719,6 +775,21 @@ impl Contact {
         }
         report.kinetic_energy_change =
             ke(v, &self.masses) + bodies_kinetic_energy(&self.rigid, bodies) - before;
+        // the corrections are abut's results: the input was finite
+        for (what, values) in [("position", &*x), ("velocity", &*v)] {
+            if let Some((node, value)) = first_non_finite(values) {
+                return Err(Error::NonFiniteResult {
+                    what: format!("kinematic contact's corrected {what}"),
+                    node,
+                    value,
+                    cause: format!(
+                        "the kinematic pass moved it from finite input (largest overclosure \
+                         corrected this increment: {:e}; check the masses and the increment)",
+                        report.max_overclosure
+                    ),
+                });
+            }
+        }
         self.kin_report = report;
         Ok(&self.kin_report)
     }
@@ -794,6 +865,26 @@ impl Contact {
         }
         Ok(rep)
     }
+}
+
+/// An error naming the first non-finite velocity.
+fn validate_velocities(velocities: &[[f64; 3]]) -> Result<()> {
+    validate_positions(velocities, 0, 3).map_err(|e| match e {
+        Error::NonFiniteCoordinate { node, axis, value } => Error::BadParameter {
+            name: "velocity",
+            value: format!("{value} (node {node}, axis {axis})"),
+            expected: "must be finite",
+        },
+        e => e,
+    })
+}
+
+/// The first node with a non-finite component, and that component.
+pub(crate) fn first_non_finite(values: &[[f64; 3]]) -> Option<(usize, f64)> {
+    values
+        .iter()
+        .enumerate()
+        .find_map(|(i, v)| v.iter().find(|c| !c.is_finite()).map(|&c| (i, c)))
 }
 
 /// Kinetic energy of the rigid bodies the rigid pairs act on (each counted once), translation

@@ -193,6 +193,64 @@ pub enum Error {
         /// The id.
         id: usize,
     },
+    /// A quantity abut computed from finite input came out NaN or infinite: the error is
+    /// abut's result, not the caller's input, and names where it arose.
+    #[error("{what} of node {node} computed as {value} (not finite): {cause}")]
+    NonFiniteResult {
+        /// The quantity ("penalty contact force", "kinematic correction", …) and its pair.
+        what: String,
+        /// The model node it belongs to.
+        node: usize,
+        /// The value computed.
+        value: f64,
+        /// What the inputs there were, and what to look at.
+        cause: String,
+    },
+    /// A node moved farther than its pair's search radius within one increment: the search
+    /// cannot follow it, and a slave may pass through its master unseen (tunnelling).
+    #[error(
+        "increment {increment} (t = {time:e}): node {node} of contact pair {pair} moves \
+         {distance:e} in one increment, farther than the pair's search radius {radius:e}: \
+         contact would be missed (tunnelling); take a smaller increment (run.dt, run.safety) \
+         or a larger search radius (the contact's search_radius){more}"
+    )]
+    Tunnelling {
+        /// The increment (1 = the first).
+        increment: u64,
+        /// The time at its start.
+        time: f64,
+        /// The fastest node.
+        node: usize,
+        /// Its pair.
+        pair: usize,
+        /// Its speed times the increment.
+        distance: f64,
+        /// The pair's search radius.
+        radius: f64,
+        /// How many others ("" when none).
+        more: String,
+    },
+    /// The explicit solution blew up: a node's position or velocity, computed by the solver,
+    /// left any meaningful range (not finite, or beyond single precision, where the contact
+    /// search works) at an increment.
+    #[error(
+        "the solution diverged at increment {increment} (t = {time:e}): node {node}'s {what} \
+         reached {value:e}{cause}"
+    )]
+    Diverged {
+        /// The increment (1 = the first).
+        increment: u64,
+        /// The time at its end.
+        time: f64,
+        /// The node.
+        node: usize,
+        /// "position" or "velocity", and its axis.
+        what: String,
+        /// The value reached.
+        value: f64,
+        /// What the increment's contact did ("" when nothing is known), and what to look at.
+        cause: String,
+    },
 }
 
 /// Result with the library's [`Error`](enum@Error).

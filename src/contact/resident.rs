@@ -641,8 +641,43 @@ impl Contact {
             fallbacks: st.fallbacks as usize,
             unanchored: self.pairs.iter().map(|p| p.search.unanchored().len()).sum(),
             stable_dt_before_contact: st.active == 0 && limit(st.stable_dt).is_finite(),
+            ..Default::default()
         };
         self.global_total += st.global_searches as u64;
+        // name the slave whose contact gave it (its master nodes share the value), else the node
+        let forces = &self.report.forces;
+        let on_slave = self.pairs.iter().find_map(|p| {
+            p.search.slaves().iter().find_map(|&s| {
+                let f = forces[s as usize];
+                f.iter().find(|c| !c.is_finite()).map(|&c| (s as usize, c))
+            })
+        });
+        if let Some((node, value)) = on_slave.or_else(|| super::first_non_finite(forces)) {
+            let pairs: Vec<String> = self
+                .pairs
+                .iter()
+                .filter(|p| {
+                    p.search.slaves().contains(&(node as u32))
+                        || p.search
+                            .master()
+                            .facets
+                            .iter()
+                            .any(|f| f.nodes().contains(&(node as u32)))
+                })
+                .map(|p| p.id.0.to_string())
+                .collect();
+            return Err(Error::NonFiniteResult {
+                what: format!("penalty contact force (pair {})", pairs.join(", ")),
+                node,
+                value,
+                cause: format!(
+                    "from finite input: position {:?}, velocity {:?}, increment {dt:e}; the \
+                     kernels work in f32, where a speed, stiffness or force beyond 3.4e38 \
+                     overflows",
+                    positions[node], velocities[node]
+                ),
+            });
+        }
         let first = self.host_increments == 1;
         for (pr, raw) in self.pairs.iter_mut().zip(raws) {
             let params = crate::cpu::schedule::plan_params(&raw.plan);

@@ -145,6 +145,11 @@ pub struct Solver {
     /// is not seen here (the contact model holds it immovable); its slaves' contact forces give it.
     pub body_contact_force: Vec<[f64; 3]>,
     started: bool,
+    /// Increments taken.
+    increments: u64,
+    /// The largest overclosure contact resolved so far (kinematic pairs: before the
+    /// correction; penalty: carried with force), the increment and the node's pair report.
+    worst_overclosure: (f64, u64),
     balance0: Option<f64>,
     /// (external, contact, damping) power at the last step's time, and the increment since.
     last_power: Option<([f64; 3], f64)>,
@@ -204,6 +209,8 @@ impl Solver {
             contact_force: vec![[0.0; 3]; n],
             body_contact_force: Vec::new(),
             started: false,
+            increments: 0,
+            worst_overclosure: (0.0, 0),
             balance0: None,
             last_power: None,
             carried: vec![None; n],
@@ -329,10 +336,13 @@ impl Solver {
                 }
             }
         }
+        self.increments += 1;
         let mut penalty = vec![[0.0; 3]; n];
         if let Some(c) = contact.as_deref_mut() {
             if c.has_penalty_pairs() {
-                penalty = c.penalty_step(&self.x, &self.v, dt)?.forces.clone();
+                let r = c.penalty_step(&self.x, &self.v, dt)?;
+                self.note_overclosure(r.max_overclosure);
+                penalty = r.forces.clone();
             }
         }
         // velocity update (the first moves by half an increment), prediction of positions
@@ -402,12 +412,17 @@ impl Solver {
         // would have in the velocity update
         let mut kinematic = vec![[0.0; 3]; n];
         let mut body_kin = vec![([0.0; 3], [0.0; 3]); self.bodies.len()];
+        // the predicted state, before contact searches it
+        self.check_diverged()?;
         if let Some(c) = contact {
             if c.has_kinematic_pairs() {
                 let v_pred = self.v.clone();
                 let pred: Vec<BodyState> = self.body_states();
                 let mut states = pred.clone();
-                c.kinematic_step(&mut self.x, &mut self.v, &mut states, dt)?;
+                let h = c
+                    .kinematic_step(&mut self.x, &mut self.v, &mut states, dt)?
+                    .max_overclosure;
+                self.note_overclosure(h);
                 for i in 0..n {
                     for a in 0..3 {
                         kinematic[i][a] = self.mass[i] * (self.v[i][a] - v_pred[i][a]) / dv_scale;
@@ -514,7 +529,76 @@ impl Solver {
         self.energy.internal = internal;
         self.energy.kinetic = kinetic;
         self.balance0.get_or_insert(self.energy.balance());
-        Ok(())
+        self.check_diverged()
+    }
+
+    /// What to look at when the solution runs away: the largest overclosure contact resolved
+    /// so far and when (an initial one resolved within one increment strains the elements
+    /// under it), and the elements' stable increment.
+    pub fn blow_up_hint(&self) -> String {
+        let (h, at) = self.worst_overclosure;
+        if h > 0.0 {
+            format!(
+                "; contact resolved an overclosure of {h:e} at increment {at}: an overclosure \
+                 resolved within one increment strains the elements under it (an initial one: \
+                 remove it from the mesh, or move the slave nodes onto the master strain-free \
+                 first: `adjust_overclosure = true` in a scene's [run], \
+                 Contact::adjust_initial_overclosure in code); else check the time increment \
+                 against the stable one ({:e})",
+                self.stable_increment()
+            )
+        } else {
+            format!(
+                "; no contact overclosure was resolved: check the time increment against the \
+                 stable one ({:e}), the loads and the material",
+                self.stable_increment()
+            )
+        }
+    }
+
+    /// Remembers the largest overclosure contact has resolved, and when.
+    fn note_overclosure(&mut self, h: f64) {
+        if h > self.worst_overclosure.0 {
+            self.worst_overclosure = (h, self.increments);
+        }
+    }
+
+    /// An error naming the first node whose position or velocity is not finite or beyond
+    /// single precision (the contact search's range): the solution has blown up.
+    fn check_diverged(&self) -> Result<()> {
+        let limit = f32::MAX as f64;
+        let bad = |v: &[f64; 3]| (0..3).find(|&a| !(v[a].abs() <= limit));
+        let found = (0..self.x.len()).find_map(|i| {
+            bad(&self.x[i])
+                .map(|a| {
+                    (
+                        i,
+                        format!("position ({})", ["x", "y", "z"][a]),
+                        self.x[i][a],
+                    )
+                })
+                .or_else(|| {
+                    bad(&self.v[i]).map(|a| {
+                        (
+                            i,
+                            format!("velocity ({})", ["x", "y", "z"][a]),
+                            self.v[i][a],
+                        )
+                    })
+                })
+        });
+        let Some((node, what, value)) = found else {
+            return Ok(());
+        };
+        let cause = self.blow_up_hint();
+        Err(Error::Diverged {
+            increment: self.increments,
+            time: self.time,
+            node,
+            what,
+            value,
+            cause,
+        })
     }
 
     /// The energy balance error: the change of [`Energy::balance`] since the first increment,

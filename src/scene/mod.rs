@@ -443,6 +443,12 @@ fn run_into(scene: &Scene, device: &Device, output: Option<&Path>) -> Result<Sum
     let mut traffic0: Option<Traffic> = None;
     let mut t_steady = Instant::now();
     let mut k = 0;
+    let mut adjusted = None;
+    if let (Some(c), true) = (contact.as_mut(), scene.run.adjust_overclosure) {
+        let bodies = solver.body_states();
+        let first = dt.min(scene.run.end_time - solver.time);
+        adjusted = Some(c.adjust_initial_overclosure(&mut solver.x, &bodies, first)?);
+    }
     // where penalty contact lowered the increment below the elements' limit: the smallest ratio
     // and the first time
     let (mut lowest_ratio, mut lowered_from) = (1.0f64, f64::NAN);
@@ -462,8 +468,41 @@ fn run_into(scene: &Scene, device: &Device, output: Option<&Path>) -> Result<Sum
             c.request_outputs(last || frame);
         }
         let t_step = Instant::now();
+        let t_start = solver.time;
         solver.step(step, contact.as_mut())?;
         k += 1;
+        if let Some(c) = contact.as_ref() {
+            let (p, q) = (c.report(), c.kinematic_report());
+            let fast = p.fast_nodes + q.fast_nodes;
+            let fastest = [p.fastest, q.fastest]
+                .into_iter()
+                .flatten()
+                .max_by(|a, b| (a.distance / a.radius).total_cmp(&(b.distance / b.radius)));
+            if let Some(f) = fastest {
+                return Err(Error::Tunnelling {
+                    increment: k as u64,
+                    time: t_start,
+                    node: f.node,
+                    pair: f.pair.0,
+                    distance: f.distance,
+                    radius: f.radius,
+                    more: format!(
+                        "{}{}",
+                        if fast > 1 {
+                            format!(" ({} more nodes move that far)", fast - 1)
+                        } else {
+                            String::new()
+                        },
+                        // a node launched by a resolved overclosure is a blow-up, not a fast body
+                        if k > 1 {
+                            solver.blow_up_hint()
+                        } else {
+                            String::new()
+                        }
+                    ),
+                });
+            }
+        }
         if k == 1 {
             first_seconds = t_step.elapsed().as_secs_f64();
             traffic0 = device.traffic();
@@ -662,6 +701,14 @@ fn run_into(scene: &Scene, device: &Device, output: Option<&Path>) -> Result<Sum
     );
     let anchoring = contact.as_ref().map(|c| c.anchoring()).unwrap_or_default();
     let mut warnings = Vec::new();
+    if let Some(a) = adjusted.filter(|a| !a.moved.is_empty()) {
+        warnings.push(format!(
+            "{} slave nodes started overclosed and were moved onto their masters strain-free \
+             (run.adjust_overclosure), by up to {:e}",
+            a.moved.len(),
+            a.max_distance
+        ));
+    }
     for a in anchoring.iter().filter(|a| !a.unanchored.is_empty()) {
         let shown: Vec<String> = a.unanchored.iter().take(8).map(|n| n.to_string()).collect();
         warnings.push(format!(

@@ -73,6 +73,12 @@ pub struct RunSpec {
     /// written with the other outputs, as `vtk/contact.pvd` and its `.vtu` frames.
     #[serde(default)]
     pub vtk_every: usize,
+    /// Move every slave node that starts overclosed onto its master before the first
+    /// increment, strain-free (Abaqus' adjustment of initial positions), instead of resolving
+    /// the overclosure within the first increment, which strains the elements under it and
+    /// launches the nodes (default false).
+    #[serde(default)]
+    pub adjust_overclosure: bool,
 }
 
 fn default_safety() -> f64 {

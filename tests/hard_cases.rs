@@ -1,0 +1,285 @@
+//! Issue 16's reporting cases: nodes that move farther than the search radius in one increment
+//! (tunnelling) are counted by the library and stop `abut`'s runs; results abut computes that
+//! come out non-finite are errors naming the node and what was computed; a solution that
+//! blows up names the increment, the node and the contact overclosure behind it; an initial
+//! overclosure can be removed strain-free before the first increment.
+
+mod common;
+
+use abut::mesh::plate_quads;
+use abut::*;
+use common::gpus;
+
+fn devices() -> Vec<Device> {
+    let mut d = vec![Device::cpu()];
+    d.extend(gpus().iter().cloned());
+    d
+}
+
+/// A rigid-like plate of 4 × 2 quads on [-1, 1]² (z = 0), slave point masses at `slaves`, one
+/// pair with search radius `radius` enforced by `enforce`, with Coulomb `mu` (0: none).
+fn plate_and_points(slaves: &[[f64; 3]], radius: f64, enforce: Enforce, mu: f64) -> Model {
+    let plate = plate_quads(4, 2, 2.0, 2.0, 0.0, 0, &|_, _| 0.0);
+    let pos: Vec<[f64; 3]> = plate
+        .positions
+        .iter()
+        .map(|p| [p[0] - 1.0, p[1] - 1.0, 0.0])
+        .collect();
+    let mut m = Model::new_3d();
+    m.add_nodes(&pos, &vec![1e3; pos.len()]).unwrap();
+    let s = m.add_surface(Surface::quads(&plate.facets)).unwrap();
+    let r = m.add_nodes(slaves, &vec![1.0; slaves.len()]).unwrap();
+    let set = m.add_node_set(&r.to_vec()).unwrap();
+    let mut pair = Pair::new(set, s).search_radius(radius).enforce(enforce);
+    if mu > 0.0 {
+        pair = pair.friction(Friction::coulomb(mu));
+    }
+    m.add_pair(pair).unwrap();
+    m
+}
+
+fn penalty(k: f64) -> Enforce {
+    Enforce::Penalty(Penalty {
+        stiffness: Stiffness::Absolute(k),
+        ..Default::default()
+    })
+}
+
+/// Unit vectors towards, away from, along and oblique to the plate.
+const DIRECTIONS: [[f64; 3]; 4] = [
+    [0.0, 0.0, -1.0],
+    [0.0, 0.0, 1.0],
+    [1.0, 0.0, 0.0],
+    [0.6, 0.0, -0.8],
+];
+
+/// Penalty and kinematic pairs count every pair node whose speed × increment exceeds the search
+/// radius, slave or master, in any direction, at several distances from the plate, and name the
+/// fastest; just below the radius nothing is counted.
+#[test]
+fn nodes_faster_than_the_search_radius_are_counted() {
+    let radius = 0.25;
+    let dt = 1e-3;
+    let heights = [0.05, 0.2, 3.0]; // in contact range, near, far beyond the radius
+    let slaves: Vec<[f64; 3]> = heights.iter().map(|&z| [0.1, 0.2, z]).collect();
+    for enforce in [penalty(1e4), Enforce::Kinematic(Kinematic::default())] {
+        let kinematic = matches!(enforce, Enforce::Kinematic(_));
+        let m = plate_and_points(&slaves, radius, enforce, 0.0);
+        let n = m.positions().len();
+        let first_slave = n - slaves.len();
+        for d in devices() {
+            for dir in DIRECTIONS {
+                for (ratio, expect_fast) in [(0.9, false), (1.1, true), (40.0, true)] {
+                    for mover in [first_slave + 1, n - 1, 0] {
+                        // one node moves: a slave (near or far) or a master node
+                        let speed = ratio * radius / dt;
+                        let mut v = vec![[0.0; 3]; n];
+                        v[mover] = dir.map(|c| c * speed);
+                        let mut c = Contact::new(&d, &m).unwrap();
+                        let (fast, fastest) = if kinematic {
+                            let mut x = m.positions().to_vec();
+                            let r = c.kinematic_step(&mut x, &mut v, &mut [], dt).unwrap();
+                            (r.fast_nodes, r.fastest)
+                        } else {
+                            let r = c.penalty_step(m.positions(), &v, dt).unwrap();
+                            (r.fast_nodes, r.fastest)
+                        };
+                        let what = format!(
+                            "{d} kinematic={kinematic} dir {dir:?} ratio {ratio} node {mover}"
+                        );
+                        assert_eq!(fast, usize::from(expect_fast), "{what}");
+                        match fastest {
+                            Some(f) => {
+                                assert!(expect_fast, "{what}");
+                                assert_eq!(f.node, mover, "{what}");
+                                assert!((f.radius - radius).abs() < 1e-12, "{what}");
+                                assert!(
+                                    (f.distance - ratio * radius).abs() < 1e-9,
+                                    "{what}: {}",
+                                    f.distance
+                                );
+                            }
+                            None => assert!(!expect_fast, "{what}"),
+                        }
+                    }
+                }
+            }
+        }
+    }
+}
+
+/// A slave velocity finite in f64 but beyond what the f32 kernels hold either gives finite
+/// forces or an error that names the slave node and says the value was computed by abut, never
+/// NaN forces with `Ok`.
+#[test]
+fn non_finite_penalty_forces_are_errors_naming_the_node() {
+    let slaves = [[0.1, 0.2, -0.01], [-0.3, 0.4, 0.02]];
+    let m = plate_and_points(
+        &slaves,
+        0.25,
+        Enforce::Penalty(Penalty {
+            stiffness: Stiffness::Absolute(1e4),
+            damping: 0.2,
+            ..Default::default()
+        }),
+        0.3, // friction too: its trial force grows with the speed
+    );
+    let n = m.positions().len();
+    let slave = n - 2; // the penetrating one
+    for d in devices() {
+        let mut errors = 0;
+        for speed in [1e3, 1e30, 1e36, 1e38, 1e39, 1e300] {
+            let mut v = vec![[0.0; 3]; n];
+            v[slave] = [0.3 * speed, 0.0, -speed];
+            let mut c = Contact::new(&d, &m).unwrap();
+            match c.penalty_step(m.positions(), &v, 1e-4) {
+                Ok(r) => assert!(
+                    r.forces.iter().flatten().all(|f| f.is_finite()),
+                    "{d} speed {speed}: non-finite forces returned as Ok"
+                ),
+                Err(Error::NonFiniteResult { node, what, .. }) => {
+                    assert_eq!(node, slave, "{d} speed {speed}: {what}");
+                    assert!(what.contains("penalty contact force"), "{what}");
+                    errors += 1;
+                }
+                Err(e) => panic!("{d} speed {speed}: unexpected error {e}"),
+            }
+        }
+        assert!(
+            errors >= 1,
+            "{d}: no speed overflowed the kernels: not a test"
+        );
+    }
+}
+
+#[cfg(feature = "solver")]
+mod scenes {
+    use abut::scene::{run, Scene};
+    use abut::{Device, Error};
+
+    /// A block of 2 × 2 × 2 cells on a rigid floor, its base at `z0`, moving at `vz`.
+    fn block_on_floor(z0: f64, vz: f64, enforce: &str, adjust: bool, end: f64) -> String {
+        format!(
+            r#"
+title = "block and floor"
+[run]
+end_time = {end}
+output_every = 10
+adjust_overclosure = {adjust}
+[[material]]
+name = "m"
+young = 1.0e7
+poisson = 0.3
+density = 1000.0
+[[part]]
+name = "block"
+shape = "block"
+material = "m"
+origin = [0.0, 0.0, {z0}]
+size = [0.1, 0.1, 0.1]
+divisions = [2, 2, 2]
+velocity = [0.0, 0.0, {vz}]
+[[part]]
+name = "floor"
+shape = "plate"
+origin = [-0.2, -0.2, 0.0]
+size = [0.5, 0.5, 0.0]
+divisions = [5, 5, 0]
+[[contact]]
+slave = "block"
+slave_face = "z-"
+master = "floor"
+master_face = "z+"
+enforce = "{enforce}"
+"#
+        )
+    }
+
+    fn scene(text: &str) -> Scene {
+        Scene::parse(text).unwrap()
+    }
+
+    /// Tunnelling stops the run with an error naming the node, its motion and the radius (the
+    /// search radius is one floor facet, 0.1); a block approaching at a speed the search can
+    /// follow runs.
+    #[test]
+    fn tunnelling_stops_the_run() {
+        for enforce in ["penalty", "kinematic"] {
+            // increment ≈ 1.58e-4 s: 2000 m/s moves 0.32 per increment
+            let e = run(
+                &scene(&block_on_floor(0.3, -2000.0, enforce, false, 2e-3)),
+                &Device::cpu(),
+                None,
+            )
+            .unwrap_err();
+            match &e {
+                Error::Tunnelling {
+                    increment,
+                    distance,
+                    radius,
+                    ..
+                } => {
+                    assert_eq!(*increment, 1, "{enforce}: {e}");
+                    assert!(*distance > *radius, "{enforce}: {e}");
+                    assert!((radius - 0.1).abs() < 1e-9, "{enforce}: {e}");
+                }
+                other => panic!("{enforce}: {other}"),
+            }
+            run(
+                &scene(&block_on_floor(0.03, -2.0, enforce, false, 5e-3)),
+                &Device::cpu(),
+                None,
+            )
+            .unwrap_or_else(|e| panic!("{enforce}: a slow block: {e}"));
+        }
+    }
+
+    /// A kinematic pair whose block starts half its height inside the floor: the correction of
+    /// the first increment inverts the elements and the solution blows up — an error that says
+    /// so, names the increment, and points at the overclosure resolved at increment 1 (not a
+    /// complaint about the user's coordinates). With `adjust_overclosure` the slave nodes are
+    /// moved onto the floor strain-free first and the run completes, warning what it moved.
+    #[test]
+    fn an_initial_overclosure_blows_up_named_or_is_adjusted() {
+        let e = run(
+            &scene(&block_on_floor(-0.05, 0.0, "kinematic", false, 0.01)),
+            &Device::cpu(),
+            None,
+        )
+        .unwrap_err();
+        // the elements launch the nodes: caught as a blow-up, or as nodes outrunning the
+        // search, either way with the overclosure behind it named
+        let (increment, cause) = match &e {
+            Error::Diverged {
+                increment, cause, ..
+            } => (*increment, cause),
+            Error::Tunnelling {
+                increment, more, ..
+            } => (*increment, more),
+            other => panic!("{other}"),
+        };
+        assert!(increment > 1, "{e}");
+        let h: f64 = cause
+            .split("overclosure of ")
+            .nth(1)
+            .and_then(|r| r.split(' ').next())
+            .and_then(|v| v.parse().ok())
+            .unwrap_or_else(|| panic!("no overclosure named: {e}"));
+        assert!((h - 0.05).abs() < 1e-4, "{e}");
+        assert!(cause.contains("at increment 1"), "{e}");
+        assert!(cause.contains("adjust_overclosure"), "{e}");
+        let s = run(
+            &scene(&block_on_floor(-0.05, 0.0, "kinematic", true, 0.01)),
+            &Device::cpu(),
+            None,
+        )
+        .unwrap();
+        assert!(
+            s.warnings
+                .iter()
+                .any(|w| w.starts_with("9 slave nodes started overclosed")),
+            "{:?}",
+            s.warnings
+        );
+    }
+}
