@@ -8,6 +8,8 @@ const NO_FACET: u32 = 0xffffffffu;
 // slave is beside it, off the facets: no contact (Rust twin: HIT_BESIDE_FREE_EDGE).
 const HIT_BESIDE_FREE_EDGE: u32 = 0x80000000u;
 const QUAD_ITERATIONS: u32 = 8u;
+const QUAD_HALVINGS: u32 = 6u;     // Rust: geometry::QUAD_HALVINGS
+const QUAD_TRUST: f32 = 0.25;      // Rust: geometry::QUAD_TRUST
 const QUAD_CONVERGED: f32 = 1e-4;   // Rust: geometry::QUAD_CONVERGED
 const COS_TENTH_DEGREE: f32 = 0.99999845; // Rust: geometry::COS_TENTH_DEGREE as f32
 // Invocations per workgroup of the one-item-per-invocation kernels (Rust: ITEM_WORKGROUP).
@@ -243,6 +245,34 @@ fn quad_shape(xi: f32, eta: f32) -> vec4<f32> {
     return vec4<f32>(0.25 * xm * em, 0.25 * xp * em, 0.25 * xp * ep, 0.25 * xm * ep);
 }
 
+// (ξ, η) of a point q in or near the plane of the quad y0..y3, by inverting the bilinear map
+// there (exact for a planar quad), clamped to the square (Rust: geometry::quad_parameters).
+fn quad_parameters(q: vec3<f32>, y0: vec3<f32>, y1: vec3<f32>, y2: vec3<f32>, y3: vec3<f32>) -> vec2<f32> {
+    let e = y1 - y0;
+    let f = y3 - y0;
+    let g = y0 - y1 + y2 - y3;
+    let h = q - y0;
+    let n = cross(y2 - y0, y3 - y1);
+    let k2 = dot(cross(g, f), n);
+    let k1 = dot(cross(e, f), n) + dot(cross(h, g), n);
+    let k0 = dot(cross(h, e), n);
+    let sq = sqrt(max(k1 * k1 - 4.0 * k0 * k2, 0.0));
+    var t = -k1 + sq;
+    if (k1 >= 0.0) { t = -k1 - sq; }
+    let va = div_or_zero(2.0 * k0, t);
+    let vb = div_or_zero(t, 2.0 * k2);
+    var v = vb;
+    if (k2 == 0.0 || max(max(-va, va - 1.0), 0.0) <= max(max(-vb, vb - 1.0), 0.0)) { v = va; }
+    let ev = e + g * v;
+    let u = div_or_zero(dot(h - f * v, ev), dot(ev, ev));
+    return vec2<f32>(clamp(u + u - 1.0, -1.0, 1.0), clamp(v + v - 1.0, -1.0, 1.0));
+}
+
+// y(ξ,η) − p of a quad relative to its node 0 (closest_on_quad).
+fn quad_residual(c0: vec3<f32>, cx: vec3<f32>, ce: vec3<f32>, cxe: vec3<f32>, pl: vec3<f32>, xi: f32, eta: f32) -> vec3<f32> {
+    return c0 + cx * xi + ce * eta + cxe * (xi * eta) - pl;
+}
+
 fn closest_on_quad(p: vec3<f32>, x0: vec3<f32>, x1: vec3<f32>, x2: vec3<f32>, x3: vec3<f32>) -> Projection {
     // relative to node 0, as in src/geometry.rs
     let y = array<vec3<f32>, 4>(vec3<f32>(0.0), x1 - x0, x2 - x0, x3 - x0);
@@ -251,11 +281,21 @@ fn closest_on_quad(p: vec3<f32>, x0: vec3<f32>, x1: vec3<f32>, x2: vec3<f32>, x3
     let cx = (y[1] + y[2] - y[3]) * 0.25;
     let ce = (y[2] + y[3] - y[1]) * 0.25;
     let cxe = (y[2] - y[1] - y[3]) * 0.25;
-    var xi = 0.0;
-    var eta = 0.0;
+    // Newton starts from the nearest point of the nearer triangle, (y0, y1, y2) or
+    // (y0, y2, y3), mapped to (ξ, η) in the quad's plane: the answer for a planar quad, near it
+    // otherwise
+    let t1 = closest_on_triangle(pl, y[0], y[1], y[2]);
+    let t2 = closest_on_triangle(pl, y[0], y[2], y[3]);
+    var start = t1.point;
+    if (t2.dist2 < t1.dist2) { start = t2.point; }
+    let st = quad_parameters(start, y[0], y[1], y[2], y[3]);
+    var xi = st.x;
+    var eta = st.y;
+    let r0 = quad_residual(c0, cx, ce, cxe, pl, xi, eta);
+    var f = dot(r0, r0);
     var step = 1.0;
     for (var k = 0u; k < QUAD_ITERATIONS; k++) {
-        let r = c0 + cx * xi + ce * eta + cxe * (xi * eta) - pl;
+        let r = quad_residual(c0, cx, ce, cxe, pl, xi, eta);
         let gx = cx + cxe * eta;
         let ge = ce + cxe * xi;
         let a11 = dot(gx, gx);
@@ -271,11 +311,25 @@ fn closest_on_quad(p: vec3<f32>, x0: vec3<f32>, x1: vec3<f32>, x2: vec3<f32>, x3
         }
         let dxi = div_or_zero(a22 * b1 - a12 * b2, det);
         let deta = div_or_zero(a11 * b2 - a12 * b1, det);
-        let nxi = clamp(xi - dxi, -1.0, 1.0);
-        let neta = clamp(eta - deta, -1.0, 1.0);
-        step = max(abs(nxi - xi), abs(neta - eta));
-        xi = nxi;
-        eta = neta;
+        // a step within QUAD_TRUST is taken whole; a longer one backtracks: the first of the
+        // step, its half, quarter, … that does not increase |y − p|²; none: stay, unconverged
+        let whole = max(abs(dxi), abs(deta)) <= QUAD_TRUST;
+        var s = 1.0;
+        step = 1.0;
+        for (var h = 0u; h < QUAD_HALVINGS; h++) {
+            let nxi = clamp(xi - dxi * s, -1.0, 1.0);
+            let neta = clamp(eta - deta * s, -1.0, 1.0);
+            let nr = quad_residual(c0, cx, ce, cxe, pl, nxi, neta);
+            let nf = dot(nr, nr);
+            if (whole || nf <= f) {
+                step = max(abs(nxi - xi), abs(neta - eta));
+                xi = nxi;
+                eta = neta;
+                f = nf;
+                break;
+            }
+            s = s * 0.5;
+        }
     }
     var best_point = c0 + cx * xi + ce * eta + cxe * (xi * eta);
     var bd = pl - best_point;
