@@ -846,3 +846,63 @@ fn the_history_has_each_parts_and_bodys_motion() {
     assert!((rows[0][vz] + 0.01).abs() < 1e-9 && (rows[0][uz] + 0.01 * rows[0][t]).abs() < 1e-9);
     std::fs::remove_dir_all(&dir).unwrap();
 }
+
+/// A material whose Poisson's ratio shrinks the increment absurdly is named before the run
+/// (`Scene::notes`) and in the summary's warnings, with the factor; ordinary ones are not. A
+/// run reports its progress after every increment, the estimate of the whole run converging on
+/// the increments it took.
+#[test]
+fn nearly_incompressible_materials_are_named_and_runs_report_progress() {
+    let scene_with = |nu: f64| {
+        Scene::parse(&format!(
+            r#"
+title = "a block at rest"
+[run]
+end_time = 1.0e-3
+[[material]]
+name = "rubber"
+young = 1.0e6
+poisson = {nu}
+density = 1000.0
+[[part]]
+name = "block"
+shape = "block"
+material = "rubber"
+origin = [0.0, 0.0, 0.0]
+size = [0.1, 0.1, 0.1]
+divisions = [1, 1, 1]
+"#
+        ))
+        .unwrap()
+    };
+    for nu in [0.0, 0.3, 0.49, 0.499] {
+        assert!(scene_with(nu).notes().is_empty(), "poisson {nu}");
+    }
+    for (nu, ratio) in [(0.4999, 70.7), (0.49999999, 7071.1)] {
+        let notes = scene_with(nu).notes();
+        assert_eq!(notes.len(), 1, "poisson {nu}: {notes:?}");
+        assert!(
+            notes[0].starts_with("material rubber:")
+                && notes[0].contains(&format!("{ratio:.0} times")),
+            "{notes:?}"
+        );
+    }
+    let scene = scene_with(0.4999);
+    let mut seen: Vec<abut::scene::Progress> = Vec::new();
+    let s = abut::scene::run_with_progress(&scene, &Device::cpu(), None, &mut |p| seen.push(*p))
+        .unwrap();
+    assert!(s.warnings.iter().any(|w| w.starts_with("material rubber:")));
+    assert_eq!(seen.len(), s.increments, "one call per increment");
+    for (k, p) in seen.iter().enumerate() {
+        assert_eq!(p.increment, k as u64 + 1);
+        assert!(p.estimated >= p.increment);
+        assert_eq!(p.end_time, 1.0e-3);
+    }
+    let last = seen.last().unwrap();
+    assert_eq!(
+        last.estimated, last.increment,
+        "the estimate ends on the count"
+    );
+    // a fixed increment: the first estimate is already the whole run
+    assert_eq!(seen[0].estimated, s.increments as u64);
+}

@@ -316,11 +316,46 @@ fn remove_all(dir: &Path, names: &[&str]) {
 /// first removes what an earlier run wrote there, and a failed run removes its partial files:
 /// a failed run leaves nothing that looks valid, and no earlier run's files pass for its own.
 pub fn run(scene: &Scene, device: &Device, output: Option<&Path>) -> Result<Summary> {
+    run_with_progress(scene, device, output, &mut |_| {})
+}
+
+/// Where a run is: called after every increment of [`run_with_progress`].
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Progress {
+    /// Increments taken.
+    pub increment: u64,
+    /// Increments the whole run will take at the present increment (taken plus what is left
+    /// of the time over the present increment).
+    pub estimated: u64,
+    /// Time reached.
+    pub time: f64,
+    /// The run's end time.
+    pub end_time: f64,
+}
+
+/// The number of increments a run of `duration` takes at the increment `dt`, saturating.
+fn increments_for(duration: f64, dt: f64) -> u64 {
+    let n = (duration / dt).ceil();
+    if n.is_finite() && n < u64::MAX as f64 {
+        n.max(0.0) as u64
+    } else {
+        u64::MAX
+    }
+}
+
+/// [`run`], calling `progress` after every increment (a progress bar, a log line every so
+/// often, or nothing).
+pub fn run_with_progress(
+    scene: &Scene,
+    device: &Device,
+    output: Option<&Path>,
+    progress: &mut dyn FnMut(&Progress),
+) -> Result<Summary> {
     if let Some(dir) = output.filter(|d| d.is_dir()) {
         remove_all(dir, &OUTPUTS);
         remove_all(dir, &PARTIALS);
     }
-    let result = run_into(scene, device, output);
+    let result = run_into(scene, device, output, progress);
     if let (Err(_), Some(dir)) = (&result, output.filter(|d| d.is_dir())) {
         remove_all(dir, &PARTIALS);
     }
@@ -328,7 +363,12 @@ pub fn run(scene: &Scene, device: &Device, output: Option<&Path>) -> Result<Summ
 }
 
 /// [`run`] itself: the outputs written under their partial names, renamed at the end.
-fn run_into(scene: &Scene, device: &Device, output: Option<&Path>) -> Result<Summary> {
+fn run_into(
+    scene: &Scene,
+    device: &Device,
+    output: Option<&Path>,
+    progress: &mut dyn FnMut(&Progress),
+) -> Result<Summary> {
     let built = scene.build()?;
     let (mut solver, model) = (built.solver, built.model);
     let x0 = solver.x.clone();
@@ -471,6 +511,13 @@ fn run_into(scene: &Scene, device: &Device, output: Option<&Path>) -> Result<Sum
         let t_start = solver.time;
         solver.step(step, contact.as_mut())?;
         k += 1;
+        progress(&Progress {
+            increment: k as u64,
+            estimated: (k as u64)
+                .saturating_add(increments_for(scene.run.end_time - solver.time, dt)),
+            time: solver.time,
+            end_time: scene.run.end_time,
+        });
         if let Some(c) = contact.as_ref() {
             let (p, q) = (c.report(), c.kinematic_report());
             let fast = p.fast_nodes + q.fast_nodes;
@@ -700,7 +747,7 @@ fn run_into(scene: &Scene, device: &Device, output: Option<&Path>) -> Result<Sum
         scene.run.contact_safety,
     );
     let anchoring = contact.as_ref().map(|c| c.anchoring()).unwrap_or_default();
-    let mut warnings = Vec::new();
+    let mut warnings = scene.notes();
     if let Some(a) = adjusted.filter(|a| !a.moved.is_empty()) {
         warnings.push(format!(
             "{} slave nodes started overclosed and were moved onto their masters strain-free \

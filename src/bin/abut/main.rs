@@ -215,14 +215,46 @@ fn device(b: BackendArg) -> abut::Result<Device> {
     }
 }
 
+/// Runs of at least this many increments say so when they start.
+const LONG_RUN: u64 = 100_000;
+
 fn run_scene(a: &RunArgs) -> abut::Result<()> {
     // mesh files in the scene are relative to its directory
     let scene = abut::scene::Scene::load(&a.scene)?;
     let device = device(a.backend)?;
     println!("device: {device}");
     println!("scene: {}", scene.title);
-    let summary = abut::scene::run(&scene, &device, a.output.as_deref())?;
-    for w in &summary.warnings {
+    let notes = scene.notes();
+    for n in &notes {
+        eprintln!("abut: warning: {n}");
+    }
+    // a bar on a terminal (hidden otherwise), and the estimate once for long runs
+    let bar = indicatif::ProgressBar::new(0);
+    bar.set_style(
+        indicatif::ProgressStyle::with_template(
+            "{elapsed_precise} [{bar:40}] increment {pos}/{len} (estimated) t = {msg}",
+        )
+        .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar()),
+    );
+    let mut told = false;
+    let mut progress = |p: &abut::scene::Progress| {
+        if !told && p.estimated >= LONG_RUN {
+            eprintln!(
+                "abut: about {} increments to t = {:e}",
+                p.estimated, p.end_time
+            );
+            told = true;
+        }
+        bar.set_length(p.estimated);
+        bar.set_position(p.increment);
+        if p.increment.is_multiple_of(64) {
+            bar.set_message(format!("{:.4e}", p.time));
+        }
+    };
+    let run = abut::scene::run_with_progress(&scene, &device, a.output.as_deref(), &mut progress);
+    bar.finish_and_clear();
+    let summary = run?;
+    for w in summary.warnings.iter().filter(|w| !notes.contains(w)) {
         eprintln!("abut: warning: {w}");
     }
     // the per-node and per-sample lists go to summary.json only: here, how many there are
