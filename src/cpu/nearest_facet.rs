@@ -79,20 +79,12 @@ pub struct Candidates<'a> {
 }
 
 impl Candidates<'_> {
-    /// Whether tree node k holds nothing within distance² `bound` of p (WGSL: `far`).
+    /// Whether tree node k holds nothing within distance² `bound` of p (WGSL: `far`; an empty
+    /// box never does).
     fn far(&self, k: u32, p: V3<f32>, bound: f32) -> bool {
-        let (lo, hi) = (self.boxes[2 * k as usize], self.boxes[2 * k as usize + 1]);
-        if lo[0] > hi[0] {
-            return true;
-        }
-        let pa = p.to_array();
-        let mut d2 = 0.0f32;
-        let mut d = [0.0f32; 3];
-        for a in 0..3 {
-            d[a] = (lo[a] - pa[a]).max(pa[a] - hi[a]).max(0.0);
-        }
-        d2 += d[0] * d[0] + d[1] * d[1] + d[2] * d[2];
-        d2 > bound * PRUNE_SLACK
+        let lo = self.boxes[2 * k as usize];
+        let hi = self.boxes[2 * k as usize + 1];
+        lo[0] > hi[0] || box_d2(self, k, glam::Vec4::new(p.x, p.y, p.z, 0.0)) > bound * PRUNE_SLACK
     }
 
     /// Leaf slot count 2^L.
