@@ -159,7 +159,7 @@ fn penalty(@builtin(workgroup_id) wg: vec3<u32>,
     let m_eff = 1.0 / (1.0 / nodes[s].w + inv_mm);
     var k = pp.stiffness;
     if (pp.stiffness_mode == STIFFNESS_AUTO) {
-        k = 0.25 * pp.stiffness * m_eff / (pp.dt_ref * pp.dt_ref);
+        k = pp.stiffness * m_eff / (pp.dt_ref * pp.dt_ref);   // stiffness: AUTO_STIFFNESS·scale
     } else if (pp.stiffness_mode == STIFFNESS_MODULUS) {
         k = pp.stiffness * pp.modulus * area / h_facet;
     } else if (pp.stiffness_mode == STIFFNESS_PER_AREA) {

@@ -34,6 +34,24 @@ pub enum ContactStatus {
     Slip,
 }
 
+/// The increment of a run whose nodes carry elements and penalty springs together: the elements'
+/// stable increment `element_dt` (already times `safety`) and the contact's `contact_dt`
+/// (`StepReport::stable_dt`) give 1/Δt² = 1/Δt_elements² + 1/(safety·Δt_contact)² — their
+/// frequencies add in square, with the same safety on both — and no more than
+/// `contact_safety·Δt_contact`, so that every contact spring stays at ω·Δt ≤ 2·contact_safety,
+/// where its switching on and off does not pump energy into the node (tests/scene.rs). A host program that integrates its own elements calls this with its
+/// elements' increment and the report's `stable_dt` (a scene run does).
+pub fn combined_increment(
+    element_dt: f64,
+    contact_dt: f64,
+    safety: f64,
+    contact_safety: f64,
+) -> f64 {
+    let dt_c = safety * contact_dt;
+    let both = 1.0 / (1.0 / (element_dt * element_dt) + 1.0 / (dt_c * dt_c)).sqrt();
+    both.min(contact_safety * contact_dt)
+}
+
 /// What one increment of penalty contact gives the host.
 #[derive(Clone, Debug, Default)]
 pub struct StepReport {

@@ -23,8 +23,8 @@ pub mod search;
 pub mod status;
 
 pub use contact::{
-    Anchoring, Contact, ContactStatus, FastNode, KinematicReport, OverclosureReport, PairOutput,
-    ResidentIo, StepReport,
+    combined_increment, Anchoring, Contact, ContactStatus, FastNode, KinematicReport,
+    OverclosureReport, PairOutput, ResidentIo, StepReport,
 };
 pub use device::{Backend, Device, Traffic};
 pub use error::{Error, Result};

@@ -576,7 +576,7 @@ fn laws_and_stiffness_rules() {
                 ..Default::default()
             },
             // m_eff with rigid masters is the slave's mass (2.0); dt_ref = 1e-3
-            Box::new(|_, _| 0.25 * 2.0 * 2.0 / 1e-6 * h),
+            Box::new(|_, _| 2.0 * 2.0 / 1e-6 * h),
         ),
         (
             Penalty {

@@ -202,7 +202,7 @@ pub fn penalty(
             let m_eff = 1.0 / (1.0 / nodes[s as usize][3] + inv_mm);
             let mut k = pp.stiffness;
             if pp.stiffness_mode == STIFFNESS_AUTO {
-                k = 0.25 * pp.stiffness * m_eff / (pp.dt_ref * pp.dt_ref);
+                k = pp.stiffness * m_eff / (pp.dt_ref * pp.dt_ref);
             } else if pp.stiffness_mode == STIFFNESS_MODULUS {
                 k = pp.stiffness * pp.modulus * area / h_facet;
             } else if pp.stiffness_mode == STIFFNESS_PER_AREA {

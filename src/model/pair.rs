@@ -95,14 +95,20 @@ impl Default for Penalty {
 /// `k = ½·SOFSCL·m*/Δt²`, with m* the effective two-body mass of the contact
 /// (`1/m* = 1/m_s + Σ N_i²/m_i`, slave mass and the master nodes' masses weighted by the
 /// load-transfer weights) and Δt the reference increment (the first increment's, unless set).
-/// abut's `½·SOFSCL` is 0.25·scale: each contact spring then has ω·Δt = 0.5·√scale, and alone
-/// allows an increment of 4·Δt/√scale, so it never dictates the stable increment at scale 1.
+/// abut's `½·SOFSCL` is `scale` (1 by default): each contact spring then has
+/// ω·Δt_ref = √scale. At a node carried by elements at their stable increment (ω_e·Δt_ref ≈ 1.8
+/// at safety 0.9) the spring is about 0.6 times the underlying element's stiffness — stiff enough
+/// that a wave reaches a rigid wall within two increments and the plateau force is within 2 % of
+/// ρ·c·v·A (tests/hard_cases.rs) — and it costs about 13 % of the increment where the springs
+/// and the elements meet (`scene::combined_increment`: 1/Δt² = 1/Δt_e² + (ω/(2·0.9))²). A
+/// scale of 0.25 (the default before) costs 4 % and delays a wave by about six increments;
+/// docs/BENCHMARKS.md tabulates the trade.
 /// The modulus rule is the element form of LS-DYNA's `SOFT=0` (`k = SLSFAC·K·A²/V`, here
 /// `scale·E·A_s/h_m` with A_s the slave node's tributary area and h_m the master facet's size)
 /// and needs the underlying material's modulus.
 #[derive(Clone, Debug, PartialEq)]
 pub enum Stiffness {
-    /// `k = 0.25·scale·m*/Δt_ref²` (see above).
+    /// `k = scale·m*/Δt_ref²` (see above).
     Auto {
         /// Factor on the automatic stiffness (Abaqus' "penalty scale factor").
         scale: f64,

@@ -29,6 +29,9 @@ pub const LAW_LINEAR: u32 = 0;
 pub const LAW_EXPONENTIAL: u32 = 1;
 /// Tabular law (WGSL: `LAW_TABULAR`).
 pub const LAW_TABULAR: u32 = 2;
+/// The automatic stiffness at scale 1, `k = AUTO_STIFFNESS·m*/Δt_ref²`: each contact spring has
+/// ω·Δt_ref = 1 (see [`crate::Stiffness::Auto`]); the kernels get `AUTO_STIFFNESS·scale`.
+pub const AUTO_STIFFNESS: f64 = 1.0;
 /// Automatic mass-and-increment stiffness (WGSL: `STIFFNESS_AUTO`).
 pub const STIFFNESS_AUTO: u32 = 0;
 /// Modulus-based stiffness (WGSL: `STIFFNESS_MODULUS`).

@@ -194,7 +194,7 @@ fn base_params(
         table: [[0.0; 4]; 8],
     };
     match pen.stiffness {
-        Stiffness::Auto { scale } => p.stiffness = scale as f32,
+        Stiffness::Auto { scale } => p.stiffness = (AUTO_STIFFNESS * scale) as f32,
         Stiffness::Modulus { modulus, scale } => {
             p.stiffness_mode = STIFFNESS_MODULUS;
             p.stiffness = scale as f32;

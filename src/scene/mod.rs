@@ -8,7 +8,7 @@
 //! [run]
 //! end_time = 30.0          # model time units
 //! safety = 0.9             # on the elements' stable increment (default 0.9)
-//! contact_safety = 0.5     # on the penalty contact's stable increment (default 0.5)
+//! contact_safety = 0.5     # cap on the penalty contact's stable increment (default 0.5)
 //! # dt = 1e-3              # a fixed increment instead (stability studies)
 //! gravity = [0, 0, -9.81]  # default none
 //! damping = 0.0            # mass-proportional α, for dynamic relaxation
@@ -162,8 +162,7 @@ pub struct Summary {
     /// The smallest stable increment penalty contact reported (∞ without penalty pairs).
     pub contact_increment: f64,
     /// What set the increment: "fixed" (`run.dt`), "elements" (their stable increment times
-    /// the safety factor) or "elements and contact" (a node carries both stiffnesses:
-    /// 1/Δt² = 1/Δt_elements² + 1/(contact_safety·Δt_contact)²).
+    /// the safety factor) or "elements and contact" ([`crate::combined_increment`]).
     pub governing_limit: String,
     /// How far below the elements' increment penalty contact took it at most (a fraction, 0
     /// when it never did).
@@ -560,11 +559,16 @@ fn run_into(
                 let reported = c.report().stable_dt;
                 contact_dt = contact_dt.min(reported);
                 // a node carries its elements' and its contact springs' stiffness together:
-                // the frequencies add in square (1/dt² = 1/dt_e² + 1/dt_c²), which is
-                // smaller than either limit alone
+                // the frequencies add in square (1/dt² = 1/dt_e² + 1/(safety·dt_c)², the same
+                // safety on both); and a spring that switches on and off must stay at
+                // ω·dt ≤ 2·contact_safety, where central differences do not pump energy
                 if scene.run.dt.is_none() {
-                    let dt_c = scene.run.contact_safety * reported;
-                    dt = 1.0 / (1.0 / (element_dt * element_dt) + 1.0 / (dt_c * dt_c)).sqrt();
+                    dt = crate::combined_increment(
+                        element_dt,
+                        reported,
+                        scene.run.safety,
+                        scene.run.contact_safety,
+                    );
                 }
                 pen = pen.max(c.report().max_overclosure);
             }

@@ -43,12 +43,14 @@ pub struct RunSpec {
     /// Safety factor on the elements' stable increment (default 0.9).
     #[serde(default = "default_safety")]
     pub safety: f64,
-    /// Safety factor on the penalty contact's stable increment (default 0.5). Not the
-    /// elements' 0.9: a contact spring switches on and off, and central differences near a
-    /// spring's linear limit (ω·Δt → 2) turn that switching into an energy pump — a node
-    /// pressed slowly into a stiff penalty contact chatters and runs away at 0.7–0.9
-    /// (tests/scene.rs). At 0.5 (ω·Δt ≤ 1 for the contact) it stays quiet; so does 0.9
-    /// with 10 % of critical damping on the contact (`contact.damping`).
+    /// Cap on the penalty contact's stable increment (default 0.5): the increment never exceeds
+    /// contact_safety times it, so every spring stays at ω·Δt ≤ 2·contact_safety. Below that
+    /// cap, elements and springs share `safety` (`abut::combined_increment`). Not 0.9: a contact
+    /// spring switches on and off, and central differences near a spring's linear limit
+    /// (ω·Δt → 2) turn that switching into an energy pump — a node pressed slowly into a stiff
+    /// penalty contact chatters and runs away at 0.7–0.9 (tests/scene.rs). At 0.5 (ω·Δt ≤ 1
+    /// for the contact) it stays quiet; so does 0.9 with 10 % of critical damping on the
+    /// contact (`contact.damping`).
     #[serde(default = "default_contact_safety")]
     pub contact_safety: f64,
     /// A fixed increment instead of the stable one (for stability studies).
@@ -298,7 +300,8 @@ pub struct ContactSpec {
     /// Balanced master–slave weight of the slave surface's pass (e.g. 0.5); none: pure.
     #[serde(default)]
     pub balanced: Option<f64>,
-    /// Penalty scale factor on the automatic stiffness (default 1).
+    /// Penalty scale factor on the automatic stiffness k = scale·m*/Δt_ref² (default 1: each
+    /// spring at ω·Δt_ref = 1, about 13 % off the increment; docs/BENCHMARKS.md).
     #[serde(default)]
     pub penalty_scale: Option<f64>,
     /// Penalty stiffness, force per length per slave node.

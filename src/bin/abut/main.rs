@@ -2,6 +2,7 @@
 //! search and penalty demonstrations.
 
 mod bench;
+mod penalty_bench;
 mod resident_bench;
 mod search_bench;
 mod verify;
