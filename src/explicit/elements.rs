@@ -148,6 +148,26 @@ impl Element {
         matches!(self, Element::Tri3 { hoop: Some(_), .. })
     }
 
+    /// The nodes of an axisymmetric element that lie on the axis (reference radius 0, or below
+    /// 1e-9 of the element's largest radius); none for other elements. The solver holds them
+    /// radially.
+    pub fn axis_nodes(&self) -> Vec<u32> {
+        match self {
+            Element::Tri3 {
+                nodes,
+                hoop: Some(r0),
+                ..
+            } => {
+                let top = r0.iter().cloned().fold(0.0, f64::max);
+                (0..3)
+                    .filter(|&j| r0[j].abs() <= 1e-9 * top)
+                    .map(|j| nodes[j])
+                    .collect()
+            }
+            _ => Vec::new(),
+        }
+    }
+
     /// A tetrahedron; `None` when its reference volume is not positive.
     pub fn tet4(nodes: [u32; 4], x: &[[f64; 3]], material: Material) -> Option<Self> {
         let p: Vec<V3<f64>> = nodes

@@ -190,9 +190,17 @@ impl Solver {
             });
         }
         let n = x.len();
+        // nodes on the axis of axisymmetric elements (reference radius 0) move along it only:
+        // u_r = 0 there by symmetry; left free, round-off walks them to negative radii
+        let mut fixed = vec![[false; 3]; n];
+        for e in &elements {
+            for node in e.axis_nodes() {
+                fixed[node as usize][0] = true;
+            }
+        }
         Ok(Self {
             v: vec![[0.0; 3]; n],
-            fixed: vec![[false; 3]; n],
+            fixed,
             prescribed: Vec::new(),
             bodies: Vec::new(),
             loads: vec![[0.0; 3]; n],
@@ -417,6 +425,7 @@ impl Solver {
         if let Some(c) = contact {
             if c.has_kinematic_pairs() {
                 let v_pred = self.v.clone();
+                let x_pred = self.x.clone();
                 let pred: Vec<BodyState> = self.body_states();
                 let mut states = pred.clone();
                 let h = c
@@ -425,6 +434,11 @@ impl Solver {
                 self.note_overclosure(h);
                 for i in 0..n {
                     for a in 0..3 {
+                        // a held direction stays where it is: its support takes the correction
+                        if self.fixed[i][a] && self.carried[i].is_none() {
+                            self.x[i][a] = x_pred[i][a];
+                            self.v[i][a] = v_pred[i][a];
+                        }
                         kinematic[i][a] = self.mass[i] * (self.v[i][a] - v_pred[i][a]) / dv_scale;
                     }
                 }

@@ -565,7 +565,12 @@ impl Scene {
             });
         }
         let mut solver = Solver::new(x.clone(), elements, &point)?;
-        solver.fixed = fixed;
+        // the parts' held directions, beside what the solver holds itself (axis nodes)
+        for (held, part) in solver.fixed.iter_mut().zip(&fixed) {
+            for a in 0..3 {
+                held[a] |= part[a];
+            }
+        }
         solver.v = velocity;
         // rigid parts that move: bodies carrying the part's nodes (after the analytical bodies,
         // whose indices are the contact model's)
