@@ -124,9 +124,13 @@ fn penalty(@builtin(workgroup_id) wg: vec3<u32>,
     var dt_approach = NO_LIMIT;
     let area = state[i].tangential_area.w;
     o.dissipation = state[i].history.x;
-    // no partner, or beside a free edge of the master (off its facets): no contact
-    if (hit.facet == NO_FACET || (hit.candidates & HIT_BESIDE_FREE_EDGE) != 0u) {
+    // no partner, or beside a free edge of the master (off its facets): no contact; a node
+    // beside it and below the facet's plane is remembered as behind the edge (history.y)
+    let beside = (hit.candidates & HIT_BESIDE_FREE_EDGE) != 0u;
+    if (hit.facet == NO_FACET || beside) {
         state[i].tangential_area = vec4<f32>(0.0, 0.0, 0.0, area);
+        let behind = select(0.0, 1.0, beside && hit.point_gap.w < 0.0);
+        state[i].history = vec4<f32>(o.dissipation, behind, 0.0, 0.0);
         out[i] = o;
         return;
     }
@@ -155,6 +159,13 @@ fn penalty(@builtin(workgroup_id) wg: vec3<u32>,
         // small sliding: the anchor's tangent plane
         nrm = hit.normal_dist.xyz;
         gap = hit.point_gap.w;
+    }
+    // a node that came from behind a free edge, still below the surface, stays behind it until
+    // it rises above: pushing it out would launch it with energy it never had
+    if (state[i].history.y != 0.0 && gap < 0.0) {
+        state[i].tangential_area = vec4<f32>(0.0, 0.0, 0.0, area);
+        out[i] = o;
+        return;
     }
     let m_eff = 1.0 / (1.0 / nodes[s].w + inv_mm);
     var k = pp.stiffness;

@@ -47,7 +47,7 @@ struct PenaltyParams {
 // Rust twin: SlaveState, 32 bytes.
 struct SlaveState {
     tangential_area: vec4<f32>,   // carried friction force (xyz), tributary area (w)
-    history: vec4<f32>,           // accumulated frictional dissipation (x)
+    history: vec4<f32>,           // accumulated frictional dissipation (x), behind a free edge (y)
 }
 
 // Rust twin: ContactOut, 64 bytes.

@@ -78,9 +78,14 @@ fn vertex_free(a: u32) -> bool {
     return false;
 }
 
+// The master's extension zone beyond its free edges, a fraction of the facet's size (Abaqus'
+// EXTENSION ZONE, default 0.1; Rust twin: cpu::common::EXTENSION_ZONE).
+const EXTENSION_ZONE: f32 = 0.1;
+
 // The slave at p, nearest to facet f at point c (weights w, unit normal nrm), is beside a free
 // boundary of the master: c lies on an unshared edge, or on a corner of one, and p is off to
-// the side of it (more than 1e-3 of the facet's size from the normal through c).
+// the side of it by more than the extension zone (EXTENSION_ZONE of the facet's size from the
+// normal through c).
 fn beside_free_edge(f: u32, fac: vec4<u32>, w: vec4<f32>, p: vec3<f32>, c: vec3<f32>, nrm: vec3<f32>) -> bool {
     let n = facet_node_count(fac);
     var on = 0u;
@@ -99,7 +104,7 @@ fn beside_free_edge(f: u32, fac: vec4<u32>, w: vec4<f32>, p: vec3<f32>, c: vec3<
     }
     let d = p - c;
     let lateral = d - dot(d, nrm) * nrm;
-    if (dot(lateral, lateral) <= 1e-6 * h * h) { return false; }
+    if (dot(lateral, lateral) <= EXTENSION_ZONE * EXTENSION_ZONE * h * h) { return false; }
     if (on == 1u) { return vertex_free(a); }
     if (on == 2u && n > 2u) { return !edge_shared(f, a, b); }
     return false;

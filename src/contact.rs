@@ -208,6 +208,9 @@ struct KinematicRun {
     law: Option<PressureOverclosure>,
     /// Small or infinitesimal sliding: corrections along the anchors' planes.
     anchored: bool,
+    /// Per slave (pass one, then the balanced pass's): behind a free edge of the master
+    /// ([`facets_from`]).
+    behind: (Vec<bool>, Vec<bool>),
     output: PairOutput,
 }
 
@@ -381,9 +384,14 @@ impl Contact {
                         }
                         None => None,
                     };
+                    let behind = (
+                        vec![false; search.slaves().len()],
+                        vec![false; back.as_ref().map_or(0, |b| b.0.slaves().len())],
+                    );
                     kinematic.push(KinematicRun {
                         id,
                         search,
+                        behind,
                         back,
                         master,
                         slaves: slaves.clone(),
@@ -632,9 +640,9 @@ impl Contact {
         let masses = &self.masses;
         for kr in &mut self.kinematic {
             let result = kr.search.step(x)?;
-            let facets = facets_from(&result);
+            let facets = facets_from(&result, &mut kr.behind.0);
             let back_facets = match &mut kr.back {
-                Some((search, _, _)) => Some(facets_from(&search.step(x)?)),
+                Some((search, _, _)) => Some(facets_from(&search.step(x)?, &mut kr.behind.1)),
                 None => None,
             };
             let back = kr

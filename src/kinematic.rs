@@ -264,12 +264,27 @@ fn correct(
     out
 }
 
-/// The facet of each slave from a search result.
-pub fn facets_from(search: &SearchResult) -> Vec<Option<u32>> {
-    // a slave beside a free edge of the master is off its facets: no contact
+/// The facet of each slave from a search result. A slave beside a free edge of the master is
+/// off its facets: no contact. `behind` (one flag per slave, kept between increments) marks a
+/// slave that was beside a free edge below the facet's plane: while it stays below the surface
+/// it gets no contact either (it came from behind the edge, and correcting it onto the surface
+/// would launch it); it clears when the slave rises above.
+pub fn facets_from(search: &SearchResult, behind: &mut [bool]) -> Vec<Option<u32>> {
     search
         .contacts()
-        .map(|c| c.filter(|c| !c.beside_free_edge).map(|c| c.facet))
+        .zip(behind.iter_mut())
+        .map(|(c, behind)| {
+            let c = c?;
+            if c.beside_free_edge {
+                *behind = c.gap < 0.0;
+                return None;
+            }
+            if *behind && c.gap < 0.0 {
+                return None;
+            }
+            *behind = false;
+            Some(c.facet)
+        })
         .collect()
 }
 

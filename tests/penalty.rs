@@ -978,8 +978,8 @@ fn balanced_pairs_weight_both_passes() {
 }
 
 /// §6 edges: a node beside a free edge or corner of the master (off its facets, below its
-/// plane) is not in contact — the master ends there — while one over the facet or exactly over
-/// the edge is; an interior fold (a valley: two facets sharing an edge) still holds a node in
+/// plane) by more than the extension zone (0.1 of a facet) is not in contact — the master ends
+/// there — while one over the facet, exactly over the edge or within the zone is; an interior fold (a valley: two facets sharing an edge) still holds a node in
 /// the wedge behind it, nearest to the shared edge and beside both facets. Penalty on every
 /// device, kinematic with the CPU and GPU searches.
 #[test]
@@ -1005,12 +1005,14 @@ fn nodes_beside_a_free_edge_are_not_in_contact() {
     let probes = [
         ([0.5, 0.5, -0.01], true),      // over the flat facet
         ([0.0, 0.5, -0.01], true),      // exactly over the free edge x = 0
-        ([-0.05, 0.5, -0.01], false),   // beside the free edge x = 0
-        ([0.5, -0.05, -0.01], false),   // beside the free edge y = 0
-        ([-0.05, -0.05, -0.01], false), // beside the free corner (0, 0)
+        ([-0.15, 0.5, -0.01], false),   // beside the free edge x = 0
+        ([0.5, -0.15, -0.01], false),   // beside the free edge y = 0
+        ([-0.15, -0.15, -0.01], false), // beside the free corner (0, 0)
         ([1.01, 0.5, -0.02], true),     // behind the valley, nearest its shared edge: held
+        ([-0.09, 0.5, -0.01], true),    // within the extension zone of the edge x = 0
+        ([-0.06, -0.06, -0.01], true),  // within the extension zone of the corner
     ];
-    let r = m.add_nodes(&probes.map(|p| p.0), &[1.0; 6]).unwrap();
+    let r = m.add_nodes(&probes.map(|p| p.0), &[1.0; 8]).unwrap();
     let set = m.add_node_set(&r.to_vec()).unwrap();
     let kin_set = m.add_node_set(&r.to_vec()).unwrap();
     let pen = m
@@ -1033,7 +1035,7 @@ fn nodes_beside_a_free_edge_are_not_in_contact() {
     let sk = mk
         .add_surface(Surface::quads(&[[0, 1, 2, 3], [1, 4, 5, 2]]))
         .unwrap();
-    let rk = mk.add_nodes(&probes.map(|p| p.0), &[1.0; 6]).unwrap();
+    let rk = mk.add_nodes(&probes.map(|p| p.0), &[1.0; 8]).unwrap();
     let setk = mk.add_node_set(&rk.to_vec()).unwrap();
     let _ = kin_set;
     mk.add_pair(

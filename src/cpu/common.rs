@@ -117,10 +117,18 @@ pub fn vertex_free(facets: &[[u32; 4]], adjacency: &[u32], a: u32) -> bool {
     false
 }
 
+/// The master surface's extension zone beyond its free edges and corners, a fraction of the
+/// facet's size (longest edge): Abaqus/Explicit's `EXTENSION ZONE` of contact pairs, default
+/// 0.1. A slave within it is on the edge (in contact with the facet extended), not beside it,
+/// so that a node pressed onto a master that ends under it — which bulges out by its Poisson
+/// strain, or sits there to round-off — is neither released nor launched when it moves back
+/// (WGSL: `EXTENSION_ZONE`).
+pub const EXTENSION_ZONE: f32 = 0.1;
+
 /// The slave at `p`, nearest to facet `f` (nodes `fac`) at point `c` with weights `w` and unit
 /// normal `nrm`, is beside a free boundary of the master: `c` lies on an unshared edge or on a
-/// corner of one, and `p` is off to the side of it by more than 1e-3 of the facet's size
-/// (WGSL: `beside_free_edge`).
+/// corner of one, and `p` is off to the side of it by more than the extension zone
+/// ([`EXTENSION_ZONE`] of the facet's size) (WGSL: `beside_free_edge`).
 #[allow(clippy::too_many_arguments)]
 pub fn beside_free_edge(
     nodes: &[[f32; 4]],
@@ -158,7 +166,7 @@ pub fn beside_free_edge(
     }
     let d = p - c;
     let lateral = d - nrm * d.dot(nrm);
-    if lateral.length2() <= 1e-6 * h * h {
+    if lateral.length2() <= EXTENSION_ZONE * EXTENSION_ZONE * h * h {
         return false;
     }
     match on {

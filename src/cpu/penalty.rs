@@ -160,10 +160,15 @@ pub fn penalty(
             let (mut dt_stable, mut dt_approach) = (NO_LIMIT, NO_LIMIT);
             let area = slave_state.tangential_area[3];
             o.dissipation = slave_state.history[0];
-            if hit.facet == NO_FACET
-                || hit.candidates & crate::search::layout::HIT_BESIDE_FREE_EDGE != 0
-            {
+            let beside = hit.candidates & crate::search::layout::HIT_BESIDE_FREE_EDGE != 0;
+            if hit.facet == NO_FACET || beside {
                 slave_state.tangential_area = [0.0, 0.0, 0.0, area];
+                let behind = if beside && hit.point_gap[3] < 0.0 {
+                    1.0
+                } else {
+                    0.0
+                };
+                slave_state.history = [o.dissipation, behind, 0.0, 0.0];
                 *slot = o;
                 return;
             }
@@ -198,6 +203,11 @@ pub fn penalty(
             if pp.flags & PENALTY_ANCHORED != 0 {
                 nrm = V3::new(hit.normal_dist[0], hit.normal_dist[1], hit.normal_dist[2]);
                 gap = hit.point_gap[3];
+            }
+            if slave_state.history[1] != 0.0 && gap < 0.0 {
+                slave_state.tangential_area = [0.0, 0.0, 0.0, area];
+                *slot = o;
+                return;
             }
             let m_eff = 1.0 / (1.0 / nodes[s as usize][3] + inv_mm);
             let mut k = pp.stiffness;

@@ -102,7 +102,9 @@ const _: () = assert!(std::mem::size_of::<PenaltyParams>() == 208);
 pub struct SlaveState {
     /// Friction force carried over (xyz) and the node's tributary area (w).
     pub tangential_area: [f32; 4],
-    /// Frictional dissipation accumulated since the start (x); y, z, w unused.
+    /// Frictional dissipation accumulated since the start (x); 1 in y while the node is behind a
+    /// free edge of the master (it was beside the edge below the facet's plane and has not risen
+    /// above the surface since: no contact, so that it is not launched out); z, w unused.
     pub history: [f32; 4],
 }
 const _: () = assert!(std::mem::size_of::<SlaveState>() == 32);
