@@ -906,3 +906,395 @@ divisions = [1, 1, 1]
     // a fixed increment: the first estimate is already the whole run
     assert_eq!(seen[0].estimated, s.increments as u64);
 }
+
+/// The axisymmetric disc of `the_axis_node_carries_the_same_pressure_as_its_neighbours` (radius
+/// 1, height 0.5, pressed by a rigid flat from below) as a mesh part: `mesh` is the part's
+/// lines after `shape = "mesh"` (file, faces), `bottom`/`top` its face names.
+fn disc_from_file(mesh: &str, bottom: &str, top: &str) -> String {
+    format!(
+        r#"
+title = "axisymmetric disc from a file"
+[run]
+end_time = 40.0
+output_every = 100
+[[material]]
+name = "m"
+young = 1.0
+poisson = 0.3
+density = 1.0
+[[part]]
+name = "disc"
+shape = "mesh"
+material = "m"
+{mesh}
+[[part]]
+name = "flat"
+shape = "line"
+origin = [-0.5, -0.0005, 0.0]
+size = [2.0, 0.0, 0.0]
+divisions = [4, 0, 0]
+motion = "velocity"
+velocity = [0.0, 2.5e-4, 0.0]
+mass = 1.0
+[[boundary]]
+part = "disc"
+face = "{top}"
+fix = ["y"]
+[[contact]]
+slave = "disc"
+slave_face = "{bottom}"
+master = "flat"
+master_face = "y+"
+stiffness_per_area = 1000.0
+damping = 0.1
+"#
+    )
+}
+
+/// An Abaqus deck of CAX4R quadrilaterals (or CPE4R) on [0, 1] × [0, 0.5], 8 × 4 cells, with
+/// its bottom and top faces as surfaces.
+fn disc_deck(kind: &str) -> String {
+    let (nx, ny) = (8, 4);
+    let mut s = String::from("*HEADING\n disc\n*NODE\n");
+    let id = |i: usize, j: usize| 1 + j * (nx + 1) + i;
+    for j in 0..=ny {
+        for i in 0..=nx {
+            s += &format!(
+                "{}, {}, {}\n",
+                id(i, j),
+                i as f64 / nx as f64,
+                0.5 * j as f64 / ny as f64
+            );
+        }
+    }
+    s += &format!("*ELEMENT, TYPE={kind}, ELSET=DISC\n");
+    for j in 0..ny {
+        for i in 0..nx {
+            s += &format!(
+                "{}, {}, {}, {}, {}\n",
+                1 + j * nx + i,
+                id(i, j),
+                id(i + 1, j),
+                id(i + 1, j + 1),
+                id(i, j + 1)
+            );
+        }
+    }
+    s += "*ELSET, ELSET=BOTTOM_EL, GENERATE\n1, 8, 1\n*ELSET, ELSET=TOP_EL, GENERATE\n25, 32, 1\n";
+    s += "*SURFACE, NAME=BOTTOM\nBOTTOM_EL, S1\n*SURFACE, NAME=TOP\nTOP_EL, S3\n";
+    s
+}
+
+/// Issue 17: axisymmetric meshes from files. A Gmsh 2D mesh part declared `axisymmetric` and an
+/// Abaqus deck of CAX4R elements press a disc onto a rigid flat: every contact node carries the
+/// exact uniaxial-stress pressure within 3 % (what is left of the loading's dynamics; the
+/// generated axisymmetric rectangle does the same, the node on the axis included), which plane
+/// strain (the same deck with CPE4R) misses by 1/(1 − ν²) − 1 ≈ 10 %.
+/// A CAX deck in a 3D scene and an axisymmetric element left of the axis are named.
+#[test]
+fn axisymmetric_parts_from_gmsh_and_abaqus_files() {
+    let dir = std::env::temp_dir().join(format!("abut-axi-files-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    std::fs::copy(
+        concat!(env!("CARGO_MANIFEST_DIR"), "/tests/data/gmsh/rect_2d.msh"),
+        dir.join("rect_2d.msh"),
+    )
+    .unwrap();
+    std::fs::write(dir.join("cax.inp"), disc_deck("CAX4R")).unwrap();
+    std::fs::write(dir.join("cpe.inp"), disc_deck("CPE4R")).unwrap();
+    let exact = 1.0 * (40.0 * 2.5e-4 - 0.0005) / 0.5 / (1.0 + 2.0 / 1000.0);
+    let cases = [
+        (
+            "file = \"rect_2d.msh\"\naxisymmetric = true",
+            "bottom",
+            "top",
+            1.0,
+        ),
+        ("file = \"cax.inp\"", "BOTTOM", "TOP", 1.0),
+        (
+            "file = \"cpe.inp\"\ndimension = 2",
+            "BOTTOM",
+            "TOP",
+            1.0 / (1.0 - 0.09),
+        ),
+    ];
+    for (mesh, bottom, top, factor) in cases {
+        let mut scene = Scene::parse(&disc_from_file(mesh, bottom, top)).unwrap();
+        scene.base_dir = Some(dir.clone());
+        let s = run(&scene, &Device::cpu(), None).unwrap();
+        assert!(
+            s.contact_nodes.len() >= 9,
+            "{mesh}: {} nodes",
+            s.contact_nodes.len()
+        );
+        // axisymmetric: the node on the axis is in contact and stays on it (plane strain: the
+        // node at x = 0 moves out with the Poisson strain)
+        let axisymmetric = factor == 1.0;
+        assert_eq!(
+            s.contact_nodes.iter().any(|n| n.position[0] == 0.0),
+            axisymmetric,
+            "{mesh}: the node at x = 0"
+        );
+        if axisymmetric {
+            for n in &s.contact_nodes {
+                assert!(
+                    (n.pressure / exact - 1.0).abs() < 0.03,
+                    "{mesh}: node at r = {:.3}: pressure {} against {exact}",
+                    n.position[0],
+                    n.pressure
+                );
+            }
+        } else {
+            // plane strain: the mean pressure is the plane-strain value, 10 % above
+            let mean = s.contact_nodes.iter().map(|n| n.pressure).sum::<f64>()
+                / s.contact_nodes.len() as f64;
+            assert!(
+                (mean / (factor * exact) - 1.0).abs() < 0.03 && mean > 1.05 * exact,
+                "{mesh}: mean pressure {mean} against {}",
+                factor * exact
+            );
+        }
+    }
+    // a CAX deck needs a 2D scene
+    let mut scene = Scene::parse(
+        &disc_from_file("file = \"cax.inp\"\ndimension = 3", "BOTTOM", "TOP")
+            .replace("shape = \"line\"", "shape = \"plate\"")
+            .replace("size = [2.0, 0.0, 0.0]", "size = [2.0, 2.0, 0.0]")
+            .replace("divisions = [4, 0, 0]", "divisions = [4, 4, 0]")
+            .replace("master_face = \"y+\"", "master_face = \"z+\""),
+    )
+    .unwrap();
+    scene.base_dir = Some(dir.clone());
+    let e = run(&scene, &Device::cpu(), None).unwrap_err().to_string();
+    assert!(e.contains("CAX") && e.contains("2D scene"), "{e}");
+    // an axisymmetric element left of the axis
+    std::fs::write(
+        dir.join("left.inp"),
+        disc_deck("CAX4R").replace("\n1, 0, 0\n", "\n1, -0.1, 0\n"),
+    )
+    .unwrap();
+    let e = abut::io::inp::read(&dir.join("left.inp"))
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("element 1") && e.contains("x = -0.1"), "{e}");
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// Issue 17: Gmsh meshes without physical groups as surfaces — the boundary of a volume mesh,
+/// the triangles of a surface mesh (its curve lines left out) and the segments bounding a
+/// plane mesh — through `MeshData::outer_surface` and a scene's face "boundary".
+#[test]
+fn gmsh_meshes_without_groups_give_surfaces() {
+    use abut::io::gmsh;
+    use abut::model::Facet;
+    let data = |f: &str| format!("{}/tests/data/gmsh/{f}", env!("CARGO_MANIFEST_DIR"));
+    // drop the physical groups: the $PhysicalNames section and every entity's tags
+    let strip = |text: &str| -> String {
+        let mut out = String::new();
+        let mut skip = false;
+        for line in text.lines() {
+            if line == "$PhysicalNames" {
+                skip = true;
+            }
+            if !skip {
+                out += line;
+                out.push('\n');
+            }
+            if line == "$EndPhysicalNames" {
+                skip = false;
+            }
+        }
+        out
+    };
+    for (file, dim) in [
+        ("box_tets.msh", 3),
+        ("rect_2d.msh", 2),
+        ("plate_quads.msh", 3),
+    ] {
+        let with = gmsh::read(std::path::Path::new(&data(file)), dim).unwrap();
+        let text = strip(&std::fs::read_to_string(data(file)).unwrap());
+        let without = gmsh::parse(text.as_bytes(), file, dim).unwrap();
+        let surface = without.outer_surface().unwrap();
+        assert!(!surface.is_empty(), "{file}");
+        match file {
+            // a volume: its free faces, outward (the same as the groups' union for the box)
+            "box_tets.msh" => {
+                assert_eq!(surface, with.boundary(None));
+                assert!(surface.iter().all(|f| matches!(f, Facet::Triangle(_))));
+            }
+            // a plane mesh: the segments around it
+            "rect_2d.msh" => {
+                assert!(surface.iter().all(|f| matches!(f, Facet::Segment(_))));
+                let length: f64 = surface
+                    .iter()
+                    .map(|f| {
+                        let n = f.nodes();
+                        let (a, b) = (
+                            without.positions[n[0] as usize],
+                            without.positions[n[1] as usize],
+                        );
+                        ((b[0] - a[0]).powi(2) + (b[1] - a[1]).powi(2)).sqrt()
+                    })
+                    .sum();
+                assert!((length - 3.0).abs() < 1e-9, "perimeter {length}");
+            }
+            // a surface mesh: its quadrilaterals, not its curve lines
+            _ => {
+                assert!(surface.iter().all(|f| matches!(f, Facet::Quad(_))));
+                let quads = without
+                    .elements
+                    .iter()
+                    .filter(|e| e.nodes.len() == 4)
+                    .count();
+                assert_eq!(surface.len(), quads);
+            }
+        }
+    }
+    // in a scene: a group-less box of tetrahedra dropped on a plate, face "boundary"
+    let dir = std::env::temp_dir().join(format!("abut-nogroups-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    std::fs::write(
+        dir.join("box.msh"),
+        strip(&std::fs::read_to_string(data("box_tets.msh")).unwrap()),
+    )
+    .unwrap();
+    let text = r#"
+title = "box without groups"
+[run]
+end_time = 0.02
+gravity = [0.0, 0.0, -9.81]
+[[material]]
+name = "m"
+young = 1.0e6
+poisson = 0.3
+density = 1000.0
+[[part]]
+name = "box"
+shape = "mesh"
+material = "m"
+file = "box.msh"
+origin = [0.0, 0.0, 0.001]
+velocity = [0.0, 0.0, -0.5]
+[[part]]
+name = "floor"
+shape = "plate"
+origin = [-1.0, -1.0, 0.0]
+size = [3.0, 3.0, 0.0]
+divisions = [6, 6, 0]
+[[contact]]
+slave = "box"
+slave_face = "boundary"
+master = "floor"
+master_face = "z+"
+"#;
+    let mut scene = Scene::parse(text).unwrap();
+    scene.base_dir = Some(dir.clone());
+    let s = run(&scene, &Device::cpu(), None).unwrap();
+    assert!(
+        s.contact_start > 0.0 && s.impulse > 0.0,
+        "the box lands: {}",
+        s.impulse
+    );
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// Issue 17: loads on rigid bodies. A free analytical rigid body and a free rigid plate part,
+/// each pulled by a constant load, accelerate at load/mass (the history's body and part
+/// velocity columns), and a moment spins the analytical one at moment/inertia; a load on a
+/// fixed body or with a fix on a rigid part is refused by name.
+#[test]
+fn loads_on_free_rigid_bodies() {
+    let text = r#"
+title = "pulled bodies"
+[run]
+end_time = 0.5
+dt = 1.0e-3
+[[rigid]]
+name = "ball"
+surface = "sphere"
+point = [0.0, 0.0, 5.0]
+radius = 0.5
+mass = 2.0
+inertia = [[4.0, 0.0, 0.0], [0.0, 4.0, 0.0], [0.0, 0.0, 4.0]]
+load = [1.0, 0.0, 0.0]
+moment = [0.0, 0.0, 2.0]
+[[part]]
+name = "plate"
+shape = "plate"
+origin = [0.0, 0.0, 0.0]
+size = [1.0, 1.0, 0.0]
+divisions = [2, 2, 0]
+motion = "free"
+mass = 4.0
+[[boundary]]
+part = "plate"
+face = "all"
+load = [0.0, 0.0, 8.0]
+"#;
+    let dir = std::env::temp_dir().join(format!("abut-body-loads-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    let s = run(&Scene::parse(text).unwrap(), &Device::cpu(), Some(&dir)).unwrap();
+    let csv = std::fs::read_to_string(dir.join("history.csv")).unwrap();
+    let mut lines = csv.lines();
+    let head: Vec<&str> = lines.next().unwrap().split(',').collect();
+    let last: Vec<f64> = lines
+        .last()
+        .unwrap()
+        .split(',')
+        .map(|x| x.parse().unwrap())
+        .collect();
+    let col = |name: &str| {
+        head.iter()
+            .position(|h| *h == name)
+            .unwrap_or_else(|| panic!("{name}"))
+    };
+    let t = last[0];
+    // F/m·t: the ball at 0.5 m/s², the plate at 2 m/s² (half steps: within one increment's worth)
+    assert!(
+        (last[col("ball.vx")] - 0.5 * t).abs() < 0.5 * 1e-3 * 2.0,
+        "ball {}",
+        last[col("ball.vx")]
+    );
+    assert!(
+        (last[col("plate.vz")] - 2.0 * t).abs() < 2.0 * 1e-3 * 2.0,
+        "plate {}",
+        last[col("plate.vz")]
+    );
+    assert!(last[col("plate.vx")].abs() < 1e-12 && last[col("ball.vz")].abs() < 1e-12);
+    // the work of the loads is booked: kinetic energy equals the external work
+    assert!(s.energy_balance_error < 1e-3, "{}", s.energy_balance_error);
+    // the moment: ω = M/I·t = 0.5·t about z gives the ball's rotational energy ½·I·ω²
+    let ke_ball_translation = 0.5 * 2.0 * (0.5 * t).powi(2);
+    let ke_ball_rotation = 0.5 * 4.0 * (0.5 * t).powi(2);
+    let ke_plate = 0.5 * 4.0 * (2.0 * t).powi(2);
+    let expected = ke_ball_translation + ke_ball_rotation + ke_plate;
+    assert!(
+        (s.kinetic / expected - 1.0).abs() < 0.01,
+        "{} against {expected}",
+        s.kinetic
+    );
+    let _ = std::fs::remove_dir_all(&dir);
+    for (bad, key) in [
+        (
+            text.replace(
+                "load = [1.0, 0.0, 0.0]",
+                "load = [1.0, 0.0, 0.0]\nmotion = \"fixed\"",
+            ),
+            "rigid.load",
+        ),
+        (
+            text.replace("motion = \"free\"", "motion = \"fixed\""),
+            "boundary.part",
+        ),
+        (
+            text.replace(
+                "load = [0.0, 0.0, 8.0]",
+                "load = [0.0, 0.0, 8.0]\nfix = [\"x\"]",
+            ),
+            "boundary.part",
+        ),
+    ] {
+        let e = Scene::parse(&bad).unwrap_err().to_string();
+        assert!(e.contains(key), "{key}: {e}");
+    }
+}

@@ -400,8 +400,9 @@ impl Solver {
         for (k, b) in self.bodies.iter_mut().enumerate() {
             let (fp, mp) = body_pen[k];
             let (fl, ml) = b.resultant(&self.x, &self.loads);
+            let ml = [0, 1, 2].map(|a| ml[a] + b.moment[a]);
             let g = self.gravity.map(|g| g * b.mass);
-            let f_ext = [0, 1, 2].map(|a| fl[a] + g[a]);
+            let f_ext = [0, 1, 2].map(|a| fl[a] + g[a] + b.load[a]);
             let moving = b.motion == BodyMotion::Free;
             body_ext[k] = if moving {
                 (f_ext, ml)

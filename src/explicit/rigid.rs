@@ -37,6 +37,11 @@ pub struct SolverBody {
     pub locked: [bool; 3],
     /// Rotation held (the angular velocity stays zero).
     pub rotation_locked: bool,
+    /// A force on the body at its reference point, model force units (beside the loads on the
+    /// nodes it carries); free bodies only.
+    pub load: [f64; 3],
+    /// A moment on the body, model force × length units; free bodies only.
+    pub moment: [f64; 3],
 }
 
 pub(crate) fn v3(a: [f64; 3]) -> V3<f64> {
@@ -156,6 +161,8 @@ impl SolverBody {
             offsets,
             locked: [false; 3],
             rotation_locked: false,
+            load: [0.0; 3],
+            moment: [0.0; 3],
         })
     }
 

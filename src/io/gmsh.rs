@@ -229,6 +229,7 @@ pub fn parse(bytes: &[u8], file: &str, dim: u32) -> Result<MeshData> {
                 kind,
                 nodes: nodes.clone(),
                 label: el.element_tag,
+                axisymmetric: false,
             });
             for g in &groups {
                 mesh.element_sets.entry(g.clone()).or_default().push(e);

@@ -226,22 +226,32 @@ fn only(l: &Line, kw: &str, opts: &BTreeMap<String, String>, allowed: &[&str]) -
     Ok(())
 }
 
-fn element_kind(l: &Line, t: &str) -> Result<ElementKind> {
-    Ok(match t.to_uppercase().as_str() {
+/// The shape of an element type, and whether it is axisymmetric.
+fn element_kind(l: &Line, t: &str) -> Result<(ElementKind, bool)> {
+    let axi = match t.to_uppercase().as_str() {
+        "CAX3" => Some(ElementKind::Tri3In2d),
+        "CAX4" | "CAX4R" => Some(ElementKind::Quad4In2d),
+        _ => None,
+    };
+    if let Some(k) = axi {
+        return Ok((k, true));
+    }
+    let kind = match t.to_uppercase().as_str() {
         "C3D4" => ElementKind::Tet4,
         "C3D8" | "C3D8R" | "C3D8I" => ElementKind::Hex8,
         "S3" | "S3R" | "R3D3" | "M3D3" => ElementKind::Tri3,
         "S4" | "S4R" | "R3D4" | "M3D4" | "M3D4R" => ElementKind::Quad4,
         "CPE3" | "CPS3" => ElementKind::Tri3In2d,
         "CPE4" | "CPE4R" | "CPS4" | "CPS4R" => ElementKind::Quad4In2d,
-        "T2D2" | "R2D2" | "T3D2" => ElementKind::Line2,
+        "T2D2" | "R2D2" | "T3D2" | "RAX2" => ElementKind::Line2,
         other => {
             return Err(err(
                 l,
-                format!("*ELEMENT: TYPE={other} is not supported by abut (C3D4, C3D8(R/I), S3(R), S4(R), R3D3, R3D4, M3D3, M3D4(R), CPE3, CPS3, CPE4(R), CPS4(R), T2D2, R2D2, T3D2)"),
+                format!("*ELEMENT: TYPE={other} is not supported by abut (C3D4, C3D8(R/I), S3(R), S4(R), R3D3, R3D4, M3D3, M3D4(R), CPE3, CPS3, CPE4(R), CPS4(R), CAX3, CAX4(R), T2D2, R2D2, RAX2, T3D2)"),
             ))
         }
-    })
+    };
+    Ok((kind, false))
 }
 
 struct Parser {
@@ -254,6 +264,8 @@ struct Parser {
     densities: BTreeMap<String, f64>,
     /// (elset, material, thickness) of each *SOLID SECTION.
     sections: Vec<(String, String, f64, Line)>,
+    /// Whether the deck's plane elements are axisymmetric (set by the first one).
+    plane_axisymmetric: Option<bool>,
 }
 
 impl Parser {
@@ -320,6 +332,7 @@ fn parse_lines(lines: &[Line]) -> Result<Deck> {
         element_index: BTreeMap::new(),
         densities: BTreeMap::new(),
         sections: Vec::new(),
+        plane_axisymmetric: None,
     };
     let mut i = 0;
     let mut current_material: Option<String> = None;
@@ -384,7 +397,7 @@ fn parse_lines(lines: &[Line]) -> Result<Deck> {
                 let Some(t) = opts.get("TYPE") else {
                     return Err(err(l, "*ELEMENT needs TYPE="));
                 };
-                let kind = element_kind(l, t)?;
+                let (kind, axisymmetric) = element_kind(l, t)?;
                 let n = kind.node_count();
                 let mut set = Vec::new();
                 // an element's nodes may continue on the next line after a trailing comma
@@ -415,12 +428,37 @@ fn parse_lines(lines: &[Line]) -> Result<Deck> {
                     if p.element_index.contains_key(&label) {
                         return Err(err(d, format!("element {label} is defined twice")));
                     }
+                    if axisymmetric {
+                        if let Some(&bad) = nodes
+                            .iter()
+                            .find(|&&n| p.deck.mesh.positions[n as usize][0] < 0.0)
+                        {
+                            return Err(err(
+                                d,
+                                format!(
+                                    "element {label} (TYPE={t}): node {} is at x = {} < 0 (x is the radius of an axisymmetric element)",
+                                    p.deck.mesh.node_labels[bad as usize],
+                                    p.deck.mesh.positions[bad as usize][0]
+                                ),
+                            ));
+                        }
+                    }
+                    if kind.is_planar()
+                        && *p.plane_axisymmetric.get_or_insert(axisymmetric) != axisymmetric
+                    {
+                        return Err(err(
+                            d,
+                            format!("element {label} (TYPE={t}): a deck's plane elements are either all axisymmetric (CAX) or none (CPE, CPS)"),
+                        ));
+                    }
                     let idx = p.deck.mesh.elements.len() as u32;
                     p.element_index.insert(label, idx);
-                    p.deck
-                        .mesh
-                        .elements
-                        .push(MeshElement { kind, nodes, label });
+                    p.deck.mesh.elements.push(MeshElement {
+                        kind,
+                        nodes,
+                        label,
+                        axisymmetric,
+                    });
                     set.push(idx);
                     k += 1;
                 }
@@ -856,9 +894,17 @@ fn parse_lines(lines: &[Line]) -> Result<Deck> {
         };
         for &e in els {
             let el = &p.deck.mesh.elements[e as usize];
+            // an axisymmetric element's mass is per radian: its area times its centroid's radius
+            let x = &p.deck.mesh.positions;
             let m = rho
-                * el.measure(&p.deck.mesh.positions)
-                * if el.kind.is_planar() { *thickness } else { 1.0 };
+                * el.measure(x)
+                * if el.axisymmetric {
+                    el.centroid_radius(x)
+                } else if el.kind.is_planar() {
+                    *thickness
+                } else {
+                    1.0
+                };
             for &n in &el.nodes {
                 masses[n as usize] += m / el.nodes.len() as f64;
             }
@@ -952,7 +998,12 @@ impl Deck {
             let slave = match &self.surfaces[&pair.slave] {
                 SurfaceDef::Nodes(n, a) => out.model.add_node_set_with_areas(n, a)?,
                 SurfaceDef::Faces(f) => {
-                    let (nodes, areas) = crate::io::face_nodes_and_areas(f, &self.mesh.positions);
+                    // an axisymmetric deck's areas are per radian
+                    let (nodes, areas) = if self.mesh.is_axisymmetric() {
+                        crate::io::face_nodes_and_areas_per_radian(f, &self.mesh.positions)
+                    } else {
+                        crate::io::face_nodes_and_areas(f, &self.mesh.positions)
+                    };
                     out.model.add_node_set_with_areas(&nodes, &areas)?
                 }
             };

@@ -78,9 +78,18 @@ pub struct MeshElement {
     pub nodes: Vec<u32>,
     /// The element's label (tag) in the file.
     pub label: u64,
+    /// Declared axisymmetric by its file (Abaqus CAX3, CAX4, CAX4R): x is the radius (≥ 0), y
+    /// the axis, and the element stands for the ring it sweeps (per radian).
+    pub axisymmetric: bool,
 }
 
 impl MeshElement {
+    /// The radius of the element's centroid at `x` (its x coordinate): what an axisymmetric
+    /// element's area is multiplied by for its volume per radian.
+    pub fn centroid_radius(&self, x: &[[f64; 3]]) -> f64 {
+        self.centroid(x).x
+    }
+
     /// Volume (area for planar and shell elements, length for lines) at `x`.
     pub fn measure(&self, x: &[[f64; 3]]) -> f64 {
         let p = |k: usize| V3::from_array(x[self.nodes[k] as usize]);
@@ -127,6 +136,13 @@ pub struct MeshData {
     pub node_sets: BTreeMap<String, Vec<u32>>,
     /// Element sets by name (indices into `elements`).
     pub element_sets: BTreeMap<String, Vec<u32>>,
+}
+
+impl MeshData {
+    /// Whether any element is axisymmetric ([`MeshElement::axisymmetric`]).
+    pub fn is_axisymmetric(&self) -> bool {
+        self.elements.iter().any(|e| e.axisymmetric)
+    }
 }
 
 pub(crate) fn facet_of(nodes: Vec<u32>) -> Facet {
@@ -247,6 +263,42 @@ impl MeshData {
     }
 }
 
+impl MeshData {
+    /// The mesh's surface without naming a group: the free faces of its volume or plane
+    /// elements, outward, when it has any (a body's boundary); else its triangles and
+    /// quadrilaterals as they are (a surface mesh — Gmsh's curve and point elements left out);
+    /// else its lines (a 2D curve). `None` for a mesh of points only.
+    pub fn outer_surface(&self) -> Option<Vec<Facet>> {
+        let body = self.elements.iter().any(|e| {
+            matches!(
+                e.kind,
+                ElementKind::Tet4
+                    | ElementKind::Hex8
+                    | ElementKind::Tri3In2d
+                    | ElementKind::Quad4In2d
+            )
+        });
+        if body {
+            return Some(self.boundary(None));
+        }
+        for kinds in [
+            &[ElementKind::Tri3, ElementKind::Quad4][..],
+            &[ElementKind::Line2][..],
+        ] {
+            let facets: Vec<Facet> = self
+                .elements
+                .iter()
+                .filter(|e| kinds.contains(&e.kind))
+                .map(|e| facet_of(e.nodes.clone()))
+                .collect();
+            if !facets.is_empty() {
+                return Some(facets);
+            }
+        }
+        None
+    }
+}
+
 /// The facets of `faces` that occur once (by their node sets): the boundary of a set of
 /// continuum elements' faces.
 pub fn free_faces(faces: &[Facet]) -> Vec<Facet> {
@@ -298,4 +350,22 @@ pub fn face_nodes_and_areas_scaled(
         area.keys().copied().collect(),
         area.values().copied().collect(),
     )
+}
+
+/// The nodes of the segments in `facets` (increasing) and each one's area per radian about the
+/// y axis (x is the radius): the area its linear shape function carries, ∫ N r ds =
+/// L·(2·r_near + r_far)/6, so that a uniform pressure gives an axisymmetric element's consistent
+/// nodal forces — a node on the axis gets L²/6, and its pressure is the pressure. Facets other
+/// than segments are left out.
+pub fn face_nodes_and_areas_per_radian(facets: &[Facet], x: &[[f64; 3]]) -> (Vec<u32>, Vec<f64>) {
+    let mut area = BTreeMap::<u32, f64>::new();
+    for f in facets {
+        if let Facet::Segment([a, b]) = f {
+            let (xa, xb) = (x[*a as usize], x[*b as usize]);
+            let l = ((xb[0] - xa[0]).powi(2) + (xb[1] - xa[1]).powi(2)).sqrt();
+            *area.entry(*a).or_default() += l * (2.0 * xa[0] + xb[0]) / 6.0;
+            *area.entry(*b).or_default() += l * (xa[0] + 2.0 * xb[0]) / 6.0;
+        }
+    }
+    area.into_iter().unzip()
 }

@@ -54,8 +54,9 @@ enum Grid {
     Facets(Vec<Facet>, &'static str),
     /// Point masses with their slave areas.
     Points(f64),
-    /// A mesh read from a file (node indices local to the part), with a deck's surfaces.
-    Mesh(Box<(MeshData, BTreeMap<String, SurfaceDef>)>),
+    /// A mesh read from a file (node indices local to the part), with a deck's surfaces and
+    /// the thickness of its 2D faces (NaN: axisymmetric, per radian).
+    Mesh(Box<(MeshData, BTreeMap<String, SurfaceDef>, f64)>),
 }
 
 /// A face: its nodes, facets (outward normals) and each node's tributary area.
@@ -207,6 +208,7 @@ impl PartNodes {
             }
             (Grid::Mesh(m), name) => {
                 let (mesh, surfaces) = (&m.0, &m.1);
+                thickness = m.2;
                 let shift = |f: &Facet| match *f {
                     Facet::Segment(s) => Facet::Segment(s.map(|n| n + base)),
                     Facet::Triangle(t) => Facet::Triangle(t.map(|n| n + base)),
@@ -234,12 +236,14 @@ impl PartNodes {
                     .or_else(|| mesh.node_sets.get(&name.to_uppercase()))
                 {
                     lone = Some((n.iter().map(|&k| k + base).collect(), f64::NAN));
+                } else if let (Some(f), "boundary") = (mesh.outer_surface(), name) {
+                    facets = f.iter().map(shift).collect();
                 } else {
                     return Err(Error::BadParameter {
                         name: "face",
                         value: format!("{name} (mesh part {})", self.name),
                         expected:
-                            "a physical group, surface or set of the part's mesh file, or all",
+                            "a physical group, surface or set of the part's mesh file, boundary (the mesh's outer surface) or all",
                     });
                 }
             }
@@ -263,16 +267,7 @@ impl PartNodes {
         // so a uniform pressure gives the element's consistent nodal forces — a node on the axis
         // gets L²/6, not L/2 times the mid radius (L²/4), and its CPRESS is the pressure
         let (nodes, areas) = if thickness.is_nan() {
-            let mut area = std::collections::BTreeMap::<u32, f64>::new();
-            for f in &facets {
-                if let Facet::Segment([a, b]) = f {
-                    let (xa, xb) = (x[*a as usize], x[*b as usize]);
-                    let l = ((xb[0] - xa[0]).powi(2) + (xb[1] - xa[1]).powi(2)).sqrt();
-                    *area.entry(*a).or_default() += l * (2.0 * xa[0] + xb[0]) / 6.0;
-                    *area.entry(*b).or_default() += l * (xa[0] + 2.0 * xb[0]) / 6.0;
-                }
-            }
-            area.into_iter().unzip()
+            crate::io::face_nodes_and_areas_per_radian(&facets, x)
         } else {
             crate::io::face_nodes_and_areas_scaled(&facets, x, &|f| match f {
                 Facet::Segment(_) => thickness,
@@ -466,6 +461,14 @@ impl Scene {
                             .iter()
                             .map(|q| [0, 1, 2].map(|a| q[a] + p.origin[a])),
                     );
+                    let axisymmetric = p.axisymmetric || mesh.is_axisymmetric();
+                    if axisymmetric && !two_d {
+                        return Err(Error::BadParameter {
+                            name: "part.file",
+                            value: format!("{file} (part {})", p.name),
+                            expected: "axisymmetric elements (CAX3, CAX4(R)) in a 2D scene: set dimension = 2 or axisymmetric = true on the part",
+                        });
+                    }
                     if !rigid {
                         let mat = material(self, p);
                         let bad_el = |k: usize| Error::BadParameter {
@@ -475,6 +478,16 @@ impl Scene {
                                 mesh.elements[k].label, file, p.name
                             ),
                             expected: "elements with positive volume or area",
+                        };
+                        let bad_axi = |k: usize| {
+                            Error::BadParameter {
+                            name: "part.file",
+                            value: format!(
+                                "element {} of {} (part {})",
+                                mesh.elements[k].label, file, p.name
+                            ),
+                            expected: "axisymmetric elements with positive area and every node at x ≥ 0 (x is the radius, after the part's origin)",
+                        }
                         };
                         for (k, e) in mesh.elements.iter().enumerate() {
                             let n: Vec<u32> = e.nodes.iter().map(|&i| i + base as u32).collect();
@@ -493,9 +506,16 @@ impl Scene {
                                         vec![[n[0], n[1], n[2]], [n[0], n[2], n[3]]]
                                     };
                                     for t in tris {
-                                        let el = Element::tri3(t, &x, p.thickness, mat)
-                                            .or_else(|| Element::tri3([t[0], t[2], t[1]], &x, p.thickness, mat))
-                                            .ok_or_else(|| bad_el(k))?;
+                                        let el = if axisymmetric {
+                                            // x is the radius: no node left of the axis
+                                            Element::axi3(t, &x, mat)
+                                                .or_else(|| Element::axi3([t[0], t[2], t[1]], &x, mat))
+                                                .ok_or_else(|| bad_axi(k))?
+                                        } else {
+                                            Element::tri3(t, &x, p.thickness, mat)
+                                                .or_else(|| Element::tri3([t[0], t[2], t[1]], &x, p.thickness, mat))
+                                                .ok_or_else(|| bad_el(k))?
+                                        };
                                         elements.push(el);
                                     }
                                 }
@@ -517,7 +537,8 @@ impl Scene {
                             });
                         }
                     }
-                    Grid::Mesh(Box::new((mesh, surfaces)))
+                    let t = if axisymmetric { f64::NAN } else { p.thickness };
+                    Grid::Mesh(Box::new((mesh, surfaces, t)))
                 }
                 _ => {
                     x.extend(&p.points);
@@ -725,6 +746,8 @@ impl Scene {
                     None => body.rotation_locked = true,
                 }
             }
+            body.load = r.load.unwrap_or([0.0; 3]);
+            body.moment = r.moment.unwrap_or([0.0; 3]);
             bodies.push((r.name.clone(), solver.add_body(body)?));
         }
         for (name, body) in meshed_bodies {

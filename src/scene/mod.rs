@@ -25,7 +25,10 @@
 //! name = "left"
 //! shape = "block"          # block | rect | bar | plate | line | arc | sphere | points | mesh
 //! # file = "part.msh"      # mesh parts: Gmsh .msh or Abaqus .inp, faces by physical group,
-//! # rigid = false          #   *SURFACE or set name; deformable (tets / plane elements) or rigid
+//! # rigid = false          #   *SURFACE or set name, or "boundary" (the mesh's outer surface,
+//! #                        #   no group needed); deformable (tets / plane elements) or rigid
+//! # axisymmetric = false   # rect and 2D mesh parts: x is the radius (a deck's CAX3/CAX4(R)
+//! #                        #   elements are axisymmetric without it); axis nodes held radially
 //! material = "rubber"
 //! origin = [0, 0, 0]
 //! size = [10, 2, 2]
@@ -42,8 +45,10 @@
 //! radius = 1.0
 //! mass = 2.0
 //! motion = "free"          # free | fixed | velocity
+//! # load = [0, 0, -1]      # free bodies: a constant force at the point, and a moment
+//! # moment = [0, 0, 0]
 //! [[boundary]]
-//! part = "left"
+//! part = "left"            # a free rigid part takes a load (its body sums it), nothing else
 //! face = "x-"              # x-, x+, y-, y+, z-, z+, all
 //! fix = ["y", "z"]
 //! # displacement = [0, -0.01, 0], ramp = 0.01   # smooth ramp; load = [0, 0, -1]: total force

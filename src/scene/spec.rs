@@ -190,8 +190,10 @@ pub struct PartSpec {
     /// The dimension a "mesh" part is read in (3, or 2 for plane-strain scenes).
     #[serde(default)]
     pub dimension: Option<u32>,
-    /// A "rect" part that is axisymmetric about the y axis (x = radius ≥ 0): its triangles and
-    /// everything measured on it are per radian of circumference (forces, masses, areas).
+    /// A "rect" or 2D "mesh" part that is axisymmetric about the y axis (x = radius ≥ 0): its
+    /// triangles (a mesh's quadrilaterals split in two) and everything measured on it are per
+    /// radian of circumference (forces, masses, areas). A deck's CAX3/CAX4(R) elements make a
+    /// mesh part axisymmetric without it.
     #[serde(default)]
     pub axisymmetric: bool,
     /// How a rigid part (plate, line, arc, sphere, rigid mesh) moves: "fixed" (the default),
@@ -210,7 +212,7 @@ impl PartSpec {
     /// Whether the part belongs in a 2D (plane-strain) scene.
     pub fn is_2d(&self) -> bool {
         matches!(self.shape.as_str(), "rect" | "line" | "arc")
-            || (self.shape == "mesh" && self.dimension == Some(2))
+            || (self.shape == "mesh" && (self.dimension == Some(2) || self.axisymmetric))
     }
 }
 
@@ -247,6 +249,12 @@ pub struct RigidSpec {
     /// "rotation" — for bodies cut by symmetry planes.
     #[serde(default)]
     pub fix: Vec<String>,
+    /// A constant force on a free body at its reference point (model force units).
+    #[serde(default)]
+    pub load: Option<[f64; 3]>,
+    /// A constant moment on a free body (model force × length units).
+    #[serde(default)]
+    pub moment: Option<[f64; 3]>,
 }
 
 /// Fixed, prescribed or loaded nodes: the nodes of a face of a part.
@@ -675,11 +683,13 @@ impl Scene {
                 for (key, v) in [("part.area", p.area), ("part.thickness", p.thickness)] {
                     positive(key, v, &what)?;
                 }
-                if p.axisymmetric && (p.shape != "rect" || p.origin[0] < 0.0) {
+                let axi_shape = (p.shape == "rect" && p.origin[0] >= 0.0)
+                    || (p.shape == "mesh" && p.dimension != Some(3) && !p.rigid);
+                if p.axisymmetric && !axi_shape {
                     return bad(
                         "part.axisymmetric",
                         format!("part {}", p.name),
-                        "only a rect part with origin x ≥ 0 (x is the radius) can be axisymmetric",
+                        "a rect part with origin x ≥ 0 (x is the radius) or a deformable 2D mesh part",
                     );
                 }
                 if let Some(m) = p.motion.as_deref() {
@@ -804,6 +814,18 @@ impl Scene {
                         "must be free, fixed or velocity",
                     );
                 }
+                for (key, v) in [("rigid.load", &b.load), ("rigid.moment", &b.moment)] {
+                    if let Some(v) = v {
+                        finite_values(key, v, &what)?;
+                        if !matches!(b.motion.as_deref(), None | Some("free")) {
+                            return bad(
+                                key,
+                                format!("body {} (motion {:?})", b.name, b.motion),
+                                "a free body (a fixed or moving body is held on its path whatever acts on it)",
+                            );
+                        }
+                    }
+                }
                 Ok(())
             })();
             r.map_err(|error| Located {
@@ -824,11 +846,15 @@ impl Scene {
                     );
                 }
                 if p.is_rigid() {
-                    return bad(
-                        "boundary.part",
-                        b.part.clone(),
-                        "rigid parts are fixed already",
-                    );
+                    // a free rigid part takes loads (its body sums them); nothing else
+                    let free = p.motion.as_deref() == Some("free");
+                    if !free || !b.fix.is_empty() || b.displacement.is_some() || b.load.is_none() {
+                        return bad(
+                            "boundary.part",
+                            b.part.clone(),
+                            "a rigid part takes only a load, and only when it is free (motion = \"free\"); fixed and moving ones are held already",
+                        );
+                    }
                 }
                 for d in b.fix.iter().chain(&b.directions) {
                     if axis_of(d).is_none() {
