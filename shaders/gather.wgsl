@@ -114,15 +114,23 @@ fn scatter_forces(@builtin(workgroup_id) wg: vec3<u32>,
     let n = facet_node_count(fac);
     let sf = pow2(fixed_exponent(status[STATUS_FORCE_SCALE], pp.n_slaves));
     let sr = pow2(fixed_exponent(status[STATUS_ROW_SCALE], pp.n_slaves));
+    let rigid_master = pp.body_slots.x != NO_SLAVE;
     for (var j = 0u; j < n; j++) {
         let w = hit.weights[j];
         let base = 4u * fac[j];
         add_fixed(base, to_fixed(-w * o.force.x, sf));
         add_fixed(base + 1u, to_fixed(-w * o.force.y, sf));
         add_fixed(base + 2u, to_fixed(-w * o.force.z, sf));
-        // a node the contact point does not weigh (w = 0) is not in the spring: no share
-        let share = select(0.0, row_share(o, 1u << (HEAVY_SHIFT + j)), w != 0.0);
+        // a node the contact point does not weigh (w = 0) is not in the spring: no share; a
+        // rigid master's nodes are one body, whose row is its slot's
+        let share = select(0.0, row_share(o, 1u << (HEAVY_SHIFT + j)), w != 0.0 && !rigid_master);
         add_fixed(base + 3u, to_fixed(share, sr));
+    }
+    if (rigid_master) {
+        add_fixed(4u * pp.body_slots.x + 3u, to_fixed(row_share(o, 1u << HEAVY_SHIFT), sr));
+    }
+    if (pp.body_slots.y != NO_SLAVE) {
+        add_fixed(4u * pp.body_slots.y + 3u, to_fixed(row_share(o, HEAVY_SLAVE), sr));
     }
 }
 
@@ -131,13 +139,14 @@ fn gather(@builtin(workgroup_id) wg: vec3<u32>,
           @builtin(num_workgroups) nwg: vec3<u32>,
           @builtin(local_invocation_index) li: u32) {
     let i = folded_id(wg, nwg, li, ITEM_WORKGROUP);
-    if (i >= pp.n_pair_nodes) { return; }
+    if (i >= pp.n_pair_nodes + pp.body_slots.z) { return; }
     let pn = pair_nodes[i];
     var f = vec3<f32>(0.0);
     var row = 0.0;
     if (pn.y != NO_SLAVE) {
         f = out[pn.y].force.xyz;
-        row = row_share(out[pn.y], HEAVY_SLAVE);
+        // a rigid slave part's springs add up in its slot (scatter_forces)
+        if (pp.body_slots.y == NO_SLAVE) { row = row_share(out[pn.y], HEAVY_SLAVE); }
     }
     let inv_f = pow2(-fixed_exponent(status[STATUS_FORCE_SCALE], pp.n_slaves));
     let inv_r = pow2(-fixed_exponent(status[STATUS_ROW_SCALE], pp.n_slaves));
@@ -152,16 +161,24 @@ fn gather(@builtin(workgroup_id) wg: vec3<u32>,
 }
 
 // Adds each pair node's force into the caller's buffer and its bound row into `rows`: one
-// invocation per pair node, and a node is one pair node of a pair, so no two invocations of a
-// dispatch touch the same node (the pairs' passes run one after another: a fixed order).
+// invocation per pair node and rigid part slot, and a node is one pair node of a pair, so no two
+// invocations of a dispatch touch the same node (a part's slot writes its lowest node's row,
+// whose own row is then zero and not written; the pairs' passes run one after another: a fixed
+// order).
 @compute @workgroup_size(64)
 fn add_forces(@builtin(workgroup_id) wg: vec3<u32>,
               @builtin(num_workgroups) nwg: vec3<u32>,
               @builtin(local_invocation_index) li: u32) {
     let i = folded_id(wg, nwg, li, ITEM_WORKGROUP);
-    if (i >= pp.n_pair_nodes) { return; }
+    if (i >= pp.n_pair_nodes + pp.body_slots.z) { return; }
     let node = pair_nodes[i].x;
     let f = forces[i];
-    host_forces[node] = host_forces[node] + vec4<f32>(f.xyz, 0.0);
-    rows[node] = rows[node] + f.w;
+    // a rigid part's slot (after the pair's nodes) carries no force, only its row, to the
+    // part's lowest node, whose own row in the pair is zero: only one of them writes
+    if (i < pp.n_pair_nodes) {
+        host_forces[node] = host_forces[node] + vec4<f32>(f.xyz, 0.0);
+    }
+    if (f.w != 0.0) {
+        rows[node] = rows[node] + f.w;
+    }
 }

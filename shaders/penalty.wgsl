@@ -167,7 +167,17 @@ fn penalty(@builtin(workgroup_id) wg: vec3<u32>,
         out[i] = o;
         return;
     }
-    let m_eff = 1.0 / (1.0 / nodes[s].w + inv_mm);
+    // a rigid side counts as one body: its compliance at the contact point along the normal
+    // (mass and rotational inertia), one share in the node-wise bound
+    var inv_ms = 1.0 / nodes[s].w;
+    if (pp.master_body.w > 0.0) {
+        inv_mm = body_compliance(pp.master_body, pp.master_inv_inertia, hit.point_gap.xyz, nrm);
+        share = vec4<f32>(sqrt(inv_mm), 0.0, 0.0, 0.0);
+    }
+    if (pp.slave_body.w > 0.0) {
+        inv_ms = body_compliance(pp.slave_body, pp.slave_inv_inertia, p, nrm);
+    }
+    let m_eff = 1.0 / (inv_ms + inv_mm);
     var k = pp.stiffness;
     if (pp.stiffness_mode == STIFFNESS_AUTO) {
         k = pp.stiffness * m_eff / (pp.dt_ref * pp.dt_ref);   // stiffness: AUTO_STIFFNESS·scale
@@ -191,7 +201,7 @@ fn penalty(@builtin(workgroup_id) wg: vec3<u32>,
     // node-wise bound: Cauchy–Schwarz weighted 1 at light nodes, share/cut at heavy ones
     var k_row = pp.weight * lv.stiffness;
     if (FRICTION) { k_row *= max(1.0, pp.stick_stiffness); }
-    let share_s = 1.0 / sqrt(nodes[s].w);
+    let share_s = sqrt(inv_ms);
     var top = share_s;
     for (var j = 0u; j < n; j++) { top = max(top, share[j]); }
     let cut = HEAVY_SHARE * top;

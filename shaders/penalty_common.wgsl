@@ -42,6 +42,19 @@ struct PenaltyParams {
     pressure: f32,
     weight: f32,
     table: array<vec4<f32>, 8>,
+    master_body: vec4<f32>,              // rigid master: centre (xyz, kernel frame), 1/mass (w; 0: none)
+    master_inv_inertia: array<vec4<f32>, 3>,  // its inverse inertia, model frame (rows)
+    slave_body: vec4<f32>,               // rigid slave part, as master_body
+    slave_inv_inertia: array<vec4<f32>, 3>,
+    body_slots: vec4<u32>,               // pair-node slots of the master's, slave's part rows; count
+}
+
+// The compliance (1/effective mass) of a rigid body (centre c, inverse mass w; inverse inertia
+// rows j) at point p along unit direction n: 1/M + (r×n)·J·(r×n), r = p − c.
+fn body_compliance(body: vec4<f32>, j: array<vec4<f32>, 3>, p: vec3<f32>, n: vec3<f32>) -> f32 {
+    let u = cross(p - body.xyz, n);
+    let ju = vec3<f32>(dot(j[0].xyz, u), dot(j[1].xyz, u), dot(j[2].xyz, u));
+    return body.w + dot(u, ju);
 }
 
 // Rust twin: SlaveState, 32 bytes.

@@ -15,6 +15,7 @@ use crate::penalty::PenaltySetup;
 use crate::search::{GlobalSearch, SearchResult};
 
 mod resident;
+mod rigid_parts;
 pub use resident::ResidentIo;
 
 /// The penalty executor of one pair, on the same device as its search.
@@ -58,11 +59,17 @@ pub struct StepReport {
     /// Contact force on every model node (model force units), summed over the pairs.
     pub forces: Vec<[f64; 3]>,
     /// The largest increment the penalty springs allow under central differences, with the
-    /// damping: the smaller of each spring's own limit (with the weights' share of the master
-    /// masses; springs within the search radius) and a node-wise bound on all the springs in
-    /// contact together, which covers nodes shared by several springs (a master node under
-    /// several slaves, both passes of a balanced pair) and is the exact limit for one spring
-    /// (to 1e-4); ∞ when there is none. A linear limit: a spring that switches on and off near
+    /// damping: the smaller of each spring's own limit 2/ω, ω² = k·(1/m_s + 1/m_master) — the
+    /// compliance of each side at the contact point along the normal: a node's 1/mass, the
+    /// master nodes' Σ w_j²/m_j by the load-transfer weights, or a rigid part's
+    /// ([`Model::add_rigid_part`]) 1/M + (r×n)·I⁻¹·(r×n) about its centre of mass — for the
+    /// springs within the search radius, and a node-wise bound on all the springs in contact
+    /// together, which covers nodes shared by several springs (a master node under several
+    /// slaves, both passes of a balanced pair) and counts a rigid part's springs as one body's;
+    /// exact for one spring wherever it sits on the facet (to 1e-4; tests/hard_cases.rs), safe
+    /// for many. It bounds the contact springs alone: a node's elements add their own frequency
+    /// ([`crate::combined_increment`]); kinematic pairs (meshed or analytical masters) limit
+    /// no increment. ∞ when there is none. A linear limit: a spring that switches on and off near
     /// it pumps energy into a node pressed into contact, so take at most about half of it for
     /// contact that persists, unless the contact is damped (10 % of critical lets 0.9 of it
     /// hold; tests/scene.rs).
@@ -282,6 +289,8 @@ pub struct Contact {
     host_increments: u64,
     /// Spatial dimension.
     dim: u32,
+    /// The model's rigid parts, followed from the positions of host-array increments.
+    parts: Vec<rigid_parts::RigidPartRun>,
 }
 
 impl Contact {
@@ -442,6 +451,7 @@ impl Contact {
             global_total: 0,
             host_increments: 0,
             dim: model.dim(),
+            parts: rigid_parts::RigidPartRun::all(model),
         })
     }
 

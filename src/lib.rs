@@ -31,8 +31,8 @@ pub use error::{Error, Result};
 pub use kinematic::BodyState;
 pub use model::{
     Analytical, BodyId, Enforce, Facet, Friction, Kinematic, Model, NodeRange, NodeSetId, Pair,
-    PairId, Penalty, PressureOverclosure, RigidBody, RigidPair, RigidPairId, Sliding, Stiffness,
-    Surface, SurfaceId,
+    PairId, Penalty, PressureOverclosure, RigidBody, RigidPair, RigidPairId, RigidPart,
+    RigidPartId, Sliding, Stiffness, Surface, SurfaceId,
 };
 pub use search::layout::IncrementStats;
 pub use search::{ContactPoint, GlobalSearch, SearchResult, SearchStats};

@@ -240,6 +240,17 @@ impl Contact {
     /// increments no longer runs host-array ones ([`Contact::penalty_step`]).
     pub fn encode_increment(&mut self, io: ResidentIo<'_>, dt: f64) -> Result<()> {
         positive_dt(dt)?;
+        if let Some(pr) = self
+            .pairs
+            .iter()
+            .find(|pr| pr.setup.rigid.0.is_some() || pr.setup.rigid.1.is_some())
+        {
+            return Err(Error::BadParameter {
+                name: "encode_increment",
+                value: format!("pair {} on a rigid part", pr.id.0),
+                expected: "host-array increments (penalty_step): a rigid part's position and rotation are read from the host's positions",
+            });
+        }
         match self.mode {
             None => {
                 let x = self.initial_positions.clone();
@@ -270,6 +281,8 @@ impl Contact {
     ) -> Result<()> {
         let dt_ref = *self.dt_ref.get_or_insert(dt);
         let n_nodes = self.n_nodes;
+        let rigid_states: Vec<crate::penalty::RigidState> =
+            self.parts.iter().map(|p| p.state).collect();
         match (io, self.resident.as_mut()) {
             (
                 ResidentIo::Gpu {
@@ -295,7 +308,9 @@ impl Contact {
                 let mut max_dim = u32::MAX;
                 // what may allocate or upload first: bind groups on the caller's buffers, params
                 for (k, pr) in self.pairs.iter_mut().enumerate() {
-                    let pp = pr.setup.params(dt, dt_ref);
+                    let mut pp = pr.setup.params(dt, dt_ref);
+                    pr.setup
+                        .set_rigid(&mut pp, &rigid_states, pr.search.resident_frame());
                     let g = pr.search.gpu_mut().ok_or_else(mixed)?;
                     g.prepare_resident(match pair_x {
                         PairPositions::Gpu(b) => &b[k],
@@ -370,7 +385,9 @@ impl Contact {
                 rows.iter_mut().for_each(|r| *r = 0.0);
                 words[..STATS_RESET_WORDS].copy_from_slice(&stats::reset_image());
                 for (k, pr) in self.pairs.iter_mut().enumerate() {
-                    let pp = pr.setup.params(dt, dt_ref);
+                    let mut pp = pr.setup.params(dt, dt_ref);
+                    pr.setup
+                        .set_rigid(&mut pp, &rigid_states, pr.search.resident_frame());
                     let c = pr.search.cpu_mut().ok_or_else(mixed)?;
                     let (mut status, prep, hits) = c.step_resident(match pair_x {
                         PairPositions::Cpu(x) => &x[k],
@@ -612,6 +629,10 @@ impl Contact {
             .iter()
             .map(|pr| !pr.search.is_anchored() && pr.schedule.surely_local(&pr.search, positions))
             .collect();
+        // the rigid parts where the positions have them
+        for p in &mut self.parts {
+            p.update(positions);
+        }
         let mut mode = self.mode.take();
         let done = self.host_arrays_increment(&mut mode, &xs, &v, &local_only, dt, outputs);
         self.mode = mode;

@@ -102,18 +102,27 @@ pub fn scatter_forces(
         }
         let fac = facet_nodes[hit.facet as usize];
         let n = facet_node_count(fac);
+        let rigid_master = pp.body_slots[0] != NO_SLAVE;
         for (j, &node) in fac.iter().enumerate().take(n) {
             let w = hit.weights[j];
             let base = 4 * node as usize;
             for c in 0..3 {
                 add_fixed(acc, base + c, to_fixed(-w * o.force[c], sf));
             }
-            let share = if w != 0.0 {
+            let share = if w != 0.0 && !rigid_master {
                 row_share(o, 1 << (HEAVY_SHIFT + j as u32))
             } else {
                 0.0
             };
             add_fixed(acc, base + 3, to_fixed(share, sr));
+        }
+        if rigid_master {
+            let slot = 4 * pp.body_slots[0] as usize + 3;
+            add_fixed(acc, slot, to_fixed(row_share(o, 1 << HEAVY_SHIFT), sr));
+        }
+        if pp.body_slots[1] != NO_SLAVE {
+            let slot = 4 * pp.body_slots[1] as usize + 3;
+            add_fixed(acc, slot, to_fixed(row_share(o, HEAVY_SLAVE), sr));
         }
     }
 }
@@ -130,13 +139,16 @@ pub fn gather(
 ) {
     let inv_f = pow2(-fixed_exponent(status[STATUS_FORCE_SCALE], pp.n_slaves));
     let inv_r = pow2(-fixed_exponent(status[STATUS_ROW_SCALE], pp.n_slaves));
-    for (i, pn) in pair_nodes[..pp.n_pair_nodes as usize].iter().enumerate() {
+    let total = (pp.n_pair_nodes + pp.body_slots[2]) as usize;
+    for (i, pn) in pair_nodes[..total].iter().enumerate() {
         let mut f = [0.0f32; 3];
         let mut row = 0.0f32;
         if pn.slave != NO_SLAVE {
             let o = out[pn.slave as usize].force;
             f = [o[0], o[1], o[2]];
-            row = row_share(&out[pn.slave as usize], HEAVY_SLAVE);
+            if pp.body_slots[1] == NO_SLAVE {
+                row = row_share(&out[pn.slave as usize], HEAVY_SLAVE);
+            }
         }
         let mut sum = [0.0f32; 4];
         for (c, s) in sum.iter_mut().enumerate() {
@@ -159,13 +171,17 @@ pub fn add_forces(
     host_forces: &mut [[f32; 4]],
     rows: &mut [f32],
 ) {
-    for i in 0..pp.n_pair_nodes as usize {
+    for i in 0..(pp.n_pair_nodes + pp.body_slots[2]) as usize {
         let node = pair_nodes[i].node as usize;
         let f = forces[i];
-        for a in 0..3 {
-            host_forces[node][a] += f[a];
+        if i < pp.n_pair_nodes as usize {
+            for a in 0..3 {
+                host_forces[node][a] += f[a];
+            }
         }
-        rows[node] += f[3];
+        if f[3] != 0.0 {
+            rows[node] += f[3];
+        }
     }
 }
 

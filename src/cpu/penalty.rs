@@ -116,6 +116,16 @@ fn row_shares(k_row: f32, share_s: f32, share: &[f32]) -> ([f32; 2], u32) {
     ([k_row * q, k_row * q * (heavy / cut)], mask)
 }
 
+/// The compliance (1/effective mass) of a rigid body (centre xyz and inverse mass w `body`,
+/// inverse inertia rows `j`) at point `p` along unit direction `n`: 1/M + (r×n)·J·(r×n)
+/// (WGSL: `body_compliance`).
+pub fn body_compliance(body: [f32; 4], j: &[[f32; 4]; 3], p: V3<f32>, n: V3<f32>) -> f32 {
+    let u = (p - V3::new(body[0], body[1], body[2])).cross(n);
+    let row = |r: [f32; 4]| V3::new(r[0], r[1], r[2]).dot(u);
+    let ju = V3::new(row(j[0]), row(j[1]), row(j[2]));
+    body[3] + u.dot(ju)
+}
+
 /// One "invocation" per slave node (WGSL: `penalty`); `friction` is the FRICTION override.
 #[allow(clippy::too_many_arguments)]
 pub fn penalty(
@@ -209,7 +219,15 @@ pub fn penalty(
                 *slot = o;
                 return;
             }
-            let m_eff = 1.0 / (1.0 / nodes[s as usize][3] + inv_mm);
+            let mut inv_ms = 1.0 / nodes[s as usize][3];
+            if pp.master_body[3] > 0.0 {
+                inv_mm = body_compliance(pp.master_body, &pp.master_inv_inertia, c, nrm);
+                share = [inv_mm.sqrt(), 0.0, 0.0, 0.0];
+            }
+            if pp.slave_body[3] > 0.0 {
+                inv_ms = body_compliance(pp.slave_body, &pp.slave_inv_inertia, p, nrm);
+            }
+            let m_eff = 1.0 / (inv_ms + inv_mm);
             let mut k = pp.stiffness;
             if pp.stiffness_mode == STIFFNESS_AUTO {
                 k = pp.stiffness * m_eff / (pp.dt_ref * pp.dt_ref);
@@ -234,7 +252,7 @@ pub fn penalty(
             if friction {
                 k_row *= pp.stick_stiffness.max(1.0);
             }
-            let (bound, mask) = row_shares(k_row, 1.0 / nodes[s as usize][3].sqrt(), &share[..n]);
+            let (bound, mask) = row_shares(k_row, inv_ms.sqrt(), &share[..n]);
             o.bound_light = bound[0];
             o.bound_heavy = bound[1];
             o.normal_gap = [nrm.x, nrm.y, nrm.z, gap];

@@ -11,7 +11,7 @@ pub use pair::{
     Enforce, Friction, Kinematic, Pair, Penalty, PressureOverclosure, Sliding, Stiffness,
     MAX_TABLE_POINTS,
 };
-pub use rigid::{Analytical, BodyId, RigidBody, RigidPair, RigidPairId};
+pub use rigid::{Analytical, BodyId, RigidBody, RigidPair, RigidPairId, RigidPart, RigidPartId};
 pub use surface::{DegenerateFacet, Facet, MasterSurface, Surface, NO_NODE};
 
 use crate::error::{Error, Result};
@@ -65,6 +65,7 @@ pub struct Model {
     pairs: Vec<Pair>,
     bodies: Vec<RigidBody>,
     rigid_pairs: Vec<RigidPair>,
+    rigid_parts: Vec<RigidPart>,
 }
 
 impl Model {
@@ -89,6 +90,7 @@ impl Model {
             pairs: Vec::new(),
             bodies: Vec::new(),
             rigid_pairs: Vec::new(),
+            rigid_parts: Vec::new(),
         }
     }
 
@@ -249,6 +251,76 @@ impl Model {
         }
         self.rigid_pairs.push(pair);
         Ok(RigidPairId(self.rigid_pairs.len() - 1))
+    }
+
+    /// Declares `nodes` one rigid part of `mass` and `inertia` (about the nodes' centroid, model
+    /// frame at the model's positions): see [`RigidPart`]. Errors: an empty list, a node out of
+    /// range, repeated or already in a rigid part, a mass or inertia a body cannot have.
+    pub fn add_rigid_part(
+        &mut self,
+        nodes: &[u32],
+        mass: f64,
+        inertia: [[f64; 3]; 3],
+    ) -> Result<RigidPartId> {
+        if nodes.is_empty() {
+            return Err(Error::Empty {
+                what: "rigid part".into(),
+            });
+        }
+        rigid::validate_mass_inertia(mass, inertia)?;
+        let mut taken = vec![false; self.positions.len()];
+        for p in &self.rigid_parts {
+            for &n in &p.nodes {
+                taken[n as usize] = true;
+            }
+        }
+        for (k, &n) in nodes.iter().enumerate() {
+            let Some(t) = taken.get_mut(n as usize) else {
+                return Err(Error::IndexOutOfRange {
+                    what: format!("rigid part node {k}"),
+                    index: n as u64,
+                    len: self.positions.len(),
+                });
+            };
+            if *t {
+                return Err(Error::DuplicateNode { node: n });
+            }
+            *t = true;
+        }
+        self.rigid_parts.push(RigidPart {
+            nodes: nodes.to_vec(),
+            mass,
+            inertia,
+        });
+        Ok(RigidPartId(self.rigid_parts.len() - 1))
+    }
+
+    /// All rigid parts, in the order added.
+    pub fn rigid_parts(&self) -> &[RigidPart] {
+        &self.rigid_parts
+    }
+
+    /// The rigid part holding each of `nodes` when they all lie on one; `None` when none does.
+    /// Errors: some but not all do, or they lie on two parts — `what` names the node list.
+    pub(crate) fn rigid_part_of(&self, nodes: &[u32], what: &str) -> Result<Option<usize>> {
+        if self.rigid_parts.is_empty() || nodes.is_empty() {
+            return Ok(None);
+        }
+        let mut part_of = std::collections::HashMap::new();
+        for (k, p) in self.rigid_parts.iter().enumerate() {
+            for &n in &p.nodes {
+                part_of.insert(n, k);
+            }
+        }
+        let first = part_of.get(&nodes[0]).copied();
+        if let Some(&n) = nodes.iter().find(|n| part_of.get(n).copied() != first) {
+            return Err(Error::BadParameter {
+                name: "rigid part",
+                value: format!("{what}: node {} and node {n}", nodes[0]),
+                expected: "a surface or slave set wholly on one rigid part, or on none",
+            });
+        }
+        Ok(first)
     }
 
     /// The rigid body `id`.

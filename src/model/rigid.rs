@@ -114,33 +114,59 @@ pub struct RigidBody {
     pub surface: Analytical,
 }
 
+/// Checks a rigid body's mass (finite, positive) and inertia (symmetric positive definite).
+pub(crate) fn validate_mass_inertia(mass: f64, inertia: [[f64; 3]; 3]) -> Result<()> {
+    if !(mass.is_finite() && mass > 0.0) {
+        return Err(Error::BadParameter {
+            name: "rigid body mass",
+            value: mass.to_string(),
+            expected: "must be finite and positive",
+        });
+    }
+    let i = inertia;
+    let sym = (0..3).all(|a| {
+        (0..3).all(|b| {
+            i[a][b].is_finite()
+                && (i[a][b] - i[b][a]).abs() <= 1e-12 * (i[a][a].abs() + i[b][b].abs())
+        })
+    });
+    let det2 = i[0][0] * i[1][1] - i[0][1] * i[1][0];
+    let det3 = i[0][0] * (i[1][1] * i[2][2] - i[1][2] * i[2][1])
+        - i[0][1] * (i[1][0] * i[2][2] - i[1][2] * i[2][0])
+        + i[0][2] * (i[1][0] * i[2][1] - i[1][1] * i[2][0]);
+    if !(sym && i[0][0] > 0.0 && det2 > 0.0 && det3 > 0.0) {
+        return Err(Error::BadParameter {
+            name: "rigid body inertia",
+            value: format!("{i:?}"),
+            expected: "must be symmetric positive definite",
+        });
+    }
+    Ok(())
+}
+
+/// Id of a rigid part within its [`crate::Model`].
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub struct RigidPartId(pub usize);
+
+/// Mesh nodes that move as one rigid body — a meshed rigid surface that is free, or carried on
+/// the host's rigid body. A penalty spring on its facets (or on its nodes as slaves) sees the
+/// body's mass and rotational inertia at the contact point, which is what sets the spring's
+/// frequency, instead of the nodes' lumped masses; and the springs on one part add up in the
+/// node-wise bound as one body.
+#[derive(Clone, Debug, PartialEq)]
+pub struct RigidPart {
+    /// Its nodes (each in one rigid part at most).
+    pub nodes: Vec<u32>,
+    /// Mass (> 0).
+    pub mass: f64,
+    /// Rotational inertia about the nodes' centroid, in the model frame at the model's
+    /// positions (symmetric positive definite).
+    pub inertia: [[f64; 3]; 3],
+}
+
 impl RigidBody {
     pub(crate) fn validate(&self, dim: u32) -> Result<()> {
-        if !(self.mass.is_finite() && self.mass > 0.0) {
-            return Err(Error::BadParameter {
-                name: "rigid body mass",
-                value: self.mass.to_string(),
-                expected: "must be finite and positive",
-            });
-        }
-        let i = self.inertia;
-        let sym = (0..3).all(|a| {
-            (0..3).all(|b| {
-                i[a][b].is_finite()
-                    && (i[a][b] - i[b][a]).abs() <= 1e-12 * (i[a][a].abs() + i[b][b].abs())
-            })
-        });
-        let det2 = i[0][0] * i[1][1] - i[0][1] * i[1][0];
-        let det3 = i[0][0] * (i[1][1] * i[2][2] - i[1][2] * i[2][1])
-            - i[0][1] * (i[1][0] * i[2][2] - i[1][2] * i[2][0])
-            + i[0][2] * (i[1][0] * i[2][1] - i[1][1] * i[2][0]);
-        if !(sym && i[0][0] > 0.0 && det2 > 0.0 && det3 > 0.0) {
-            return Err(Error::BadParameter {
-                name: "rigid body inertia",
-                value: format!("{i:?}"),
-                expected: "must be symmetric positive definite",
-            });
-        }
+        validate_mass_inertia(self.mass, self.inertia)?;
         if self.surface.is_2d() != (dim == 2) {
             return Err(Error::BadParameter {
                 name: "analytical surface",

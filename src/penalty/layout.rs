@@ -93,8 +93,21 @@ pub struct PenaltyParams {
     pub weight: f32,
     /// Tabular law: (overclosure, pressure) points, two per vec4.
     pub table: [[f32; 4]; 8],
+    /// The rigid part the master surface lies on: its centre of mass (xyz, the kernels' frame)
+    /// and 1/mass (w; 0: the master is not rigid — its nodes' own masses count).
+    pub master_body: [f32; 4],
+    /// Its inverse rotational inertia in the model frame now (rows, xyz).
+    pub master_inv_inertia: [[f32; 4]; 3],
+    /// The rigid part the slave nodes lie on, as `master_body`.
+    pub slave_body: [f32; 4],
+    /// Its inverse rotational inertia, as `master_inv_inertia`.
+    pub slave_inv_inertia: [[f32; 4]; 3],
+    /// Rows of the node-wise bound of the rigid parts: the pair-node slot of the master's (x)
+    /// and the slave's (y) rigid part (`NO_SLAVE`: none), and how many such slots follow the
+    /// pair's nodes (z); w unused.
+    pub body_slots: [u32; 4],
 }
-const _: () = assert!(std::mem::size_of::<PenaltyParams>() == 208);
+const _: () = assert!(std::mem::size_of::<PenaltyParams>() == 352);
 
 /// Per-slave state kept between increments. WGSL twin: `SlaveState`.
 #[repr(C)]

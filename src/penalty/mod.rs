@@ -9,11 +9,28 @@ use crate::model::{
 };
 use layout::*;
 
+/// A rigid part's state for one increment: what a penalty spring on it needs.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct RigidState {
+    /// Centre of mass now, model units.
+    pub centre: [f64; 3],
+    /// 1 / mass.
+    pub inv_mass: f64,
+    /// Inverse rotational inertia about the centre, model frame now.
+    pub inv_inertia: [[f64; 3]; 3],
+}
+
 /// The static description of a penalty pair in the kernels' layout.
 #[derive(Clone, Debug)]
 pub struct PenaltySetup {
-    /// Slave nodes then master nodes not already listed (a node in both appears once).
+    /// Slave nodes then master nodes not already listed (a node in both appears once); then
+    /// one slot per rigid part of the pair (its row of the node-wise bound, carried to the
+    /// part's lowest node).
     pub pair_nodes: Vec<PairNode>,
+    /// Pair nodes proper (before the rigid parts' slots).
+    pub n_nodes: usize,
+    /// The rigid part (model index) the master surface lies on, and the slave nodes'.
+    pub rigid: (Option<usize>, Option<usize>),
     /// Active facet indices adjacent to each pair node, increasing.
     pub adjacency: Vec<u32>,
     /// The pair-node index of each node of each active facet (`u32::MAX` pads segments and
@@ -115,6 +132,35 @@ impl PenaltySetup {
             .enumerate()
             .map(|(i, pn)| (pn.node, i as u32))
             .collect();
+        // rigid parts: one row slot each after the nodes, carried to the part's lowest node
+        let n_nodes = pair_nodes.len();
+        let master_part =
+            model.rigid_part_of(&master.nodes(), &format!("master of pair {}", id.0))?;
+        let slave_part = model.rigid_part_of(slaves, &format!("slave nodes of pair {}", id.0))?;
+        if master_part.is_some() && master_part == slave_part {
+            return Err(crate::error::Error::BadParameter {
+                name: "rigid part",
+                value: format!("pair {}", id.0),
+                expected: "slave nodes and a master surface on different bodies",
+            });
+        }
+        let mut slots = [NO_SLAVE; 2];
+        for (k, part) in [master_part, slave_part].into_iter().enumerate() {
+            if let Some(part) = part {
+                let rep = *model.rigid_parts()[part]
+                    .nodes
+                    .iter()
+                    .min()
+                    .expect("a rigid part has nodes");
+                slots[k] = pair_nodes.len() as u32;
+                pair_nodes.push(PairNode {
+                    node: rep,
+                    slave: NO_SLAVE,
+                    adj_start: 0,
+                    adj_end: 0,
+                });
+            }
+        }
         let facet_nodes = master
             .active
             .iter()
@@ -130,11 +176,14 @@ impl PenaltySetup {
             .collect();
         let mut params = base_params(pen, &pair.friction, slaves.len(), master.active.len());
         params.weight = weight as f32;
+        params.body_slots = [slots[0], slots[1], (pair_nodes.len() - n_nodes) as u32, 0];
         if pair.sliding != crate::model::Sliding::Finite {
             params.flags |= PENALTY_ANCHORED;
         }
         Ok(Self {
             pair_nodes,
+            n_nodes,
+            rigid: (master_part, slave_part),
             adjacency,
             facet_nodes,
             areas,
@@ -146,10 +195,32 @@ impl PenaltySetup {
     /// The parameters of one increment `dt` with reference increment `dt_ref`.
     pub fn params(&self, dt: f64, dt_ref: f64) -> PenaltyParams {
         let mut p = self.params;
-        p.n_pair_nodes = self.pair_nodes.len() as u32;
+        p.n_pair_nodes = self.n_nodes as u32;
         p.dt = dt as f32;
         p.dt_ref = dt_ref as f32;
         p
+    }
+
+    /// Puts the states of the pair's rigid parts (`states`, by model index) into `p`, their
+    /// centres relative to the kernels' `frame` origin.
+    pub fn set_rigid(&self, p: &mut PenaltyParams, states: &[RigidState], frame: [f64; 3]) {
+        for (part, body, inertia) in [
+            (self.rigid.0, &mut p.master_body, &mut p.master_inv_inertia),
+            (self.rigid.1, &mut p.slave_body, &mut p.slave_inv_inertia),
+        ] {
+            if let Some(k) = part {
+                let s = &states[k];
+                *body = [
+                    (s.centre[0] - frame[0]) as f32,
+                    (s.centre[1] - frame[1]) as f32,
+                    (s.centre[2] - frame[2]) as f32,
+                    s.inv_mass as f32,
+                ];
+                for (row, j) in inertia.iter_mut().zip(&s.inv_inertia) {
+                    *row = [j[0] as f32, j[1] as f32, j[2] as f32, 0.0];
+                }
+            }
+        }
     }
 
     /// The initial per-slave state: no friction force, the tributary area.
@@ -192,6 +263,11 @@ fn base_params(
         pressure: 0.0,
         weight: 1.0,
         table: [[0.0; 4]; 8],
+        master_body: [0.0; 4],
+        master_inv_inertia: [[0.0; 4]; 3],
+        slave_body: [0.0; 4],
+        slave_inv_inertia: [[0.0; 4]; 3],
+        body_slots: [NO_SLAVE, NO_SLAVE, 0, 0],
     };
     match pen.stiffness {
         Stiffness::Auto { scale } => p.stiffness = (AUTO_STIFFNESS * scale) as f32,

@@ -596,6 +596,8 @@ impl Scene {
         // rigid parts that move: bodies carrying the part's nodes (after the analytical bodies,
         // whose indices are the contact model's)
         let mut meshed_bodies = Vec::new();
+        // free ones are rigid parts of the contact model too: springs on them see the body
+        let mut free_parts = Vec::new();
         for &(k, base, count) in &moving_parts {
             let p = &self.part[k];
             let nodes: Vec<u32> = (base as u32..(base + count) as u32).collect();
@@ -627,6 +629,9 @@ impl Scene {
                 Some("velocity") => BodyMotion::Velocity(p.velocity),
                 _ => BodyMotion::Free,
             };
+            if motion == BodyMotion::Free {
+                free_parts.push((nodes.clone(), p.mass, inertia));
+            }
             let mut body = SolverBody::new(p.mass, inertia, c, nodes, &x, motion)?;
             body.state.velocity = p.velocity;
             meshed_bodies.push((p.name.clone(), body));
@@ -687,6 +692,9 @@ impl Scene {
             Model::new_3d()
         };
         model.add_nodes(&x, &solver.mass)?;
+        for (nodes, mass, inertia) in &free_parts {
+            model.add_rigid_part(nodes, *mass, *inertia)?;
+        }
         let mut bodies = Vec::new();
         for r in &self.rigid {
             let motion = match r.motion.as_deref() {
