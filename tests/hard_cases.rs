@@ -397,12 +397,17 @@ velocity = [0.0, 0.0, {mv}]
                 let late = (s.impact_time - exact_impact) / dt;
                 let what = format!("{d}, {n} elements, two bars {two}");
                 assert!(late.abs() <= 2.0, "{what}: impact {late} increments late");
+                // the summary's plateau against the mean over the middle half of the history
                 let h = force_history(&dir);
                 let first = h.iter().position(|x| x.1 > 0.0).unwrap();
                 let last = h.iter().rposition(|x| x.1 > 0.0).unwrap();
                 let span = last - first;
                 let mid = &h[first + span / 4..=last - span / 4];
                 let plateau = mid.iter().map(|x| x.1).sum::<f64>() / mid.len() as f64;
+                assert!(
+                    (s.plateau_force / plateau - 1.0).abs() < 1e-9,
+                    "{what}: summary"
+                );
                 assert!(
                     (plateau / exact_force - 1.0).abs() <= 0.02,
                     "{what}: plateau {plateau} against {exact_force}"

@@ -198,6 +198,9 @@ pub struct Summary {
     pub peak_force: f64,
     /// Impulse between the half-plateau edges divided by their distance.
     pub mean_force: f64,
+    /// The plateau: the mean contact force over the middle half of the contact (between the
+    /// first and the last increment with force); NaN without contact.
+    pub plateau_force: f64,
     /// Impulse of the contact force on the slave nodes.
     pub impulse: f64,
     /// Total contact force on the slave nodes in the last increment.
@@ -241,10 +244,11 @@ pub struct Summary {
 }
 
 /// Rising and falling edges of a force history (time, force per increment) at half its
-/// plateau (the mean over the middle half of the contact), by linear interpolation.
-fn half_plateau_edges(history: &[(f64, f64)]) -> (f64, f64, f64) {
+/// plateau (the mean over the middle half of the contact), by linear interpolation; the
+/// impulse; the plateau.
+fn half_plateau_edges(history: &[(f64, f64)]) -> (f64, f64, f64, f64) {
     let Some(first) = history.iter().position(|h| h.1 > 0.0) else {
-        return (f64::NAN, f64::NAN, f64::NAN);
+        return (f64::NAN, f64::NAN, f64::NAN, f64::NAN);
     };
     let last = history
         .iter()
@@ -252,7 +256,8 @@ fn half_plateau_edges(history: &[(f64, f64)]) -> (f64, f64, f64) {
         .expect("first exists");
     let span = last - first;
     let mid = &history[first + span / 4..=last - span / 4];
-    let half = 0.5 * mid.iter().map(|h| h.1).sum::<f64>() / mid.len() as f64;
+    let plateau = mid.iter().map(|h| h.1).sum::<f64>() / mid.len() as f64;
+    let half = 0.5 * plateau;
     let rise = (first..=last)
         .find(|&n| history[n].1 >= half)
         .expect("the mean is reached");
@@ -287,7 +292,7 @@ fn half_plateau_edges(history: &[(f64, f64)]) -> (f64, f64, f64) {
             history[n].1 * dt
         })
         .sum();
-    (t_rise, t_fall, impulse)
+    (t_rise, t_fall, impulse, plateau)
 }
 
 fn stress6(s: [[f64; 3]; 3]) -> [f64; 6] {
@@ -666,7 +671,7 @@ fn run_into(
     };
     let first = forces.iter().position(|h| h.1 > 0.0);
     let last = forces.iter().rposition(|h| h.1 > 0.0);
-    let (impact, release, impulse) = half_plateau_edges(&forces);
+    let (impact, release, impulse, plateau) = half_plateau_edges(&forces);
     let mut parts = Vec::new();
     let mut el = 0;
     for p in &built.parts {
@@ -807,6 +812,7 @@ fn run_into(
         impact_time: impact,
         release_time: release,
         peak_force: peak,
+        plateau_force: plateau,
         mean_force: if release > impact {
             let inside: f64 = forces
                 .windows(2)

@@ -54,26 +54,12 @@ pub fn run_bench(a: &BenchArgs) -> abut::Result<()> {
         md,
         "| device | elements | contact | cost | late (incr) | plateau | mean | peak | µs/incr |\n|---|---|---|---|---|---|---|---|---|"
     );
-    let dir = std::env::temp_dir().join("abut-bench-penalty");
     for d in &devices {
         for n in [20usize, 40] {
             for scale in [Some(0.25), Some(0.5), Some(1.0), Some(2.0), Some(4.0), None] {
                 let scene = Scene::parse(&truss(n, scale))?;
-                let _ = std::fs::remove_dir_all(&dir);
-                let s = run(&scene, d, Some(&dir))?;
-                let path = dir.join("history.csv");
-                let csv = std::fs::read_to_string(&path).map_err(|e| io_err(&path, e))?;
-                let mut lines = csv.lines();
-                let head: Vec<&str> = lines.next().unwrap_or("").split(',').collect();
-                let col = head.iter().position(|h| *h == "contact_force").unwrap_or(6);
-                let f: Vec<f64> = lines
-                    .filter_map(|l| l.split(',').nth(col).and_then(|x| x.parse().ok()))
-                    .collect();
-                let first = f.iter().position(|&x| x > 0.0).unwrap_or(0);
-                let last = f.iter().rposition(|&x| x > 0.0).unwrap_or(0);
-                let span = last.saturating_sub(first);
-                let mid = &f[first + span / 4..=last - span / 4];
-                let plateau = mid.iter().sum::<f64>() / mid.len().max(1) as f64;
+                let s = run(&scene, d, None)?;
+                let plateau = s.plateau_force;
                 let dt = s.end_time / s.increments as f64;
                 let what = match scale {
                     Some(x) => format!("penalty ×{x}"),
