@@ -6,7 +6,8 @@ use crate::error::{Error, Result};
 use crate::geometry::{closest_on_facet, V3};
 use crate::gpu::GpuPenalty;
 use crate::kinematic::{
-    anchored_pass, facets_from, meshed_pass, rigid_pass, BodyState, SlaveCorrection, PASSES,
+    anchored_pass, facets_from, friction_pass, meshed_pass, rigid_pass, BodyState, SlaveCorrection,
+    PASSES,
 };
 use crate::model::{validate_positions, Model, PairId};
 use crate::model::{BodyId, Enforce, MasterSurface, PressureOverclosure, RigidBody, RigidPairId};
@@ -215,6 +216,8 @@ struct KinematicRun {
     law: Option<PressureOverclosure>,
     /// Small or infinitesimal sliding: corrections along the anchors' planes.
     anchored: bool,
+    /// Coulomb friction (μ static, μ kinetic, decay), after the normal correction.
+    friction: Option<(f64, f64, f64)>,
     /// Per slave (pass one, then the balanced pass's): behind a free edge of the master
     /// ([`facets_from`]).
     behind: (Vec<bool>, Vec<bool>),
@@ -247,6 +250,8 @@ pub struct KinematicReport {
     pub kinetic_energy_change: f64,
     /// Sum over slaves of the resisting force magnitudes (first pass).
     pub total_force: f64,
+    /// Sum over slaves of the kinematic friction force magnitudes (pairs with friction).
+    pub friction_force: f64,
     /// Nodes of meshed kinematic pairs that the velocities carry farther than their pair's
     /// search radius within this increment (see [`StepReport::fast_nodes`]).
     pub fast_nodes: usize,
@@ -397,9 +402,19 @@ impl Contact {
                         vec![false; search.slaves().len()],
                         vec![false; back.as_ref().map_or(0, |b| b.0.slaves().len())],
                     );
+                    let friction = match pair.friction {
+                        crate::model::Friction::Frictionless => None,
+                        crate::model::Friction::Coulomb {
+                            mu,
+                            mu_kinetic,
+                            decay,
+                            ..
+                        } => Some((mu, mu_kinetic, decay)),
+                    };
                     kinematic.push(KinematicRun {
                         id,
                         search,
+                        friction,
                         behind,
                         back,
                         master,
@@ -661,6 +676,7 @@ impl Contact {
                 .zip(back_facets.as_ref())
                 .map(|((search, surface, w), bf)| (bf, surface, *w, search.slaves()));
             let mut first: Option<Vec<SlaveCorrection>> = None;
+            let mut normal_force: Vec<f64> = Vec::new();
             // hard contact is re-projected on the corrected geometry; a softened law is applied once
             let passes = if kr.law.is_some() || kr.anchored {
                 1
@@ -731,9 +747,33 @@ impl Contact {
                         v[i][a] += dx[i][a] / dt;
                     }
                 }
+                // the normal force of every pass (the friction limit's)
+                if normal_force.is_empty() {
+                    normal_force = vec![0.0; c.len()];
+                }
+                for (f, ck) in normal_force.iter_mut().zip(&c) {
+                    *f += ck.force.max(0.0);
+                }
                 first.get_or_insert(c);
             }
             let c = first.unwrap_or_default();
+            if let (Some(mu), None, false) = (kr.friction, &back, kr.anchored) {
+                let ft = friction_pass(
+                    &kr.master,
+                    masses,
+                    x,
+                    v,
+                    &kr.slaves,
+                    &facets,
+                    &normal_force,
+                    mu,
+                    dt,
+                );
+                report.friction_force += ft
+                    .iter()
+                    .map(|f| (f[0] * f[0] + f[1] * f[1] + f[2] * f[2]).sqrt())
+                    .sum::<f64>();
+            }
             // what is left, measured on the corrected positions
             let left = if kr.anchored {
                 // on the anchors' planes, moved with the corrected masters

@@ -264,6 +264,75 @@ fn correct(
     out
 }
 
+/// Coulomb friction of a kinematic pair, after its normal correction (Abaqus' kinematic
+/// friction): each slave in contact gets the tangential force that would stop its relative slip
+/// within the increment, `m*·|v_t|/Δt` with the two-body mass `1/m* = 1/m_s + Σ w_j²/m_j`, but no
+/// more than `μ(|v_t|)·f_n` — `f_n` the normal corrections' force, over their passes — opposite to the slip on the
+/// slave and by the weights on its master facet's nodes. `v` (corrected for the normal) and `x`
+/// move by the tangential velocity change (and its `Δt`). Stick is exact (no elastic pre-slip);
+/// the coefficient decays with slip rate as the penalty's does. Returns each slave's friction
+/// force (model frame; zero where it is not in contact).
+#[allow(clippy::too_many_arguments)]
+pub fn friction_pass(
+    master: &MasterSurface,
+    masses: &[f64],
+    x: &mut [[f64; 3]],
+    v: &mut [[f64; 3]],
+    slaves: &[u32],
+    facet_of: &[Option<u32>],
+    normal_force: &[f64],
+    mu: (f64, f64, f64),
+    dt: f64,
+) -> Vec<[f64; 3]> {
+    let (mu_s, mu_k, decay) = mu;
+    let mut out = vec![[0.0; 3]; slaves.len()];
+    // forces first (every slave on the same velocities), then the changes
+    let mut dv = vec![V3::<f64>::zero(); x.len()];
+    for (k, (&s, f)) in slaves.iter().zip(facet_of).enumerate() {
+        let (Some(f), Some(&f_n)) = (f, normal_force.get(k)) else {
+            continue;
+        };
+        if f_n <= 0.0 {
+            continue;
+        }
+        let nodes = master.facets[*f as usize].nodes();
+        let xs: Vec<V3<f64>> = nodes
+            .iter()
+            .map(|&n| V3::from_array(x[n as usize]))
+            .collect();
+        let pr = closest_on_facet(V3::from_array(x[s as usize]), &xs);
+        let n = pr.normal;
+        let mut v_rel = V3::from_array(v[s as usize]);
+        let mut inv_m = 1.0 / masses[s as usize];
+        for (j, &m) in nodes.iter().enumerate() {
+            v_rel = v_rel - V3::from_array(v[m as usize]) * pr.weights[j];
+            inv_m += pr.weights[j] * pr.weights[j] / masses[m as usize];
+        }
+        let v_t = v_rel - n * v_rel.dot(n);
+        let speed = v_t.length2().sqrt();
+        if speed == 0.0 {
+            continue;
+        }
+        let mu = mu_k + (mu_s - mu_k) * (-decay * speed).exp();
+        let stick = speed / (inv_m * dt);
+        let f = stick.min(mu * f_n);
+        let ft = v_t * (-f / speed);
+        out[k] = ft.to_array();
+        dv[s as usize] = dv[s as usize] + ft * (dt / masses[s as usize]);
+        for (j, &m) in nodes.iter().enumerate() {
+            dv[m as usize] = dv[m as usize] - ft * (pr.weights[j] * dt / masses[m as usize]);
+        }
+    }
+    for (i, d) in dv.iter().enumerate() {
+        let d = d.to_array();
+        for a in 0..3 {
+            v[i][a] += d[a];
+            x[i][a] += d[a] * dt;
+        }
+    }
+    out
+}
+
 /// The facet of each slave from a search result. A slave beside a free edge of the master is
 /// off its facets: no contact. `behind` (one flag per slave, kept between increments) marks a
 /// slave that was beside a free edge below the facet's plane: while it stays below the surface

@@ -805,14 +805,33 @@ fn bad_kinematic_input_is_an_error() {
     .unwrap();
     let s = m.add_surface(Surface::quads(&[[0, 1, 2, 3]])).unwrap();
     let set = m.add_node_set(&[4]).unwrap();
+    // kinematic friction: pure finite-sliding pairs only
     let e = m
         .add_pair(
             Pair::new(set, s)
                 .enforce(kinematic(None))
+                .sliding(Sliding::Small)
                 .friction(Friction::coulomb(0.2)),
         )
         .unwrap_err();
     assert!(e.to_string().contains("friction"), "{e}");
+    let e = m
+        .add_pair(
+            Pair::new(set, s)
+                .enforce(kinematic(None))
+                .balanced(s, 0.5)
+                .friction(Friction::coulomb(0.2)),
+        )
+        .unwrap_err();
+    assert!(e.to_string().contains("friction"), "{e}");
+    assert!(m
+        .clone()
+        .add_pair(
+            Pair::new(set, s)
+                .enforce(kinematic(None))
+                .friction(Friction::coulomb(0.2))
+        )
+        .is_ok());
     let e = m
         .add_pair(Pair::new(set, s).enforce(kinematic(Some(PressureOverclosure::Linear))))
         .unwrap_err();

@@ -389,11 +389,13 @@ impl Pair {
                         });
                     }
                 }
-                if !matches!(self.friction, Friction::Frictionless) {
+                if !matches!(self.friction, Friction::Frictionless)
+                    && (self.balanced.is_some() || self.sliding != Sliding::Finite)
+                {
                     return Err(Error::BadParameter {
                         name: "friction",
                         value: format!("{:?}", self.friction),
-                        expected: "kinematic pairs are frictionless in this version; use penalty enforcement for friction",
+                        expected: "kinematic friction on pure finite-sliding pairs (balanced and small-sliding kinematic pairs are frictionless; use penalty enforcement there)",
                     });
                 }
             }

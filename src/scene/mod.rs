@@ -58,7 +58,7 @@
 //! master = "right"         # part (with master_face) or rigid body
 //! master_face = "x-"       # x-, ..., z+, or "out" for arcs and spheres
 //! enforce = "kinematic"    # or "penalty" (default)
-//! friction = 0.0           # Coulomb coefficient (penalty only)
+//! friction = 0.0           # Coulomb coefficient (kinematic: pure finite-sliding pairs)
 //! sliding = "finite"       # finite | small | infinitesimal
 //! # balanced = 0.5         # balanced master–slave weight
 //! # penalty_scale = 1.0 | stiffness = k | stiffness_per_area = eps

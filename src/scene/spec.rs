@@ -299,7 +299,7 @@ pub struct ContactSpec {
     /// "penalty" (default) or "kinematic".
     #[serde(default)]
     pub enforce: Option<String>,
-    /// Coulomb coefficient (penalty).
+    /// Coulomb coefficient (penalty, and kinematic pure finite-sliding pairs).
     #[serde(default)]
     pub friction: f64,
     /// "finite" (default), "small", "infinitesimal".
