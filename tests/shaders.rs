@@ -97,6 +97,18 @@ fn constant_u32(m: &naga::Module, name: &str) -> u32 {
     }
 }
 
+fn constant_f32(m: &naga::Module, name: &str) -> f32 {
+    let (_, c) = m
+        .constants
+        .iter()
+        .find(|(_, c)| c.name.as_deref() == Some(name))
+        .unwrap_or_else(|| panic!("no WGSL constant {name}"));
+    match m.global_expressions[c.init] {
+        naga::Expression::Literal(naga::Literal::F32(v)) => v,
+        ref e => panic!("{name} is {e:?}"),
+    }
+}
+
 fn struct_size(m: &naga::Module, name: &str) -> u32 {
     let mut layouter = naga::proc::Layouter::default();
     layouter.update(m.to_ctx()).unwrap();
@@ -118,6 +130,15 @@ fn wgsl_twins_match_rust() {
         abut::search::layout::HIT_BESIDE_FREE_EDGE
     );
     assert_eq!(constant_u32(&m, "NO_NODE"), abut::model::NO_NODE);
+    // the free-edge extension zone and the penalty's heavy-share cut, f32 twins
+    assert_eq!(
+        constant_f32(&m, "EXTENSION_ZONE"),
+        abut::cpu::common::EXTENSION_ZONE
+    );
+    assert_eq!(
+        constant_f32(&parse("penalty"), "HEAVY_SHARE"),
+        abut::penalty::layout::HEAVY_SHARE
+    );
     assert_eq!(
         constant_u32(&m, "QUAD_ITERATIONS"),
         abut::geometry::QUAD_ITERATIONS
