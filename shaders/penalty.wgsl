@@ -13,7 +13,10 @@
 //             so momentum is conserved to round-off. The override FRICTION = false removes all
 //             friction work. Nothing runs when the search overflowed or the motion budget
 //             was used up (the increment will run again). A slave whose hit carries
-//             HIT_BESIDE_FREE_EDGE is off the master's facets: open, no force.
+//             HIT_BESIDE_FREE_EDGE is off the master's facets: open, no force; one that was
+//             beside a free edge below the facet's plane (state.history.y) stays open until
+//             its gap is positive. A rigid side (pp.master_body / slave_body, w > 0) counts
+//             with its body's compliance at the contact point and as one share of the bound.
 //             Increments are positive f32, reduced with atomicMin on their bits (order-
 //             preserving for positive floats), so the result is deterministic.
 //             Every spring within the search radius also writes its shares of the node-wise

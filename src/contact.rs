@@ -41,8 +41,9 @@ pub enum ContactStatus {
 /// (`StepReport::stable_dt`) give 1/Δt² = 1/Δt_elements² + 1/(safety·Δt_contact)² — their
 /// frequencies add in square, with the same safety on both — and no more than
 /// `contact_safety·Δt_contact`, so that every contact spring stays at ω·Δt ≤ 2·contact_safety,
-/// where its switching on and off does not pump energy into the node (tests/scene.rs). A host program that integrates its own elements calls this with its
-/// elements' increment and the report's `stable_dt` (a scene run does).
+/// where its switching on and off does not pump energy into the node (tests/scene.rs). A host
+/// program that integrates its own elements calls this with its elements' increment and the
+/// report's `stable_dt` (a scene run does).
 pub fn combined_increment(
     element_dt: f64,
     contact_dt: f64,

@@ -85,27 +85,30 @@ fn every_shader_file_is_embedded_and_mirrored() {
     }
 }
 
-fn constant_u32(m: &naga::Module, name: &str) -> u32 {
+/// The literal a WGSL constant is initialised with.
+fn constant(m: &naga::Module, name: &str) -> naga::Literal {
     let (_, c) = m
         .constants
         .iter()
         .find(|(_, c)| c.name.as_deref() == Some(name))
         .unwrap_or_else(|| panic!("no WGSL constant {name}"));
     match m.global_expressions[c.init] {
-        naga::Expression::Literal(naga::Literal::U32(v)) => v,
+        naga::Expression::Literal(l) => l,
         ref e => panic!("{name} is {e:?}"),
     }
 }
 
+fn constant_u32(m: &naga::Module, name: &str) -> u32 {
+    match constant(m, name) {
+        naga::Literal::U32(v) => v,
+        l => panic!("{name} is {l:?}"),
+    }
+}
+
 fn constant_f32(m: &naga::Module, name: &str) -> f32 {
-    let (_, c) = m
-        .constants
-        .iter()
-        .find(|(_, c)| c.name.as_deref() == Some(name))
-        .unwrap_or_else(|| panic!("no WGSL constant {name}"));
-    match m.global_expressions[c.init] {
-        naga::Expression::Literal(naga::Literal::F32(v)) => v,
-        ref e => panic!("{name} is {e:?}"),
+    match constant(m, name) {
+        naga::Literal::F32(v) => v,
+        l => panic!("{name} is {l:?}"),
     }
 }
 
