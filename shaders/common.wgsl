@@ -375,3 +375,64 @@ fn closest_on_quad(p: vec3<f32>, x0: vec3<f32>, x1: vec3<f32>, x2: vec3<f32>, x3
     r.dist2 = best_d2;
     return r;
 }
+
+// ---- the search tree's boxes, quantised (Rust twin: search::tree::BoxCodec) ----
+// A box is one vec4<u32>: its six bounds (lo.xyz, hi.xyz) as 21-bit codes q on a grid of step
+// s, a power of two (box_step below): the bound is (q − BOX_BIAS)·s, exact in f32; code 0 is
+// −∞ and BOX_TOP is +∞ (a bound beyond the grid's ±2^20 steps becomes infinite, so a box only
+// ever grows); an empty box has lo = +∞ and hi = −∞. Lower bounds round down and upper ones
+// up, so a box always holds what it was made from.
+const BOX_BIAS: f32 = 1048576.0;    // 2^20
+const BOX_TOP: u32 = 0x1fffffu;     // 2^21 − 1
+const BOX_BIG: f32 = 3.0e38;
+
+// The step of the box grid, and its inverse: the power of two at or below the box margin
+// (2^-100 when the margin is below that), so the grid's ±2^20 steps reach 2^19 margins, twice
+// the largest master coordinate, and a code costs at most one margin.
+fn box_step(margin: f32) -> vec2<f32> {
+    let e = clamp(i32((bitcast<u32>(margin) >> 23u) & 0xffu) - 127, -100, 100);
+    return vec2<f32>(bitcast<f32>(u32(e + 127) << 23u), bitcast<f32>(u32(127 - e) << 23u));
+}
+
+fn box_code_lo(x: f32, inv_step: f32) -> u32 {
+    return u32(clamp(floor(x * inv_step) + BOX_BIAS, 0.0, f32(BOX_TOP - 1u)));
+}
+
+fn box_code_hi(x: f32, inv_step: f32) -> u32 {
+    return u32(clamp(ceil(x * inv_step) + BOX_BIAS, 1.0, f32(BOX_TOP)));
+}
+
+fn box_bound(q: u32, step: f32) -> f32 {
+    if (q == 0u) { return -BOX_BIG; }
+    if (q == BOX_TOP) { return BOX_BIG; }
+    return (f32(q) - BOX_BIAS) * step;
+}
+
+// Packs codes (lo, hi) into one vec4<u32>: 21 bits each, lo.x from bit 0 upwards.
+fn box_pack(lo: vec3<u32>, hi: vec3<u32>) -> vec4<u32> {
+    return vec4<u32>(
+        lo.x | (lo.y << 21u),
+        (lo.y >> 11u) | (lo.z << 10u) | (hi.x << 31u),
+        (hi.x >> 1u) | (hi.y << 20u),
+        (hi.y >> 12u) | (hi.z << 9u));
+}
+
+fn box_codes_lo(b: vec4<u32>) -> vec3<u32> {
+    return vec3<u32>(b.x & BOX_TOP, ((b.x >> 21u) | (b.y << 11u)) & BOX_TOP, (b.y >> 10u) & BOX_TOP);
+}
+
+fn box_codes_hi(b: vec4<u32>) -> vec3<u32> {
+    return vec3<u32>(((b.y >> 31u) | (b.z << 1u)) & BOX_TOP, ((b.z >> 20u) | (b.w << 12u)) & BOX_TOP, (b.w >> 9u) & BOX_TOP);
+}
+
+fn box_bounds(q: vec3<u32>, step: f32) -> vec3<f32> {
+    return vec3<f32>(box_bound(q.x, step), box_bound(q.y, step), box_bound(q.z, step));
+}
+
+// Distance² from p to the packed box b; +∞ (above any bound) for an empty box.
+fn packed_box_d2(b: vec4<u32>, p: vec3<f32>, step: f32) -> f32 {
+    let lo = box_bounds(box_codes_lo(b), step);
+    let hi = box_bounds(box_codes_hi(b), step);
+    let d = max(max(lo - p, p - hi), vec3<f32>(0.0));
+    return dot(d, d);
+}

@@ -70,7 +70,7 @@
 @group(0) @binding(2) var<storage, read> facets: array<vec4<u32>>;
 @group(0) @binding(3) var<storage, read> slaves: array<u32>;
 @group(0) @binding(4) var<storage, read> order: array<u32>;
-@group(0) @binding(5) var<storage, read> boxes: array<vec4<f32>>;
+@group(0) @binding(5) var<storage, read> boxes: array<vec4<u32>>;
 @group(0) @binding(6) var<storage, read_write> status: array<atomic<u32>>;
 @group(0) @binding(7) var<storage, read_write> hits: array<Hit>;
 @group(0) @binding(8) var<storage, read> adjacency: array<u32>;
@@ -106,11 +106,7 @@ fn share_node(a: vec4<u32>, b: vec4<u32>) -> bool {
 
 // Whether tree node k holds nothing within distance² `bound` of p (an empty box never does).
 fn far(k: u32, p: vec3<f32>, bound: f32) -> bool {
-    let lo = boxes[2u * k].xyz;
-    let hi = boxes[2u * k + 1u].xyz;
-    if (lo.x > hi.x) { return true; }
-    let d = max(max(lo - p, p - hi), vec3<f32>(0.0));
-    return dot(d, d) > bound * PRUNE_SLACK;
+    return box_d2(k, p) > bound * PRUNE_SLACK;
 }
 
 // The node a depth-first walk visits after the subtree of node k; 0 when none is left.
@@ -134,20 +130,9 @@ struct Walk {
     projections: u32,
 }
 
-// Distance² from p to tree node k's box; EMPTY_LO for an empty box (never within a bound).
+// Distance² from p to tree node k's box; +∞ for an empty box (never within a bound).
 fn box_d2(k: u32, p: vec3<f32>) -> f32 {
-    let lo = boxes[2u * k].xyz;
-    let hi = boxes[2u * k + 1u].xyz;
-    if (lo.x > hi.x) { return EMPTY_LO; }
-    let d = max(max(lo - p, p - hi), vec3<f32>(0.0));
-    return dot(d, d);
-}
-
-// Distance² from p to the centre of tree node k's box: the walk's choice between two children
-// whose boxes are equally near (both holding p, say).
-fn centre_d2(k: u32, p: vec3<f32>) -> f32 {
-    let d = 0.5 * (boxes[2u * k].xyz + boxes[2u * k + 1u].xyz) - p;
-    return dot(d, d);
+    return packed_box_d2(boxes[k], p, box_step(params.box_margin).x);
 }
 
 // The slave at walk position t: grid-local position, model node id.
@@ -161,15 +146,18 @@ fn walk_point(t: u32) -> WalkPoint {
     return WalkPoint(bitcast<vec3<f32>>(w.xyz), w.w);
 }
 
-// The nearest facet of the slave at walk position t a depth-first walk finds within
-// WALK_VISITS nodes: at an inner node the nearer child's box first; the farther one is left
-// pending and, when the walk comes back to it, skipped if its box is farther than the best
-// distance found by then. No stack in memory: the pending subtrees are one bit per depth
-// (`pending`, bit d: the sibling of the walk's ancestor at depth d), the deepest taken first,
-// and the ancestors are those of the node the walk was last at (heap layout: parent k/2,
-// sibling k^1). A walk cut off by the cap leaves `next` at the lowest first leaf slot of the
-// subtrees still pending.
-fn walk(t: u32) -> Walk {
+// The nearest facet of the slave at walk position t a depth-first walk from tree node `start`
+// finds within WALK_VISITS nodes. Each visit tests the two children of one inner node (two
+// loads: on a software adapter a load is a loop over the SIMD lanes, the walk's main cost) and
+// goes to the nearer one whose box is within the best distance found so far, leaving the other
+// pending; when neither is, the walk returns to the deepest pending subtree, untested (its
+// children's boxes lie within its own, so the next visit prunes it if it is far by then; a
+// pending leaf is tested before it is projected). No stack in memory: the pending subtrees are
+// one bit per depth (`pending`, bit d: the sibling of the walk's ancestor at depth d), and the
+// ancestors are those of the node the walk was last at (heap layout: parent k/2, sibling k^1).
+// A walk cut off by the cap leaves `next` at the lowest first leaf slot of the subtrees still
+// pending.
+fn walk(t: u32, start: u32) -> Walk {
     let wp = walk_point(t);
     let slave = wp.node;
     let p = wp.p;
@@ -181,52 +169,69 @@ fn walk(t: u32) -> Walk {
     w.f = NO_FACET;
     w.next = 0u;
     w.projections = 0u;
-    var k = select(1u, 0u, far(1u, p, w.d2));
+    var k = start;
+    last = max(start, 1u);
     var v = 0u;
-    // Two loops, so that the lanes of a SIMD group that reach a leaf wait for the others and
-    // project together, instead of every lane paying for a projection whenever one needs it.
+    // whether the leaf k was reached from a pending return (its box not yet tested)
+    var untested = true;
+    let step = box_step(params.box_margin).x;
     for (var leaf = 0u; leaf < WALK_VISITS; leaf++) {
-        // inner nodes and returns to pending subtrees, until a leaf, the end or the cap
-        for (; v < WALK_VISITS && k < leaves; v++) {
+        // every iteration tests the two children of one inner node: a return to a pending
+        // sibling goes to it untested (its children's boxes lie within its own)
+        for (; v < WALK_VISITS; v++) {
             if (k == 0u) {
-                // back to the deepest pending subtree; skipped if farther than the best distance
                 if (pending == 0u) { break; }
                 let depth = firstLeadingBit(pending);
                 pending &= ~(1u << depth);
                 last = (last >> (firstLeadingBit(last) - depth)) ^ 1u;
-                k = select(last, 0u, box_d2(last, p) > w.d2 * PRUNE_SLACK);
+                k = last;
+                untested = true;
+            }
+            if (k >= leaves) { break; }
+            let bound = w.d2 * PRUNE_SLACK;
+            let bl = boxes[2u * k];
+            let br = boxes[2u * k + 1u];
+            let lo_l = box_bounds(box_codes_lo(bl), step);
+            let hi_l = box_bounds(box_codes_hi(bl), step);
+            let lo_r = box_bounds(box_codes_lo(br), step);
+            let hi_r = box_bounds(box_codes_hi(br), step);
+            let el = max(max(lo_l - p, p - hi_l), vec3<f32>(0.0));
+            let er = max(max(lo_r - p, p - hi_r), vec3<f32>(0.0));
+            let dl = dot(el, el);
+            let dr = dot(er, er);
+            let near_l = dl <= bound;
+            let near_r = dr <= bound;
+            untested = false;
+            if (near_l && near_r) {
+                let cl = 0.5 * (lo_l + hi_l) - p;
+                let cr = 0.5 * (lo_r + hi_r) - p;
+                let right_first = dr < dl || (dr == dl && dot(cr, cr) < dot(cl, cl));
+                pending |= 1u << (firstLeadingBit(k) + 1u);
+                k = select(2u * k, 2u * k + 1u, right_first);
+            } else if (near_l) {
+                k = 2u * k;
+            } else if (near_r) {
+                k = 2u * k + 1u;
             } else {
-                let bound = w.d2 * PRUNE_SLACK;
-                let dl = box_d2(2u * k, p);
-                let dr = box_d2(2u * k + 1u, p);
-                let near_l = dl <= bound;
-                let near_r = dr <= bound;
-                if (near_l && near_r) {
-                    let right_first = dr < dl || (dr == dl && centre_d2(2u * k + 1u, p) < centre_d2(2u * k, p));
-                    pending |= 1u << (firstLeadingBit(k) + 1u);
-                    k = select(2u * k, 2u * k + 1u, right_first);
-                } else if (near_l) {
-                    k = 2u * k;
-                } else if (near_r) {
-                    k = 2u * k + 1u;
-                } else {
-                    last = k;
-                    k = 0u;
-                }
+                last = k;
+                k = 0u;
             }
         }
         if (v >= WALK_VISITS || k < leaves) { break; }
         // the leaf
         v++;
-        let f = order[k - leaves];
-        if (!excluded(slave, facets[f])) {
-            let d2 = project_facet(p, facets[f]).dist2;
-            w.projections += 1u;
-            if (d2 < w.d2 || (d2 == w.d2 && f < w.f)) {
-                w.d2 = d2;
-                w.f = f;
+        if (!untested || box_d2(k, p) <= w.d2 * PRUNE_SLACK) {
+            let f = order[k - leaves];
+            if (!excluded(slave, facets[f])) {
+                let d2 = project_facet(p, facets[f]).dist2;
+                w.projections += 1u;
+                if (d2 < w.d2 || (d2 == w.d2 && f < w.f)) {
+                    w.d2 = d2;
+                    w.f = f;
+                }
             }
         }
+        untested = false;
         last = k;
         k = 0u;
     }
@@ -279,7 +284,7 @@ fn chunk_best(i: u32, t: u32) -> ChunkBest {
     b.f = NO_FACET;
     for (var j = j0; j < j1; j++) {
         let k = leaves + j;
-        if (boxes[2u * k].x > boxes[2u * k + 1u].x) { continue; } // no facet, or collapsed
+        if ((boxes[k].x & BOX_TOP) == BOX_TOP) { continue; } // no facet, or collapsed: empty
         let f = order[j];
         if (excluded(slave, facets[f])) { continue; }
         let d2 = project_facet(p, facets[f]).dist2;
@@ -308,7 +313,7 @@ fn nearest_walk(@builtin(workgroup_id) wg: vec3<u32>,
     let t = folded_id(wg, nwg, li, ITEM_WORKGROUP);
     if (t >= params.n_slaves) { return; }
     if (t == 0u) { work[params.n_slaves] = 0u; }
-    let w = walk(t);
+    let w = walk(t, 1u);
     let leaves = 1u << params.tree_levels;
     var start = leaves;
     if (w.next != 0u) { start = min(w.next - 1u, leaves); }

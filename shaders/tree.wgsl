@@ -6,22 +6,24 @@
 // longest side), in heap layout: node 1 is the root, node k's children are 2k and 2k + 1, level
 // l holds nodes 2^l .. 2^(l+1) − 1, and leaf slot j is node 2^L + j (L = params.tree_levels)
 // holding facet order[j], or nothing when order[j] = NO_FACET.
-// boxes[2k] is node k's lower corner and boxes[2k + 1] its upper one (xyz, local frame; w 0).
-// An empty box (no facet below, or only collapsed ones) has lo > hi.
+// boxes[k] is node k's box, packed into one vec4<u32> (common.wgsl: 21-bit codes of its six
+// bounds on a power-of-two grid, lower bounds rounded down and upper ones up; one load per box
+// test). An empty box (no facet below, or only collapsed ones) has lo = +∞, hi = −∞.
 //
 // Bindings: 0 params (uniform SearchParams: tree_levels, box_margin), 1 tree (uniform
 //           TreeParams of this pass), 2 nodes (local xyz), 3 facets, 4 order (active facet of
-//           each leaf slot), 5 boxes (2 vec4 per node, 2^(L+1) nodes), 6 status
+//           each leaf slot), 5 boxes (one packed vec4<u32> per node, 2^(L+1) nodes), 6 status
 //           (STATUS_COLLAPSED counted).
 // Dispatch: tree_refit one invocation per node of level `bottom` (2^bottom of them),
 //           TREE_WORKGROUP per workgroup, folded into 2D; one pass per group of up to
 //           TREE_LEVELS_PER_PASS levels, bottom = L first (the leaves, from the facets), then
 //           up to the root. Passes run in order, each after the last (separate dispatches).
 // Invariants: a leaf's box is its facet's nodes' box grown by box_margin (≥ 16 f32 ulps of the
-//             frame's extent: the round-off of a closest point computed in f32), so a facet's
-//             computed distance from any point is never below its box's; an inner node's box is
-//             the union of its children's. min/max are exact, so the boxes are the same bits on
-//             every device and in the CPU mirror, whatever the order of execution. A facet
+//             frame's extent: the round-off of a closest point computed in f32) and rounded
+//             outwards to the box grid, so a facet's computed distance from any point is never
+//             below its box's; an inner node's box is the union of its children's (min/max of
+//             the codes). Every operation is exact, so the boxes are the same bits on every
+//             device and in the CPU mirror, whatever the order of execution. A facet
 //             collapsed at these positions (facet_collapsed) gets an empty box (no slave finds
 //             it) and is counted in STATUS_COLLAPSED. The loop runs at most
 //             TREE_LEVELS_PER_PASS times.
@@ -39,7 +41,7 @@ struct TreeParams {
 @group(0) @binding(2) var<storage, read> nodes: array<vec4<f32>>;
 @group(0) @binding(3) var<storage, read> facets: array<vec4<u32>>;
 @group(0) @binding(4) var<storage, read> order: array<u32>;
-@group(0) @binding(5) var<storage, read_write> boxes: array<vec4<f32>>;
+@group(0) @binding(5) var<storage, read_write> boxes: array<vec4<u32>>;
 @group(0) @binding(6) var<storage, read_write> status: array<atomic<u32>>;
 
 // Invocations per workgroup (Rust twin: TREE_WORKGROUP) and the levels one pass reduces in
@@ -47,13 +49,13 @@ struct TreeParams {
 const TREE_WORKGROUP: u32 = 64u;
 const TREE_LEVELS_PER_PASS: u32 = 6u;
 
-var<workgroup> wlo: array<vec3<f32>, 64>;
-var<workgroup> whi: array<vec3<f32>, 64>;
+var<workgroup> wlo: array<vec3<u32>, 64>;
+var<workgroup> whi: array<vec3<u32>, 64>;
 
-// The box of leaf slot j: its facet's nodes, grown by the margin; empty for a slot with no
-// facet or a collapsed facet.
-fn leaf_box(j: u32) -> array<vec3<f32>, 2> {
-    var b = array<vec3<f32>, 2>(vec3<f32>(EMPTY_LO), vec3<f32>(-EMPTY_LO));
+// The codes of leaf slot j's box: its facet's nodes, grown by the margin; empty for a slot with
+// no facet or a collapsed facet.
+fn leaf_box(j: u32) -> array<vec3<u32>, 2> {
+    var b = array<vec3<u32>, 2>(vec3<u32>(BOX_TOP), vec3<u32>(0u));
     if (order[j] == NO_FACET) { return b; }
     let fac = facets[order[j]];
     let n = facet_node_count(fac);
@@ -68,8 +70,11 @@ fn leaf_box(j: u32) -> array<vec3<f32>, 2> {
         return b;
     }
     let m = vec3<f32>(params.box_margin);
-    b[0] = min(min(x0, x1), min(x2, x3)) - m;
-    b[1] = max(max(x0, x1), max(x2, x3)) + m;
+    let lo = min(min(x0, x1), min(x2, x3)) - m;
+    let hi = max(max(x0, x1), max(x2, x3)) + m;
+    let inv = box_step(params.box_margin).y;
+    b[0] = vec3<u32>(box_code_lo(lo.x, inv), box_code_lo(lo.y, inv), box_code_lo(lo.z, inv));
+    b[1] = vec3<u32>(box_code_hi(hi.x, inv), box_code_hi(hi.y, inv), box_code_hi(hi.z, inv));
     return b;
 }
 
@@ -79,18 +84,18 @@ fn tree_refit(@builtin(workgroup_id) wg: vec3<u32>,
               @builtin(local_invocation_index) li: u32) {
     let k = folded_id(wg, nwg, li, TREE_WORKGROUP);
     let width = 1u << tree.bottom;  // nodes of level `bottom`: width .. 2·width − 1
-    var lo = vec3<f32>(EMPTY_LO);
-    var hi = vec3<f32>(-EMPTY_LO);
+    var lo = vec3<u32>(BOX_TOP);
+    var hi = vec3<u32>(0u);
     if (k < width) {
         if (tree.bottom == params.tree_levels) {
             let b = leaf_box(k);
             lo = b[0];
             hi = b[1];
-            boxes[2u * (width + k)] = vec4<f32>(lo, 0.0);
-            boxes[2u * (width + k) + 1u] = vec4<f32>(hi, 0.0);
+            boxes[width + k] = box_pack(lo, hi);
         } else {
-            lo = boxes[2u * (width + k)].xyz;
-            hi = boxes[2u * (width + k) + 1u].xyz;
+            let b = boxes[width + k];
+            lo = box_codes_lo(b);
+            hi = box_codes_hi(b);
         }
     }
     wlo[li] = lo;
@@ -114,8 +119,7 @@ fn tree_refit(@builtin(workgroup_id) wg: vec3<u32>,
             whi[li] = hi;
             let node = first + li;
             if (node < (width >> s)) {  // within level bottom − s − 1
-                boxes[2u * node] = vec4<f32>(lo, 0.0);
-                boxes[2u * node + 1u] = vec4<f32>(hi, 0.0);
+                boxes[node] = box_pack(lo, hi);
             }
         }
     }

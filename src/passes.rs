@@ -33,7 +33,7 @@ pub enum Buf {
     ScanData,
     /// The active facet of each leaf slot of the search tree (Morton order).
     Order,
-    /// The search tree's boxes: two `vec4<f32>` per heap node.
+    /// The search tree's boxes: one packed `vec4<u32>` per heap node.
     Boxes,
     /// The status words (`STATUS_*`).
     Status,

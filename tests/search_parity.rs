@@ -5,6 +5,7 @@
 mod common;
 
 use abut::mesh::{plate_quads, plate_triangles, point_cloud, polyline, sphere_triangles};
+use abut::search::tree::boxes;
 use abut::{Device, Error, Facet, GlobalSearch, Model, PairId, Surface};
 use common::*;
 
@@ -397,8 +398,20 @@ fn each_step_matches_its_mirror_in_split_runs() {
     let cpu_boxes = cpu_search.tree_boxes().unwrap();
     let order = cpu_search.tree_order().to_vec();
     let leaves = order.len().next_power_of_two();
-    assert_eq!(cpu_boxes.len(), 4 * leaves);
+    assert_eq!(cpu_boxes.len(), 2 * leaves);
     let frame = cpu.stats.grid.frame;
+    // the grid step the kernels quantise on: from the box margin of the master's extent
+    let (mut lo_m, mut hi_m) = ([f64::INFINITY; 3], [f64::NEG_INFINITY; 3]);
+    for &f in &master.active {
+        for &n in master.facets[f as usize].nodes() {
+            for a in 0..3 {
+                lo_m[a] = lo_m[a].min(m.positions()[n as usize][a]);
+                hi_m[a] = hi_m[a].max(m.positions()[n as usize][a]);
+            }
+        }
+    }
+    let margin = abut::search::box_margin(lo_m, hi_m, frame);
+    let (step, _) = boxes::box_step(margin);
     let mut placed: Vec<u32> = order.iter().copied().filter(|&f| f != u32::MAX).collect();
     placed.sort_unstable();
     assert_eq!(
@@ -407,32 +420,45 @@ fn each_step_matches_its_mirror_in_split_runs() {
         "every active facet in exactly one leaf slot"
     );
     for (j, &f) in order.iter().enumerate() {
-        let (lo, hi) = (cpu_boxes[2 * (leaves + j)], cpu_boxes[2 * (leaves + j) + 1]);
+        let b = cpu_boxes[leaves + j];
         if f == u32::MAX {
-            assert!(lo[0] > hi[0], "leaf {j}: an empty slot with a box");
+            assert!(boxes::is_empty(b), "leaf {j}: an empty slot with a box");
             continue;
         }
+        let (lo, hi) = boxes::unpack(b, step);
         for &n in master.facets[master.active[f as usize] as usize].nodes() {
             let x = m.positions()[n as usize];
             for a in 0..3 {
                 let xl = (x[a] - frame[a]) as f32;
+                // holds the node with the margin (quantising only widens)
                 assert!(
-                    lo[a] <= xl && xl <= hi[a],
+                    lo[a] <= xl - margin && xl + margin <= hi[a],
                     "leaf {j}: node {n} outside its box"
                 );
             }
         }
+        let (qlo, qhi) = boxes::codes(b);
+        for a in 0..3 {
+            assert!(
+                qlo[a] > 0 && qhi[a] < boxes::BOX_TOP,
+                "leaf {j}: an infinite bound"
+            );
+        }
     }
     for k in 1..leaves {
+        let (lo, hi) = boxes::codes(cpu_boxes[k]);
+        let (l_lo, l_hi) = boxes::codes(cpu_boxes[2 * k]);
+        let (r_lo, r_hi) = boxes::codes(cpu_boxes[2 * k + 1]);
         for a in 0..3 {
-            let (l, r) = (2 * k, 2 * k + 1);
             assert_eq!(
-                cpu_boxes[2 * k][a],
-                cpu_boxes[2 * l][a].min(cpu_boxes[2 * r][a])
+                lo[a],
+                l_lo[a].min(r_lo[a]),
+                "node {k}: not its children's union"
             );
             assert_eq!(
-                cpu_boxes[2 * k + 1][a],
-                cpu_boxes[2 * l + 1][a].max(cpu_boxes[2 * r + 1][a])
+                hi[a],
+                l_hi[a].max(r_hi[a]),
+                "node {k}: not its children's union"
             );
         }
     }

@@ -135,8 +135,11 @@ pub(crate) fn hits_mut(hits: &mut Arc<Vec<GpuHit>>) -> &mut Vec<GpuHit> {
 /// The buffers of one search on the CPU; they only grow.
 #[derive(Clone, Debug, Default)]
 pub struct CpuWorkspace {
-    /// The search tree's boxes (two vec4 per heap node: lower, upper corner).
-    pub boxes: Vec<[f32; 4]>,
+    /// The search tree's packed boxes (one per heap node, `search::tree::boxes`).
+    pub boxes: Vec<[u32; 4]>,
+    /// The same boxes decoded (lower, upper corner per heap node; the bits the kernels decode
+    /// at each test): the CPU walk reads these instead of decoding every box it tests.
+    pub corners: Vec<[[f32; 4]; 2]>,
     /// Status words (`STATUS_*`).
     pub status: [u32; STATUS_WORDS],
     /// One result per slave node (the tracked nodes between increments), shared with the last
@@ -235,8 +238,9 @@ impl CpuSearch {
         Ok(&self.ws)
     }
 
-    /// The search tree's boxes after the last global search (two vec4 per heap node).
-    pub fn tree_boxes(&self) -> &[[f32; 4]] {
+    /// The search tree's packed boxes after the last global search (one per heap node,
+    /// `search::tree::boxes`).
+    pub fn tree_boxes(&self) -> &[[u32; 4]] {
         &self.ws.boxes
     }
 
@@ -246,7 +250,7 @@ impl CpuSearch {
         self.ws.boxes.clear();
         self.ws
             .boxes
-            .resize(tree::box_words(prep.params.tree_levels), [0.0; 4]);
+            .resize(tree::box_words(prep.params.tree_levels), [0; 4]);
         hits_mut(&mut self.ws.hits).resize(prep.slaves.len(), GpuHit::miss(0, 0));
     }
 
@@ -280,6 +284,7 @@ pub fn run_step(
                     &mut ws.status,
                 );
             }
+            tree::decode(params, &ws.boxes, &mut ws.corners);
         }
         Step::NearestFacet => {
             let n = params.n_slaves as usize;
@@ -305,6 +310,7 @@ pub fn run_step(
                 walk_points: &ws.walk_points,
                 order: &prep.order,
                 boxes: &ws.boxes,
+                corners: &ws.corners,
                 adjacency: &prep.adjacency,
             };
             nearest_facet::nearest_walk(&c, &mut ws.work, &mut ws.best);

@@ -7,9 +7,10 @@ use super::common::{excluded, facet_node_count, node, share_node};
 use super::PAR_MIN;
 use crate::geometry::{closest_on_quad, closest_on_segment, closest_on_triangle, Projection, V3};
 use crate::search::layout::{
-    GpuHit, SearchParams, EMPTY_LO, FLAG_SELF_CONTACT, HIT_BESIDE_FREE_EDGE, NO_FACET,
-    STATUS_CROWDED, STATUS_FALLBACK,
+    GpuHit, SearchParams, FLAG_SELF_CONTACT, HIT_BESIDE_FREE_EDGE, NO_FACET, STATUS_CROWDED,
+    STATUS_FALLBACK,
 };
+use crate::search::tree::boxes;
 
 /// Nearest point on a padded facet (WGSL: `project`).
 pub fn project(nodes: &[[f32; 4]], p: V3<f32>, fac: [u32; 4]) -> Projection<f32> {
@@ -72,8 +73,10 @@ pub struct Candidates<'a> {
     pub walk_points: &'a [[u32; 4]],
     /// Active facet of each leaf slot of the tree.
     pub order: &'a [u32],
-    /// The tree's boxes (two per heap node).
-    pub boxes: &'a [[f32; 4]],
+    /// The tree's packed boxes (one per heap node, `search::tree::boxes`).
+    pub boxes: &'a [[u32; 4]],
+    /// The same boxes decoded: lower and upper corner (w 0) per heap node.
+    pub corners: &'a [[[f32; 4]; 2]],
     /// Node→facet adjacency.
     pub adjacency: &'a [u32],
 }
@@ -82,9 +85,7 @@ impl Candidates<'_> {
     /// Whether tree node k holds nothing within distance² `bound` of p (WGSL: `far`; an empty
     /// box never does).
     fn far(&self, k: u32, p: V3<f32>, bound: f32) -> bool {
-        let lo = self.boxes[2 * k as usize];
-        let hi = self.boxes[2 * k as usize + 1];
-        lo[0] > hi[0] || box_d2(self, k, glam::Vec4::new(p.x, p.y, p.z, 0.0)) > bound * PRUNE_SLACK
+        box_d2(self, k, glam::Vec4::new(p.x, p.y, p.z, 0.0)) > bound * PRUNE_SLACK
     }
 
     /// Leaf slot count 2^L.
@@ -133,47 +134,37 @@ struct Walk {
     projections: u32,
 }
 
-/// Distance² from p (w = 0) to tree node k's box; `EMPTY_LO` for an empty box (WGSL: `box_d2`).
+/// Distance² from p (w = 0) to tree node k's box; +∞ for an empty box (WGSL: `box_d2`).
 #[inline]
 fn box_d2(c: &Candidates<'_>, k: u32, p: glam::Vec4) -> f32 {
-    let b: &[[f32; 4]; 2] = c.boxes[2 * k as usize..2 * k as usize + 2]
-        .try_into()
-        .expect("two vec4");
-    box_d2_of(
-        glam::Vec4::from_array(b[0]),
-        glam::Vec4::from_array(b[1]),
-        p,
-    )
+    let (lo, hi) = corners(c, k);
+    box_d2_of(lo, hi, p)
 }
 
-/// Distance² from p (w = 0) to the box [lo, hi] (WGSL: `box_d2`, the same operations in the
-/// same order: the components in SIMD lanes, the sum in x, y, z order); `EMPTY_LO` for an
+/// Tree node k's lower and upper corner, decoded (WGSL: `box_bounds(box_codes_lo(b), step)`,
+/// `box_bounds(box_codes_hi(b), step)` of its packed box).
+#[inline]
+fn corners(c: &Candidates<'_>, k: u32) -> (glam::Vec4, glam::Vec4) {
+    let [lo, hi] = c.corners[k as usize];
+    (glam::Vec4::from_array(lo), glam::Vec4::from_array(hi))
+}
+
+/// Distance² from p (w = 0) to the box [lo, hi] (WGSL: `packed_box_d2`, the same operations
+/// in the same order: the components in SIMD lanes, the sum in x, y, z order); +∞ for an
 /// empty box.
 #[inline]
 fn box_d2_of(lo: glam::Vec4, hi: glam::Vec4, p: glam::Vec4) -> f32 {
-    if lo.x > hi.x {
-        return EMPTY_LO;
-    }
     let d = (lo - p).max(p - hi).max(glam::Vec4::ZERO);
     let d = d * d;
     d.x + d.y + d.z
 }
 
-/// Distance² from p (w = 0) to the centre of the box [lo, hi] (WGSL: `centre_d2`).
+/// Distance² from p (w = 0) to the centre of the box [lo, hi] (WGSL: the walk's `cl`, `cr`).
 #[inline]
 fn centre_d2_of(lo: glam::Vec4, hi: glam::Vec4, p: glam::Vec4) -> f32 {
     let d = 0.5 * (lo + hi) - p;
     let d = d * d;
     d.x + d.y + d.z
-}
-
-/// The boxes of inner node k's two children (lower and upper corner of each).
-#[inline]
-fn children(c: &Candidates<'_>, k: u32) -> [glam::Vec4; 4] {
-    let b: &[[f32; 4]; 4] = c.boxes[4 * k as usize..4 * k as usize + 4]
-        .try_into()
-        .expect("four vec4");
-    b.map(glam::Vec4::from_array)
 }
 
 /// The depth of heap node k ≥ 1 (WGSL: `firstLeadingBit(k)`).
@@ -189,7 +180,7 @@ fn ancestor(at: u32, d: u32) -> u32 {
 /// The nearest facet of the slave at walk position t a depth-first walk finds within
 /// `WALK_VISITS` nodes, the nearer child first, the pending siblings one bit per depth
 /// (WGSL: `walk`).
-fn walk(c: &Candidates<'_>, t: usize) -> Walk {
+fn walk(c: &Candidates<'_>, t: usize, start: u32) -> Walk {
     let (p, slave) = walk_point(c, t);
     let leaves = c.leaves();
     // bit d: the sibling of the walk's ancestor at depth d is still to visit
@@ -203,12 +194,16 @@ fn walk(c: &Candidates<'_>, t: usize) -> Walk {
         projections: 0,
     };
     let p4 = glam::Vec4::new(p.x, p.y, p.z, 0.0);
-    let mut k = if c.far(1, p, w.d2) { 0 } else { 1 };
+    let mut k = start;
+    last = last.max(start);
     let mut v = 0;
+    // whether the leaf k was reached by a return to a pending sibling (its box not yet tested)
+    let mut untested = true;
     // two loops as in the shader (its SIMD lanes project together)
     for _leaf in 0..WALK_VISITS {
-        // inner nodes and returns to pending subtrees, until a leaf, the end or the cap
-        while v < WALK_VISITS && k < leaves {
+        // one inner node's two children per iteration, until a leaf, the end or the cap; a
+        // return to a pending sibling goes to it untested (its children lie within its box)
+        while v < WALK_VISITS {
             if k == 0 {
                 if pending == 0 {
                     break;
@@ -216,30 +211,38 @@ fn walk(c: &Candidates<'_>, t: usize) -> Walk {
                 let d = depth(pending);
                 pending &= !(1 << d);
                 last = ancestor(last, d) ^ 1;
-                k = if box_d2(c, last, p4) > w.d2 * PRUNE_SLACK {
-                    0
-                } else {
-                    last
-                };
-            } else {
-                let bound = w.d2 * PRUNE_SLACK;
-                let (l, r) = (2 * k, 2 * k + 1);
-                let [lo_l, hi_l, lo_r, hi_r] = children(c, k);
-                let (dl, dr) = (box_d2_of(lo_l, hi_l, p4), box_d2_of(lo_r, hi_r, p4));
-                match (dl <= bound, dr <= bound) {
-                    (true, true) => {
-                        let right_first = dr < dl
-                            || (dr == dl
-                                && centre_d2_of(lo_r, hi_r, p4) < centre_d2_of(lo_l, hi_l, p4));
-                        pending |= 1 << (depth(k) + 1);
-                        k = if right_first { r } else { l };
-                    }
-                    (true, false) => k = l,
-                    (false, true) => k = r,
-                    (false, false) => {
-                        last = k;
-                        k = 0;
-                    }
+                k = last;
+                untested = true;
+                if k < leaves && box_d2(c, k, p4) > w.d2 * PRUNE_SLACK {
+                    // the shader tests its two children and finds both farther (they lie in
+                    // its box): the same state after one visit, for one box test instead of two
+                    k = 0;
+                    v += 1;
+                    continue;
+                }
+            }
+            if k >= leaves {
+                break;
+            }
+            let bound = w.d2 * PRUNE_SLACK;
+            let (l, r) = (2 * k, 2 * k + 1);
+            let (lo_l, hi_l) = corners(c, l);
+            let (lo_r, hi_r) = corners(c, r);
+            let (dl, dr) = (box_d2_of(lo_l, hi_l, p4), box_d2_of(lo_r, hi_r, p4));
+            untested = false;
+            match (dl <= bound, dr <= bound) {
+                (true, true) => {
+                    let right_first = dr < dl
+                        || (dr == dl
+                            && centre_d2_of(lo_r, hi_r, p4) < centre_d2_of(lo_l, hi_l, p4));
+                    pending |= 1 << (depth(k) + 1);
+                    k = if right_first { r } else { l };
+                }
+                (true, false) => k = l,
+                (false, true) => k = r,
+                (false, false) => {
+                    last = k;
+                    k = 0;
                 }
             }
             v += 1;
@@ -249,15 +252,18 @@ fn walk(c: &Candidates<'_>, t: usize) -> Walk {
         }
         // the leaf
         v += 1;
-        let f = c.order[(k - leaves) as usize];
-        if !c.excluded(slave, f) {
-            let d2 = project(c.nodes, p, c.facets[f as usize]).dist2;
-            w.projections += 1;
-            if d2 < w.d2 || (d2 == w.d2 && f < w.f) {
-                w.d2 = d2;
-                w.f = f;
+        if !untested || box_d2(c, k, p4) <= w.d2 * PRUNE_SLACK {
+            let f = c.order[(k - leaves) as usize];
+            if !c.excluded(slave, f) {
+                let d2 = project(c.nodes, p, c.facets[f as usize]).dist2;
+                w.projections += 1;
+                if d2 < w.d2 || (d2 == w.d2 && f < w.f) {
+                    w.d2 = d2;
+                    w.f = f;
+                }
             }
         }
+        untested = false;
         last = k;
         k = 0;
     }
@@ -288,7 +294,7 @@ fn chunk_best(c: &Candidates<'_>, work: &[u32], b: &[u32], i: usize, t: u32) -> 
     let mut best = (c.params.radius * c.params.radius, NO_FACET);
     for j in j0..j1 {
         let k = (leaves + j) as usize;
-        if c.boxes[2 * k][0] > c.boxes[2 * k + 1][0] {
+        if boxes::is_empty(c.boxes[k]) {
             continue; // no facet, or collapsed
         }
         let f = c.order[j as usize];
@@ -337,7 +343,7 @@ pub fn nearest_walk(c: &Candidates<'_>, work: &mut [u32], best: &mut [u32]) {
         .enumerate()
         .with_min_len(PAR_MIN)
         .for_each(|(t, (b, chunks))| {
-            let w = walk(c, t);
+            let w = walk(c, t, 1);
             let start = if w.next != 0 {
                 (w.next - 1).min(n_slots)
             } else {

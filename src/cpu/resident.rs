@@ -33,7 +33,7 @@ impl CpuSearch {
         self.ws.boxes.clear();
         self.ws
             .boxes
-            .resize(super::tree::box_words(prep.params.tree_levels), [0.0; 4]);
+            .resize(super::tree::box_words(prep.params.tree_levels), [0; 4]);
         super::hits_mut(&mut self.ws.hits).resize(prep.slaves.len(), GpuHit::miss(0, 0));
         self.ws.reference = prep.nodes.clone();
         self.resident = Some(Box::new(CpuResident {

@@ -4,28 +4,23 @@ use rayon::prelude::*;
 
 use super::common::{facet_collapsed, facet_node_count, node};
 use super::PAR_MIN;
-use crate::search::layout::{SearchParams, TreeParams, EMPTY_LO, NO_FACET, STATUS_COLLAPSED};
+use crate::search::layout::{SearchParams, TreeParams, NO_FACET, STATUS_COLLAPSED};
+use crate::search::tree::boxes::{self, EMPTY};
 
-/// The lower and upper corner of an empty box.
-const EMPTY: [[f32; 4]; 2] = [
-    [EMPTY_LO, EMPTY_LO, EMPTY_LO, 0.0],
-    [-EMPTY_LO, -EMPTY_LO, -EMPTY_LO, 0.0],
-];
-
-/// Words (vec4) of the boxes of a tree of `levels` levels: two per heap node, nodes
-/// 0..2^(levels+1) (node 0 unused).
+/// Packed boxes (`[u32; 4]`, `search::tree::boxes`) of a tree of `levels` levels: one per heap
+/// node, nodes 0..2^(levels+1) (node 0 unused).
 pub fn box_words(levels: u32) -> usize {
-    4usize << levels
+    2usize << levels
 }
 
-/// The box of leaf slot `j` (WGSL: `leaf_box`) and whether its facet collapsed.
+/// The packed box of leaf slot `j` (WGSL: `leaf_box`) and whether its facet collapsed.
 fn leaf_box(
     params: &SearchParams,
     nodes: &[[f32; 4]],
     facets: &[[u32; 4]],
     order: &[u32],
     j: usize,
-) -> ([[f32; 4]; 2], bool) {
+) -> ([u32; 4], bool) {
     if order[j] == NO_FACET {
         return (EMPTY, false);
     }
@@ -44,11 +39,12 @@ fn leaf_box(
             hi[a] = hi[a].max(x[a]);
         }
     }
+    let inv = boxes::box_step(m).1;
     (
-        [
-            [lo[0] - m, lo[1] - m, lo[2] - m, 0.0],
-            [hi[0] + m, hi[1] + m, hi[2] + m, 0.0],
-        ],
+        boxes::pack(
+            [0, 1, 2].map(|a| boxes::code_lo(lo[a] - m, inv)),
+            [0, 1, 2].map(|a| boxes::code_hi(hi[a] + m, inv)),
+        ),
         false,
     )
 }
@@ -62,19 +58,19 @@ pub fn tree_refit(
     nodes: &[[f32; 4]],
     facets: &[[u32; 4]],
     order: &[u32],
-    boxes: &mut [[f32; 4]],
+    tree: &mut [[u32; 4]],
     status: &mut [u32],
 ) {
     let width = 1usize << tp.bottom;
     if tp.bottom == params.tree_levels {
-        let level = &mut boxes[2 * width..4 * width];
+        let level = &mut tree[width..2 * width];
         let collapsed: u32 = level
-            .par_chunks_mut(2)
+            .par_iter_mut()
             .enumerate()
             .with_min_len(PAR_MIN)
             .map(|(j, b)| {
                 let (bx, c) = leaf_box(params, nodes, facets, order, j);
-                b.copy_from_slice(&bx);
+                *b = bx;
                 u32::from(c)
             })
             .sum();
@@ -82,21 +78,35 @@ pub fn tree_refit(
     }
     for s in 0..tp.levels {
         let w = width >> (s + 1); // nodes of the level being computed: w..2w
-        let (upper, lower) = boxes.split_at_mut(4 * w);
-        let parents = &mut upper[2 * w..4 * w];
-        let children = &lower[..4 * w];
+        let (upper, lower) = tree.split_at_mut(2 * w);
+        let parents = &mut upper[w..2 * w];
+        let children = &lower[..2 * w];
         parents
-            .par_chunks_mut(2)
+            .par_iter_mut()
             .enumerate()
             .with_min_len(PAR_MIN)
             .for_each(|(i, b)| {
-                let (l, r) = (&children[4 * i..4 * i + 2], &children[4 * i + 2..4 * i + 4]);
-                for a in 0..3 {
-                    b[0][a] = l[0][a].min(r[0][a]);
-                    b[1][a] = l[1][a].max(r[1][a]);
-                }
-                b[0][3] = 0.0;
-                b[1][3] = 0.0;
+                let (l_lo, l_hi) = boxes::codes(children[2 * i]);
+                let (r_lo, r_hi) = boxes::codes(children[2 * i + 1]);
+                *b = boxes::pack(
+                    [0, 1, 2].map(|a| l_lo[a].min(r_lo[a])),
+                    [0, 1, 2].map(|a| l_hi[a].max(r_hi[a])),
+                );
             });
     }
+}
+
+/// Decodes every packed box into its lower and upper corner (`corners`, resized), with the
+/// bits the kernels' `box_bounds` gives: the CPU walk's boxes.
+pub fn decode(params: &SearchParams, tree: &[[u32; 4]], corners: &mut Vec<[[f32; 4]; 2]>) {
+    let step = boxes::box_step(params.box_margin).0;
+    corners.resize(tree.len(), [[0.0; 4]; 2]);
+    corners
+        .par_iter_mut()
+        .zip(tree)
+        .with_min_len(PAR_MIN)
+        .for_each(|(c, &b)| {
+            let (lo, hi) = boxes::unpack(b, step);
+            *c = [[lo[0], lo[1], lo[2], 0.0], [hi[0], hi[1], hi[2], 0.0]];
+        });
 }

@@ -687,9 +687,9 @@ impl GpuSearch {
             .collect())
     }
 
-    /// Reads back the search tree's boxes after the last global search (two vec4 per heap
-    /// node). A debugging and testing aid (it allocates and waits).
-    pub fn tree_boxes(&self) -> Result<Vec<[f32; 4]>> {
+    /// Reads back the search tree's packed boxes after the last global search (one per heap
+    /// node, `search::tree::boxes`). A debugging and testing aid (it allocates and waits).
+    pub fn tree_boxes(&self) -> Result<Vec<[u32; 4]>> {
         let Some(levels) = self.tree_levels.filter(|_| self.searched) else {
             return Err(Error::Gpu {
                 during: "reading the search tree".into(),

@@ -993,10 +993,11 @@ impl GlobalSearch {
         &self.master
     }
 
-    /// The search tree's boxes after the last global search (two vec4 per heap node, lower
-    /// then upper corner, local frame; read back from the GPU on a GPU device): for tests of
-    /// the refit and for debugging.
-    pub fn tree_boxes(&self) -> Result<Vec<[f32; 4]>> {
+    /// The search tree's packed boxes after the last global search (one per heap node, node 0
+    /// unused; local frame, decoded by [`tree::boxes::unpack`] with the step
+    /// [`tree::boxes::box_step`] of [`layout::SearchParams::box_margin`]; read back from the
+    /// GPU on a GPU device): for tests of the refit and for debugging.
+    pub fn tree_boxes(&self) -> Result<Vec<[u32; 4]>> {
         match &self.executor {
             Executor::Gpu(g) => g.tree_boxes(),
             Executor::Cpu(c) => Ok(c.tree_boxes().to_vec()),
