@@ -376,19 +376,21 @@ fn closest_on_quad(p: vec3<f32>, x0: vec3<f32>, x1: vec3<f32>, x2: vec3<f32>, x3
     return r;
 }
 
-// ---- the search tree's boxes, quantised (Rust twin: search::tree::BoxCodec) ----
+// ---- the search tree's boxes, quantised (Rust twin: search::tree::boxes) ----
 // A box is one vec4<u32>: its six bounds (lo.xyz, hi.xyz) as 21-bit codes q on a grid of step
-// s, a power of two (box_step below): the bound is (q − BOX_BIAS)·s, exact in f32; code 0 is
-// −∞ and BOX_TOP is +∞ (a bound beyond the grid's ±2^20 steps becomes infinite, so a box only
-// ever grows); an empty box has lo = +∞ and hi = −∞. Lower bounds round down and upper ones
-// up, so a box always holds what it was made from.
+// s, a power of two (box_step): the bound is (q − BOX_BIAS)·s, exact in f32. Lower bounds round
+// down and upper ones up, so a box always holds what it was made from; a bound beyond the grid
+// gets code 0 (lower) or BOX_TOP (upper), which lie outside the grid's finite range
+// ±(BOX_BIAS − 1)·s, and the box tests measure from the point clamped into that range
+// (box_point): those codes then act as −∞ and +∞, and a distance is never overestimated. An
+// empty box has lo codes BOX_TOP and hi codes 0 (box_empty).
 const BOX_BIAS: f32 = 1048576.0;    // 2^20
 const BOX_TOP: u32 = 0x1fffffu;     // 2^21 − 1
-const BOX_BIG: f32 = 3.0e38;
 
 // The step of the box grid, and its inverse: the power of two at or below the box margin
-// (2^-100 when the margin is below that), so the grid's ±2^20 steps reach 2^19 margins, twice
-// the largest master coordinate, and a code costs at most one margin.
+// (2^-100 at least), so the grid's ±2^20 steps reach 2^19 margins, twice the largest master
+// coordinate, and a code widens a box by at most one margin. Built from exponent bits: every
+// device gets the same two numbers.
 fn box_step(margin: f32) -> vec2<f32> {
     let e = clamp(i32((bitcast<u32>(margin) >> 23u) & 0xffu) - 127, -100, 100);
     return vec2<f32>(bitcast<f32>(u32(e + 127) << 23u), bitcast<f32>(u32(127 - e) << 23u));
@@ -400,12 +402,6 @@ fn box_code_lo(x: f32, inv_step: f32) -> u32 {
 
 fn box_code_hi(x: f32, inv_step: f32) -> u32 {
     return u32(clamp(ceil(x * inv_step) + BOX_BIAS, 1.0, f32(BOX_TOP)));
-}
-
-fn box_bound(q: u32, step: f32) -> f32 {
-    if (q == 0u) { return -BOX_BIG; }
-    if (q == BOX_TOP) { return BOX_BIG; }
-    return (f32(q) - BOX_BIAS) * step;
 }
 
 // Packs codes (lo, hi) into one vec4<u32>: 21 bits each, lo.x from bit 0 upwards.
@@ -425,14 +421,26 @@ fn box_codes_hi(b: vec4<u32>) -> vec3<u32> {
     return vec3<u32>(((b.y >> 31u) | (b.z << 1u)) & BOX_TOP, ((b.z >> 20u) | (b.w << 12u)) & BOX_TOP, (b.w >> 9u) & BOX_TOP);
 }
 
+// The bounds of three codes.
 fn box_bounds(q: vec3<u32>, step: f32) -> vec3<f32> {
-    return vec3<f32>(box_bound(q.x, step), box_bound(q.y, step), box_bound(q.z, step));
+    return (vec3<f32>(q) - vec3<f32>(BOX_BIAS)) * step;
 }
 
-// Distance² from p to the packed box b; +∞ (above any bound) for an empty box.
-fn packed_box_d2(b: vec4<u32>, p: vec3<f32>, step: f32) -> f32 {
+// Whether a packed box is empty (no facet below it, or only collapsed ones).
+fn box_empty(b: vec4<u32>) -> bool {
+    return (b.x & BOX_TOP) == BOX_TOP;
+}
+
+// The point box tests measure from: p clamped into the grid's finite range.
+fn box_point(p: vec3<f32>, step: f32) -> vec3<f32> {
+    let g = (BOX_BIAS - 1.0) * step;
+    return clamp(p, vec3<f32>(-g), vec3<f32>(g));
+}
+
+// Distance² from the box point q (box_point) to the non-empty packed box b.
+fn packed_box_d2(b: vec4<u32>, q: vec3<f32>, step: f32) -> f32 {
     let lo = box_bounds(box_codes_lo(b), step);
     let hi = box_bounds(box_codes_hi(b), step);
-    let d = max(max(lo - p, p - hi), vec3<f32>(0.0));
+    let d = max(max(lo - q, q - hi), vec3<f32>(0.0));
     return dot(d, d);
 }

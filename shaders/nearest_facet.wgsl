@@ -4,12 +4,18 @@
 // Prelude: common.wgsl, search_common.wgsl (projection, self-contact exclusion, free edges).
 //
 // The passes, in order:
-//   walk_gather      one invocation per slave: its position and node id copied into
-//                    `walk_points` in the order the walks take the slaves (Morton order of their
-//                    start positions), so that the walk reads them in sequence instead of one
-//                    scattered read per slave; every later pass keeps its per-slave record (work,
-//                    best) at this walk position t, and only nearest_facet maps it back to the
-//                    caller's order.
+//   walk_start       one invocation per group of WALK_GROUP walk positions (neighbours in Morton
+//                    order of the slaves' start positions, so near each other). First their
+//                    slaves' positions and node ids are copied into `walk_points` in walk
+//                    order, so that the walks read them in sequence instead of one scattered
+//                    read per slave (every later pass keeps its per-slave record, work and
+//                    best, at the walk position t, and only nearest_facet maps it back to the
+//                    caller's order). Then from the root down while exactly one child's box is
+//                    within the radius of the group's box, to the node every walk of the group
+//                    would reach by itself (above it each has one near child per level, the
+//                    same for all), or to none (no facet within the radius of any of them):
+//                    into `work` at each position, the walk's start node (0: none). A SIMD
+//                    group of walks skips the levels above it together.
 //   nearest_walk     one invocation per slave: a depth-first walk of the tree, the nearer child
 //                    first, skipping every subtree whose box is farther than the best facet
 //                    found so far (at first the radius), at most WALK_VISITS nodes. Its best
@@ -30,22 +36,26 @@
 //   nearest_facet    one invocation per slave: the winner, the hit from it, the counts
 //                    (STATUS_FALLBACK, STATUS_CROWDED).
 //
-// Dispatch: walk_gather, nearest_walk, nearest_crowded and nearest_facet one invocation per slave,
-//           nearest_args one, the chunk passes one per work item through the indirect
-//           arguments; ITEM_WORKGROUP per workgroup, folded into 2D.
+// Dispatch: nearest_walk, nearest_crowded and nearest_facet one invocation per slave, walk_start
+//           one per group of WALK_GROUP slaves, nearest_args one, the chunk passes one per work
+//           item through the indirect arguments; ITEM_WORKGROUP per workgroup, folded into 2D.
 // Bindings: 0 params, 1 nodes, 2 facets, 3 slaves (node id per slave, then the slaves' indices
 //           in Morton order of their start positions: walk position t is slave
 //           slaves[n_slaves + t], so neighbouring invocations walk the same branches and read
 //           the same boxes), 4 order (active facet of each leaf slot), 5 boxes (the tree's,
 //           tree.wgsl), 6 status (fallbacks and self-contact crowding counted), 7 hits (one Hit
 //           per slave, caller's order), 8 adjacency (as in local_search.wgsl; self-contact and
-//           free edges), 9 work (chunk counts per walk position, scanned to first work items;
-//           word n_slaves: total), 10 best (BEST_WORDS per walk position, below), 11 args (the
-//           indirect dispatch: x, y, z), 12 walk_points (per walk position: the slave's
-//           grid-local position as f32 bits, xyz, and its node id, w). Each entry point binds
-//           the subset it uses, at most 8 storage buffers (WebGPU's default limit).
+//           free edges), 9 work (per walk position the walk's start node from walk_start,
+//           then its chunk counts, scanned to first work items; word n_slaves: total), 10 best
+//           (BEST_WORDS per walk position, below), 11 args (the indirect dispatch: x, y, z),
+//           12 walk_points (per walk position: the slave's grid-local position as f32 bits,
+//           xyz, and its node id, w), 13 best_records (the buffer of `best` as two vec4 per
+//           record: nearest_walk writes and nearest_facet reads whole records through it, the
+//           passes between single words through `best`). Each entry point binds the subset it
+//           uses, at most 8 storage buffers (WebGPU's default limit).
 // Invariants: the walk skips a subtree only when its box is farther than the best distance by
-//             more than round-off (PRUNE_SLACK; boxes are grown by the frame's round-off), so
+//             more than round-off (PRUNE_SLACK; boxes are grown by the frame's round-off and
+//             rounded outwards to the box grid, distances taken from the box point), so
 //             every facet at the best distance is projected and the result is the brute
 //             force's: the nearest facet within the radius, ties to the lowest facet id,
 //             decided by comparison; the tracked node is the facet node nearest the slave
@@ -78,12 +88,19 @@
 @group(0) @binding(10) var<storage, read_write> best: array<atomic<u32>>;
 @group(0) @binding(11) var<storage, read_write> args: array<u32>;
 @group(0) @binding(12) var<storage, read_write> walk_points: array<vec4<u32>>;
+// The same buffer as `best`, two vec4 per record: the walk writes a record and nearest_facet
+// reads it whole (two loads or stores where word by word they would be eight), the passes
+// between update single words atomically through `best`.
+@group(0) @binding(13) var<storage, read_write> best_records: array<vec4<u32>>;
 
 // Candidates one work item projects at most (Rust twin: CANDIDATE_CHUNK), far below the 65,535
 // iterations where Mesa stops a loop.
 const CANDIDATE_CHUNK: u32 = 1024u;
 // Tree nodes one walk visits at most (Rust twin: WALK_VISITS).
 const WALK_VISITS: u32 = 2048u;
+// Walk positions per group whose walks start together at one tree node (Rust twin: WALK_GROUP):
+// a SIMD group's width on a CPU adapter (8 lanes of 32 bits in AVX2).
+const WALK_GROUP: u32 = 8u;
 // Words of a slave's best record (Rust twin: BEST_WORDS).
 const BEST_WORDS: u32 = 8u;
 // A subtree is skipped when its box's distance² exceeds the bound by this factor: more than
@@ -104,9 +121,11 @@ fn share_node(a: vec4<u32>, b: vec4<u32>) -> bool {
     return false;
 }
 
-// Whether tree node k holds nothing within distance² `bound` of p (an empty box never does).
-fn far(k: u32, p: vec3<f32>, bound: f32) -> bool {
-    return box_d2(k, p) > bound * PRUNE_SLACK;
+// Whether tree node k holds nothing within distance² `bound` of the point whose box point
+// (box_point) is q: its box is empty or farther.
+fn far(k: u32, q: vec3<f32>, bound: f32) -> bool {
+    let b = boxes[k];
+    return box_empty(b) || packed_box_d2(b, q, box_step(params.box_margin).x) > bound * PRUNE_SLACK;
 }
 
 // The node a depth-first walk visits after the subtree of node k; 0 when none is left.
@@ -128,11 +147,6 @@ struct Walk {
     f: u32,
     next: u32,        // 0: finished; else 1 + the first leaf slot left to the chunks
     projections: u32,
-}
-
-// Distance² from p to tree node k's box; +∞ for an empty box (never within a bound).
-fn box_d2(k: u32, p: vec3<f32>) -> f32 {
-    return packed_box_d2(boxes[k], p, box_step(params.box_margin).x);
 }
 
 // The slave at walk position t: grid-local position, model node id.
@@ -175,6 +189,7 @@ fn walk(t: u32, start: u32) -> Walk {
     // whether the leaf k was reached from a pending return (its box not yet tested)
     var untested = true;
     let step = box_step(params.box_margin).x;
+    let q = box_point(p, step);
     for (var leaf = 0u; leaf < WALK_VISITS; leaf++) {
         // every iteration tests the two children of one inner node: a return to a pending
         // sibling goes to it untested (its children's boxes lie within its own)
@@ -195,16 +210,16 @@ fn walk(t: u32, start: u32) -> Walk {
             let hi_l = box_bounds(box_codes_hi(bl), step);
             let lo_r = box_bounds(box_codes_lo(br), step);
             let hi_r = box_bounds(box_codes_hi(br), step);
-            let el = max(max(lo_l - p, p - hi_l), vec3<f32>(0.0));
-            let er = max(max(lo_r - p, p - hi_r), vec3<f32>(0.0));
+            let el = max(max(lo_l - q, q - hi_l), vec3<f32>(0.0));
+            let er = max(max(lo_r - q, q - hi_r), vec3<f32>(0.0));
             let dl = dot(el, el);
             let dr = dot(er, er);
-            let near_l = dl <= bound;
-            let near_r = dr <= bound;
+            let near_l = !box_empty(bl) && dl <= bound;
+            let near_r = !box_empty(br) && dr <= bound;
             untested = false;
             if (near_l && near_r) {
-                let cl = 0.5 * (lo_l + hi_l) - p;
-                let cr = 0.5 * (lo_r + hi_r) - p;
+                let cl = 0.5 * (lo_l + hi_l) - q;
+                let cr = 0.5 * (lo_r + hi_r) - q;
                 let right_first = dr < dl || (dr == dl && dot(cr, cr) < dot(cl, cl));
                 pending |= 1u << (firstLeadingBit(k) + 1u);
                 k = select(2u * k, 2u * k + 1u, right_first);
@@ -220,7 +235,7 @@ fn walk(t: u32, start: u32) -> Walk {
         if (v >= WALK_VISITS || k < leaves) { break; }
         // the leaf
         v++;
-        if (!untested || box_d2(k, p) <= w.d2 * PRUNE_SLACK) {
+        if (!untested || !far(k, q, w.d2)) {
             let f = order[k - leaves];
             if (!excluded(slave, facets[f])) {
                 let d2 = project_facet(p, facets[f]).dist2;
@@ -284,7 +299,7 @@ fn chunk_best(i: u32, t: u32) -> ChunkBest {
     b.f = NO_FACET;
     for (var j = j0; j < j1; j++) {
         let k = leaves + j;
-        if ((boxes[k].x & BOX_TOP) == BOX_TOP) { continue; } // no facet, or collapsed: empty
+        if (box_empty(boxes[k])) { continue; } // no facet, or collapsed
         let f = order[j];
         if (excluded(slave, facets[f])) { continue; }
         let d2 = project_facet(p, facets[f]).dist2;
@@ -296,14 +311,49 @@ fn chunk_best(i: u32, t: u32) -> ChunkBest {
     return b;
 }
 
+// Whether tree node k's box is within distance² `bound` of the box [glo, ghi] (not empty).
+fn group_near(k: u32, glo: vec3<f32>, ghi: vec3<f32>, bound: f32, step: f32) -> bool {
+    let b = boxes[k];
+    let lo = box_bounds(box_codes_lo(b), step);
+    let hi = box_bounds(box_codes_hi(b), step);
+    let d = max(max(lo - ghi, glo - hi), vec3<f32>(0.0));
+    return !box_empty(b) && dot(d, d) <= bound;
+}
+
 @compute @workgroup_size(64)
-fn walk_gather(@builtin(workgroup_id) wg: vec3<u32>,
-               @builtin(num_workgroups) nwg: vec3<u32>,
-               @builtin(local_invocation_index) li: u32) {
-    let t = folded_id(wg, nwg, li, ITEM_WORKGROUP);
-    if (t >= params.n_slaves) { return; }
-    let slave = slaves[slaves[params.n_slaves + t]];
-    walk_points[t] = vec4<u32>(bitcast<vec3<u32>>(nodes[slave].xyz), slave);
+fn walk_start(@builtin(workgroup_id) wg: vec3<u32>,
+              @builtin(num_workgroups) nwg: vec3<u32>,
+              @builtin(local_invocation_index) li: u32) {
+    // invocation g: the walk positions g·WALK_GROUP onwards
+    let t0 = folded_id(wg, nwg, li, ITEM_WORKGROUP) * WALK_GROUP;
+    if (t0 >= params.n_slaves) { return; }
+    let t1 = min(t0 + WALK_GROUP, params.n_slaves);
+    let step = box_step(params.box_margin).x;
+    var glo = vec3<f32>(0.0);
+    var ghi = vec3<f32>(0.0);
+    for (var t = t0; t < t1; t++) {
+        // the slave at walk position t, gathered
+        let slave = slaves[slaves[params.n_slaves + t]];
+        let x = nodes[slave].xyz;
+        walk_points[t] = vec4<u32>(bitcast<vec3<u32>>(x), slave);
+        let q = box_point(x, step);
+        if (t == t0) {
+            glo = q;
+            ghi = q;
+        }
+        glo = min(glo, q);
+        ghi = max(ghi, q);
+    }
+    let bound = params.radius * params.radius * PRUNE_SLACK;
+    let leaves = 1u << params.tree_levels;
+    var k = select(0u, 1u, group_near(1u, glo, ghi, bound, step));
+    for (var s = 0u; s < 32u && k != 0u && k < leaves; s++) {
+        let near_l = group_near(2u * k, glo, ghi, bound, step);
+        let near_r = group_near(2u * k + 1u, glo, ghi, bound, step);
+        if (near_l && near_r) { break; }
+        k = select(select(0u, 2u * k + 1u, near_r), 2u * k, near_l);
+    }
+    for (var t = t0; t < t1; t++) { work[t] = k; }
 }
 
 @compute @workgroup_size(64)
@@ -313,21 +363,14 @@ fn nearest_walk(@builtin(workgroup_id) wg: vec3<u32>,
     let t = folded_id(wg, nwg, li, ITEM_WORKGROUP);
     if (t >= params.n_slaves) { return; }
     if (t == 0u) { work[params.n_slaves] = 0u; }
-    let w = walk(t, 1u);
+    let w = walk(t, work[t]);
     let leaves = 1u << params.tree_levels;
     var start = leaves;
     if (w.next != 0u) { start = min(w.next - 1u, leaves); }
     let rest = leaves - start;
     work[t] = (rest + CANDIDATE_CHUNK - 1u) / CANDIDATE_CHUNK;
-    let b = BEST_WORDS * t;
-    atomicStore(&best[b], bitcast<u32>(w.d2));
-    atomicStore(&best[b + 1u], NO_FACET);
-    atomicStore(&best[b + 2u], 0u);
-    atomicStore(&best[b + 3u], w.projections + rest);
-    atomicStore(&best[b + 4u], w.f);
-    atomicStore(&best[b + 5u], start);
-    atomicStore(&best[b + 6u], bitcast<u32>(w.d2));
-    atomicStore(&best[b + 7u], 0u);
+    best_records[2u * t] = vec4<u32>(bitcast<u32>(w.d2), NO_FACET, 0u, w.projections + rest);
+    best_records[2u * t + 1u] = vec4<u32>(w.f, start, bitcast<u32>(w.d2), 0u);
 }
 
 @compute @workgroup_size(1)
@@ -374,16 +417,22 @@ fn nearest_ties(@builtin(workgroup_id) wg: vec3<u32>,
     }
 }
 
-// The winner of walk position i's record: the chunks' facet at the best distance, or the walk's when it
-// is at that distance with a lower id.
-fn winner(i: u32) -> u32 {
-    let b = BEST_WORDS * i;
-    let f = atomicLoad(&best[b + 1u]);
-    let walk_f = atomicLoad(&best[b + 4u]);
-    if (walk_f != NO_FACET && atomicLoad(&best[b + 6u]) == atomicLoad(&best[b]) && walk_f < f) {
+// The winner of a record (words 0..3, 4..7): the chunks' facet at the best distance, or the
+// walk's when it is at that distance with a lower id.
+fn record_winner(r0: vec4<u32>, r1: vec4<u32>) -> u32 {
+    let walk_f = r1.x;
+    if (walk_f != NO_FACET && r1.z == r0.x && walk_f < r0.y) {
         return walk_f;
     }
-    return f;
+    return r0.y;
+}
+
+// The winner of walk position i's record, read word by word (the passes that bind `best`).
+fn winner(i: u32) -> u32 {
+    let b = BEST_WORDS * i;
+    let r0 = vec4<u32>(atomicLoad(&best[b]), atomicLoad(&best[b + 1u]), 0u, 0u);
+    let r1 = vec4<u32>(atomicLoad(&best[b + 4u]), 0u, atomicLoad(&best[b + 6u]), 0u);
+    return record_winner(r0, r1);
 }
 
 // Self-contact: whether the slave at walk position i has a facet within the radius, other than
@@ -395,10 +444,11 @@ fn crowded(i: u32, best_f: u32) -> bool {
     let p = wp.p;
     let leaves = 1u << params.tree_levels;
     let r2 = params.radius * params.radius;
+    let q = box_point(p, box_step(params.box_margin).x);
     var k = 1u;
     for (var v = 0u; v < WALK_VISITS; v++) {
         if (k == 0u) { return false; }
-        if (far(k, p, r2)) {
+        if (far(k, q, r2)) {
             k = next_node(k);
         } else if (k >= leaves) {
             let f = order[k - leaves];
@@ -434,33 +484,43 @@ fn nearest_facet(@builtin(workgroup_id) wg: vec3<u32>,
     let i = folded_id(wg, nwg, li, ITEM_WORKGROUP);
     if (i >= params.n_slaves) { return; }
     let wp = walk_point(i);
+    let r0 = best_records[2u * i];
+    let r1 = best_records[2u * i + 1u];
     var hit: Hit;
     hit.facet = NO_FACET;
     hit.node = NO_NODE;
-    let b = BEST_WORDS * i;
-    hit.candidates = atomicLoad(&best[b + 3u]);
+    hit.candidates = r0.w;
     hit.slave = wp.node;
     hit.point_gap = vec4<f32>(0.0);
     hit.normal_dist = vec4<f32>(0.0);
     hit.weights = vec4<f32>(0.0);
     let p = wp.p;
-    if (atomicLoad(&best[b + 5u]) < (1u << params.tree_levels)) { atomicAdd(&status[STATUS_FALLBACK], 1u); }
-    let best_f = winner(i);
+    if (r1.y < (1u << params.tree_levels)) { atomicAdd(&status[STATUS_FALLBACK], 1u); }
+    let best_f = record_winner(r0, r1);
     if (best_f != NO_FACET) {
-        if (atomicLoad(&best[b + 2u]) != 0u) { atomicAdd(&status[STATUS_CROWDED], 1u); }
+        if (r0.z != 0u) { atomicAdd(&status[STATUS_CROWDED], 1u); }
         let fac = facets[best_f];
-        let pr = project_facet(p, fac);
+        // the facet's nodes loaded once, for the projection and the nearest node
         let n = facet_node_count(fac);
-        var best_node = NO_NODE;
-        var best_nd2 = 0.0;
-        for (var j = 0u; j < n; j++) {
-            let node = fac[j];
-            let d = nodes[node].xyz - p;
-            let d2 = dot(d, d);
-            if (best_node == NO_NODE || d2 < best_nd2 || (d2 == best_nd2 && node < best_node)) {
-                best_node = node;
-                best_nd2 = d2;
-            }
+        let x0 = nodes[fac.x].xyz;
+        let x1 = nodes[fac.y].xyz;
+        var x2 = x1;
+        var x3 = x1;
+        if (n >= 3u) { x2 = nodes[fac.z].xyz; }
+        if (n == 4u) { x3 = nodes[fac.w].xyz; }
+        let pr = project_points(p, n, x0, x1, x2, x3);
+        // the nearest of them, ties to the lowest node id
+        var best_node = fac.x;
+        var best_nd2 = dot(x0 - p, x0 - p);
+        let d1 = dot(x1 - p, x1 - p);
+        if (d1 < best_nd2 || (d1 == best_nd2 && fac.y < best_node)) { best_node = fac.y; best_nd2 = d1; }
+        if (n >= 3u) {
+            let d2 = dot(x2 - p, x2 - p);
+            if (d2 < best_nd2 || (d2 == best_nd2 && fac.z < best_node)) { best_node = fac.z; best_nd2 = d2; }
+        }
+        if (n == 4u) {
+            let d3 = dot(x3 - p, x3 - p);
+            if (d3 < best_nd2 || (d3 == best_nd2 && fac.w < best_node)) { best_node = fac.w; best_nd2 = d3; }
         }
         hit.facet = best_f;
         hit.node = best_node;

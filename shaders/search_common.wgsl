@@ -13,6 +13,13 @@ fn project_facet(p: vec3<f32>, fac: vec4<u32>) -> Projection {
     return closest_on_quad(p, x0, x1, x2, nodes[fac.w].xyz);
 }
 
+// Closest point of p on the facet of n nodes at x0..x3 (project_facet, its nodes loaded).
+fn project_points(p: vec3<f32>, n: u32, x0: vec3<f32>, x1: vec3<f32>, x2: vec3<f32>, x3: vec3<f32>) -> Projection {
+    if (n == 2u) { return closest_on_segment(p, x0, x1); }
+    if (n == 3u) { return closest_on_triangle(p, x0, x1, x2); }
+    return closest_on_quad(p, x0, x1, x2, x3);
+}
+
 // Whether facet fac has collapsed at the current positions (see facet_collapsed in common.wgsl).
 fn collapsed(fac: vec4<u32>) -> bool {
     let n = facet_node_count(fac);

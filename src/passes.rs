@@ -113,6 +113,8 @@ pub struct Binding {
 pub enum Items {
     /// One per slave node.
     Slaves,
+    /// One per group of `WALK_GROUP` slave nodes (walk positions).
+    SlaveGroups,
     /// One per active facet.
     Facets,
     /// One per watched node (motion budget).
@@ -205,17 +207,19 @@ const CHUNK_BINDINGS: &[Binding] = &[
 ];
 
 /// `nearest_facet.wgsl`: the slaves' positions and node ids gathered in the order the walks
-/// take them.
-pub const WALK_GATHER: Pass = Pass {
+/// take them, and the tree node where each group of `WALK_GROUP` walks starts.
+pub const WALK_START: Pass = Pass {
     stem: "nearest_facet",
-    entry: "walk_gather",
+    entry: "walk_start",
     bindings: &[
         b(0, SearchParams, U),
         b(1, Nodes, R),
         b(3, Slaves, R),
+        b(5, Boxes, R),
+        b(9, Work, RW),
         b(12, WalkPoints, RW),
     ],
-    items: Items::Slaves,
+    items: Items::SlaveGroups,
     per_workgroup: ITEM_WORKGROUP,
 };
 
@@ -232,8 +236,8 @@ pub const NEAREST_WALK: Pass = Pass {
         b(5, Boxes, R),
         b(8, Adjacency, R),
         b(9, Work, RW),
-        b(10, Best, RW),
         b(12, WalkPoints, RW),
+        b(13, Best, RW),
     ],
     items: Items::Slaves,
     per_workgroup: ITEM_WORKGROUP,
@@ -297,8 +301,8 @@ pub const NEAREST_FACET: Pass = Pass {
         b(6, Status, RW),
         b(7, Hits, RW),
         b(8, Adjacency, R),
-        b(10, Best, RW),
         b(12, WalkPoints, RW),
+        b(13, Best, RW),
     ],
     items: Items::Slaves,
     per_workgroup: ITEM_WORKGROUP,
@@ -530,7 +534,7 @@ pub const PASSES: [Pass; 25] = [
     TREE_REFIT,
     SCAN_BLOCKS,
     SCAN_ADD,
-    WALK_GATHER,
+    WALK_START,
     NEAREST_WALK,
     NEAREST_ARGS,
     NEAREST_CHUNKS,

@@ -152,7 +152,7 @@ pub struct CpuWorkspace {
     pub work: Vec<u32>,
     /// Nearest-facet record per walk position (`nearest_facet::BEST_WORDS` words).
     pub best: Vec<u32>,
-    /// The slaves' positions and node ids in walk order (`nearest_facet::walk_gather`).
+    /// The slaves' positions and node ids in walk order (`nearest_facet::walk_start`).
     pub walk_points: Vec<[u32; 4]>,
 }
 
@@ -294,11 +294,14 @@ pub fn run_step(
             ws.best.clear();
             ws.best.resize(n * nearest_facet::BEST_WORDS, 0);
             ws.walk_points.resize(n, [0; 4]);
-            nearest_facet::walk_gather(
+            nearest_facet::walk_start(
+                params,
+                &ws.corners,
                 &prep.nodes,
                 &prep.slaves,
                 &prep.walk_order,
                 &mut ws.walk_points,
+                &mut ws.work,
             );
 
             let c = nearest_facet::Candidates {

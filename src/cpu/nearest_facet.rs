@@ -8,7 +8,7 @@ use super::PAR_MIN;
 use crate::geometry::{closest_on_quad, closest_on_segment, closest_on_triangle, Projection, V3};
 use crate::search::layout::{
     GpuHit, SearchParams, FLAG_SELF_CONTACT, HIT_BESIDE_FREE_EDGE, NO_FACET, STATUS_CROWDED,
-    STATUS_FALLBACK,
+    STATUS_FALLBACK, WALK_GROUP,
 };
 use crate::search::tree::boxes;
 
@@ -69,7 +69,7 @@ pub struct Candidates<'a> {
     /// The slaves in the order the walks take them (Morton order of their start positions).
     pub walk_order: &'a [u32],
     /// Per walk position: the slave's position (f32 bits, xyz) and node id (w), from
-    /// [`walk_gather`].
+    /// [`walk_start`].
     pub walk_points: &'a [[u32; 4]],
     /// Active facet of each leaf slot of the tree.
     pub order: &'a [u32],
@@ -82,10 +82,23 @@ pub struct Candidates<'a> {
 }
 
 impl Candidates<'_> {
-    /// Whether tree node k holds nothing within distance² `bound` of p (WGSL: `far`; an empty
-    /// box never does).
-    fn far(&self, k: u32, p: V3<f32>, bound: f32) -> bool {
-        box_d2(self, k, glam::Vec4::new(p.x, p.y, p.z, 0.0)) > bound * PRUNE_SLACK
+    /// Whether tree node k holds nothing within distance² `bound` of the point whose box point
+    /// is q (WGSL: `far`): its box is empty or farther.
+    fn far(&self, k: u32, q: glam::Vec4, bound: f32) -> bool {
+        let (lo, hi) = corners(self, k);
+        lo.w != 0.0 || box_d2_of(lo, hi, q) > bound * PRUNE_SLACK
+    }
+
+    /// The point box tests measure from (WGSL: `box_point`): p clamped into the box grid's
+    /// finite range, w = 0.
+    fn box_point(&self, p: V3<f32>) -> glam::Vec4 {
+        let step = boxes::box_step(self.params.box_margin).0;
+        glam::Vec4::new(
+            boxes::point(p.x, step),
+            boxes::point(p.y, step),
+            boxes::point(p.z, step),
+            0.0,
+        )
     }
 
     /// Leaf slot count 2^L.
@@ -134,24 +147,28 @@ struct Walk {
     projections: u32,
 }
 
-/// Distance² from p (w = 0) to tree node k's box; +∞ for an empty box (WGSL: `box_d2`).
-#[inline]
-fn box_d2(c: &Candidates<'_>, k: u32, p: glam::Vec4) -> f32 {
-    let (lo, hi) = corners(c, k);
-    box_d2_of(lo, hi, p)
-}
-
 /// Tree node k's lower and upper corner, decoded (WGSL: `box_bounds(box_codes_lo(b), step)`,
-/// `box_bounds(box_codes_hi(b), step)` of its packed box).
+/// `box_bounds(box_codes_hi(b), step)` of its packed box); the lower corner's w is 1 when the
+/// box is empty.
 #[inline]
 fn corners(c: &Candidates<'_>, k: u32) -> (glam::Vec4, glam::Vec4) {
     let [lo, hi] = c.corners[k as usize];
     (glam::Vec4::from_array(lo), glam::Vec4::from_array(hi))
 }
 
-/// Distance² from p (w = 0) to the box [lo, hi] (WGSL: `packed_box_d2`, the same operations
-/// in the same order: the components in SIMD lanes, the sum in x, y, z order); +∞ for an
-/// empty box.
+/// The decoded boxes of inner node k's two children (lower and upper corner of each; one
+/// bounds check for the pair).
+#[inline]
+fn children(c: &Candidates<'_>, k: u32) -> [glam::Vec4; 4] {
+    let b: &[[[f32; 4]; 2]; 2] = c.corners[2 * k as usize..2 * k as usize + 2]
+        .try_into()
+        .expect("two boxes");
+    [b[0][0], b[0][1], b[1][0], b[1][1]].map(glam::Vec4::from_array)
+}
+
+/// Distance² from the box point q (w = 0) to the non-empty box [lo, hi] (WGSL:
+/// `packed_box_d2`, the same operations in the same order: the components in SIMD lanes, the
+/// sum in x, y, z order).
 #[inline]
 fn box_d2_of(lo: glam::Vec4, hi: glam::Vec4, p: glam::Vec4) -> f32 {
     let d = (lo - p).max(p - hi).max(glam::Vec4::ZERO);
@@ -159,7 +176,8 @@ fn box_d2_of(lo: glam::Vec4, hi: glam::Vec4, p: glam::Vec4) -> f32 {
     d.x + d.y + d.z
 }
 
-/// Distance² from p (w = 0) to the centre of the box [lo, hi] (WGSL: the walk's `cl`, `cr`).
+/// Distance² from the box point q (w = 0) to the centre of the box [lo, hi] (WGSL: the walk's
+/// `cl`, `cr`).
 #[inline]
 fn centre_d2_of(lo: glam::Vec4, hi: glam::Vec4, p: glam::Vec4) -> f32 {
     let d = 0.5 * (lo + hi) - p;
@@ -193,7 +211,7 @@ fn walk(c: &Candidates<'_>, t: usize, start: u32) -> Walk {
         next: 0,
         projections: 0,
     };
-    let p4 = glam::Vec4::new(p.x, p.y, p.z, 0.0);
+    let q = c.box_point(p);
     let mut k = start;
     last = last.max(start);
     let mut v = 0;
@@ -213,7 +231,7 @@ fn walk(c: &Candidates<'_>, t: usize, start: u32) -> Walk {
                 last = ancestor(last, d) ^ 1;
                 k = last;
                 untested = true;
-                if k < leaves && box_d2(c, k, p4) > w.d2 * PRUNE_SLACK {
+                if k < leaves && c.far(k, q, w.d2) {
                     // the shader tests its two children and finds both farther (they lie in
                     // its box): the same state after one visit, for one box test instead of two
                     k = 0;
@@ -226,15 +244,13 @@ fn walk(c: &Candidates<'_>, t: usize, start: u32) -> Walk {
             }
             let bound = w.d2 * PRUNE_SLACK;
             let (l, r) = (2 * k, 2 * k + 1);
-            let (lo_l, hi_l) = corners(c, l);
-            let (lo_r, hi_r) = corners(c, r);
-            let (dl, dr) = (box_d2_of(lo_l, hi_l, p4), box_d2_of(lo_r, hi_r, p4));
+            let [lo_l, hi_l, lo_r, hi_r] = children(c, k);
+            let (dl, dr) = (box_d2_of(lo_l, hi_l, q), box_d2_of(lo_r, hi_r, q));
             untested = false;
-            match (dl <= bound, dr <= bound) {
+            match (lo_l.w == 0.0 && dl <= bound, lo_r.w == 0.0 && dr <= bound) {
                 (true, true) => {
                     let right_first = dr < dl
-                        || (dr == dl
-                            && centre_d2_of(lo_r, hi_r, p4) < centre_d2_of(lo_l, hi_l, p4));
+                        || (dr == dl && centre_d2_of(lo_r, hi_r, q) < centre_d2_of(lo_l, hi_l, q));
                     pending |= 1 << (depth(k) + 1);
                     k = if right_first { r } else { l };
                 }
@@ -252,7 +268,7 @@ fn walk(c: &Candidates<'_>, t: usize, start: u32) -> Walk {
         }
         // the leaf
         v += 1;
-        if !untested || box_d2(c, k, p4) <= w.d2 * PRUNE_SLACK {
+        if !untested || !c.far(k, q, w.d2) {
             let f = c.order[(k - leaves) as usize];
             if !c.excluded(slave, f) {
                 let d2 = project(c.nodes, p, c.facets[f as usize]).dist2;
@@ -309,28 +325,78 @@ fn chunk_best(c: &Candidates<'_>, work: &[u32], b: &[u32], i: usize, t: u32) -> 
     best
 }
 
-/// One "invocation" per slave: walk position t gets the position and node id of slave
-/// `walk_order[t]` (WGSL: `walk_gather`).
-pub fn walk_gather(
+/// One "invocation" per group of `WALK_GROUP` walk positions (WGSL: `walk_start`): walk
+/// position t gets the position and node id of slave `walk_order[t]` in `walk_points`, and the
+/// tree node where the group's walks start goes into `work` at each of its positions (0: no
+/// facet within the radius of any of them). `corners`: the tree's decoded boxes.
+pub fn walk_start(
+    params: &SearchParams,
+    corners: &[[[f32; 4]; 2]],
     nodes: &[[f32; 4]],
     slaves: &[u32],
     walk_order: &[u32],
     walk_points: &mut [[u32; 4]],
+    work: &mut [u32],
 ) {
-    walk_points
-        .par_iter_mut()
-        .zip(walk_order)
-        .with_min_len(PAR_MIN)
-        .for_each(|(w, &i)| {
-            let slave = slaves[i as usize];
-            let x = nodes[slave as usize];
-            *w = [x[0].to_bits(), x[1].to_bits(), x[2].to_bits(), slave];
+    let n = params.n_slaves as usize;
+    let leaves = 1u32 << params.tree_levels;
+    let bound = params.radius * params.radius * PRUNE_SLACK;
+    let step = boxes::box_step(params.box_margin).0;
+    // whether node k's box is within the bound of the box [glo, ghi] (WGSL: `group_near`)
+    let near = |k: u32, glo: glam::Vec4, ghi: glam::Vec4| {
+        let [lo, hi] = corners[k as usize].map(glam::Vec4::from_array);
+        let d = (lo - ghi).max(glo - hi).max(glam::Vec4::ZERO);
+        let d = d * d;
+        lo.w == 0.0 && d.x + d.y + d.z <= bound
+    };
+    let group = WALK_GROUP as usize;
+    walk_points[..n]
+        .par_chunks_mut(group)
+        .zip(work[..n].par_chunks_mut(group))
+        .zip(walk_order.par_chunks(group))
+        .with_min_len(PAR_MIN / group)
+        .for_each(|((points, starts), order)| {
+            let mut glo = glam::Vec4::ZERO;
+            let mut ghi = glam::Vec4::ZERO;
+            for (j, (w, &i)) in points.iter_mut().zip(order).enumerate() {
+                let slave = slaves[i as usize];
+                let x = nodes[slave as usize];
+                *w = [x[0].to_bits(), x[1].to_bits(), x[2].to_bits(), slave];
+                let q = glam::Vec4::new(
+                    boxes::point(x[0], step),
+                    boxes::point(x[1], step),
+                    boxes::point(x[2], step),
+                    0.0,
+                );
+                if j == 0 {
+                    (glo, ghi) = (q, q);
+                }
+                glo = glo.min(q);
+                ghi = ghi.max(q);
+            }
+            let mut k = if near(1, glo, ghi) { 1 } else { 0 };
+            let mut s = 0;
+            while s < 32 && k != 0 && k < leaves {
+                let (l, r) = (near(2 * k, glo, ghi), near(2 * k + 1, glo, ghi));
+                if l && r {
+                    break;
+                }
+                k = if l {
+                    2 * k
+                } else if r {
+                    2 * k + 1
+                } else {
+                    0
+                };
+                s += 1;
+            }
+            starts.fill(k);
         });
 }
 
-/// One "invocation" per walk position t: the tree walk, its best facet into `best`, the chunks
-/// of the leaf slots it did not reach into `work` (word n_slaves set to 0 for the scan)
-/// (WGSL: `nearest_walk`).
+/// One "invocation" per walk position t: the tree walk from the start node in `work[t]`, its
+/// best facet into `best`, the chunks of the leaf slots it did not reach into `work` (word
+/// n_slaves set to 0 for the scan) (WGSL: `nearest_walk`).
 pub fn nearest_walk(c: &Candidates<'_>, work: &mut [u32], best: &mut [u32]) {
     let n = c.params.n_slaves as usize;
     if n > 0 {
@@ -343,7 +409,7 @@ pub fn nearest_walk(c: &Candidates<'_>, work: &mut [u32], best: &mut [u32]) {
         .enumerate()
         .with_min_len(PAR_MIN)
         .for_each(|(t, (b, chunks))| {
-            let w = walk(c, t, 1);
+            let w = walk(c, t, *chunks);
             let start = if w.next != 0 {
                 (w.next - 1).min(n_slots)
             } else {
@@ -461,12 +527,13 @@ fn crowded(c: &Candidates<'_>, i: usize, best_f: u32) -> bool {
     let (p, slave) = walk_point(c, i);
     let leaves = c.leaves();
     let r2 = c.params.radius * c.params.radius;
+    let q = c.box_point(p);
     let mut k = 1u32;
     for _ in 0..WALK_VISITS {
         if k == 0 {
             return false;
         }
-        if c.far(k, p, r2) {
+        if c.far(k, q, r2) {
             k = next_node(k);
         } else if k >= leaves {
             let f = c.order[(k - leaves) as usize];

@@ -97,7 +97,8 @@ pub fn tree_refit(
 }
 
 /// Decodes every packed box into its lower and upper corner (`corners`, resized), with the
-/// bits the kernels' `box_bounds` gives: the CPU walk's boxes.
+/// bits the kernels' `box_bounds` gives: the CPU walk's boxes. An empty box's lower corner has
+/// w = 1 (its bounds are meaningless).
 pub fn decode(params: &SearchParams, tree: &[[u32; 4]], corners: &mut Vec<[[f32; 4]; 2]>) {
     let step = boxes::box_step(params.box_margin).0;
     corners.resize(tree.len(), [[0.0; 4]; 2]);
@@ -107,6 +108,7 @@ pub fn decode(params: &SearchParams, tree: &[[u32; 4]], corners: &mut Vec<[[f32;
         .with_min_len(PAR_MIN)
         .for_each(|(c, &b)| {
             let (lo, hi) = boxes::unpack(b, step);
-            *c = [[lo[0], lo[1], lo[2], 0.0], [hi[0], hi[1], hi[2], 0.0]];
+            let empty = if boxes::is_empty(b) { 1.0 } else { 0.0 };
+            *c = [[lo[0], lo[1], lo[2], empty], [hi[0], hi[1], hi[2], 0.0]];
         });
 }

@@ -41,7 +41,7 @@ struct Pipelines {
     tree_refit: wgpu::ComputePipeline,
     scan_blocks: wgpu::ComputePipeline,
     scan_add: wgpu::ComputePipeline,
-    walk_gather: wgpu::ComputePipeline,
+    walk_start: wgpu::ComputePipeline,
     nearest_walk: wgpu::ComputePipeline,
     nearest_args: wgpu::ComputePipeline,
     nearest_chunks: wgpu::ComputePipeline,
@@ -60,7 +60,7 @@ struct BindGroups {
     motion: wgpu::BindGroup,
     /// One per refit pass of the tree.
     tree_refit: Vec<wgpu::BindGroup>,
-    walk_gather: wgpu::BindGroup,
+    walk_start: wgpu::BindGroup,
     nearest_walk: wgpu::BindGroup,
     work_scan_blocks: Vec<wgpu::BindGroup>,
     work_scan_add: Vec<wgpu::BindGroup>,
@@ -78,7 +78,7 @@ struct Buffers {
     nodes: GrowBuffer,
     facets: GrowBuffer,
     slaves: GrowBuffer,
-    /// The slaves' positions and node ids in walk order (`walk_gather`).
+    /// The slaves' positions and node ids in walk order (`walk_start`).
     walk_points: GrowBuffer,
     /// The search tree's leaf order.
     order: GrowBuffer,
@@ -173,7 +173,7 @@ impl GpuSearch {
             tree_refit: pipeline(&passes::TREE_REFIT),
             scan_blocks: pipeline(&passes::SCAN_BLOCKS),
             scan_add: pipeline(&passes::SCAN_ADD),
-            walk_gather: pipeline(&passes::WALK_GATHER),
+            walk_start: pipeline(&passes::WALK_START),
             nearest_walk: pipeline(&passes::NEAREST_WALK),
             nearest_args: pipeline(&passes::NEAREST_ARGS),
             nearest_chunks: pipeline(&passes::NEAREST_CHUNKS),
@@ -427,7 +427,7 @@ impl GpuSearch {
             local_search: group(&p.local_search, &passes::LOCAL_SEARCH)?,
             motion: group(&p.motion, &passes::MOTION)?,
             tree_refit,
-            walk_gather: group(&p.walk_gather, &passes::WALK_GATHER)?,
+            walk_start: group(&p.walk_start, &passes::WALK_START)?,
             nearest_walk: group(&p.nearest_walk, &passes::NEAREST_WALK)?,
             work_scan_blocks,
             work_scan_add,
@@ -792,9 +792,9 @@ impl GpuSearch {
                     let work = work_levels(prep);
                     let mut seq = vec![
                         (
-                            &p.walk_gather,
-                            &bg.walk_gather,
-                            params.n_slaves,
+                            &p.walk_start,
+                            &bg.walk_start,
+                            params.n_slaves.div_ceil(crate::search::layout::WALK_GROUP),
                             ITEM_WORKGROUP,
                         ),
                         (

@@ -5,6 +5,10 @@ use bytemuck::{Pod, Zeroable};
 
 /// Invocations per workgroup of the one-item-per-invocation kernels (WGSL: `ITEM_WORKGROUP`).
 pub const ITEM_WORKGROUP: u32 = 64;
+
+/// Walk positions per group whose walks of the search tree start together at one node
+/// (WGSL: `WALK_GROUP` in nearest_facet.wgsl).
+pub const WALK_GROUP: u32 = 8;
 /// Words scanned per workgroup by `scan.wgsl` (WGSL: `SCAN_BLOCK`).
 pub const SCAN_BLOCK: u32 = 1024;
 /// Lower corner of an empty box in the search tree (its upper corner is the negation)

@@ -117,23 +117,24 @@ pub fn leaf_order(points: &[[f64; 3]], dim: u32) -> Vec<u32> {
 }
 
 /// The search tree's boxes, quantised (WGSL twins in `common.wgsl`: `box_step`, `box_code_lo`,
-/// `box_code_hi`, `box_bound`, `box_pack`, `box_codes_lo`, `box_codes_hi`).
+/// `box_code_hi`, `box_pack`, `box_codes_lo`, `box_codes_hi`, `box_bounds`, `box_empty`,
+/// `box_point`).
 ///
-/// A box is one `[u32; 4]` (a `vec4<u32>` on the device: one load per box test, where two
+/// A box is one `[u32; 4]` (a `vec4<u32>` on the device: one load per box test where two
 /// `vec4<f32>` corners cost two — on a software adapter every load is a loop over the SIMD
 /// lanes, and the walk is mostly loads). Its six bounds are 21-bit codes q on a grid of step
-/// s, a power of two: the bound is (q − 2^20)·s, exact in f32 on every device. Code 0 is −∞
-/// and [`BOX_TOP`] is +∞: a bound beyond the grid's ±2^20 steps becomes infinite, so a box only
-/// ever grows, whatever the master does. An empty box has lo = +∞ and hi = −∞. Lower bounds
+/// s, a power of two: the bound is (q − 2^20)·s, exact in f32 on every device. Lower bounds
 /// round down and upper bounds up, so a box always holds what it was made from, and min/max of
-/// codes is the exact union.
+/// codes is the exact union. A bound beyond the grid gets code 0 (lower) or [`BOX_TOP`] (upper),
+/// which lie outside the grid's finite range ±(2^20 − 1)·s, and box tests measure from the
+/// point clamped into that range ([`point`]): those codes then act as −∞ and +∞ whatever the
+/// master does, and no distance is overestimated (clamping a point into a box that holds
+/// another only brings it nearer). An empty box has lo codes `BOX_TOP` and hi codes 0.
 pub mod boxes {
-    /// The largest code: +∞ (a lower bound's code is at most `BOX_TOP − 1`).
+    /// The largest code (a lower bound's code is at most `BOX_TOP − 1`).
     pub const BOX_TOP: u32 = 0x1f_ffff;
     /// The code of the grid's origin: 2^20.
     pub const BOX_BIAS: f32 = 1_048_576.0;
-    /// What the codes 0 and [`BOX_TOP`] stand for (±∞ to every bound test).
-    pub const BOX_BIG: f32 = 3.0e38;
 
     /// The step of the box grid and its inverse for a tree whose leaf boxes grow by `margin`:
     /// the power of two at or below the margin (2^-100 at least), so the grid's ±2^20 steps
@@ -148,23 +149,25 @@ pub mod boxes {
         )
     }
 
-    /// The code of a lower bound `x` (rounded down; −∞ below the grid).
+    /// The code of a lower bound `x` (rounded down; 0 below the grid).
     pub fn code_lo(x: f32, inv_step: f32) -> u32 {
         ((x * inv_step).floor() + BOX_BIAS).clamp(0.0, (BOX_TOP - 1) as f32) as u32
     }
 
-    /// The code of an upper bound `x` (rounded up; +∞ above the grid).
+    /// The code of an upper bound `x` (rounded up; `BOX_TOP` above the grid).
     pub fn code_hi(x: f32, inv_step: f32) -> u32 {
         ((x * inv_step).ceil() + BOX_BIAS).clamp(1.0, BOX_TOP as f32) as u32
     }
 
-    /// The bound of code `q`.
+    /// The bound of code `q`: (q − 2^20)·s.
     pub fn bound(q: u32, step: f32) -> f32 {
-        match q {
-            0 => -BOX_BIG,
-            BOX_TOP => BOX_BIG,
-            _ => (q as f32 - BOX_BIAS) * step,
-        }
+        (q as f32 - BOX_BIAS) * step
+    }
+
+    /// The point box tests measure from: `p` clamped into the grid's finite range.
+    pub fn point(p: f32, step: f32) -> f32 {
+        let g = (BOX_BIAS - 1.0) * step;
+        p.clamp(-g, g)
     }
 
     /// Packs the codes of a box: 21 bits each, lo.x from bit 0 upwards, then lo.y, lo.z, hi.x,
@@ -194,7 +197,7 @@ pub mod boxes {
         )
     }
 
-    /// The packed empty box (lo = +∞, hi = −∞).
+    /// The packed empty box.
     pub const EMPTY: [u32; 4] = [BOX_TOP | BOX_TOP << 21, BOX_TOP >> 11 | BOX_TOP << 10, 0, 0];
 
     /// Whether a packed box is empty (no facet below it, or only collapsed ones).
@@ -202,8 +205,8 @@ pub mod boxes {
         b[0] & BOX_TOP == BOX_TOP
     }
 
-    /// The lower and upper corner of a packed box on the grid of `step` (model units in the
-    /// search's local frame; ±[`BOX_BIG`] for infinite bounds).
+    /// The lower and upper corner of a packed box on the grid of `step` (the search's local
+    /// frame; the codes 0 and `BOX_TOP` decode to the grid's edges, beyond every box point).
     pub fn unpack(b: [u32; 4], step: f32) -> ([f32; 3], [f32; 3]) {
         let (lo, hi) = codes(b);
         (lo.map(|q| bound(q, step)), hi.map(|q| bound(q, step)))
@@ -215,61 +218,55 @@ mod tests {
     use super::*;
 
     #[test]
-    fn packed_boxes_hold_what_they_were_made_from() {
+    fn packed_boxes_never_overestimate_a_distance() {
         use super::boxes::*;
         let margin = 32.0 * f32::EPSILON * 3.7;
         let (step, inv) = box_step(margin);
         assert_eq!(step * inv, 1.0);
         assert!(step <= margin && 2.0 * step > margin);
         assert_eq!(box_step(0.0), (2f32.powi(-100), 2f32.powi(100)));
+        // distance² from p to [lo, hi] per axis, in f64
+        let d2 = |p: [f32; 3], lo: [f32; 3], hi: [f32; 3]| -> f64 {
+            (0..3)
+                .map(|a| {
+                    let d = (lo[a] as f64 - p[a] as f64)
+                        .max(p[a] as f64 - hi[a] as f64)
+                        .max(0.0);
+                    d * d
+                })
+                .sum()
+        };
         let mut rng = crate::mesh::SplitMix64::new(7);
-        for _ in 0..10_000 {
-            let scale = [1e-3, 1.0, 3.7, 50.0][(rng.next_u64() % 4) as usize];
-            let a: [f32; 3] = std::array::from_fn(|_| rng.range(-scale, scale) as f32);
-            let b: [f32; 3] = std::array::from_fn(|_| rng.range(-scale, scale) as f32);
+        // the grid reaches ±2^20 steps ≈ ±8 here: boxes and points inside and far beyond it
+        for _ in 0..20_000 {
+            let scale = [1e-3, 1.0, 3.7, 50.0, 1e30][(rng.next_u64() % 5) as usize];
+            let mut v = || rng.range(-scale, scale) as f32;
+            let (a, b): ([f32; 3], [f32; 3]) = ([v(), v(), v()], [v(), v(), v()]);
+            let p = [v(), v(), v()];
             let lo: [f32; 3] = std::array::from_fn(|i| a[i].min(b[i]));
             let hi: [f32; 3] = std::array::from_fn(|i| a[i].max(b[i]));
             let packed = pack(lo.map(|x| code_lo(x, inv)), hi.map(|x| code_hi(x, inv)));
             assert!(!is_empty(packed));
             let (qlo, qhi) = unpack(packed, step);
+            let q = p.map(|x| point(x, step));
+            assert!(
+                d2(q, qlo, qhi) <= d2(p, lo, hi),
+                "overestimated: p {p:?}, box {lo:?}..{hi:?}"
+            );
             for i in 0..3 {
-                // never smaller; at most one step larger inside the grid (±2^20 steps)
-                assert!(
-                    qlo[i] <= lo[i] && qhi[i] >= hi[i],
-                    "{lo:?} {hi:?} {qlo:?} {qhi:?}"
-                );
-                // beyond the grid (±2^20 steps): −∞ below it, its last step above, and the
-                // mirror image for upper bounds
-                let (inside, beyond) = (1_048_000.0 * step, 1_049_000.0 * step);
-                if lo[i].abs() < inside {
-                    assert!(lo[i] - qlo[i] <= step, "{} {}", lo[i], qlo[i]);
-                } else if lo[i] < -beyond {
-                    assert_eq!(qlo[i], -BOX_BIG);
-                } else if lo[i] > beyond {
-                    assert_eq!(qlo[i], bound(BOX_TOP - 1, step));
+                // inside the grid: holds the box, at most one step wider
+                if lo[i].abs() < 1_048_000.0 * step {
+                    assert!(qlo[i] <= lo[i] && lo[i] - qlo[i] <= step);
                 }
-                if hi[i].abs() < inside {
-                    assert!(qhi[i] - hi[i] <= step);
-                } else if hi[i] > beyond {
-                    assert_eq!(qhi[i], BOX_BIG);
-                } else if hi[i] < -beyond {
-                    assert_eq!(qhi[i], bound(1, step));
+                if hi[i].abs() < 1_048_000.0 * step {
+                    assert!(qhi[i] >= hi[i] && qhi[i] - hi[i] <= step);
                 }
             }
         }
-        // beyond the grid: infinite, never cut
-        let packed = pack(
-            [code_lo(-1e30, inv), code_lo(1e30, inv), 0],
-            [code_hi(-1e30, inv), code_hi(1e30, inv), BOX_TOP],
-        );
-        let (lo, hi) = unpack(packed, step);
-        assert_eq!(lo[0], -BOX_BIG);
-        assert!(lo[1] < 1e30 && lo[1] > 0.0);
-        assert!(hi[0] > -1e30 && hi[0] < 0.0);
-        assert_eq!(hi[1], BOX_BIG);
-        assert_eq!((lo[2], hi[2]), (-BOX_BIG, BOX_BIG));
         assert!(is_empty(EMPTY));
         assert_eq!(codes(EMPTY), ([BOX_TOP; 3], [0; 3]));
+        let c = [3, 1 << 20, BOX_TOP - 1];
+        assert_eq!(codes(pack(c, [1, 77, BOX_TOP])), (c, [1, 77, BOX_TOP]));
     }
 
     #[test]

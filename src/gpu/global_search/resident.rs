@@ -19,8 +19,10 @@ struct Slots {
     tree_passes: Vec<u64>,
     /// Global: one per block of each level of the work-item scan.
     work_levels: Vec<u64>,
-    /// Global: one per slave (walk_gather, nearest_walk, nearest_crowded, nearest_facet).
+    /// Global: one per slave (nearest_walk, nearest_crowded, nearest_facet).
     slaves: u64,
+    /// Global: one per group of `WALK_GROUP` slaves (walk_start).
+    slave_groups: u64,
     /// Global: one invocation (nearest_args).
     one: u64,
     /// Global: one per watched node (set_reference).
@@ -56,7 +58,7 @@ struct Groups {
     anchor: wgpu::BindGroup,
     local_search: wgpu::BindGroup,
     tree_refit: Vec<wgpu::BindGroup>,
-    walk_gather: wgpu::BindGroup,
+    walk_start: wgpu::BindGroup,
     nearest_walk: wgpu::BindGroup,
     nearest_args: wgpu::BindGroup,
     nearest_chunks: wgpu::BindGroup,
@@ -118,6 +120,13 @@ fn initial_plan(
             .push(add_slot(&mut plan, level.1, SCAN_BLOCK, g, max_dim)?);
     }
     slots.slaves = add_slot(&mut plan, params.n_slaves, iw, g, max_dim)?;
+    slots.slave_groups = add_slot(
+        &mut plan,
+        params.n_slaves.div_ceil(WALK_GROUP),
+        iw,
+        g,
+        max_dim,
+    )?;
     slots.one = add_slot(&mut plan, 1, 1, g, max_dim)?;
     slots.motion_nodes = add_slot(&mut plan, n_nodes_watched, iw, g, max_dim)?;
     Ok((plan, slots))
@@ -318,7 +327,7 @@ impl GpuSearch {
                 anchor: group(&p.anchor, &passes::ANCHOR)?,
                 local_search: group(&p.local_search, &passes::LOCAL_SEARCH)?,
                 tree_refit,
-                walk_gather: group(&p.walk_gather, &passes::WALK_GATHER)?,
+                walk_start: group(&p.walk_start, &passes::WALK_START)?,
                 nearest_walk: group(&p.nearest_walk, &passes::NEAREST_WALK)?,
                 nearest_args: group(&p.nearest_args, &passes::NEAREST_ARGS)?,
                 nearest_chunks: group(&p.nearest_chunks, &passes::NEAREST_CHUNKS)?,
@@ -417,7 +426,7 @@ impl GpuSearch {
             .zip(&g.tree_refit)
             .map(|(&slot, group)| Indirect(&p.tree_refit, group, plan, slot))
             .collect();
-        global.push(Indirect(&p.walk_gather, &g.walk_gather, plan, s.slaves));
+        global.push(Indirect(&p.walk_start, &g.walk_start, plan, s.slave_groups));
         global.push(Indirect(&p.nearest_walk, &g.nearest_walk, plan, s.slaves));
         for (i, &slot) in s.work_levels.iter().enumerate() {
             global.push(Indirect(&p.scan_blocks, &g.work_scan_blocks[i], plan, slot));
