@@ -237,8 +237,9 @@ fn walk(t: u32, start: u32) -> Walk {
         v++;
         if (!untested || !far(k, q, w.d2)) {
             let f = order[k - leaves];
-            if (!excluded(slave, facets[f])) {
-                let d2 = project_facet(p, facets[f]).dist2;
+            let fac = facets[f];
+            if (!excluded(slave, fac)) {
+                let d2 = project_facet(p, fac).dist2;
                 w.projections += 1u;
                 if (d2 < w.d2 || (d2 == w.d2 && f < w.f)) {
                     w.d2 = d2;
@@ -301,8 +302,9 @@ fn chunk_best(i: u32, t: u32) -> ChunkBest {
         let k = leaves + j;
         if (box_empty(boxes[k])) { continue; } // no facet, or collapsed
         let f = order[j];
-        if (excluded(slave, facets[f])) { continue; }
-        let d2 = project_facet(p, facets[f]).dist2;
+        let fac = facets[f];
+        if (excluded(slave, fac)) { continue; }
+        let d2 = project_facet(p, fac).dist2;
         if (d2 < b.d2 || (d2 == b.d2 && f < b.f)) {
             b.d2 = d2;
             b.f = f;

@@ -276,3 +276,69 @@ fn facet_sizes_varying_a_hundredfold() {
         );
     }
 }
+
+/// The tree's boxes are 21-bit codes on a power-of-two grid around the frame reaching twice the
+/// master's extent; a bound beyond it saturates, and box tests clamp the point into the grid so
+/// that saturated bounds act as ±∞ (a master that travelled far since the grid was fitted: device
+/// positions under a large radius, say). Here the grid is made 2^24 times too small, so that
+/// every bound of every box saturates: the walks can prune nothing, run into their visit cap and
+/// leave the rest to the chunks — and every hit is still the one the fitted grid gives, on the
+/// CPU path and every adapter, the adapters bit for bit with the CPU mirror.
+#[test]
+fn box_bounds_beyond_the_box_grid_act_as_infinite() {
+    use abut::cpu::CpuSearch;
+    use abut::device::DeviceKind;
+    use abut::gpu::GpuSearch;
+    let facet = 1.0 / 8.0;
+    let (m, p) = plate_scene(facet, [0.0; 3]);
+    let search = GlobalSearch::new(&Device::cpu(), &m, p).unwrap();
+    let fitted = search.prepare(m.positions()).unwrap();
+    let mut tiny = fitted.clone();
+    tiny.params.box_margin *= 2f32.powi(-24);
+    let reference = CpuSearch::default().run(&fitted).unwrap();
+    let cpu = CpuSearch::default().run(&tiny).unwrap();
+    let same = |a: &abut::search::layout::GpuHit, b: &abut::search::layout::GpuHit| {
+        a.facet == b.facet
+            && a.node == b.node
+            && a.point_gap.map(f32::to_bits) == b.point_gap.map(f32::to_bits)
+            && a.normal_dist.map(f32::to_bits) == b.normal_dist.map(f32::to_bits)
+            && a.weights.map(f32::to_bits) == b.weights.map(f32::to_bits)
+    };
+    let found = reference.iter().filter(|h| h.facet != u32::MAX).count();
+    assert!(found > 100, "too few contacts to be a test: {found}");
+    let candidates = |h: &[abut::search::layout::GpuHit]| -> u64 {
+        h.iter().map(|h| (h.candidates & 0x7fff_ffff) as u64).sum()
+    };
+    assert!(
+        candidates(&cpu) > 10 * candidates(&reference),
+        "the tiny grid pruned: {} vs {} projections",
+        candidates(&cpu),
+        candidates(&reference)
+    );
+    for (i, (a, b)) in reference.iter().zip(cpu.iter()).enumerate() {
+        assert!(same(a, b), "CPU path: slave {i}: {a:?} vs {b:?}");
+    }
+    for gpu in gpus() {
+        let DeviceKind::Gpu(ctx) = gpu.kind() else {
+            continue;
+        };
+        let mut g = GpuSearch::new(ctx.clone()).unwrap();
+        let on_fitted: Vec<_> = g.run(&fitted).unwrap().to_vec();
+        let hits = g.run(&tiny).unwrap();
+        assert_eq!(hits.len(), cpu.len());
+        for (i, ((a, b), c)) in on_fitted
+            .iter()
+            .zip(hits.iter())
+            .zip(cpu.iter())
+            .enumerate()
+        {
+            // the same bits as with the fitted grid on this adapter; the same facet, node and
+            // projection count as the CPU mirror (whose quads' last bits may differ)
+            assert!(same(a, b), "{gpu}: slave {i}: {a:?} vs {b:?}");
+            assert!(
+                b.facet == c.facet && b.node == c.node && b.candidates == c.candidates,
+                "{gpu}: slave {i}: {b:?} vs the CPU mirror's {c:?}"
+            );
+        }
+    }
+}

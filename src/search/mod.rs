@@ -1162,6 +1162,16 @@ impl GlobalSearch {
                 ]
             })
             .collect();
+        // every coordinate finite in f32 in both frames (the common case, sequential passes):
+        // nothing to name
+        let finite = |x: [f32; 3]| x[0].is_finite() && x[1].is_finite() && x[2].is_finite();
+        if nodes.iter().all(|x| finite([x[0], x[1], x[2]]))
+            && positions
+                .iter()
+                .all(|x| finite([x[0] as f32, x[1] as f32, x[2] as f32]))
+        {
+            return Ok(nodes);
+        }
         // the lowest node beyond f32 in the model frame itself, else in the search's frame
         let lowest = |beyond: &dyn Fn(usize, usize) -> bool| {
             let mut bad: Option<(usize, usize)> = None;
