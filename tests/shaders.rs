@@ -399,7 +399,7 @@ fn pass_declarations_match_the_shaders() {
         );
         let [x, y, z] = m.entry_points[k].workgroup_size;
         let per = match pass.items {
-            Items::ScanBlocks => x * y * z * 4,
+            Items::ScanBlocks => x * y * z * constant_u32(&m, "SCAN_PER_THREAD"),
             _ => x * y * z,
         };
         assert_eq!(per, pass.per_workgroup, "{what}: items per workgroup");
