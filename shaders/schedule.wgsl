@@ -26,7 +26,7 @@
 @group(0) @binding(3) var<storage, read_write> args: array<u32>;
 
 // Most dispatch slots a plan has (Rust twin: MAX_PLAN_SLOTS).
-const MAX_PLAN_SLOTS: u32 = 16u;
+const MAX_PLAN_SLOTS: u32 = 48u;
 // Words of SearchParams the schedule reads and writes (Rust: the struct's field order).
 const P_CELL_SIZE: u32 = 0u;
 const P_INV_CELL_SIZE: u32 = 1u;

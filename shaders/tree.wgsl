@@ -15,9 +15,12 @@
 //           each leaf slot), 5 boxes (one packed vec4<u32> per node, 2^(L+1) nodes), 6 status
 //           (STATUS_COLLAPSED counted).
 // Dispatch: tree_refit one invocation per node of level `bottom` (2^bottom of them),
-//           TREE_WORKGROUP per workgroup, folded into 2D; one pass per group of up to
-//           TREE_LEVELS_PER_PASS levels, bottom = L first (the leaves, from the facets), then
-//           up to the root. Passes run in order, each after the last (separate dispatches).
+//           TREE_WORKGROUP per workgroup, folded into 2D; one pass per level
+//           (TREE_LEVELS_PER_PASS), bottom = L first (the leaves, from the facets), then up to
+//           the root (bottom = 0). Passes run in order, each after the last (separate
+//           dispatches). No workgroup memory and no barrier: on a CPU adapter a barrier
+//           switches between every SIMD group of the workgroup, and a reduction of six levels
+//           per pass in workgroup memory cost 4 µs per workgroup (60 ms at 10^6 facets).
 // Invariants: a leaf's box is its facet's nodes' box grown by box_margin (≥ 16 f32 ulps of the
 //             frame's extent: the round-off of a closest point computed in f32) and rounded
 //             outwards to the box grid, so a facet's computed distance from any point is never
@@ -25,13 +28,12 @@
 //             the codes). Every operation is exact, so the boxes are the same bits on every
 //             device and in the CPU mirror, whatever the order of execution. A facet
 //             collapsed at these positions (facet_collapsed) gets an empty box (no slave finds
-//             it) and is counted in STATUS_COLLAPSED. The loop runs at most
-//             TREE_LEVELS_PER_PASS times.
+//             it) and is counted in STATUS_COLLAPSED. No loop.
 
 // Rust twin: TreeParams (src/search/layout.rs), 16 bytes.
 struct TreeParams {
-    bottom: u32,  // the level whose boxes this pass reads (the leaves: computes)
-    levels: u32,  // levels above it this pass computes (≤ TREE_LEVELS_PER_PASS, ≤ bottom)
+    bottom: u32,  // the level this pass computes: the leaves from their facets, else from below
+    levels: u32,  // levels it computes: TREE_LEVELS_PER_PASS
     _pad0: u32,
     _pad1: u32,
 }
@@ -44,13 +46,10 @@ struct TreeParams {
 @group(0) @binding(5) var<storage, read_write> boxes: array<vec4<u32>>;
 @group(0) @binding(6) var<storage, read_write> status: array<atomic<u32>>;
 
-// Invocations per workgroup (Rust twin: TREE_WORKGROUP) and the levels one pass reduces in
-// workgroup memory (log2 of it; Rust twin: TREE_LEVELS_PER_PASS).
+// Invocations per workgroup (Rust twin: TREE_WORKGROUP) and the levels one pass computes (Rust
+// twin: TREE_LEVELS_PER_PASS).
 const TREE_WORKGROUP: u32 = 64u;
-const TREE_LEVELS_PER_PASS: u32 = 6u;
-
-var<workgroup> wlo: array<vec3<u32>, 64>;
-var<workgroup> whi: array<vec3<u32>, 64>;
+const TREE_LEVELS_PER_PASS: u32 = 1u;
 
 // The codes of leaf slot j's box: its facet's nodes, grown by the margin; empty for a slot with
 // no facet or a collapsed facet.
@@ -82,45 +81,16 @@ fn leaf_box(j: u32) -> array<vec3<u32>, 2> {
 fn tree_refit(@builtin(workgroup_id) wg: vec3<u32>,
               @builtin(num_workgroups) nwg: vec3<u32>,
               @builtin(local_invocation_index) li: u32) {
-    let k = folded_id(wg, nwg, li, TREE_WORKGROUP);
+    let j = folded_id(wg, nwg, li, TREE_WORKGROUP);
     let width = 1u << tree.bottom;  // nodes of level `bottom`: width .. 2·width − 1
-    var lo = vec3<u32>(BOX_TOP);
-    var hi = vec3<u32>(0u);
-    if (k < width) {
-        if (tree.bottom == params.tree_levels) {
-            let b = leaf_box(k);
-            lo = b[0];
-            hi = b[1];
-            boxes[width + k] = box_pack(lo, hi);
-        } else {
-            let b = boxes[width + k];
-            lo = box_codes_lo(b);
-            hi = box_codes_hi(b);
-        }
-    }
-    wlo[li] = lo;
-    whi[li] = hi;
-    // this workgroup's first node at the current level, and the lanes still holding a box
-    var first = width + (k - li);
-    var span = TREE_WORKGROUP;
-    for (var s = 0u; s < TREE_LEVELS_PER_PASS; s++) {
-        if (s >= tree.levels) { break; }
-        workgroupBarrier();
-        span = span / 2u;
-        first = first / 2u;
-        let live = li < span;
-        if (live) {
-            lo = min(wlo[2u * li], wlo[2u * li + 1u]);
-            hi = max(whi[2u * li], whi[2u * li + 1u]);
-        }
-        workgroupBarrier();
-        if (live) {
-            wlo[li] = lo;
-            whi[li] = hi;
-            let node = first + li;
-            if (node < (width >> s)) {  // within level bottom − s − 1
-                boxes[node] = box_pack(lo, hi);
-            }
-        }
+    if (j >= width) { return; }
+    let k = width + j;
+    if (tree.bottom == params.tree_levels) {
+        let b = leaf_box(j);
+        boxes[k] = box_pack(b[0], b[1]);
+    } else {
+        let l = boxes[2u * k];
+        let r = boxes[2u * k + 1u];
+        boxes[k] = box_pack(min(box_codes_lo(l), box_codes_lo(r)), max(box_codes_hi(l), box_codes_hi(r)));
     }
 }

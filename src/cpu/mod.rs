@@ -247,10 +247,12 @@ impl CpuSearch {
     /// Sizes and resets the workspace for a global search of `prep`.
     fn reset(&mut self, prep: &Prepared) {
         crate::status::reset(&mut self.ws.status, crate::status::Owner::Search);
-        self.ws.boxes.clear();
         self.ws
             .boxes
             .resize(tree::box_words(prep.params.tree_levels), [0; 4]);
+        self.ws
+            .corners
+            .resize(tree::box_words(prep.params.tree_levels), [[0.0; 4]; 2]);
         hits_mut(&mut self.ws.hits).resize(prep.slaves.len(), GpuHit::miss(0, 0));
     }
 
@@ -281,10 +283,10 @@ pub fn run_step(
                     &prep.facets,
                     &prep.order,
                     &mut ws.boxes,
+                    &mut ws.corners,
                     &mut ws.status,
                 );
             }
-            tree::decode(params, &ws.boxes, &mut ws.corners);
         }
         Step::NearestFacet => {
             let n = params.n_slaves as usize;

@@ -30,10 +30,13 @@ impl CpuSearch {
         frame_origin: [f32; 3],
     ) {
         let plan = fresh_plan(&prep.params, interval);
-        self.ws.boxes.clear();
         self.ws
             .boxes
             .resize(super::tree::box_words(prep.params.tree_levels), [0; 4]);
+        self.ws.corners.resize(
+            super::tree::box_words(prep.params.tree_levels),
+            [[0.0; 4]; 2],
+        );
         super::hits_mut(&mut self.ws.hits).resize(prep.slaves.len(), GpuHit::miss(0, 0));
         self.ws.reference = prep.nodes.clone();
         self.resident = Some(Box::new(CpuResident {

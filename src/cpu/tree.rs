@@ -40,18 +40,19 @@ fn leaf_box(
         }
     }
     let inv = boxes::box_step(m).1;
-    (
-        boxes::pack(
-            [0, 1, 2].map(|a| boxes::code_lo(lo[a] - m, inv)),
-            [0, 1, 2].map(|a| boxes::code_hi(hi[a] + m, inv)),
-        ),
-        false,
-    )
+    let (l, h) = (
+        |a: usize| boxes::code_lo(lo[a] - m, inv),
+        |a: usize| boxes::code_hi(hi[a] + m, inv),
+    );
+    (boxes::pack([l(0), l(1), l(2)], [h(0), h(1), h(2)]), false)
 }
 
-/// One refit pass (WGSL: `tree_refit`): the boxes of level `tp.bottom` (computed from the facets
-/// at the leaves, else as the previous pass left them), then `tp.levels` levels above it, each
-/// node's box the union of its children's. Collapsed facets are counted into `status`.
+/// One refit pass (WGSL: `tree_refit`): the boxes of level `tp.bottom`, the leaves' from their
+/// facets (collapsed facets counted into `status`), any other level's the union of its
+/// children's. `corners` gets the same boxes decoded (lower, upper corner; the lower corner's w
+/// is 1 for an empty box): the CPU walk's boxes, with the bits the kernels' `box_bounds` gives.
+/// An inner node's corners are the min/max of its children's, which is exactly the decoded
+/// min/max of their codes (the decoding is exact and increasing).
 pub fn tree_refit(
     params: &SearchParams,
     tp: &TreeParams,
@@ -59,56 +60,74 @@ pub fn tree_refit(
     facets: &[[u32; 4]],
     order: &[u32],
     tree: &mut [[u32; 4]],
+    corners: &mut [[[f32; 4]; 2]],
     status: &mut [u32],
 ) {
     let width = 1usize << tp.bottom;
+    let step = boxes::box_step(params.box_margin).0;
+    let level = &mut tree[width..2 * width];
+    let (upper, lower) = corners.split_at_mut(2 * width);
+    let level_corners = &mut upper[width..2 * width];
     if tp.bottom == params.tree_levels {
-        let level = &mut tree[width..2 * width];
         let collapsed: u32 = level
             .par_iter_mut()
+            .zip(level_corners.par_iter_mut())
             .enumerate()
             .with_min_len(PAR_MIN)
-            .map(|(j, b)| {
-                let (bx, c) = leaf_box(params, nodes, facets, order, j);
+            .map(|(j, (b, c))| {
+                let (bx, collapsed) = leaf_box(params, nodes, facets, order, j);
                 *b = bx;
-                u32::from(c)
+                *c = decoded(bx, step);
+                u32::from(collapsed)
             })
             .sum();
         status[STATUS_COLLAPSED] += collapsed;
+        return;
     }
-    for s in 0..tp.levels {
-        let w = width >> (s + 1); // nodes of the level being computed: w..2w
-        let (upper, lower) = tree.split_at_mut(2 * w);
-        let parents = &mut upper[w..2 * w];
-        let children = &lower[..2 * w];
-        parents
-            .par_iter_mut()
-            .enumerate()
-            .with_min_len(PAR_MIN)
-            .for_each(|(i, b)| {
-                let (l_lo, l_hi) = boxes::codes(children[2 * i]);
-                let (r_lo, r_hi) = boxes::codes(children[2 * i + 1]);
-                *b = boxes::pack(
-                    [0, 1, 2].map(|a| l_lo[a].min(r_lo[a])),
-                    [0, 1, 2].map(|a| l_hi[a].max(r_hi[a])),
-                );
-            });
-    }
+    let children = &lower[..2 * width];
+    let (tree_upper, tree_lower) = tree.split_at_mut(2 * width);
+    let level = &mut tree_upper[width..2 * width];
+    let child_boxes = &tree_lower[..2 * width];
+    level
+        .par_iter_mut()
+        .zip(level_corners.par_iter_mut())
+        .enumerate()
+        .with_min_len(PAR_MIN)
+        .for_each(|(i, (b, c))| {
+            let (l, r) = (child_boxes[2 * i], child_boxes[2 * i + 1]);
+            *b = union(l, r);
+            let [ll, lh] = children[2 * i].map(glam::Vec4::from_array);
+            let [rl, rh] = children[2 * i + 1].map(glam::Vec4::from_array);
+            *c = [ll.min(rl).to_array(), lh.max(rh).to_array()];
+        });
 }
 
-/// Decodes every packed box into its lower and upper corner (`corners`, resized), with the
-/// bits the kernels' `box_bounds` gives: the CPU walk's boxes. An empty box's lower corner has
-/// w = 1 (its bounds are meaningless).
-pub fn decode(params: &SearchParams, tree: &[[u32; 4]], corners: &mut Vec<[[f32; 4]; 2]>) {
-    let step = boxes::box_step(params.box_margin).0;
-    corners.resize(tree.len(), [[0.0; 4]; 2]);
-    corners
-        .par_iter_mut()
-        .zip(tree)
-        .with_min_len(PAR_MIN)
-        .for_each(|(c, &b)| {
-            let (lo, hi) = boxes::unpack(b, step);
-            let empty = if boxes::is_empty(b) { 1.0 } else { 0.0 };
-            *c = [[lo[0], lo[1], lo[2], empty], [hi[0], hi[1], hi[2], 0.0]];
-        });
+/// The union of two packed boxes: min of the lower codes, max of the upper ones (WGSL: the
+/// refit's `box_pack(min(…), max(…))`).
+fn union(l: [u32; 4], r: [u32; 4]) -> [u32; 4] {
+    let (l_lo, l_hi) = boxes::codes(l);
+    let (r_lo, r_hi) = boxes::codes(r);
+    boxes::pack(
+        [
+            l_lo[0].min(r_lo[0]),
+            l_lo[1].min(r_lo[1]),
+            l_lo[2].min(r_lo[2]),
+        ],
+        [
+            l_hi[0].max(r_hi[0]),
+            l_hi[1].max(r_hi[1]),
+            l_hi[2].max(r_hi[2]),
+        ],
+    )
+}
+
+/// A packed box decoded: lower and upper corner, the lower's w 1 when it is empty.
+fn decoded(b: [u32; 4], step: f32) -> [[f32; 4]; 2] {
+    let (lo, hi) = boxes::codes(b);
+    let q = |c: u32| boxes::bound(c, step);
+    let empty = if boxes::is_empty(b) { 1.0 } else { 0.0 };
+    [
+        [q(lo[0]), q(lo[1]), q(lo[2]), empty],
+        [q(hi[0]), q(hi[1]), q(hi[2]), 0.0],
+    ]
 }

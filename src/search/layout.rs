@@ -182,9 +182,10 @@ const _: () = assert!(std::mem::size_of::<FrameParams>() == 32);
 #[repr(C)]
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Pod, Zeroable)]
 pub struct TreeParams {
-    /// The level whose boxes the pass reads (the leaves, `tree_levels`: computes them).
+    /// The level whose boxes the pass computes: the leaves (`tree_levels`) from their facets,
+    /// any other from the level below.
     pub bottom: u32,
-    /// Levels above it the pass computes (at most `TREE_LEVELS_PER_PASS` and `bottom`).
+    /// Levels the pass computes: `TREE_LEVELS_PER_PASS`.
     pub levels: u32,
     /// Padding.
     pub _pad: [u32; 2],
@@ -193,26 +194,22 @@ const _: () = assert!(std::mem::size_of::<TreeParams>() == 16);
 
 /// Invocations per workgroup of the tree's refit (WGSL: `TREE_WORKGROUP`).
 pub const TREE_WORKGROUP: u32 = 64;
-/// Levels one refit pass computes in workgroup memory: log2 of `TREE_WORKGROUP`
-/// (WGSL: `TREE_LEVELS_PER_PASS`).
-pub const TREE_LEVELS_PER_PASS: u32 = 6;
+/// Levels one refit pass computes (WGSL: `TREE_LEVELS_PER_PASS`): one, so that no pass needs a
+/// workgroup barrier (on a CPU adapter a barrier switches between every SIMD group of the
+/// workgroup: the reduction of six levels in workgroup memory cost 4 µs per workgroup, 60 ms at
+/// 10^6 facets on lavapipe).
+pub const TREE_LEVELS_PER_PASS: u32 = 1;
 
 /// The refit passes of a tree of `levels` levels below its root, leaves first.
 pub fn tree_passes(levels: u32) -> Vec<TreeParams> {
-    let mut passes = Vec::new();
-    let mut bottom = levels;
-    loop {
-        let up = bottom.min(TREE_LEVELS_PER_PASS);
-        passes.push(TreeParams {
+    (0..=levels)
+        .rev()
+        .map(|bottom| TreeParams {
             bottom,
-            levels: up,
+            levels: TREE_LEVELS_PER_PASS,
             _pad: [0; 2],
-        });
-        if bottom == up {
-            return passes;
-        }
-        bottom -= up;
-    }
+        })
+        .collect()
 }
 
 /// Parameters of one scan level. WGSL twin: `ScanParams` in scan.wgsl.
@@ -355,7 +352,7 @@ pub const PLAN_SLOTS: usize = 88;
 /// Words per dispatch slot.
 pub const PLAN_SLOT_WORDS: usize = 8;
 /// Most dispatch slots of a plan (WGSL: `MAX_PLAN_SLOTS` in schedule.wgsl).
-pub const MAX_PLAN_SLOTS: usize = 16;
+pub const MAX_PLAN_SLOTS: usize = 48;
 /// Words of a plan.
 pub const PLAN_WORDS: usize = PLAN_SLOTS + MAX_PLAN_SLOTS * PLAN_SLOT_WORDS;
 /// Slot kind: dispatched in global increments.

@@ -1051,26 +1051,26 @@ impl GlobalSearch {
             });
         }
         validate_positions(positions, 0, self.dim)?;
-        let mut lo = [f64::INFINITY; 3];
-        let mut hi = [f64::NEG_INFINITY; 3];
+        // the master's box and its facets' mean extent, from the padded active facets (unused
+        // slots repeat node 1, which changes no box); four lanes of f64 per corner
+        let mut lo = glam::DVec4::splat(f64::INFINITY);
+        let mut hi = glam::DVec4::splat(f64::NEG_INFINITY);
         let mut extent_sum = 0.0;
-        for &f in &self.master.active {
-            let facet = &self.master.facets[f as usize];
-            let mut flo = [f64::INFINITY; 3];
-            let mut fhi = [f64::NEG_INFINITY; 3];
-            for &n in facet.nodes() {
-                let x = positions[n as usize];
-                for a in 0..3 {
-                    flo[a] = flo[a].min(x[a]);
-                    fhi[a] = fhi[a].max(x[a]);
-                }
-            }
-            for a in 0..3 {
-                lo[a] = lo[a].min(flo[a]);
-                hi[a] = hi[a].max(fhi[a]);
-            }
-            extent_sum += (0..3).map(|a| fhi[a] - flo[a]).fold(0.0, f64::max);
+        for fac in self.facets.iter() {
+            let n = crate::cpu::common::facet_node_count(*fac);
+            let x = |j: usize| {
+                let p = positions[fac[j.min(n - 1)] as usize];
+                glam::DVec4::new(p[0], p[1], p[2], 0.0)
+            };
+            let (x0, x1, x2, x3) = (x(0), x(1), x(2), x(3));
+            let flo = x0.min(x1).min(x2.min(x3));
+            let fhi = x0.max(x1).max(x2.max(x3));
+            lo = lo.min(flo);
+            hi = hi.max(fhi);
+            let e = fhi - flo;
+            extent_sum += e.x.max(e.y).max(e.z);
         }
+        let (lo, hi) = ([lo.x, lo.y, lo.z], [hi.x, hi.y, hi.z]);
         let n_facets = self.facets.len();
         let grid = Grid::fit(
             lo,

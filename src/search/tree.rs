@@ -151,12 +151,28 @@ pub mod boxes {
 
     /// The code of a lower bound `x` (rounded down; 0 below the grid).
     pub fn code_lo(x: f32, inv_step: f32) -> u32 {
-        ((x * inv_step).floor() + BOX_BIAS).clamp(0.0, (BOX_TOP - 1) as f32) as u32
+        (floor(x * inv_step) + BOX_BIAS).clamp(0.0, (BOX_TOP - 1) as f32) as u32
     }
 
     /// The code of an upper bound `x` (rounded up; `BOX_TOP` above the grid).
     pub fn code_hi(x: f32, inv_step: f32) -> u32 {
-        ((x * inv_step).ceil() + BOX_BIAS).clamp(1.0, BOX_TOP as f32) as u32
+        (-floor(-(x * inv_step)) + BOX_BIAS).clamp(1.0, BOX_TOP as f32) as u32
+    }
+
+    /// `t.floor()`, the same value for every `t`, without the library call that `floor` is on
+    /// x86-64 targets without SSE4.1 (one per bound of every leaf at each refit).
+    fn floor(t: f32) -> f32 {
+        if t.abs() < 8_388_608.0 {
+            // |t| < 2^23: the truncation is exact, one below for a negative fraction
+            let i = t as i32 as f32;
+            if i > t {
+                i - 1.0
+            } else {
+                i
+            }
+        } else {
+            t // an integer already, or ±∞, or NaN
+        }
     }
 
     /// The bound of code `q`: (q − 2^20)·s.
@@ -262,6 +278,22 @@ mod tests {
                     assert!(qhi[i] >= hi[i] && qhi[i] - hi[i] <= step);
                 }
             }
+        }
+        // the codes are those of the library's floor and ceil (the shaders' builtins)
+        let mut rng = crate::mesh::SplitMix64::new(8);
+        for k in 0..100_000 {
+            let x = match k % 4 {
+                0 => rng.range(-4.0, 4.0) as f32,
+                1 => (rng.range(-20.0, 20.0) as f32).round() * step,
+                2 => rng.range(-1e9, 1e9) as f32,
+                _ => f32::from_bits(rng.next_u64() as u32),
+            };
+            if !x.is_finite() {
+                continue;
+            }
+            let lo = ((x * inv).floor() + BOX_BIAS).clamp(0.0, (BOX_TOP - 1) as f32) as u32;
+            let hi = ((x * inv).ceil() + BOX_BIAS).clamp(1.0, BOX_TOP as f32) as u32;
+            assert_eq!((code_lo(x, inv), code_hi(x, inv)), (lo, hi), "{x:e}");
         }
         assert!(is_empty(EMPTY));
         assert_eq!(codes(EMPTY), ([BOX_TOP; 3], [0; 3]));
