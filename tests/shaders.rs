@@ -172,7 +172,19 @@ fn wgsl_twins_match_rust() {
         constant_u32(&t, "TREE_LEVELS_PER_PASS"),
         TREE_LEVELS_PER_PASS
     );
-    assert_eq!(1 << TREE_LEVELS_PER_PASS, TREE_WORKGROUP);
+    // the packed boxes' codes and the walks' groups
+    assert_eq!(
+        constant_u32(&t, "BOX_TOP"),
+        abut::search::tree::boxes::BOX_TOP
+    );
+    assert_eq!(
+        constant_f32(&t, "BOX_BIAS"),
+        abut::search::tree::boxes::BOX_BIAS
+    );
+    assert_eq!(
+        constant_u32(&parse("nearest_facet"), "WALK_GROUP"),
+        abut::search::layout::WALK_GROUP
+    );
     assert_eq!(
         constant_u32(&t, "STATUS_COLLAPSED") as usize,
         STATUS_COLLAPSED
