@@ -125,11 +125,12 @@ pub fn leaf_order(points: &[[f64; 3]], dim: u32) -> Vec<u32> {
 /// lanes, and the walk is mostly loads). Its six bounds are 21-bit codes q on a grid of step
 /// s, a power of two: the bound is (q − 2^20)·s, exact in f32 on every device. Lower bounds
 /// round down and upper bounds up, so a box always holds what it was made from, and min/max of
-/// codes is the exact union. A bound beyond the grid gets code 0 (lower) or [`BOX_TOP`] (upper),
-/// which lie outside the grid's finite range ±(2^20 − 1)·s, and box tests measure from the
-/// point clamped into that range ([`point`]): those codes then act as −∞ and +∞ whatever the
-/// master does, and no distance is overestimated (clamping a point into a box that holds
-/// another only brings it nearer). An empty box has lo codes `BOX_TOP` and hi codes 0.
+/// codes is the exact union. A bound beyond the grid gets code 0 (lower) or
+/// [`BOX_TOP`](boxes::BOX_TOP) (upper), which lie outside the grid's finite range
+/// ±(2^20 − 1)·s, and box tests measure from the point clamped into that range
+/// ([`point`](boxes::point)): those codes then act as −∞ and +∞ whatever the master does, and
+/// no distance is overestimated (clamping a point into a box that holds another only brings it
+/// nearer). An empty box has lo codes `BOX_TOP` and hi codes 0.
 pub mod boxes {
     /// The largest code (a lower bound's code is at most `BOX_TOP − 1`).
     pub const BOX_TOP: u32 = 0x1f_ffff;
