@@ -186,7 +186,7 @@ fn walk(t: u32, start: u32) -> Walk {
     var k = start;
     last = max(start, 1u);
     var v = 0u;
-    // whether the leaf k was reached from a pending return (its box not yet tested)
+    // whether node k was reached untested: the start node, or a return to a pending subtree
     var untested = true;
     let step = box_step(params.box_margin).x;
     let q = box_point(p, step);

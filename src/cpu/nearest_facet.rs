@@ -215,7 +215,7 @@ fn walk(c: &Candidates<'_>, t: usize, start: u32) -> Walk {
     let mut k = start;
     last = last.max(start);
     let mut v = 0;
-    // whether the leaf k was reached by a return to a pending sibling (its box not yet tested)
+    // whether node k was reached untested: the start node, or a return to a pending subtree
     let mut untested = true;
     // two loops as in the shader (its SIMD lanes project together)
     for _leaf in 0..WALK_VISITS {
