@@ -503,25 +503,19 @@ fn nearest_facet(@builtin(workgroup_id) wg: vec3<u32>,
         if (r0.z != 0u) { atomicAdd(&status[STATUS_CROWDED], 1u); }
         let fac = facets[best_f];
         // the facet's nodes loaded once, for the projection and the nearest node
-        let n = facet_node_count(fac);
-        let x0 = nodes[fac.x].xyz;
-        let x1 = nodes[fac.y].xyz;
-        var x2 = x1;
-        var x3 = x1;
-        if (n >= 3u) { x2 = nodes[fac.z].xyz; }
-        if (n == 4u) { x3 = nodes[fac.w].xyz; }
-        let pr = project_points(p, n, x0, x1, x2, x3);
+        let x = facet_points(fac);
+        let pr = project_points(p, x);
         // the nearest of them, ties to the lowest node id
         var best_node = fac.x;
-        var best_nd2 = dot(x0 - p, x0 - p);
-        let d1 = dot(x1 - p, x1 - p);
+        var best_nd2 = dot(x.x0 - p, x.x0 - p);
+        let d1 = dot(x.x1 - p, x.x1 - p);
         if (d1 < best_nd2 || (d1 == best_nd2 && fac.y < best_node)) { best_node = fac.y; best_nd2 = d1; }
-        if (n >= 3u) {
-            let d2 = dot(x2 - p, x2 - p);
+        if (x.n >= 3u) {
+            let d2 = dot(x.x2 - p, x.x2 - p);
             if (d2 < best_nd2 || (d2 == best_nd2 && fac.z < best_node)) { best_node = fac.z; best_nd2 = d2; }
         }
-        if (n == 4u) {
-            let d3 = dot(x3 - p, x3 - p);
+        if (x.n == 4u) {
+            let d3 = dot(x.x3 - p, x.x3 - p);
             if (d3 < best_nd2 || (d3 == best_nd2 && fac.w < best_node)) { best_node = fac.w; best_nd2 = d3; }
         }
         hit.facet = best_f;

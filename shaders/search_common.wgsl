@@ -2,34 +2,44 @@
 // prepended (after common.wgsl) to nearest_facet.wgsl and local_search.wgsl, which declare
 // `params`, `nodes`, `facets` and `adjacency`. CPU mirror: src/cpu/common.rs.
 
-// Closest point of p on facet fac.
-fn project_facet(p: vec3<f32>, fac: vec4<u32>) -> Projection {
-    let n = facet_node_count(fac);
-    let x0 = nodes[fac.x].xyz;
-    let x1 = nodes[fac.y].xyz;
-    if (n == 2u) { return closest_on_segment(p, x0, x1); }
-    let x2 = nodes[fac.z].xyz;
-    if (n == 3u) { return closest_on_triangle(p, x0, x1, x2); }
-    return closest_on_quad(p, x0, x1, x2, nodes[fac.w].xyz);
+// The positions of facet fac's nodes, and their count; the slots beyond it repeat node 1 (not
+// loaded again).
+struct FacetPoints {
+    n: u32,
+    x0: vec3<f32>,
+    x1: vec3<f32>,
+    x2: vec3<f32>,
+    x3: vec3<f32>,
 }
 
-// Closest point of p on the facet of n nodes at x0..x3 (project_facet, its nodes loaded).
-fn project_points(p: vec3<f32>, n: u32, x0: vec3<f32>, x1: vec3<f32>, x2: vec3<f32>, x3: vec3<f32>) -> Projection {
-    if (n == 2u) { return closest_on_segment(p, x0, x1); }
-    if (n == 3u) { return closest_on_triangle(p, x0, x1, x2); }
-    return closest_on_quad(p, x0, x1, x2, x3);
+fn facet_points(fac: vec4<u32>) -> FacetPoints {
+    var f: FacetPoints;
+    f.n = facet_node_count(fac);
+    f.x0 = nodes[fac.x].xyz;
+    f.x1 = nodes[fac.y].xyz;
+    f.x2 = f.x1;
+    f.x3 = f.x1;
+    if (f.n >= 3u) { f.x2 = nodes[fac.z].xyz; }
+    if (f.n == 4u) { f.x3 = nodes[fac.w].xyz; }
+    return f;
+}
+
+// Closest point of p on the facet whose nodes are f.
+fn project_points(p: vec3<f32>, f: FacetPoints) -> Projection {
+    if (f.n == 2u) { return closest_on_segment(p, f.x0, f.x1); }
+    if (f.n == 3u) { return closest_on_triangle(p, f.x0, f.x1, f.x2); }
+    return closest_on_quad(p, f.x0, f.x1, f.x2, f.x3);
+}
+
+// Closest point of p on facet fac.
+fn project_facet(p: vec3<f32>, fac: vec4<u32>) -> Projection {
+    return project_points(p, facet_points(fac));
 }
 
 // Whether facet fac has collapsed at the current positions (see facet_collapsed in common.wgsl).
 fn collapsed(fac: vec4<u32>) -> bool {
-    let n = facet_node_count(fac);
-    let x0 = nodes[fac.x].xyz;
-    let x1 = nodes[fac.y].xyz;
-    var x2 = x1;
-    var x3 = x1;
-    if (n >= 3u) { x2 = nodes[fac.z].xyz; }
-    if (n == 4u) { x3 = nodes[fac.w].xyz; }
-    return facet_collapsed(x0, x1, x2, x3, n);
+    let f = facet_points(fac);
+    return facet_collapsed(f.x0, f.x1, f.x2, f.x3, f.n);
 }
 
 // Self-contact: facet f is the slave's own or touches one of the slave's own facets.

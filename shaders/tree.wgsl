@@ -15,9 +15,8 @@
 //           each leaf slot), 5 boxes (one packed vec4<u32> per node, 2^(L+1) nodes), 6 status
 //           (STATUS_COLLAPSED counted).
 // Dispatch: tree_refit one invocation per node of level `bottom` (2^bottom of them),
-//           TREE_WORKGROUP per workgroup, folded into 2D; one pass per level
-//           (TREE_LEVELS_PER_PASS), bottom = L first (the leaves, from the facets), then up to
-//           the root (bottom = 0). Passes run in order, each after the last (separate
+//           TREE_WORKGROUP per workgroup, folded into 2D; one pass per level, bottom = L first
+//           (the leaves, from the facets), then up to the root (bottom = 0). Passes run in order, each after the last (separate
 //           dispatches). No workgroup memory and no barrier: on a CPU adapter a barrier
 //           switches between every SIMD group of the workgroup, and a reduction of six levels
 //           per pass in workgroup memory cost 4 µs per workgroup (60 ms at 10^6 facets).
@@ -33,9 +32,9 @@
 // Rust twin: TreeParams (src/search/layout.rs), 16 bytes.
 struct TreeParams {
     bottom: u32,  // the level this pass computes: the leaves from their facets, else from below
-    levels: u32,  // levels it computes: TREE_LEVELS_PER_PASS
     _pad0: u32,
     _pad1: u32,
+    _pad2: u32,
 }
 
 @group(0) @binding(0) var<uniform> params: SearchParams;
@@ -46,10 +45,8 @@ struct TreeParams {
 @group(0) @binding(5) var<storage, read_write> boxes: array<vec4<u32>>;
 @group(0) @binding(6) var<storage, read_write> status: array<atomic<u32>>;
 
-// Invocations per workgroup (Rust twin: TREE_WORKGROUP) and the levels one pass computes (Rust
-// twin: TREE_LEVELS_PER_PASS).
+// Invocations per workgroup (Rust twin: TREE_WORKGROUP).
 const TREE_WORKGROUP: u32 = 64u;
-const TREE_LEVELS_PER_PASS: u32 = 1u;
 
 // The codes of leaf slot j's box: its facet's nodes, grown by the margin; empty for a slot with
 // no facet or a collapsed facet.

@@ -5,7 +5,7 @@
 use abut::gpu::shaders::{source, COMMON, KERNELS};
 use abut::search::layout::{
     GpuHit, ScanParams, SearchParams, TreeParams, EMPTY_LO, ITEM_WORKGROUP, NO_FACET, SCAN_BLOCK,
-    STATUS_COLLAPSED, STATUS_FALLBACK, TREE_LEVELS_PER_PASS, TREE_WORKGROUP,
+    STATUS_COLLAPSED, STATUS_FALLBACK, TREE_WORKGROUP,
 };
 
 fn parse(stem: &str) -> naga::Module {
@@ -168,10 +168,6 @@ fn wgsl_twins_match_rust() {
     )));
     let t = parse("tree");
     assert_eq!(constant_u32(&t, "TREE_WORKGROUP"), TREE_WORKGROUP);
-    assert_eq!(
-        constant_u32(&t, "TREE_LEVELS_PER_PASS"),
-        TREE_LEVELS_PER_PASS
-    );
     // the packed boxes' codes and the walks' groups
     assert_eq!(
         constant_u32(&t, "BOX_TOP"),

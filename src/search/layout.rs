@@ -183,31 +183,26 @@ const _: () = assert!(std::mem::size_of::<FrameParams>() == 32);
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Pod, Zeroable)]
 pub struct TreeParams {
     /// The level whose boxes the pass computes: the leaves (`tree_levels`) from their facets,
-    /// any other from the level below.
+    /// any other from the level below. One level per pass, so that no pass needs a workgroup
+    /// barrier (on a CPU adapter a barrier switches between every SIMD group of the workgroup:
+    /// a reduction of six levels in workgroup memory cost 4 µs per workgroup, 60 ms at 10^6
+    /// facets on lavapipe).
     pub bottom: u32,
-    /// Levels the pass computes: `TREE_LEVELS_PER_PASS`.
-    pub levels: u32,
     /// Padding.
-    pub _pad: [u32; 2],
+    pub _pad: [u32; 3],
 }
 const _: () = assert!(std::mem::size_of::<TreeParams>() == 16);
 
 /// Invocations per workgroup of the tree's refit (WGSL: `TREE_WORKGROUP`).
 pub const TREE_WORKGROUP: u32 = 64;
-/// Levels one refit pass computes (WGSL: `TREE_LEVELS_PER_PASS`): one, so that no pass needs a
-/// workgroup barrier (on a CPU adapter a barrier switches between every SIMD group of the
-/// workgroup: the reduction of six levels in workgroup memory cost 4 µs per workgroup, 60 ms at
-/// 10^6 facets on lavapipe).
-pub const TREE_LEVELS_PER_PASS: u32 = 1;
 
-/// The refit passes of a tree of `levels` levels below its root, leaves first.
+/// The refit passes of a tree of `levels` levels below its root, one per level, leaves first.
 pub fn tree_passes(levels: u32) -> Vec<TreeParams> {
     (0..=levels)
         .rev()
         .map(|bottom| TreeParams {
             bottom,
-            levels: TREE_LEVELS_PER_PASS,
-            _pad: [0; 2],
+            _pad: [0; 3],
         })
         .collect()
 }

@@ -482,3 +482,27 @@ impl GpuSearch {
         groups
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The plan's slots hold the largest search there can be: a tree of 32 levels (one refit
+    /// pass per level, 33) and the most slaves a u32 counts (four scan levels); with one level
+    /// fewer per pass this was where 16 slots ran out.
+    #[test]
+    fn the_largest_search_fits_the_plan() {
+        for (levels, slaves) in [(0, 1), (17, 1_000_000), (32, u32::MAX - 1)] {
+            let params = SearchParams {
+                tree_levels: levels,
+                n_slaves: slaves,
+                ..bytemuck::Zeroable::zeroed()
+            };
+            let work = ScanLevels::new(slaves + 1);
+            let (plan, slots) = initial_plan(&params, 100, &work, slaves, 65_535)
+                .unwrap_or_else(|e| panic!("{levels} levels, {slaves} slaves: {e}"));
+            assert_eq!(slots.tree_passes.len(), levels as usize + 1);
+            assert!(plan[PLAN_N_SLOTS] as usize <= MAX_PLAN_SLOTS);
+        }
+    }
+}
