@@ -32,7 +32,7 @@ pub use kinematic::BodyState;
 pub use model::{
     Analytical, BodyId, Enforce, Facet, Friction, Kinematic, Model, NodeRange, NodeSetId, Pair,
     PairId, Penalty, PressureOverclosure, RigidBody, RigidPair, RigidPairId, RigidPart,
-    RigidPartId, Sliding, Stiffness, Surface, SurfaceId,
+    RigidPartId, Sliding, Stiffness, Surface, SurfaceId, DEFAULT_CONTACT_DAMPING,
 };
 pub use search::layout::IncrementStats;
 pub use search::{ContactPoint, GlobalSearch, SearchResult, SearchStats};

@@ -268,10 +268,33 @@ fn amplitude(hist: &[Vec<[f64; 3]>], node: usize, from: usize, to: usize, eq: f6
         .fold(0.0, f64::max)
 }
 
+/// A linear penalty spring of stiffness `k` with viscous damping `z` (a fraction of critical).
+fn damped_penalty(k: f64, z: f64) -> Enforce {
+    Enforce::Penalty(Penalty {
+        stiffness: Stiffness::Absolute(k),
+        damping: z,
+        ..Default::default()
+    })
+}
+
+/// The stable increment of central differences for a spring of angular frequency `omega` with
+/// viscous damping `z` acting on the half-increment velocity: 2/ω·(√(1 + z²) − z) (the root at
+/// −1 of x⁺ = (2 − a − b)·x − (1 − b)·x⁻, a = (ω·Δt)², b = 2·z·ω·Δt).
+fn damped_limit(omega: f64, z: f64) -> f64 {
+    2.0 / omega * ((1.0 + z * z).sqrt() - z)
+}
+
 /// VERIFICATION §5: a node on a rigid facet (master masses 1e12) pushed by a constant force;
-/// k ≤ 4·m_s/dt². Bounded at 0.99× the reported increment, growing at 1.01×.
+/// k ≤ 4·m_s/dt² undamped, and 2/ω·(√(1 + ξ²) − ξ) with the default contact damping ξ.
+/// Bounded at 0.99× the reported increment, growing at 1.01×.
 #[test]
 fn stable_increment_node_on_rigid_facet() {
+    for z in [0.0, DEFAULT_CONTACT_DAMPING] {
+        node_on_rigid_facet(z);
+    }
+}
+
+fn node_on_rigid_facet(z: f64) {
     let (k, ms, f) = (400.0, 0.5, 2.0);
     let mut m = Model::new_3d();
     m.add_nodes(
@@ -290,15 +313,20 @@ fn stable_increment_node_on_rigid_facet() {
     // about sevenfold, which must not open the contact
     let r = m.add_nodes(&[[0.1, 0.2, -1.1 * h_eq]], &[ms]).unwrap();
     let set = m.add_node_set(&r.to_vec()).unwrap();
-    m.add_pair(Pair::new(set, s).search_radius(0.5).enforce(penalty(k)))
-        .unwrap();
+    m.add_pair(
+        Pair::new(set, s)
+            .search_radius(0.5)
+            .enforce(damped_penalty(k, z)),
+    )
+    .unwrap();
     let ext = [[0.0; 3], [0.0; 3], [0.0; 3], [0.0; 3], [0.0, 0.0, -f]];
-    let exact = 2.0 / (k * (1.0 / ms + 4.0 * 0.0)).sqrt(); // masters: weight² / 1e12 ≈ 0
+    // masters: weight² / 1e12 ≈ 0
+    let exact = damped_limit((k * (1.0 / ms + 4.0 * 0.0)).sqrt(), z);
     for d in devices() {
         let (_, dts) = integrate(&d, &m, &ext, 1e-3, 1);
         assert!(
             (dts[0] - exact).abs() <= 1e-5 * exact,
-            "{d}: reported {} vs 2/√(k/m) = {exact}",
+            "{d}, damping {z}: reported {} vs 2/ω·(√(1 + ξ²) − ξ) = {exact}",
             dts[0]
         );
         let a0 = 0.1 * h_eq;
@@ -307,22 +335,28 @@ fn stable_increment_node_on_rigid_facet() {
         let late = amplitude(&hist, 4, 1000, 1500, -h_eq);
         assert!(
             late <= 1.01 * early && late < 20.0 * a0,
-            "{d}: 0.99×: amplitude {early} then {late}"
+            "{d}, damping {z}: 0.99×: amplitude {early} then {late}"
         );
         let (hist, _) = integrate(&d, &m, &ext, 1.01 * dts[0], 200);
         assert!(
             amplitude(&hist, 4, 100, 200, -h_eq) > 100.0 * a0,
-            "{d}: 1.01×: no growth"
+            "{d}, damping {z}: 1.01×: no growth"
         );
     }
 }
 
 /// VERIFICATION §5, two bodies: a 2D slave node against a free segment (two nodes of mass m_m,
-/// slave at its midpoint, weights ½): dt ≤ 2/√(k(1/m_s + Σ w²/m_i)). Mass ratios 1e±6 too,
-/// with momentum conserved.
+/// slave at its midpoint, weights ½): dt ≤ 2/√(k(1/m_s + Σ w²/m_i)), undamped and with the
+/// default contact damping (× (√(1 + ξ²) − ξ)). Mass ratios 1e±6 too, with momentum conserved.
 #[test]
 fn stable_increment_two_bodies_and_mass_ratios() {
-    for (ms, mm) in [(1.0f64, 0.5f64), (1e-6, 1.0), (1.0, 1e-6)] {
+    for (ms, mm, z) in [
+        (1.0f64, 0.5f64, 0.0),
+        (1e-6, 1.0, 0.0),
+        (1.0, 1e-6, 0.0),
+        (1.0, 0.5, DEFAULT_CONTACT_DAMPING),
+        (1e-6, 1.0, DEFAULT_CONTACT_DAMPING),
+    ] {
         let k = 100.0;
         let mut m = Model::new_2d();
         m.add_nodes_2d(&[[1.0, 0.0], [-1.0, 0.0]], &[mm, mm])
@@ -332,16 +366,20 @@ fn stable_increment_two_bodies_and_mass_ratios() {
         let h_eq = f / k;
         let r = m.add_nodes_2d(&[[0.0, -1.1 * h_eq]], &[ms]).unwrap();
         let set = m.add_node_set(&r.to_vec()).unwrap();
-        m.add_pair(Pair::new(set, s).search_radius(0.5).enforce(penalty(k)))
-            .unwrap();
+        m.add_pair(
+            Pair::new(set, s)
+                .search_radius(0.5)
+                .enforce(damped_penalty(k, z)),
+        )
+        .unwrap();
         // equal and opposite pushes: the slave (below) up into the segment, its nodes down
         let ext = [[0.0, f / 2.0, 0.0], [0.0, f / 2.0, 0.0], [0.0, -f, 0.0]];
-        let exact = 2.0 / (k * (1.0 / ms + 2.0 * 0.25 / mm)).sqrt();
+        let exact = damped_limit((k * (1.0 / ms + 2.0 * 0.25 / mm)).sqrt(), z);
         for d in devices() {
             let (_, dts) = integrate(&d, &m, &ext, 1e-4 * exact, 1);
             assert!(
                 (dts[0] - exact).abs() <= 1e-4 * exact,
-                "{d} ms={ms} mm={mm}: reported {} vs {exact}",
+                "{d} ms={ms} mm={mm} damping {z}: reported {} vs {exact}",
                 dts[0]
             );
             let (hist, _) = integrate(&d, &m, &ext, 0.99 * dts[0], 1500);
@@ -354,7 +392,7 @@ fn stable_increment_two_bodies_and_mass_ratios() {
             };
             assert!(
                 dev(1000, 1500) <= 1.1 * dev(0, 500),
-                "{d} ms={ms}: 0.99× not bounded: {} then {}",
+                "{d} ms={ms} damping {z}: 0.99× not bounded: {} then {}",
                 dev(0, 500),
                 dev(1000, 1500)
             );
@@ -376,7 +414,7 @@ fn stable_increment_two_bodies_and_mass_ratios() {
                 .fold(0.0, f64::max);
             assert!(
                 grown > 100.0 * 0.1 * h_eq,
-                "{d} ms={ms}: 1.01× did not grow ({grown})"
+                "{d} ms={ms} damping {z}: 1.01× did not grow ({grown})"
             );
         }
     }

@@ -392,7 +392,7 @@ fn mesh_parts_from_gmsh_and_abaqus_files() {
 }
 
 /// Rigid parts that move: a plate pushed up at a set velocity bats a point mass off at twice
-/// its speed (an elastic bounce off a moving wall);
+/// its speed (an elastic bounce off a moving wall: an undamped spring);
 /// a free meshed sphere dropped on a fixed plate bounces back with the impulse the contact gave
 /// it (penalty, searched on every device).
 #[test]
@@ -422,6 +422,7 @@ slave_face = "all"
 master = "lift"
 master_face = "z+"
 stiffness = 1.0e5
+damping = 0.0
 "#;
     let drop = r#"
 title = "a rigid meshed sphere dropped on a plate"
@@ -474,11 +475,12 @@ stiffness = 1.0e4
         let s = run(&Scene::parse(drop).unwrap(), &d, None).unwrap();
         let ball = &s.bodies[0];
         assert_eq!(ball.name, "ball");
-        // it came down, touched once and went back up, and the contact impulse is what changed
-        // its momentum besides gravity: m·(v_end − v_0) = J − m·g·T
+        // it came down, touched once and went back up (the default contact damping takes part of
+        // the bounce: 0.5 m/s up at the end undamped, 0.2 now), and the contact impulse is what
+        // changed its momentum besides gravity: m·(v_end − v_0) = J − m·g·T
         let (m, t) = (2.0, 0.08 - 0.5 * 2e-4);
         let change = m * (ball.velocity[2] + 1.0) + m * 9.81 * t;
-        assert!(ball.velocity[2] > 0.5, "{d}: v {:?}", ball.velocity);
+        assert!(ball.velocity[2] > 0.1, "{d}: v {:?}", ball.velocity);
         assert!(
             (s.impulse - change).abs() < 1e-3 * change,
             "{d}: impulse {} vs momentum change {change}",
@@ -1297,4 +1299,73 @@ load = [0.0, 0.0, 8.0]
         let e = Scene::parse(&bad).unwrap_err().to_string();
         assert!(e.contains(key), "{key}: {e}");
     }
+}
+
+/// A fixed `run.dt` above the penalty contact's stable increment is named in the summary's
+/// warnings with the factor that would fix it: a rigid meshed box (74 slave nodes on one free
+/// body) put down on a plate at the automatic stiffness, whose springs — each tuned to the first
+/// increment — add up on the one body to about 4.4 times the stable limit; scaled down by the
+/// warning's factor the same run is quiet and warns of nothing, and the box settles onto the
+/// plate (before, the unstable run hopped in silence).
+#[test]
+fn a_fixed_increment_above_the_contacts_limit_is_warned_about() {
+    let text = |extra: &str| {
+        format!(
+            r#"
+title = "a rigid box put down on a plate"
+[run]
+end_time = 0.05
+dt = 1e-4
+gravity = [0.0, 0.0, -9.81]
+[[part]]
+name = "box"
+shape = "mesh"
+file = "{}/scenes/meshes/box_tets.msh"
+rigid = true
+motion = "free"
+mass = 1.0
+[[part]]
+name = "plate"
+shape = "plate"
+origin = [-0.5, -0.5, 0.0]
+size = [2.0, 2.0, 0.0]
+divisions = [8, 8, 0]
+[[contact]]
+slave = "box"
+slave_face = "bottom"
+master = "plate"
+master_face = "z+"
+{extra}
+"#,
+            env!("CARGO_MANIFEST_DIR")
+        )
+    };
+    let s = run(&Scene::parse(&text("")).unwrap(), &Device::cpu(), None).unwrap();
+    let w: Vec<&String> = s
+        .warnings
+        .iter()
+        .filter(|w| w.contains("exceeds the penalty contact's stable increment"))
+        .collect();
+    assert_eq!(w.len(), 1, "{:?}", s.warnings);
+    // the factor it names: "multiply the contact's penalty_scale by F or less"
+    let factor: f64 = w[0]
+        .split("penalty_scale by ")
+        .nth(1)
+        .and_then(|r| r.split_whitespace().next())
+        .and_then(|f| f.parse().ok())
+        .expect("a factor");
+    assert!(factor > 0.0 && factor < 0.05, "{}", w[0]);
+    let s = run(
+        &Scene::parse(&text(&format!("penalty_scale = {factor}"))).unwrap(),
+        &Device::cpu(),
+        None,
+    )
+    .unwrap();
+    assert!(s.warnings.is_empty(), "{:?}", s.warnings);
+    // settled: at rest on the plate, pressed in by about its weight over the springs
+    let b = &s.bodies[0];
+    assert!(
+        b.velocity.iter().all(|v| v.abs() < 0.01) && b.position[2] > 0.24,
+        "{b:?}"
+    );
 }

@@ -9,7 +9,7 @@ mod surface;
 
 pub use pair::{
     Enforce, Friction, Kinematic, Pair, Penalty, PressureOverclosure, Sliding, Stiffness,
-    MAX_TABLE_POINTS,
+    DEFAULT_CONTACT_DAMPING, MAX_TABLE_POINTS,
 };
 pub use rigid::{Analytical, BodyId, RigidBody, RigidPair, RigidPairId, RigidPart, RigidPartId};
 pub use surface::{DegenerateFacet, Facet, MasterSurface, Surface, NO_NODE};

@@ -793,7 +793,7 @@ impl Scene {
                             scale: c.penalty_scale.unwrap_or(1.0),
                         },
                     },
-                    damping: c.damping.unwrap_or(0.0),
+                    damping: c.damping.unwrap_or(crate::model::DEFAULT_CONTACT_DAMPING),
                     ..Penalty::default()
                 }),
             };

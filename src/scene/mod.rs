@@ -501,6 +501,9 @@ fn run_into(
     // where penalty contact lowered the increment below the elements' limit: the smallest ratio
     // and the first time
     let (mut lowest_ratio, mut lowered_from) = (1.0f64, f64::NAN);
+    // a fixed run.dt above the penalty contact's stable increment: the largest ratio and when
+    // it first happened
+    let (mut over_ratio, mut over_from) = (1.0f64, f64::NAN);
     while solver.time < scene.run.end_time * (1.0 - 1e-12) {
         let step = dt.min(scene.run.end_time - solver.time);
         // (round-off of the combined formula aside)
@@ -568,6 +571,12 @@ fn run_into(
             if c.has_penalty_pairs() {
                 let reported = c.report().stable_dt;
                 contact_dt = contact_dt.min(reported);
+                if scene.run.dt.is_some() && step > reported * (1.0 + 1e-9) {
+                    if over_from.is_nan() {
+                        over_from = t_start;
+                    }
+                    over_ratio = over_ratio.max(step / reported);
+                }
                 // a node carries its elements' and its contact springs' stiffness together:
                 // the frequencies add in square (1/dt² = 1/dt_e² + 1/(safety·dt_c)², the same
                 // safety on both); and a spring that switches on and off must stay at
@@ -762,6 +771,18 @@ fn run_into(
     );
     let anchoring = contact.as_ref().map(|c| c.anchoring()).unwrap_or_default();
     let mut warnings = scene.notes();
+    if over_ratio > 1.0 {
+        warnings.push(format!(
+            "run.dt = {:e} exceeds the penalty contact's stable increment (by up to {over_ratio:.3}×, \
+             from t = {over_from:e}): central differences are unstable there and the contact \
+             results cannot be trusted. Lower run.dt below it — with the automatic stiffness, \
+             which follows the first increment (k ∝ 1/run.dt²), multiply the contact's \
+             penalty_scale by {:.3e} or less instead (ω·Δt ≤ 1, run.contact_safety) — or, in a \
+             scene with elements, leave run.dt out and the increment follows both limits",
+            scene.run.dt.unwrap_or(f64::NAN),
+            (scene.run.contact_safety / over_ratio).powi(2)
+        ));
+    }
     if let Some(a) = adjusted.filter(|a| !a.moved.is_empty()) {
         warnings.push(format!(
             "{} slave nodes started overclosed and were moved onto their masters strain-free \

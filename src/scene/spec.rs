@@ -318,9 +318,11 @@ pub struct ContactSpec {
     /// Penalty stiffness per unit area (pressure per length).
     #[serde(default)]
     pub stiffness_per_area: Option<f64>,
-    /// Viscous damping of each penalty spring, a fraction of its critical damping (default 0;
-    /// penalty only). It takes energy out of impacts, and keeps contact chatter from pumping
-    /// energy into light nodes (see `run.contact_safety`).
+    /// Viscous damping of each penalty spring, a fraction of its critical damping (default
+    /// 0.03, Abaqus/Explicit's: `abut::DEFAULT_CONTACT_DAMPING`; penalty only; 0 turns it off).
+    /// It takes energy out of impacts, keeps bodies from rocking on their contact springs for
+    /// ever (friction lets go where the normal force dips), and keeps contact chatter from
+    /// pumping energy into light nodes (see `run.contact_safety`).
     #[serde(default)]
     pub damping: Option<f64>,
     /// Global search every this many increments.
