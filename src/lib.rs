@@ -14,6 +14,7 @@ pub mod io;
 pub mod kinematic;
 pub mod mesh;
 pub mod model;
+pub mod partition;
 pub mod passes;
 pub mod penalty;
 pub mod query;
