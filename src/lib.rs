@@ -4,6 +4,8 @@
 pub mod contact;
 pub mod cpu;
 pub mod device;
+#[cfg(feature = "mpi")]
+pub mod distributed;
 pub mod error;
 #[cfg(feature = "solver")]
 pub mod explicit;

@@ -1,0 +1,241 @@
+//! Penalty contact across MPI ranks against the single process (issue 18), run by
+//! tests/mpi.rs under `mpirun -n N` (or by hand: `mpirun -n 4 target/release/examples/mpi_contact`).
+//!
+//! Every rank builds the same model: a wavy plate of 16 × 16 quads (the master, its nodes free
+//! and sliding along x by more than a rank's width over the run, so slaves' nearest facets pass
+//! from one rank's nodes to another's), a cloud of 300 slave points pressed into it and moving,
+//! and a block of 200 nodes far away in no pair (with four ranks, recursive coordinate bisection
+//! gives them a rank of their own: a rank with no contact at all). The nodes are split by
+//! recursive coordinate bisection of all of them, so the slaves and the plate are cut across
+//! ranks differently. Positions are prescribed (x = x0 + v·t), so each increment's forces can be
+//! compared with a single `Contact` over the whole model exactly: rank 0 runs it beside its share
+//! and compares every node's force after every increment (relative to the largest force). It
+//! prints one line per run — the largest difference, the distributed global searches, the bytes
+//! sent per increment by each rank, and a checksum of every force's bits (equal on reruns with
+//! the same rank count) — and exits non-zero when a force differs by more than f32 round-off.
+
+use abut::distributed::{DistributedContact, RankModel, RankPair, NO_GLOBAL_NODE};
+use abut::mesh::{plate_quads, point_cloud};
+use abut::partition::recursive_bisection;
+use abut::*;
+use mpi::traits::*;
+
+const INCREMENTS: usize = 60;
+const DT: f64 = 1e-3;
+
+fn main() {
+    let universe = mpi::initialize().expect("MPI initialises");
+    let world = universe.world();
+    let (rank, size) = (world.rank() as usize, world.size() as usize);
+
+    // the whole model, the same on every rank
+    let plate = plate_quads(16, 16, 1.0, 1.0, 0.0, 0, &|x, y| {
+        0.02 * (6.0 * x).sin() * (4.0 * y).cos()
+    });
+    let np = plate.positions.len();
+    let cloud = point_cloud(300, [0.1, 0.1, -0.004], [0.9, 0.9, -0.001], 7);
+    let far = point_cloud(200, [50.0, 50.0, 50.0], [51.0, 51.0, 51.0], 9);
+    let mut x0: Vec<[f64; 3]> = plate.positions.clone();
+    // the slaves follow the wavy surface, pressed in by 1–4 mm
+    for p in &cloud {
+        let z = 0.02 * (6.0 * p[0]).sin() * (4.0 * p[1]).cos();
+        x0.push([p[0], p[1], z + p[2]]);
+    }
+    x0.extend(&far);
+    let n = x0.len();
+    let slaves: Vec<usize> = (np..np + cloud.len()).collect();
+    let mut masses = vec![1.0; n];
+    for &s in &slaves {
+        masses[s] = 0.5;
+    }
+    // the plate slides along +x by 0.3 over the run, the slaves drift along y and sink a little
+    let mut vel = vec![[0.0; 3]; n];
+    for v in vel.iter_mut().take(np) {
+        *v = [0.3 / (INCREMENTS as f64 * DT), 0.0, 0.0];
+    }
+    for (k, &s) in slaves.iter().enumerate() {
+        vel[s] = [0.0, 0.5 * ((k % 7) as f64 - 3.0), -0.02];
+    }
+    let at = |t: f64| -> Vec<[f64; 3]> {
+        (0..n)
+            .map(|i| [0, 1, 2].map(|a| x0[i][a] + vel[i][a] * t))
+            .collect()
+    };
+    let radius = 0.1;
+
+    // this rank's share
+    let part = recursive_bisection(&x0, size).expect("a partition");
+    let own: Vec<usize> = (0..n).filter(|&i| part[i] as usize == rank).collect();
+    let facets: Vec<[u64; 4]> = plate
+        .facets
+        .iter()
+        .filter(|f| part[f[0] as usize] as usize == rank)
+        .map(|f| f.map(|g| g as u64))
+        .collect();
+    let _ = NO_GLOBAL_NODE;
+    let mut pair = RankPair::new(
+        slaves
+            .iter()
+            .filter(|&&s| part[s] as usize == rank)
+            .map(|&s| s as u64)
+            .collect(),
+        facets,
+        radius,
+    );
+    pair.search_interval = 10;
+    let my_slaves = pair.slaves.len();
+    let model = RankModel {
+        ids: own.iter().map(|&i| i as u64).collect(),
+        positions: own.iter().map(|&i| x0[i]).collect(),
+        masses: own.iter().map(|&i| masses[i]).collect(),
+        pairs: vec![pair],
+    };
+    let device = Device::cpu();
+    if std::env::var("ABUT_MPI_CASE").as_deref() == Ok("bad-slave") {
+        // the last rank names a slave it does not own: every rank is refused, none hangs
+        let mut bad = model.clone();
+        if rank == size - 1 {
+            bad.pairs[0].slaves.push(u64::MAX - 1);
+        }
+        let e = DistributedContact::new(&world, &device, bad)
+            .err()
+            .expect("refused");
+        println!("rank {rank} refused: {e}");
+        return;
+    }
+    let mut dc = DistributedContact::new(&world, &device, model).expect("a distributed contact");
+
+    // the single process's contact, on rank 0
+    let mut single = (rank == 0).then(|| {
+        let mut m = Model::new_3d();
+        m.add_nodes(&x0, &masses).unwrap();
+        let surf = m.add_surface(Surface::quads(&plate.facets)).unwrap();
+        let set = m
+            .add_node_set(&slaves.iter().map(|&s| s as u32).collect::<Vec<_>>())
+            .unwrap();
+        m.add_pair(Pair::new(set, surf).search_radius(radius))
+            .unwrap();
+        let mut c = Contact::new(&device, &m).unwrap();
+        c.request_outputs(true);
+        c
+    });
+    // the rank owning each slave's facet at the last increment (facets belong to the rank of
+    // their first node), and how often it changed
+    let mut facet_rank = vec![u32::MAX; slaves.len()];
+    let mut handovers = 0usize;
+
+    let (mut worst, mut scale, mut searches, mut bytes) = (0.0f64, 0.0f64, 0, 0usize);
+    let mut checksum: u64 = 0xcbf2_9ce4_8422_2325;
+    let mut active = 0;
+    let mut micros = 0.0f64;
+    for k in 0..INCREMENTS {
+        let x = at(k as f64 * DT);
+        let xo: Vec<[f64; 3]> = own.iter().map(|&i| x[i]).collect();
+        let vo: Vec<[f64; 3]> = own.iter().map(|&i| vel[i]).collect();
+        let t = std::time::Instant::now();
+        let step = dc.step(&xo, &vo, DT).expect("a distributed increment");
+        micros += t.elapsed().as_secs_f64() * 1e6;
+        searches += step.global_search as usize;
+        bytes += step.bytes_sent;
+        active = step.active;
+        // every rank's forces on rank 0, by global id
+        let ids: Vec<u64> = own.iter().map(|&i| i as u64).collect();
+        let flat: Vec<f64> = step.forces.iter().flatten().copied().collect();
+        let (all_ids, all_f) = gather(&world, &ids, &flat);
+        if let Some(c) = single.as_mut() {
+            let r = c.penalty_step(&x, &vel, DT).expect("a single increment");
+            let mut dist = vec![[0.0; 3]; n];
+            for (j, &g) in all_ids.iter().enumerate() {
+                dist[g as usize] = [all_f[3 * j], all_f[3 * j + 1], all_f[3 * j + 2]];
+            }
+            for i in 0..n {
+                for a in 0..3 {
+                    scale = scale.max(r.forces[i][a].abs());
+                    worst = worst.max((r.forces[i][a] - dist[i][a]).abs());
+                    for b in dist[i][a].to_bits().to_le_bytes() {
+                        checksum = (checksum ^ b as u64).wrapping_mul(0x100_0000_01b3);
+                    }
+                }
+            }
+            assert_eq!(r.active, step.active, "increment {k}: slaves in contact");
+            let outs = c.outputs();
+            if let Some(sr) = outs[0].1.search.as_ref() {
+                for (j, cp) in sr.contacts().enumerate() {
+                    let owner = cp.map_or(u32::MAX, |p| {
+                        part[plate.facets[p.facet as usize][0] as usize]
+                    });
+                    if owner != facet_rank[j] && facet_rank[j] != u32::MAX && owner != u32::MAX {
+                        handovers += 1;
+                    }
+                    facet_rank[j] = owner;
+                }
+            }
+        }
+    }
+    let all_bytes = gather_counts(
+        &world,
+        [
+            bytes as u64,
+            my_slaves as u64,
+            (micros / INCREMENTS as f64) as u64,
+        ],
+    );
+    if rank == 0 {
+        let rel = worst / scale;
+        let per: Vec<String> = all_bytes
+            .iter()
+            .map(|[b, s, us]| format!("{}B/{s}slaves/{us}us", b / INCREMENTS as u64))
+            .collect();
+        println!(
+            "ranks {size}: largest force difference {rel:.3e} of the largest force {scale:.4e}; \
+             {active} slaves in contact; {handovers} hand-overs of a slave's facet between \
+             ranks; {searches} distributed global searches; per rank: bytes sent per increment, \
+             slaves, time per increment {}; \
+             checksum {checksum:016x}",
+            per.join(" ")
+        );
+        if !(rel <= 1e-5) || scale == 0.0 {
+            eprintln!("forces differ from the single process's");
+            world.abort(1);
+        }
+    }
+}
+
+/// Every rank's ids and 3-vectors on every rank, in rank order.
+fn gather(
+    world: &mpi::topology::SimpleCommunicator,
+    ids: &[u64],
+    f: &[f64],
+) -> (Vec<u64>, Vec<f64>) {
+    use mpi::datatype::PartitionMut;
+    let size = world.size() as usize;
+    let mut counts = vec![0i32; size];
+    world.all_gather_into(&(ids.len() as i32), &mut counts[..]);
+    let displs: Vec<i32> = counts
+        .iter()
+        .scan(0, |a, &c| {
+            let d = *a;
+            *a += c;
+            Some(d)
+        })
+        .collect();
+    let total = counts.iter().sum::<i32>() as usize;
+    let mut all_ids = vec![0u64; total];
+    world.all_gather_varcount_into(
+        ids,
+        &mut PartitionMut::new(&mut all_ids[..], &counts[..], &displs[..]),
+    );
+    let c3: Vec<i32> = counts.iter().map(|c| 3 * c).collect();
+    let d3: Vec<i32> = displs.iter().map(|d| 3 * d).collect();
+    let mut all_f = vec![0.0; 3 * total];
+    world.all_gather_varcount_into(f, &mut PartitionMut::new(&mut all_f[..], &c3[..], &d3[..]));
+    (all_ids, all_f)
+}
+
+/// Each rank's three counters (bytes, slaves, µs per increment) on every rank.
+fn gather_counts(world: &mpi::topology::SimpleCommunicator, c: [u64; 3]) -> Vec<[u64; 3]> {
+    let size = world.size() as usize;
+    let mut all = vec![0u64; 3 * size];
+    world.all_gather_into(&c[..], &mut all[..]);
+    all.chunks_exact(3).map(|c| [c[0], c[1], c[2]]).collect()
+}

@@ -1,0 +1,720 @@
+//! (feature `mpi`) Penalty contact across MPI ranks: one model split over processes, each rank
+//! holding its own nodes and running abut's search and enforcement on its own device.
+//!
+//! Each rank gives a [`RankModel`]: the nodes it owns (global ids, positions, masses) and, per
+//! pair, its own slave nodes and the master facets it owns (by global node ids; their nodes may
+//! be owned anywhere). At construction the facets' topology is gathered on every rank (a few
+//! words per facet). At every *distributed global search* — at the start, every
+//! `search_interval` increments, and as soon as any node of any rank has moved more than the
+//! motion budget (half the search radius) since the last one, agreed by all ranks in the same
+//! increment — each rank's slave region (the box of its slaves grown by the search radius, twice
+//! the budget and two facet sizes) is gathered, and every rank sends each other rank the master
+//! nodes it owns inside that region: those are the other rank's ghosts. A rank then builds its
+//! local contact model: its own nodes, its ghosts, and every master facet all of whose nodes it
+//! has — so every facet within the search radius of its slaves until the next distributed global
+//! search is there, with all the facets around each of its nodes (the smoothed normals are the
+//! single process's). Between them, each increment exchanges only the ghosts' positions and
+//! velocities (owner to holder) and, after the local penalty step, the ghosts' forces back to
+//! their owners, which add them to their own in rank order: a contact is enforced once, by the
+//! rank that owns its slave. The stable increment is the minimum over ranks.
+//!
+//! Not yet across ranks (each refused with an error naming it): friction (its carried stick
+//! force would be lost when the local model is rebuilt), balanced pairs and self-contact.
+
+use std::collections::HashMap;
+
+use mpi::datatype::{Partition, PartitionMut};
+use mpi::topology::SimpleCommunicator;
+use mpi::traits::*;
+use mpi::Count;
+
+use crate::contact::Contact;
+use crate::device::Device;
+use crate::error::{Error, Result};
+use crate::model::{Enforce, Facet, Friction, Model, Pair, Penalty, Surface};
+
+/// Marks the unused fourth node of a triangle in [`RankPair::facets`].
+pub const NO_GLOBAL_NODE: u64 = u64::MAX;
+
+/// One rank's share of a model.
+#[derive(Clone, Debug, Default)]
+pub struct RankModel {
+    /// Global ids of the nodes this rank owns (each node owned by exactly one rank).
+    pub ids: Vec<u64>,
+    /// Their positions (model length units), in `ids` order.
+    pub positions: Vec<[f64; 3]>,
+    /// Their lumped masses (> 0), in `ids` order.
+    pub masses: Vec<f64>,
+    /// The contact pairs, the same pairs in the same order on every rank.
+    pub pairs: Vec<RankPair>,
+}
+
+/// One penalty pair's share on a rank.
+#[derive(Clone, Debug)]
+pub struct RankPair {
+    /// This rank's slave nodes of the pair (global ids of nodes it owns; may be empty).
+    pub slaves: Vec<u64>,
+    /// The master facets this rank owns: 3D triangles (fourth id [`NO_GLOBAL_NODE`]) or quads,
+    /// by global node ids, nodes counter-clockwise seen from the side contact comes from.
+    pub facets: Vec<[u64; 4]>,
+    /// Search radius (model length units), the same on every rank.
+    pub search_radius: f64,
+    /// Penalty enforcement, the same on every rank.
+    pub penalty: Penalty,
+    /// Friction; only [`Friction::Frictionless`] across ranks for now.
+    pub friction: Friction,
+    /// Distributed global search at least every this many increments (≥ 1).
+    pub search_interval: u32,
+}
+
+impl RankPair {
+    /// A frictionless penalty pair with the default enforcement, searched globally every 100
+    /// increments (Abaqus' default for two-surface pairs).
+    pub fn new(slaves: Vec<u64>, facets: Vec<[u64; 4]>, search_radius: f64) -> Self {
+        Self {
+            slaves,
+            facets,
+            search_radius,
+            penalty: Penalty::default(),
+            friction: Friction::Frictionless,
+            search_interval: 100,
+        }
+    }
+}
+
+/// What one distributed increment did, the same on every rank where it says so.
+#[derive(Clone, Debug, Default)]
+pub struct DistributedStep {
+    /// Contact forces on this rank's own nodes, in [`RankModel::ids`] order: its own contacts'
+    /// and those other ranks' contacts put on its nodes, summed in rank order.
+    pub forces: Vec<[f64; 3]>,
+    /// The smallest stable increment of any rank's springs (s); infinite when none limits it.
+    pub stable_dt: f64,
+    /// The largest overclosure of any rank.
+    pub max_overclosure: f64,
+    /// Slave nodes in contact, all ranks.
+    pub active: usize,
+    /// Whether this increment began with a distributed global search (on every rank).
+    pub global_search: bool,
+    /// Bytes this rank sent to other ranks in this increment (ghost exchange and forces back).
+    pub bytes_sent: usize,
+    /// Ghost nodes this rank holds now.
+    pub ghosts: usize,
+}
+
+/// A rank's contact: its local model of own and ghost nodes, and the exchange plan with its
+/// neighbours (see the module's documentation).
+pub struct DistributedContact {
+    comm: SimpleCommunicator,
+    device: Device,
+    ids: Vec<u64>,
+    masses: Vec<f64>,
+    index: HashMap<u64, usize>,
+    pairs: Vec<PairTopology>,
+    /// The largest facet edge of any pair, all ranks.
+    h_max: f64,
+    /// Owned nodes that are master nodes of some pair.
+    master_nodes: Vec<usize>,
+    /// Per destination rank: own nodes whose state it receives, in send order.
+    send: Vec<Vec<usize>>,
+    /// Per source rank: how many ghosts come from it (ghosts are numbered by source rank, then
+    /// in the order sent).
+    recv: Vec<usize>,
+    ghost_masses: Vec<f64>,
+    contact: Option<Contact>,
+    dt_ref: Option<f64>,
+    since_search: u32,
+    /// Positions of own and ghost nodes at the last distributed global search.
+    anchor: Vec<[f64; 3]>,
+    started: bool,
+    last: DistributedStep,
+}
+
+struct PairTopology {
+    slaves: Vec<usize>,
+    facets: Vec<[u64; 4]>,
+    radius: f64,
+    penalty: Penalty,
+    interval: u32,
+}
+
+fn bad(name: &'static str, value: String, expected: &'static str) -> Error {
+    Error::BadParameter {
+        name,
+        value,
+        expected,
+    }
+}
+
+/// Gathers every rank's `items` on every rank, in rank order; with each rank's count.
+fn all_gather<T: Equivalence + Clone + Default>(
+    comm: &SimpleCommunicator,
+    items: &[T],
+) -> (Vec<T>, Vec<usize>) {
+    let n = comm.size() as usize;
+    let mut counts = vec![0 as Count; n];
+    comm.all_gather_into(&(items.len() as Count), &mut counts[..]);
+    let displs: Vec<Count> = counts
+        .iter()
+        .scan(0, |acc, &c| {
+            let d = *acc;
+            *acc += c;
+            Some(d)
+        })
+        .collect();
+    let total: Count = counts.iter().sum();
+    let mut all = vec![T::default(); total as usize];
+    {
+        let mut part = PartitionMut::new(&mut all[..], &counts[..], &displs[..]);
+        comm.all_gather_varcount_into(items, &mut part);
+    }
+    (all, counts.iter().map(|&c| c as usize).collect())
+}
+
+/// Sends `out[r]` to rank r and returns what each rank sent here (all-to-all with counts).
+fn exchange<T: Equivalence + Clone + Default>(
+    comm: &SimpleCommunicator,
+    out: &[Vec<T>],
+) -> Vec<Vec<T>> {
+    let n = comm.size() as usize;
+    let send_counts: Vec<Count> = out.iter().map(|v| v.len() as Count).collect();
+    let mut recv_counts = vec![0 as Count; n];
+    comm.all_to_all_into(&send_counts[..], &mut recv_counts[..]);
+    let offsets = |c: &[Count]| -> Vec<Count> {
+        c.iter()
+            .scan(0, |acc, &x| {
+                let d = *acc;
+                *acc += x;
+                Some(d)
+            })
+            .collect()
+    };
+    let (sd, rd) = (offsets(&send_counts), offsets(&recv_counts));
+    let flat: Vec<T> = out.iter().flatten().cloned().collect();
+    let mut back = vec![T::default(); recv_counts.iter().sum::<Count>() as usize];
+    {
+        let send = Partition::new(&flat[..], &send_counts[..], &sd[..]);
+        let mut recv = PartitionMut::new(&mut back[..], &recv_counts[..], &rd[..]);
+        comm.all_to_all_varcount_into(&send, &mut recv);
+    }
+    let mut res = Vec::with_capacity(n);
+    for r in 0..n {
+        let (a, b) = (rd[r] as usize, (rd[r] + recv_counts[r]) as usize);
+        res.push(back[a..b].to_vec());
+    }
+    res
+}
+
+fn all_min(comm: &SimpleCommunicator, x: f64) -> f64 {
+    let mut y = 0.0;
+    comm.all_reduce_into(&x, &mut y, mpi::collective::SystemOperation::min());
+    y
+}
+
+fn all_max(comm: &SimpleCommunicator, x: f64) -> f64 {
+    let mut y = 0.0;
+    comm.all_reduce_into(&x, &mut y, mpi::collective::SystemOperation::max());
+    y
+}
+
+fn all_sum(comm: &SimpleCommunicator, x: u64) -> u64 {
+    let mut y = 0u64;
+    comm.all_reduce_into(&x, &mut y, mpi::collective::SystemOperation::sum());
+    y
+}
+
+/// Own node index by global id, and each pair's slaves as own indices; or the first fault of
+/// this rank's share (no collective: see [`agree`]).
+type Validated = (HashMap<u64, usize>, Vec<Vec<usize>>);
+
+fn validate(model: &RankModel) -> Result<Validated> {
+    let n = model.ids.len();
+    if model.positions.len() != n || model.masses.len() != n {
+        return Err(Error::LengthMismatch {
+            what: "positions and masses (one per owned node)",
+            expected: n,
+            got: model.positions.len().min(model.masses.len()),
+        });
+    }
+    let mut index = HashMap::with_capacity(n);
+    for (i, &g) in model.ids.iter().enumerate() {
+        if g == NO_GLOBAL_NODE || index.insert(g, i).is_some() {
+            return Err(bad(
+                "global node id",
+                g.to_string(),
+                "unique on the rank, not u64::MAX",
+            ));
+        }
+        if !(model.masses[i] > 0.0 && model.masses[i].is_finite()) {
+            return Err(Error::BadMass {
+                node: i,
+                mass: model.masses[i],
+            });
+        }
+        for (axis, &value) in model.positions[i].iter().enumerate() {
+            if !value.is_finite() {
+                return Err(Error::NonFiniteCoordinate {
+                    node: i,
+                    axis,
+                    value,
+                });
+            }
+        }
+    }
+    let mut slaves_of = Vec::with_capacity(model.pairs.len());
+    for (k, p) in model.pairs.iter().enumerate() {
+        if !matches!(p.friction, Friction::Frictionless) {
+            return Err(bad(
+                "friction",
+                format!("pair {k}"),
+                "frictionless pairs across ranks (friction's carried stick force is not yet \
+                 carried through a distributed global search)",
+            ));
+        }
+        if !(p.search_radius > 0.0 && p.search_radius.is_finite()) {
+            return Err(bad(
+                "search_radius",
+                p.search_radius.to_string(),
+                "finite and positive",
+            ));
+        }
+        if p.search_interval == 0 {
+            return Err(bad("search_interval", "0".into(), "at least 1"));
+        }
+        let mut slaves = Vec::with_capacity(p.slaves.len());
+        for &g in &p.slaves {
+            slaves.push(*index.get(&g).ok_or_else(|| {
+                bad(
+                    "slave node",
+                    format!("global id {g} of pair {k}"),
+                    "a node this rank owns",
+                )
+            })?);
+        }
+        slaves_of.push(slaves);
+    }
+    Ok((index, slaves_of))
+}
+
+/// Whether every rank got on (collective): this rank's own error, or, where another rank failed,
+/// an error naming the first such rank.
+fn agree(comm: &SimpleCommunicator, own: Option<Error>) -> Result<()> {
+    let me = comm.rank() as f64;
+    let first = all_min(comm, if own.is_some() { me } else { f64::INFINITY });
+    match own {
+        Some(e) => Err(e),
+        None if first.is_finite() => Err(bad(
+            "rank",
+            format!("{first}"),
+            "every rank to get through (that rank failed: its own error says why)",
+        )),
+        None => Ok(()),
+    }
+}
+
+impl DistributedContact {
+    /// This rank's contact over `comm` (duplicated: abut's messages never mix with the
+    /// host's), running on `device`. Collective: every rank of `comm` calls it.
+    ///
+    /// Errors: a repeated global id, a slave this rank does not own, a pair with friction, a bad
+    /// radius or interval, mismatched lengths, bad masses.
+    pub fn new(comm: &SimpleCommunicator, device: &Device, model: RankModel) -> Result<Self> {
+        let comm = comm.duplicate();
+        // every rank checks its own share first and all agree before any gather: a rank that
+        // returned alone would leave the others waiting in a collective for ever
+        let (valid, fault) = match validate(&model) {
+            Ok(v) => (Some(v), None),
+            Err(e) => (None, Some(e)),
+        };
+        let count = model.pairs.len() as f64;
+        let uneven = all_min(&comm, count) != all_max(&comm, count);
+        agree(&comm, fault)?;
+        if uneven {
+            return Err(bad(
+                "pairs",
+                model.pairs.len().to_string(),
+                "the same number of pairs on every rank",
+            ));
+        }
+        let (index, slaves_of) = valid.expect("agreed: every share valid");
+        let n = model.ids.len();
+        let mut pairs = Vec::new();
+        let mut edge = 0.0f64;
+        for (k, (p, slaves)) in model.pairs.iter().zip(slaves_of).enumerate() {
+            // the whole pair's facet topology on every rank, in rank order
+            let flat: Vec<u64> = p.facets.iter().flatten().copied().collect();
+            let (all, _) = all_gather(&comm, &flat);
+            let facets: Vec<[u64; 4]> = all
+                .chunks_exact(4)
+                .map(|c| [c[0], c[1], c[2], c[3]])
+                .collect();
+            // each facet listed by one rank, once
+            let mut seen = std::collections::HashSet::with_capacity(facets.len());
+            for f in &facets {
+                let mut key = *f;
+                key.sort_unstable();
+                if !seen.insert(key) {
+                    return Err(bad(
+                        "master facet",
+                        format!("{f:?} of pair {k}"),
+                        "listed by one rank only, once",
+                    ));
+                }
+            }
+            pairs.push(PairTopology {
+                slaves,
+                facets,
+                radius: p.search_radius,
+                penalty: p.penalty.clone(),
+                interval: p.search_interval,
+            });
+        }
+        let mut is_master = vec![false; n];
+        for p in &pairs {
+            for f in &p.facets {
+                for &g in f {
+                    if let Some(&i) = index.get(&g) {
+                        is_master[i] = true;
+                    }
+                }
+            }
+        }
+        // every master node's start position on every rank, once: the longest facet edge (the
+        // ghost region's margin), and facets naming a node nobody owns
+        let own_masters: Vec<usize> = (0..n).filter(|&i| is_master[i]).collect();
+        let ids: Vec<u64> = own_masters.iter().map(|&i| model.ids[i]).collect();
+        let pos: Vec<f64> = own_masters
+            .iter()
+            .flat_map(|&i| model.positions[i])
+            .collect();
+        let (all_ids, _) = all_gather(&comm, &ids);
+        let (all_pos, _) = all_gather(&comm, &pos);
+        let at: HashMap<u64, [f64; 3]> = all_ids
+            .iter()
+            .enumerate()
+            .map(|(k, &g)| (g, [all_pos[3 * k], all_pos[3 * k + 1], all_pos[3 * k + 2]]))
+            .collect();
+        for (k, p) in pairs.iter().enumerate() {
+            for f in &p.facets {
+                let m = if f[3] == NO_GLOBAL_NODE { 3 } else { 4 };
+                for j in 0..m {
+                    let (a, b) = match (at.get(&f[j]), at.get(&f[(j + 1) % m])) {
+                        (Some(a), Some(b)) => (a, b),
+                        _ => {
+                            return Err(bad(
+                                "master facet",
+                                format!("{f:?} of pair {k}"),
+                                "nodes that some rank owns",
+                            ))
+                        }
+                    };
+                    let d = (0..3).map(|c| (a[c] - b[c]).powi(2)).sum::<f64>().sqrt();
+                    edge = edge.max(d);
+                }
+            }
+        }
+        let h_max = edge;
+        let size = comm.size() as usize;
+        Ok(Self {
+            comm,
+            device: device.clone(),
+            ids: model.ids,
+            masses: model.masses,
+            index,
+            pairs,
+            h_max,
+            master_nodes: (0..n).filter(|&i| is_master[i]).collect(),
+            send: vec![Vec::new(); size],
+            recv: vec![0; size],
+            ghost_masses: Vec::new(),
+            contact: None,
+            dt_ref: None,
+            since_search: 0,
+            anchor: Vec::new(),
+            started: false,
+            last: DistributedStep::default(),
+        })
+    }
+
+    /// What the last increment did.
+    pub fn last(&self) -> &DistributedStep {
+        &self.last
+    }
+
+    /// The motion budget: how far any node may move between distributed global searches (half
+    /// the smallest search radius).
+    fn budget(&self) -> f64 {
+        0.5 * self
+            .pairs
+            .iter()
+            .map(|p| p.radius)
+            .fold(f64::INFINITY, f64::min)
+    }
+
+    /// New ghosts for own positions `x`: the send lists, the ghosts' ids and masses. Returns
+    /// the ghosts' global ids (by source rank, then in the order sent) and the bytes sent.
+    fn choose_ghosts(&mut self, x: &[[f64; 3]]) -> (Vec<u64>, usize) {
+        let size = self.comm.size() as usize;
+        let grow = self.pairs.iter().map(|p| p.radius).fold(0.0f64, f64::max)
+            + 2.0 * self.budget()
+            + 2.0 * self.h_max;
+        // this rank's slave region (none: an inverted box, which contains nothing)
+        let mut region = [
+            f64::INFINITY,
+            f64::INFINITY,
+            f64::INFINITY,
+            f64::NEG_INFINITY,
+            f64::NEG_INFINITY,
+            f64::NEG_INFINITY,
+        ];
+        for p in &self.pairs {
+            for &s in &p.slaves {
+                for a in 0..3 {
+                    region[a] = region[a].min(x[s][a] - grow);
+                    region[3 + a] = region[3 + a].max(x[s][a] + grow);
+                }
+            }
+        }
+        let (regions, _) = all_gather(&self.comm, &region);
+        let me = self.comm.rank() as usize;
+        self.send = vec![Vec::new(); size];
+        for r in (0..size).filter(|&r| r != me) {
+            let b = &regions[6 * r..6 * r + 6];
+            for &i in &self.master_nodes {
+                if (0..3).all(|a| x[i][a] >= b[a] && x[i][a] <= b[3 + a]) {
+                    self.send[r].push(i);
+                }
+            }
+        }
+        let ids_out: Vec<Vec<u64>> = self
+            .send
+            .iter()
+            .map(|l| l.iter().map(|&i| self.ids[i]).collect())
+            .collect();
+        let mass_out: Vec<Vec<f64>> = self
+            .send
+            .iter()
+            .map(|l| l.iter().map(|&i| self.masses[i]).collect())
+            .collect();
+        let ids_in = exchange(&self.comm, &ids_out);
+        let mass_in = exchange(&self.comm, &mass_out);
+        self.recv = ids_in.iter().map(Vec::len).collect();
+        self.ghost_masses = mass_in.into_iter().flatten().collect();
+        let sent: usize = self.send.iter().map(Vec::len).sum();
+        (ids_in.into_iter().flatten().collect(), 16 * sent + 48)
+    }
+
+    /// The local model of own nodes at `x` and ghosts at `gx` (global ids `ghost_ids`), and its
+    /// contact (none when this rank has no slave near any facet).
+    fn build_local(&mut self, x: &[[f64; 3]], gx: &[[f64; 3]], ghost_ids: &[u64]) -> Result<()> {
+        let n_own = self.ids.len();
+        let mut local_of: HashMap<u64, u32> = HashMap::with_capacity(n_own + ghost_ids.len());
+        for (&g, &i) in &self.index {
+            local_of.insert(g, i as u32);
+        }
+        for (k, &g) in ghost_ids.iter().enumerate() {
+            local_of.insert(g, (n_own + k) as u32);
+        }
+        let mut model = Model::new_3d();
+        let positions: Vec<[f64; 3]> = x.iter().chain(gx).copied().collect();
+        let masses: Vec<f64> = self
+            .masses
+            .iter()
+            .chain(&self.ghost_masses)
+            .copied()
+            .collect();
+        model.add_nodes(&positions, &masses)?;
+        let mut any = false;
+        for p in &self.pairs {
+            if p.slaves.is_empty() {
+                continue;
+            }
+            let facets: Vec<Facet> = p
+                .facets
+                .iter()
+                .filter_map(|f| {
+                    let m = if f[3] == NO_GLOBAL_NODE { 3 } else { 4 };
+                    let mut l = [0u32; 4];
+                    for j in 0..m {
+                        l[j] = *local_of.get(&f[j])?;
+                    }
+                    Some(if m == 3 {
+                        Facet::Triangle([l[0], l[1], l[2]])
+                    } else {
+                        Facet::Quad(l)
+                    })
+                })
+                .collect();
+            if facets.is_empty() {
+                continue;
+            }
+            let surf = model.add_surface(Surface::from_facets(facets))?;
+            let slaves: Vec<u32> = p.slaves.iter().map(|&s| s as u32).collect();
+            let set = model.add_node_set(&slaves)?;
+            model.add_pair(
+                Pair::new(set, surf)
+                    .search_radius(p.radius)
+                    .enforce(Enforce::Penalty(p.penalty.clone())),
+            )?;
+            any = true;
+        }
+        self.contact = if any {
+            let mut c = Contact::new(&self.device, &model)?;
+            if let Some(dt) = self.dt_ref {
+                c.set_reference_increment(dt)?;
+            }
+            Some(c)
+        } else {
+            None
+        };
+        self.anchor = positions;
+        Ok(())
+    }
+
+    /// One increment: own nodes at `x` moving at `v` (in [`RankModel::ids`] order), increment
+    /// `dt`. Collective: every rank calls it in the same increment with the same `dt`.
+    pub fn step(&mut self, x: &[[f64; 3]], v: &[[f64; 3]], dt: f64) -> Result<&DistributedStep> {
+        let n_own = self.ids.len();
+        // faults are agreed on, never returned by one rank alone (the others would wait in the
+        // next exchange for ever)
+        let mut fault = None;
+        if x.len() != n_own || v.len() != n_own {
+            fault = Some(Error::LengthMismatch {
+                what: "positions and velocities of the owned nodes",
+                expected: n_own,
+                got: x.len().min(v.len()),
+            });
+        } else if let Some((node, axis, value)) = (0..n_own)
+            .flat_map(|i| (0..3).map(move |a| (i, a)))
+            .map(|(i, a)| {
+                (
+                    i,
+                    a,
+                    if x[i][a].is_finite() {
+                        v[i][a]
+                    } else {
+                        x[i][a]
+                    },
+                )
+            })
+            .find(|t| !t.2.is_finite())
+        {
+            fault = Some(Error::NonFiniteCoordinate { node, axis, value });
+        }
+        agree(&self.comm, fault)?;
+        let mut fault = None;
+        if self.dt_ref.is_none() {
+            // the automatic stiffness' reference: the first increment, on every rank
+            self.dt_ref = Some(all_min(&self.comm, dt));
+        }
+        // a distributed global search: first, at the interval, or when any node has used up
+        // the motion budget (agreed: the largest motion over all ranks)
+        let moved = if self.started {
+            x.iter()
+                .zip(&self.anchor)
+                .map(|(p, q)| (0..3).map(|a| (p[a] - q[a]).powi(2)).sum::<f64>().sqrt())
+                .fold(0.0f64, f64::max)
+        } else {
+            0.0
+        };
+        let interval = self
+            .pairs
+            .iter()
+            .map(|p| p.interval)
+            .min()
+            .unwrap_or(u32::MAX);
+        let global = !self.started
+            || self.since_search >= interval
+            || all_max(&self.comm, moved) > self.budget();
+        let mut bytes = 0;
+        let mut ghost_ids = Vec::new();
+        if global {
+            let (ids, b) = self.choose_ghosts(x);
+            ghost_ids = ids;
+            bytes += b;
+            self.since_search = 0;
+        }
+        self.since_search += 1;
+        // the ghosts' state from their owners
+        let state_out: Vec<Vec<f64>> = self
+            .send
+            .iter()
+            .map(|l| {
+                l.iter()
+                    .flat_map(|&i| [x[i][0], x[i][1], x[i][2], v[i][0], v[i][1], v[i][2]])
+                    .collect()
+            })
+            .collect();
+        bytes += 8 * state_out.iter().map(Vec::len).sum::<usize>();
+        let state_in: Vec<f64> = exchange(&self.comm, &state_out)
+            .into_iter()
+            .flatten()
+            .collect();
+        let gx: Vec<[f64; 3]> = state_in
+            .chunks_exact(6)
+            .map(|c| [c[0], c[1], c[2]])
+            .collect();
+        let gv: Vec<[f64; 3]> = state_in
+            .chunks_exact(6)
+            .map(|c| [c[3], c[4], c[5]])
+            .collect();
+        if global {
+            if let Err(e) = self.build_local(x, &gx, &ghost_ids) {
+                self.contact = None;
+                fault = Some(e);
+            }
+            // the anchor of the motion budget: own positions now
+            self.anchor.truncate(n_own);
+            self.started = true;
+        }
+        let mut forces = vec![[0.0; 3]; n_own];
+        let (mut stable, mut over, mut active) = (f64::INFINITY, 0.0f64, 0usize);
+        let mut ghost_forces = vec![[0.0; 3]; gx.len()];
+        if let Some(c) = self.contact.as_mut() {
+            let lx: Vec<[f64; 3]> = x.iter().chain(&gx).copied().collect();
+            let lv: Vec<[f64; 3]> = v.iter().chain(&gv).copied().collect();
+            match c.penalty_step(&lx, &lv, dt) {
+                Ok(r) => {
+                    forces.copy_from_slice(&r.forces[..n_own]);
+                    ghost_forces.copy_from_slice(&r.forces[n_own..]);
+                    stable = r.stable_dt;
+                    over = r.max_overclosure;
+                    active = r.active;
+                }
+                Err(e) => fault = Some(e),
+            }
+        }
+        // ghosts' forces back to their owners, added there in rank order
+        let mut back: Vec<Vec<f64>> = Vec::with_capacity(self.recv.len());
+        let mut at = 0;
+        for &count in &self.recv {
+            back.push(
+                ghost_forces[at..at + count]
+                    .iter()
+                    .flat_map(|f| f.iter().copied())
+                    .collect(),
+            );
+            at += count;
+        }
+        bytes += 8 * back.iter().map(Vec::len).sum::<usize>();
+        let came = exchange(&self.comm, &back);
+        for (q, list) in self.send.iter().enumerate() {
+            for (k, &i) in list.iter().enumerate() {
+                for a in 0..3 {
+                    forces[i][a] += came[q][3 * k + a];
+                }
+            }
+        }
+        agree(&self.comm, fault)?;
+        self.last = DistributedStep {
+            forces,
+            stable_dt: all_min(&self.comm, stable),
+            max_overclosure: all_max(&self.comm, over),
+            active: all_sum(&self.comm, active as u64) as usize,
+            global_search: global,
+            bytes_sent: bytes,
+            ghosts: gx.len(),
+        };
+        Ok(&self.last)
+    }
+}
