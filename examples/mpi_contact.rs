@@ -3,7 +3,8 @@
 //!
 //! Every rank builds the same model: a wavy plate of 16 × 16 quads (the master, its nodes free
 //! and sliding along x by more than a rank's width over the run, so slaves' nearest facets pass
-//! from one rank's nodes to another's), a cloud of 300 slave points pressed into it and moving,
+//! from one rank's nodes to another's), a cloud of 300 slave points pressed into it and moving
+//! (two pairs on the one plate: half the cloud frictionless, half with Coulomb friction 0.3),
 //! and a block of 200 nodes far away in no pair (with four ranks, recursive coordinate bisection
 //! gives them a rank of their own: a rank with no contact at all). The nodes are split by
 //! recursive coordinate bisection of all of them, so the slaves and the plate are cut across
@@ -22,6 +23,7 @@ use mpi::traits::*;
 
 const INCREMENTS: usize = 60;
 const DT: f64 = 1e-3;
+const MU: f64 = 0.3;
 
 fn main() {
     let universe = mpi::initialize().expect("MPI initialises");
@@ -73,22 +75,32 @@ fn main() {
         .map(|f| f.map(|g| g as u64))
         .collect();
     let _ = NO_GLOBAL_NODE;
-    let mut pair = RankPair::new(
-        slaves
-            .iter()
-            .filter(|&&s| part[s] as usize == rank)
-            .map(|&s| s as u64)
-            .collect(),
-        facets,
-        radius,
-    );
-    pair.search_interval = 10;
-    let my_slaves = pair.slaves.len();
+    // two pairs on the one plate: the first half of the cloud frictionless, the second with
+    // Coulomb friction μ = 0.3 (its stick force carried across the rebuilds)
+    let halves = [&slaves[..slaves.len() / 2], &slaves[slaves.len() / 2..]];
+    let pairs: Vec<RankPair> = halves
+        .iter()
+        .zip([Friction::Frictionless, Friction::coulomb(MU)])
+        .map(|(half, friction)| {
+            let mut pair = RankPair::new(
+                half.iter()
+                    .filter(|&&s| part[s] as usize == rank)
+                    .map(|&s| s as u64)
+                    .collect(),
+                facets.clone(),
+                radius,
+            );
+            pair.friction = friction;
+            pair.search_interval = 10;
+            pair
+        })
+        .collect();
+    let my_slaves: usize = pairs.iter().map(|p| p.slaves.len()).sum();
     let model = RankModel {
         ids: own.iter().map(|&i| i as u64).collect(),
         positions: own.iter().map(|&i| x0[i]).collect(),
         masses: own.iter().map(|&i| masses[i]).collect(),
-        pairs: vec![pair],
+        pairs,
     };
     let device = Device::cpu();
     if std::env::var("ABUT_MPI_CASE").as_deref() == Ok("bad-slave") {
@@ -110,11 +122,20 @@ fn main() {
         let mut m = Model::new_3d();
         m.add_nodes(&x0, &masses).unwrap();
         let surf = m.add_surface(Surface::quads(&plate.facets)).unwrap();
-        let set = m
-            .add_node_set(&slaves.iter().map(|&s| s as u32).collect::<Vec<_>>())
+        for (half, friction) in halves
+            .iter()
+            .zip([Friction::Frictionless, Friction::coulomb(MU)])
+        {
+            let set = m
+                .add_node_set(&half.iter().map(|&s| s as u32).collect::<Vec<_>>())
+                .unwrap();
+            m.add_pair(
+                Pair::new(set, surf)
+                    .search_radius(radius)
+                    .friction(friction),
+            )
             .unwrap();
-        m.add_pair(Pair::new(set, surf).search_radius(radius))
-            .unwrap();
+        }
         let mut c = Contact::new(&device, &m).unwrap();
         c.request_outputs(true);
         c
@@ -159,8 +180,9 @@ fn main() {
             }
             assert_eq!(r.active, step.active, "increment {k}: slaves in contact");
             let outs = c.outputs();
-            if let Some(sr) = outs[0].1.search.as_ref() {
+            for (h, sr) in outs.iter().filter_map(|o| o.1.search.as_ref()).enumerate() {
                 for (j, cp) in sr.contacts().enumerate() {
+                    let j = j + h * halves[0].len();
                     let owner = cp.map_or(u32::MAX, |p| {
                         part[plate.facets[p.facet as usize][0] as usize]
                     });

@@ -11,7 +11,9 @@ use crate::kinematic::{
 };
 use crate::model::{validate_positions, Model, PairId};
 use crate::model::{BodyId, Enforce, MasterSurface, PressureOverclosure, RigidBody, RigidPairId};
-use crate::penalty::layout::{ContactOut, CSTATUS_MASK, CSTATUS_OPEN, CSTATUS_SLIP, CSTATUS_STICK};
+use crate::penalty::layout::{
+    ContactOut, SlaveState, CSTATUS_MASK, CSTATUS_OPEN, CSTATUS_SLIP, CSTATUS_STICK,
+};
 use crate::penalty::PenaltySetup;
 use crate::search::{GlobalSearch, SearchResult};
 
@@ -475,6 +477,67 @@ impl Contact {
     /// back every increment (off by default: then only forces and increments come back).
     pub fn request_outputs(&mut self, yes: bool) {
         self.want_outputs = yes;
+    }
+
+    /// The per-slave state of penalty pair `pair` — the carried friction (stick) force, the
+    /// tributary area and the history (dissipation, behind-a-free-edge flag) — one list per pass
+    /// (two for a balanced pair: the slave nodes', then the master nodes'), in the order of the
+    /// pair's slave node set. With [`Contact::set_penalty_states`] it carries a contact's
+    /// friction into another Contact over the same slaves (a rebuilt local model of a
+    /// distributed run). Reads back from the device on a GPU.
+    pub fn penalty_states(&self, pair: PairId) -> Result<Vec<Vec<SlaveState>>> {
+        let mut out = Vec::new();
+        for p in self.pairs.iter().filter(|p| p.id == pair) {
+            out.push(match &p.exec {
+                PenaltyExec::Cpu(c) => c.state.clone(),
+                PenaltyExec::Gpu(g) => g.read_state()?,
+            });
+        }
+        if out.is_empty() {
+            return Err(Error::UnknownId {
+                what: "penalty pair",
+                id: pair.0,
+            });
+        }
+        Ok(out)
+    }
+
+    /// Replaces the per-slave state of penalty pair `pair` (as [`Contact::penalty_states`]
+    /// gives it: one list per pass, each as long as that pass's slaves).
+    pub fn set_penalty_states(&mut self, pair: PairId, states: &[Vec<SlaveState>]) -> Result<()> {
+        let runs: Vec<usize> = (0..self.pairs.len())
+            .filter(|&k| self.pairs[k].id == pair)
+            .collect();
+        if runs.is_empty() {
+            return Err(Error::UnknownId {
+                what: "penalty pair",
+                id: pair.0,
+            });
+        }
+        if runs.len() != states.len() {
+            return Err(Error::LengthMismatch {
+                what: "penalty states (one list per pass of the pair)",
+                expected: runs.len(),
+                got: states.len(),
+            });
+        }
+        for (&k, s) in runs.iter().zip(states) {
+            let n = self.pairs[k].output.slaves.len();
+            if s.len() != n {
+                return Err(Error::LengthMismatch {
+                    what: "penalty states (one per slave of the pass)",
+                    expected: n,
+                    got: s.len(),
+                });
+            }
+        }
+        for (&k, s) in runs.iter().zip(states) {
+            match &mut self.pairs[k].exec {
+                PenaltyExec::Cpu(c) => c.state.copy_from_slice(s),
+                PenaltyExec::Gpu(g) => g.write_state(s),
+            }
+        }
+        Ok(())
     }
 
     /// Sets the reference increment of the automatic penalty stiffness (by default the first

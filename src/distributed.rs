@@ -18,8 +18,9 @@
 //! their owners, which add them to their own in rank order: a contact is enforced once, by the
 //! rank that owns its slave. The stable increment is the minimum over ranks.
 //!
-//! Not yet across ranks (each refused with an error naming it): friction (its carried stick
-//! force would be lost when the local model is rebuilt), balanced pairs and self-contact.
+//! Coulomb friction carries each slave's stick force from one local model to the next (a slave
+//! never changes rank). Not yet across ranks: balanced pairs and self-contact (a
+//! [`RankPair`] cannot state them).
 
 use std::collections::HashMap;
 
@@ -31,7 +32,7 @@ use mpi::Count;
 use crate::contact::Contact;
 use crate::device::Device;
 use crate::error::{Error, Result};
-use crate::model::{Enforce, Facet, Friction, Model, Pair, Penalty, Surface};
+use crate::model::{Enforce, Facet, Friction, Model, Pair, PairId, Penalty, Surface};
 
 /// Marks the unused fourth node of a triangle in [`RankPair::facets`].
 pub const NO_GLOBAL_NODE: u64 = u64::MAX;
@@ -61,7 +62,7 @@ pub struct RankPair {
     pub search_radius: f64,
     /// Penalty enforcement, the same on every rank.
     pub penalty: Penalty,
-    /// Friction; only [`Friction::Frictionless`] across ranks for now.
+    /// Friction, the same on every rank.
     pub friction: Friction,
     /// Distributed global search at least every this many increments (≥ 1).
     pub search_interval: u32,
@@ -135,7 +136,10 @@ struct PairTopology {
     facets: Vec<[u64; 4]>,
     radius: f64,
     penalty: Penalty,
+    friction: Friction,
     interval: u32,
+    /// This pair's id in the local contact, when it has one.
+    local: Option<PairId>,
 }
 
 fn bad(name: &'static str, value: String, expected: &'static str) -> Error {
@@ -263,14 +267,6 @@ fn validate(model: &RankModel) -> Result<Validated> {
     }
     let mut slaves_of = Vec::with_capacity(model.pairs.len());
     for (k, p) in model.pairs.iter().enumerate() {
-        if !matches!(p.friction, Friction::Frictionless) {
-            return Err(bad(
-                "friction",
-                format!("pair {k}"),
-                "frictionless pairs across ranks (friction's carried stick force is not yet \
-                 carried through a distributed global search)",
-            ));
-        }
         if !(p.search_radius > 0.0 && p.search_radius.is_finite()) {
             return Err(bad(
                 "search_radius",
@@ -316,8 +312,9 @@ impl DistributedContact {
     /// This rank's contact over `comm` (duplicated: abut's messages never mix with the
     /// host's), running on `device`. Collective: every rank of `comm` calls it.
     ///
-    /// Errors: a repeated global id, a slave this rank does not own, a pair with friction, a bad
-    /// radius or interval, mismatched lengths, bad masses.
+    /// Errors (on every rank, naming the rank at fault on the others): a repeated global id, a
+    /// slave this rank does not own, a bad radius or interval, mismatched lengths, bad masses or
+    /// coordinates, a facet listed twice or naming a node no rank owns.
     pub fn new(comm: &SimpleCommunicator, device: &Device, model: RankModel) -> Result<Self> {
         let comm = comm.duplicate();
         // every rank checks its own share first and all agree before any gather: a rank that
@@ -366,7 +363,9 @@ impl DistributedContact {
                 facets,
                 radius: p.search_radius,
                 penalty: p.penalty.clone(),
+                friction: p.friction.clone(),
                 interval: p.search_interval,
+                local: None,
             });
         }
         let mut is_master = vec![false; n];
@@ -524,8 +523,18 @@ impl DistributedContact {
             .copied()
             .collect();
         model.add_nodes(&positions, &masses)?;
-        let mut any = false;
+        // the friction each slave carries, from the contact being replaced (same slaves, same
+        // order: a slave never changes rank)
+        let mut carried = Vec::with_capacity(self.pairs.len());
         for p in &self.pairs {
+            carried.push(match (self.contact.as_ref(), p.local) {
+                (Some(c), Some(id)) => Some(c.penalty_states(id)?),
+                _ => None,
+            });
+        }
+        let mut any = false;
+        for p in self.pairs.iter_mut() {
+            p.local = None;
             if p.slaves.is_empty() {
                 continue;
             }
@@ -551,17 +560,25 @@ impl DistributedContact {
             let surf = model.add_surface(Surface::from_facets(facets))?;
             let slaves: Vec<u32> = p.slaves.iter().map(|&s| s as u32).collect();
             let set = model.add_node_set(&slaves)?;
-            model.add_pair(
-                Pair::new(set, surf)
-                    .search_radius(p.radius)
-                    .enforce(Enforce::Penalty(p.penalty.clone())),
-            )?;
+            p.local = Some(
+                model.add_pair(
+                    Pair::new(set, surf)
+                        .search_radius(p.radius)
+                        .enforce(Enforce::Penalty(p.penalty.clone()))
+                        .friction(p.friction.clone()),
+                )?,
+            );
             any = true;
         }
         self.contact = if any {
             let mut c = Contact::new(&self.device, &model)?;
             if let Some(dt) = self.dt_ref {
                 c.set_reference_increment(dt)?;
+            }
+            for (p, states) in self.pairs.iter().zip(carried) {
+                if let (Some(id), Some(s)) = (p.local, states) {
+                    c.set_penalty_states(id, &s)?;
+                }
             }
             Some(c)
         } else {

@@ -1,7 +1,9 @@
 //! Contact across MPI ranks (issue 18, feature `mpi`): examples/mpi_contact.rs under
 //! `mpirun -n 1, 2 and 4` (oversubscribed on a two-core machine) gives every node's force after
-//! every one of 60 increments equal to a single process's to f32 round-off — a penalty pair whose
-//! slaves and master plate are cut across ranks differently by recursive coordinate bisection,
+//! every one of 60 increments equal to a single process's to f32 round-off — two penalty pairs
+//! on one plate, frictionless and with Coulomb friction (the stick force carried through each
+//! rank's rebuilt local model), whose slaves and master are cut across ranks differently by
+//! recursive coordinate bisection,
 //! the plate sliding by more than a rank's width so that slaves' facets pass between ranks,
 //! distributed global searches at the interval, and with four ranks one rank with no contact —
 //! and a rerun with the same rank count gives the same bits.

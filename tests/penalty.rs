@@ -1127,3 +1127,105 @@ fn the_report_says_when_the_contact_limit_comes_before_contact() {
         }
     }
 }
+
+/// `Contact::penalty_states` and `set_penalty_states` carry each slave's stick force, area and
+/// history into another Contact over the same model (what a distributed run does when it
+/// rebuilds a rank's local model): 25 point masses pressed onto a plate and dragged across it
+/// with Coulomb friction, stepped 40 increments by one Contact, and 20 by one then 20 by a fresh
+/// one given the first's states — the forces of the last 20 agree to f32 round-off on every
+/// device (the states round-trip through the GPU's buffer); without the states they do not.
+#[test]
+fn penalty_states_carry_friction_into_another_contact() {
+    let plate = plate_quads(6, 6, 1.2, 1.2, 0.0, 0, &|_, _| 0.0);
+    let mut m = Model::new_3d();
+    m.add_nodes(&plate.positions, &vec![1e9; plate.positions.len()])
+        .unwrap();
+    let s = m.add_surface(Surface::quads(&plate.facets)).unwrap();
+    let pts: Vec<[f64; 3]> = (0..25)
+        .map(|i| {
+            [
+                0.3 + 0.15 * (i % 5) as f64,
+                0.3 + 0.15 * (i / 5) as f64,
+                -1e-3,
+            ]
+        })
+        .collect();
+    let r = m.add_nodes(&pts, &[0.5; 25]).unwrap();
+    let set = m.add_node_set(&r.to_vec()).unwrap();
+    let pair = m
+        .add_pair(
+            Pair::new(set, s)
+                .search_radius(0.1)
+                .friction(Friction::coulomb(0.4)),
+        )
+        .unwrap();
+    let n = m.positions().len();
+    let dt = 1e-3;
+    // the slaves dragged along x and back along y, pressed in
+    let at = |k: usize| -> (Vec<[f64; 3]>, Vec<[f64; 3]>) {
+        let mut x = m.positions().to_vec();
+        let mut v = vec![[0.0; 3]; n];
+        let t = k as f64 * dt;
+        for i in r.to_vec() {
+            let i = i as usize;
+            let vel = [0.5 * (20.0 * t).cos(), -0.3 * (13.0 * t).sin(), 0.0];
+            x[i][0] += 0.5 / 20.0 * (20.0 * t).sin();
+            x[i][1] += 0.3 / 13.0 * ((13.0 * t).cos() - 1.0);
+            v[i] = vel;
+        }
+        (x, v)
+    };
+    for d in devices() {
+        let mut whole = Contact::new(&d, &m).unwrap();
+        let mut first = Contact::new(&d, &m).unwrap();
+        let mut reference = Vec::new();
+        for k in 0..40 {
+            let (x, v) = at(k);
+            reference.push(whole.penalty_step(&x, &v, dt).unwrap().forces.clone());
+            if k < 20 {
+                first.penalty_step(&x, &v, dt).unwrap();
+            }
+        }
+        let states = first.penalty_states(pair).unwrap();
+        assert_eq!(states.len(), 1);
+        assert!(
+            states[0].iter().any(|s| s.tangential_area[0] != 0.0),
+            "{d}: no friction force carried"
+        );
+        for carry in [true, false] {
+            let mut second = Contact::new(&d, &m).unwrap();
+            second.set_reference_increment(dt).unwrap();
+            if carry {
+                second.set_penalty_states(pair, &states).unwrap();
+                assert_eq!(
+                    second.penalty_states(pair).unwrap(),
+                    states,
+                    "{d}: round trip"
+                );
+            }
+            let (mut worst, mut scale) = (0.0f64, 0.0f64);
+            for (k, want) in reference.iter().enumerate().skip(20) {
+                let (x, v) = at(k);
+                let got = second.penalty_step(&x, &v, dt).unwrap().forces.clone();
+                for i in 0..n {
+                    for a in 0..3 {
+                        scale = scale.max(want[i][a].abs());
+                        worst = worst.max((want[i][a] - got[i][a]).abs());
+                    }
+                }
+            }
+            if carry {
+                assert!(worst <= 1e-5 * scale, "{d}: carried: {worst} of {scale}");
+            } else {
+                assert!(
+                    worst > 1e-3 * scale,
+                    "{d}: not carried, yet {worst} of {scale}"
+                );
+            }
+        }
+        // wrong shapes are named
+        assert!(first.set_penalty_states(pair, &[]).is_err());
+        assert!(first.set_penalty_states(pair, &[vec![]]).is_err());
+        assert!(first.penalty_states(PairId(7)).is_err());
+    }
+}

@@ -8,7 +8,7 @@ use super::global_search::SharedBuffers;
 use crate::device::GpuContext;
 use crate::error::{Error, Result};
 use crate::passes::{self, Buf};
-use crate::penalty::layout::PenaltyParams;
+use crate::penalty::layout::{PenaltyParams, SlaveState};
 use crate::penalty::PenaltySetup;
 use crate::search::layout::ITEM_WORKGROUP;
 use wgpu::BufferUsages as U;
@@ -72,6 +72,38 @@ fn storage(
 }
 
 impl GpuPenalty {
+    /// The per-slave state (carried friction force, tributary area, history), read back.
+    pub fn read_state(&self) -> Result<Vec<SlaveState>> {
+        let bytes = self.n_slaves as u64 * 32;
+        if bytes == 0 {
+            return Ok(Vec::new());
+        }
+        let staging = self.ctx.device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("slave state readback"),
+            size: bytes,
+            usage: U::MAP_READ | U::COPY_DST,
+            mapped_at_creation: false,
+        });
+        let mut enc = self
+            .ctx
+            .device
+            .create_command_encoder(&wgpu::CommandEncoderDescriptor::default());
+        enc.copy_buffer_to_buffer(&self.state, 0, &staging, 0, bytes);
+        super::submit(&self.ctx, enc);
+        super::buffers::read_back_with(
+            &self.ctx,
+            &staging,
+            bytes,
+            "reading the penalty slave state",
+            bytemuck::pod_collect_to_vec::<u8, SlaveState>,
+        )
+    }
+
+    /// Replaces the per-slave state (`state.len()` must be the slave count).
+    pub fn write_state(&self, state: &[SlaveState]) {
+        super::upload(&self.ctx, &self.state, 0, bytemuck::cast_slice(state));
+    }
+
     /// Compiles the pipelines (friction compiled in or out) and creates the pair's buffers.
     pub fn new(ctx: Arc<GpuContext>, setup: &PenaltySetup, n_nodes: usize) -> Result<Self> {
         let d = &ctx.device;
@@ -139,7 +171,8 @@ impl GpuPenalty {
             U::empty(),
         );
         super::upload(&ctx, &adjacency, 0, bytemuck::cast_slice(&setup.adjacency));
-        let state = storage(d, "slave state", n_slaves as u64 * 32, U::empty());
+        // COPY_SRC: read back to carry it into another Contact (`Contact::penalty_states`)
+        let state = storage(d, "slave state", n_slaves as u64 * 32, U::COPY_SRC);
         super::upload(
             &ctx,
             &state,
