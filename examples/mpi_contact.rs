@@ -31,33 +31,19 @@ fn main() {
     let (rank, size) = (world.rank() as usize, world.size() as usize);
 
     // the whole model, the same on every rank
-    let plate = plate_quads(16, 16, 1.0, 1.0, 0.0, 0, &|x, y| {
-        0.02 * (6.0 * x).sin() * (4.0 * y).cos()
-    });
-    let np = plate.positions.len();
-    let cloud = point_cloud(300, [0.1, 0.1, -0.004], [0.9, 0.9, -0.001], 7);
-    let far = point_cloud(200, [50.0, 50.0, 50.0], [51.0, 51.0, 51.0], 9);
-    let mut x0: Vec<[f64; 3]> = plate.positions.clone();
-    // the slaves follow the wavy surface, pressed in by 1–4 mm
-    for p in &cloud {
-        let z = 0.02 * (6.0 * p[0]).sin() * (4.0 * p[1]).cos();
-        x0.push([p[0], p[1], z + p[2]]);
-    }
-    x0.extend(&far);
+    let case = std::env::var("ABUT_MPI_CASE").unwrap_or_default();
+    let Scene {
+        x0,
+        masses,
+        vel,
+        facets: surface,
+        pairs: specs,
+    } = if case == "self" {
+        sheet()
+    } else {
+        plate_and_cloud()
+    };
     let n = x0.len();
-    let slaves: Vec<usize> = (np..np + cloud.len()).collect();
-    let mut masses = vec![1.0; n];
-    for &s in &slaves {
-        masses[s] = 0.5;
-    }
-    // the plate slides along +x by 0.3 over the run, the slaves drift along y and sink a little
-    let mut vel = vec![[0.0; 3]; n];
-    for v in vel.iter_mut().take(np) {
-        *v = [0.3 / (INCREMENTS as f64 * DT), 0.0, 0.0];
-    }
-    for (k, &s) in slaves.iter().enumerate() {
-        vel[s] = [0.0, 0.5 * ((k % 7) as f64 - 3.0), -0.02];
-    }
     let at = |t: f64| -> Vec<[f64; 3]> {
         (0..n)
             .map(|i| [0, 1, 2].map(|a| x0[i][a] + vel[i][a] * t))
@@ -68,19 +54,14 @@ fn main() {
     // this rank's share
     let part = recursive_bisection(&x0, size).expect("a partition");
     let own: Vec<usize> = (0..n).filter(|&i| part[i] as usize == rank).collect();
-    let facets: Vec<[u64; 4]> = plate
-        .facets
+    let facets: Vec<[u64; 4]> = surface
         .iter()
         .filter(|f| part[f[0] as usize] as usize == rank)
         .map(|f| f.map(|g| g as u64))
         .collect();
     let _ = NO_GLOBAL_NODE;
-    // two pairs on the one plate: the first half of the cloud frictionless, the second with
-    // Coulomb friction μ = 0.3 (its stick force carried across the rebuilds)
-    let halves = [&slaves[..slaves.len() / 2], &slaves[slaves.len() / 2..]];
-    let pairs: Vec<RankPair> = halves
+    let pairs: Vec<RankPair> = specs
         .iter()
-        .zip([Friction::Frictionless, Friction::coulomb(MU)])
         .map(|(half, friction)| {
             let mut pair = RankPair::new(
                 half.iter()
@@ -90,7 +71,7 @@ fn main() {
                 facets.clone(),
                 radius,
             );
-            pair.friction = friction;
+            pair.friction = friction.clone();
             pair.search_interval = 10;
             pair
         })
@@ -121,18 +102,15 @@ fn main() {
     let mut single = (rank == 0).then(|| {
         let mut m = Model::new_3d();
         m.add_nodes(&x0, &masses).unwrap();
-        let surf = m.add_surface(Surface::quads(&plate.facets)).unwrap();
-        for (half, friction) in halves
-            .iter()
-            .zip([Friction::Frictionless, Friction::coulomb(MU)])
-        {
+        let surf = m.add_surface(Surface::quads(&surface)).unwrap();
+        for (half, friction) in &specs {
             let set = m
                 .add_node_set(&half.iter().map(|&s| s as u32).collect::<Vec<_>>())
                 .unwrap();
             m.add_pair(
                 Pair::new(set, surf)
                     .search_radius(radius)
-                    .friction(friction),
+                    .friction(friction.clone()),
             )
             .unwrap();
         }
@@ -142,7 +120,7 @@ fn main() {
     });
     // the rank owning each slave's facet at the last increment (facets belong to the rank of
     // their first node), and how often it changed
-    let mut facet_rank = vec![u32::MAX; slaves.len()];
+    let mut facet_rank = vec![u32::MAX; specs.iter().map(|s| s.0.len()).sum()];
     let mut handovers = 0usize;
 
     let (mut worst, mut scale, mut searches, mut bytes) = (0.0f64, 0.0f64, 0, 0usize);
@@ -182,10 +160,9 @@ fn main() {
             let outs = c.outputs();
             for (h, sr) in outs.iter().filter_map(|o| o.1.search.as_ref()).enumerate() {
                 for (j, cp) in sr.contacts().enumerate() {
-                    let j = j + h * halves[0].len();
-                    let owner = cp.map_or(u32::MAX, |p| {
-                        part[plate.facets[p.facet as usize][0] as usize]
-                    });
+                    let j = j + specs[..h].iter().map(|s| s.0.len()).sum::<usize>();
+                    let owner =
+                        cp.map_or(u32::MAX, |p| part[surface[p.facet as usize][0] as usize]);
                     if owner != facet_rank[j] && facet_rank[j] != u32::MAX && owner != u32::MAX {
                         handovers += 1;
                     }
@@ -260,4 +237,95 @@ fn gather_counts(world: &mpi::topology::SimpleCommunicator, c: [u64; 3]) -> Vec<
     let mut all = vec![0u64; 3 * size];
     world.all_gather_into(&c[..], &mut all[..]);
     all.chunks_exact(3).map(|c| [c[0], c[1], c[2]]).collect()
+}
+
+/// A model: start positions, masses, velocities, the master surface (quads by node), and the
+/// pairs on it (slave nodes, friction).
+struct Scene {
+    x0: Vec<[f64; 3]>,
+    masses: Vec<f64>,
+    vel: Vec<[f64; 3]>,
+    facets: Vec<[u32; 4]>,
+    pairs: Vec<(Vec<usize>, Friction)>,
+}
+
+/// The wavy plate sliding under the cloud of slaves, two pairs on it (the first half of the
+/// cloud frictionless, the second with Coulomb friction μ = 0.3, its stick force carried through
+/// the rebuilds), and the far block.
+fn plate_and_cloud() -> Scene {
+    let plate = plate_quads(16, 16, 1.0, 1.0, 0.0, 0, &|x, y| {
+        0.02 * (6.0 * x).sin() * (4.0 * y).cos()
+    });
+    let np = plate.positions.len();
+    let cloud = point_cloud(300, [0.1, 0.1, -0.004], [0.9, 0.9, -0.001], 7);
+    let far = point_cloud(200, [50.0, 50.0, 50.0], [51.0, 51.0, 51.0], 9);
+    let mut x0: Vec<[f64; 3]> = plate.positions.clone();
+    // the slaves follow the wavy surface, pressed in by 1–4 mm
+    for p in &cloud {
+        let z = 0.02 * (6.0 * p[0]).sin() * (4.0 * p[1]).cos();
+        x0.push([p[0], p[1], z + p[2]]);
+    }
+    x0.extend(&far);
+    let n = x0.len();
+    let slaves: Vec<usize> = (np..np + cloud.len()).collect();
+    let mut masses = vec![1.0; n];
+    for &s in &slaves {
+        masses[s] = 0.5;
+    }
+    // the plate slides along +x by 0.3 over the run, the slaves drift along y and sink a little
+    let mut vel = vec![[0.0; 3]; n];
+    for v in vel.iter_mut().take(np) {
+        *v = [0.3 / (INCREMENTS as f64 * DT), 0.0, 0.0];
+    }
+    for (k, &s) in slaves.iter().enumerate() {
+        vel[s] = [0.0, 0.5 * ((k % 7) as f64 - 3.0), -0.02];
+    }
+    let half = slaves.len() / 2;
+    Scene {
+        x0,
+        masses,
+        vel,
+        facets: plate.facets.clone(),
+        pairs: vec![
+            (slaves[..half].to_vec(), Friction::Frictionless),
+            (slaves[half..].to_vec(), Friction::coulomb(MU)),
+        ],
+    }
+}
+
+/// A self-contact sheet: one surface of two layers, the lower facing up and the upper (shifted,
+/// facing down) pressed 1–3 mm through it and sliding along x by 0.2 over the run; every node
+/// of both layers a slave of the one pair, with friction.
+fn sheet() -> Scene {
+    let lower = plate_quads(12, 12, 1.0, 1.0, 0.0, 0, &|_, _| 0.0);
+    let upper = plate_quads(12, 12, 1.0, 1.0, 0.0, 0, &|_, _| 0.0);
+    let nl = lower.positions.len() as u32;
+    let mut x0 = lower.positions.clone();
+    x0.extend(upper.positions.iter().map(|p| {
+        [
+            p[0] + 0.021,
+            p[1] + 0.033,
+            -0.002 + 0.001 * (5.0 * p[0]).sin(),
+        ]
+    }));
+    let mut facets = lower.facets.clone();
+    // the upper layer faces down: its quads wound the other way
+    facets.extend(
+        upper
+            .facets
+            .iter()
+            .map(|f| [f[0], f[3], f[2], f[1]].map(|k| k + nl)),
+    );
+    let n = x0.len();
+    let mut vel = vec![[0.0; 3]; n];
+    for v in vel.iter_mut().skip(nl as usize) {
+        *v = [0.2 / (INCREMENTS as f64 * DT), 0.0, -0.01];
+    }
+    Scene {
+        x0,
+        masses: vec![1.0; n],
+        vel,
+        facets,
+        pairs: vec![((0..n).collect(), Friction::coulomb(MU))],
+    }
 }

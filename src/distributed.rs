@@ -19,8 +19,10 @@
 //! rank that owns its slave. The stable increment is the minimum over ranks.
 //!
 //! Coulomb friction carries each slave's stick force from one local model to the next (a slave
-//! never changes rank). Not yet across ranks: balanced pairs and self-contact (a
-//! [`RankPair`] cannot state them).
+//! never changes rank). Self-contact is a pair whose slaves lie on its own master surface, as in
+//! a single process: each rank's slaves are its own nodes of the surface, against the own and
+//! ghost facets around them. Not yet across ranks: balanced pairs (a [`RankPair`] cannot state
+//! one: the master nodes' pass must run on their owners).
 
 use std::collections::HashMap;
 

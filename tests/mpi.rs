@@ -6,13 +6,18 @@
 //! recursive coordinate bisection,
 //! the plate sliding by more than a rank's width so that slaves' facets pass between ranks,
 //! distributed global searches at the interval, and with four ranks one rank with no contact —
-//! and a rerun with the same rank count gives the same bits.
+//! and a rerun with the same rank count gives the same bits; a self-contact sheet likewise.
 
 use std::process::Command;
 
 /// Runs the example under `mpirun -n ranks`; its one line.
 fn run(ranks: usize) -> String {
-    let out = mpirun(ranks, None);
+    run_case(ranks, None)
+}
+
+/// Runs the example's `case` under `mpirun -n ranks`; its one line.
+fn run_case(ranks: usize, case: Option<&str>) -> String {
+    let out = mpirun(ranks, case);
     out.lines()
         .find(|l| l.starts_with("ranks "))
         .expect("the example's line")
@@ -98,5 +103,22 @@ fn a_bad_share_is_refused_on_every_rank() {
         } else {
             assert!(line.contains("rank") && line.contains('2'), "{line}");
         }
+    }
+}
+
+/// A self-contact sheet across ranks: one surface of two layers pressed through each other and
+/// sliding, every node of both a slave of the one pair (with friction), the layers cut across
+/// ranks: every node's force equals the single process's at 1, 2 and 4 ranks.
+#[test]
+fn a_self_contact_sheet_across_ranks_equals_the_single_process() {
+    for ranks in [1, 2, 4] {
+        let line = run_case(ranks, Some("self"));
+        let active: usize = line
+            .split(" slaves in contact")
+            .next()
+            .and_then(|h| h.rsplit(' ').next())
+            .and_then(|h| h.parse().ok())
+            .expect("a count in contact");
+        assert!(active > 100, "{line}");
     }
 }
