@@ -14,8 +14,11 @@
 //! prints one line per run — the largest difference, the distributed global searches, the bytes
 //! sent per increment by each rank, and a checksum of every force's bits (equal on reruns with
 //! the same rank count) — and exits non-zero when a force differs by more than f32 round-off.
+//!
+//! `ABUT_MPI_CASE` picks another model: `self` (a self-contact sheet), `balanced` (a balanced
+//! pair of two plates), `bad-slave` (a rank names a slave it does not own: refused everywhere).
 
-use abut::distributed::{DistributedContact, RankModel, RankPair, NO_GLOBAL_NODE};
+use abut::distributed::{DistributedContact, RankBalance, RankModel, RankPair, NO_GLOBAL_NODE};
 use abut::mesh::{plate_quads, point_cloud};
 use abut::partition::recursive_bisection;
 use abut::*;
@@ -24,6 +27,8 @@ use mpi::traits::*;
 const INCREMENTS: usize = 60;
 const DT: f64 = 1e-3;
 const MU: f64 = 0.3;
+/// The weight of a balanced pair's slave-on-master pass (not ½, so that the passes differ).
+const BALANCE: f64 = 0.6;
 
 fn main() {
     let universe = mpi::initialize().expect("MPI initialises");
@@ -38,8 +43,11 @@ fn main() {
         vel,
         facets: surface,
         pairs: specs,
+        slave_facets,
     } = if case == "self" {
         sheet()
+    } else if case == "balanced" {
+        two_plates()
     } else {
         plate_and_cloud()
     };
@@ -73,6 +81,14 @@ fn main() {
             );
             pair.friction = friction.clone();
             pair.search_interval = 10;
+            pair.balanced = slave_facets.as_ref().map(|sf| RankBalance {
+                slave_facets: sf
+                    .iter()
+                    .filter(|f| part[f[0] as usize] as usize == rank)
+                    .map(|f| f.map(|g| g as u64))
+                    .collect(),
+                weight: BALANCE,
+            });
             pair
         })
         .collect();
@@ -103,16 +119,20 @@ fn main() {
         let mut m = Model::new_3d();
         m.add_nodes(&x0, &masses).unwrap();
         let surf = m.add_surface(Surface::quads(&surface)).unwrap();
+        let slave_surf = slave_facets
+            .as_ref()
+            .map(|sf| m.add_surface(Surface::quads(sf)).unwrap());
         for (half, friction) in &specs {
             let set = m
                 .add_node_set(&half.iter().map(|&s| s as u32).collect::<Vec<_>>())
                 .unwrap();
-            m.add_pair(
-                Pair::new(set, surf)
-                    .search_radius(radius)
-                    .friction(friction.clone()),
-            )
-            .unwrap();
+            let mut pair = Pair::new(set, surf)
+                .search_radius(radius)
+                .friction(friction.clone());
+            if let Some(s) = slave_surf {
+                pair = pair.balanced(s, BALANCE);
+            }
+            m.add_pair(pair).unwrap();
         }
         let mut c = Contact::new(&device, &m).unwrap();
         c.request_outputs(true);
@@ -158,7 +178,11 @@ fn main() {
             }
             assert_eq!(r.active, step.active, "increment {k}: slaves in contact");
             let outs = c.outputs();
-            for (h, sr) in outs.iter().filter_map(|o| o.1.search.as_ref()).enumerate() {
+            // the slave-on-master passes (a balanced pair's second pass searches the slave
+            // surface, whose facets are not counted here)
+            let passes = outs.iter().filter_map(|o| o.1.search.as_ref());
+            let step_by = if slave_facets.is_some() { 2 } else { 1 };
+            for (h, sr) in passes.step_by(step_by).enumerate() {
                 for (j, cp) in sr.contacts().enumerate() {
                     let j = j + specs[..h].iter().map(|s| s.0.len()).sum::<usize>();
                     let owner =
@@ -247,6 +271,8 @@ struct Scene {
     vel: Vec<[f64; 3]>,
     facets: Vec<[u32; 4]>,
     pairs: Vec<(Vec<usize>, Friction)>,
+    /// The slave surface of a balanced pair (quads by node, facing the master).
+    slave_facets: Option<Vec<[u32; 4]>>,
 }
 
 /// The wavy plate sliding under the cloud of slaves, two pairs on it (the first half of the
@@ -290,6 +316,7 @@ fn plate_and_cloud() -> Scene {
             (slaves[..half].to_vec(), Friction::Frictionless),
             (slaves[half..].to_vec(), Friction::coulomb(MU)),
         ],
+        slave_facets: None,
     }
 }
 
@@ -327,5 +354,55 @@ fn sheet() -> Scene {
         vel,
         facets,
         pairs: vec![((0..n).collect(), Friction::coulomb(MU))],
+        slave_facets: None,
+    }
+}
+
+/// A balanced pair: a wavy plate of 14 × 14 quads (the master, facing up) and a finer flat
+/// plate of 17 × 17 quads above it (the slave surface, facing down, its nodes the slaves),
+/// pressed 1–3 mm into the crests and sliding along x by 0.25 and along y by 0.05 over the run,
+/// with friction 0.3; the passes weighted 0.6 and 0.4. Both passes' contacts cross ranks: the
+/// plates are cut by the same bisection of all nodes, which their different meshes do not align
+/// with.
+fn two_plates() -> Scene {
+    let lower = plate_quads(14, 14, 1.0, 1.0, 0.0, 0, &|x, y| {
+        0.004 * (5.0 * x).cos() * (3.0 * y).cos()
+    });
+    let upper = plate_quads(17, 17, 1.0, 1.0, 0.0, 0, &|_, _| 0.0);
+    let nl = lower.positions.len();
+    let mut x0 = lower.positions.clone();
+    x0.extend(upper.positions.iter().map(|p| {
+        [
+            p[0] + 0.013,
+            p[1] - 0.021,
+            0.002 - 0.001 * (4.0 * p[1]).sin(),
+        ]
+    }));
+    let n = x0.len();
+    let mut vel = vec![[0.0; 3]; n];
+    for v in vel.iter_mut().skip(nl) {
+        *v = [
+            0.25 / (INCREMENTS as f64 * DT),
+            0.05 / (INCREMENTS as f64 * DT),
+            -0.01,
+        ];
+    }
+    let mut masses = vec![1.0; n];
+    for m in masses.iter_mut().skip(nl) {
+        *m = 0.7;
+    }
+    Scene {
+        x0,
+        masses,
+        vel,
+        facets: lower.facets.clone(),
+        pairs: vec![((nl..n).collect(), Friction::coulomb(MU))],
+        slave_facets: Some(
+            upper
+                .facets
+                .iter()
+                .map(|f| [f[0], f[3], f[2], f[1]].map(|k| k + nl as u32))
+                .collect(),
+        ),
     }
 }

@@ -21,8 +21,15 @@
 //! Coulomb friction carries each slave's stick force from one local model to the next (a slave
 //! never changes rank). Self-contact is a pair whose slaves lie on its own master surface, as in
 //! a single process: each rank's slaves are its own nodes of the surface, against the own and
-//! ghost facets around them. Not yet across ranks: balanced pairs (a [`RankPair`] cannot state
-//! one: the master nodes' pass must run on their owners).
+//! ghost facets around them. A balanced pair ([`RankPair::balanced`]) runs as its two passes,
+//! each a pure pair weighted as in [`crate::Pair::balanced`]: the slaves against the master
+//! facets (on the slaves' owners), and the master surface's nodes against the slave facets (on
+//! the master nodes' owners, each with its tributary area on the whole master surface): every
+//! contact of either pass is enforced once, by the rank that owns its slave node.
+//!
+//! Slave areas (the penalty's area per slave) are fixed at construction from the whole surface
+//! at the start positions, as a single process fixes them when it builds its contact: the
+//! given [`RankPair::slave_areas`], else the mean area of the whole master surface's facets.
 
 use std::collections::HashMap;
 
@@ -34,7 +41,9 @@ use mpi::Count;
 use crate::contact::Contact;
 use crate::device::Device;
 use crate::error::{Error, Result};
-use crate::model::{Enforce, Facet, Friction, Model, Pair, PairId, Penalty, Surface};
+use crate::model::{
+    Enforce, Facet, Friction, MasterSurface, Model, Pair, PairId, Penalty, Surface,
+};
 
 /// Marks the unused fourth node of a triangle in [`RankPair::facets`].
 pub const NO_GLOBAL_NODE: u64 = u64::MAX;
@@ -68,6 +77,23 @@ pub struct RankPair {
     pub friction: Friction,
     /// Distributed global search at least every this many increments (≥ 1).
     pub search_interval: u32,
+    /// The tributary area of each slave (one per entry of `slaves`, model area units);
+    /// `None`: every slave takes the mean facet area of the whole master surface.
+    pub slave_areas: Option<Vec<f64>>,
+    /// Makes the pair balanced ([`crate::Pair::balanced`]): the slave surface's share and the
+    /// weight of the slave-on-master pass.
+    pub balanced: Option<RankBalance>,
+}
+
+/// The slave side of a balanced pair on one rank.
+#[derive(Clone, Debug)]
+pub struct RankBalance {
+    /// The facets of the surface the slave nodes lie on that this rank owns (as
+    /// [`RankPair::facets`]: by global node ids, facing the master).
+    pub slave_facets: Vec<[u64; 4]>,
+    /// The weight of the slave-on-master pass in [0, 1] (the master-on-slave pass gets
+    /// 1 − weight), the same on every rank; ½ is the usual choice.
+    pub weight: f64,
 }
 
 impl RankPair {
@@ -81,6 +107,8 @@ impl RankPair {
             penalty: Penalty::default(),
             friction: Friction::Frictionless,
             search_interval: 100,
+            slave_areas: None,
+            balanced: None,
         }
     }
 }
@@ -133,8 +161,14 @@ pub struct DistributedContact {
     last: DistributedStep,
 }
 
+/// One pass of a pair on this rank: its own slaves (or, for a balanced pair's second pass, its
+/// own master nodes) against every facet of the pass's master side.
 struct PairTopology {
     slaves: Vec<usize>,
+    /// Each slave's area.
+    areas: Vec<f64>,
+    /// The fraction of each contact's force this pass applies.
+    weight: f64,
     facets: Vec<[u64; 4]>,
     radius: f64,
     penalty: Penalty,
@@ -229,6 +263,70 @@ fn all_sum(comm: &SimpleCommunicator, x: u64) -> u64 {
     y
 }
 
+/// Gathers one pair's facets (listed by `k`'s owners) on every rank, in rank order; each facet
+/// must be listed once, by one rank (the same result, and so the same error, on every rank).
+fn gather_facets(
+    comm: &SimpleCommunicator,
+    facets: &[[u64; 4]],
+    k: usize,
+) -> Result<Vec<[u64; 4]>> {
+    let flat: Vec<u64> = facets.iter().flatten().copied().collect();
+    let (all, _) = all_gather(comm, &flat);
+    let facets: Vec<[u64; 4]> = all
+        .chunks_exact(4)
+        .map(|c| [c[0], c[1], c[2], c[3]])
+        .collect();
+    let mut seen = std::collections::HashSet::with_capacity(facets.len());
+    for f in &facets {
+        let mut key = *f;
+        key.sort_unstable();
+        if !seen.insert(key) {
+            return Err(bad(
+                "master facet",
+                format!("{f:?} of pair {k}"),
+                "listed by one rank only, once",
+            ));
+        }
+    }
+    Ok(facets)
+}
+
+/// The whole surface of `facets` at the start positions `at` (by global id), numbered in the
+/// order its nodes first appear; and that numbering. Errors: a node no rank owns.
+fn whole_surface(
+    facets: &[[u64; 4]],
+    at: &HashMap<u64, [f64; 3]>,
+    k: usize,
+) -> Result<(MasterSurface, HashMap<u64, u32>)> {
+    let mut local_of: HashMap<u64, u32> = HashMap::new();
+    let mut positions = Vec::new();
+    let mut list = Vec::with_capacity(facets.len());
+    for f in facets {
+        let m = if f[3] == NO_GLOBAL_NODE { 3 } else { 4 };
+        let mut l = [0u32; 4];
+        for j in 0..m {
+            let p = at.get(&f[j]).ok_or_else(|| {
+                bad(
+                    "master facet",
+                    format!("{f:?} of pair {k}"),
+                    "nodes that some rank owns",
+                )
+            })?;
+            l[j] = *local_of.entry(f[j]).or_insert_with(|| {
+                positions.push(*p);
+                (positions.len() - 1) as u32
+            });
+        }
+        list.push(if m == 3 {
+            Facet::Triangle([l[0], l[1], l[2]])
+        } else {
+            Facet::Quad(l)
+        });
+    }
+    let surface = MasterSurface::build(&Surface::from_facets(list), &positions, 3)?;
+    Ok((surface, local_of))
+}
+
 /// Own node index by global id, and each pair's slaves as own indices; or the first fault of
 /// this rank's share (no collective: see [`agree`]).
 type Validated = (HashMap<u64, usize>, Vec<Vec<usize>>);
@@ -278,6 +376,31 @@ fn validate(model: &RankModel) -> Result<Validated> {
         }
         if p.search_interval == 0 {
             return Err(bad("search_interval", "0".into(), "at least 1"));
+        }
+        if let Some(a) = &p.slave_areas {
+            if a.len() != p.slaves.len() {
+                return Err(Error::LengthMismatch {
+                    what: "slave areas (one per slave of the pair)",
+                    expected: p.slaves.len(),
+                    got: a.len(),
+                });
+            }
+            if let Some(j) = a.iter().position(|x| !(x.is_finite() && *x > 0.0)) {
+                return Err(bad(
+                    "slave area",
+                    format!("{} (slave {} of pair {k})", a[j], p.slaves[j]),
+                    "finite and positive",
+                ));
+            }
+        }
+        if let Some(b) = &p.balanced {
+            if !(b.weight.is_finite() && (0.0..=1.0).contains(&b.weight)) {
+                return Err(bad(
+                    "balanced weight",
+                    format!("{} (pair {k})", b.weight),
+                    "must lie in [0, 1]",
+                ));
+            }
         }
         let mut slaves = Vec::with_capacity(p.slaves.len());
         for &g in &p.slaves {
@@ -336,43 +459,31 @@ impl DistributedContact {
             ));
         }
         let (index, slaves_of) = valid.expect("agreed: every share valid");
-        let n = model.ids.len();
-        let mut pairs = Vec::new();
-        let mut edge = 0.0f64;
-        for (k, (p, slaves)) in model.pairs.iter().zip(slaves_of).enumerate() {
-            // the whole pair's facet topology on every rank, in rank order
-            let flat: Vec<u64> = p.facets.iter().flatten().copied().collect();
-            let (all, _) = all_gather(&comm, &flat);
-            let facets: Vec<[u64; 4]> = all
-                .chunks_exact(4)
-                .map(|c| [c[0], c[1], c[2], c[3]])
-                .collect();
-            // each facet listed by one rank, once
-            let mut seen = std::collections::HashSet::with_capacity(facets.len());
-            for f in &facets {
-                let mut key = *f;
-                key.sort_unstable();
-                if !seen.insert(key) {
-                    return Err(bad(
-                        "master facet",
-                        format!("{f:?} of pair {k}"),
-                        "listed by one rank only, once",
-                    ));
-                }
+        // balanced or not, the same on every rank (the passes' collectives must match)
+        for (k, p) in model.pairs.iter().enumerate() {
+            let w = p.balanced.as_ref().map_or(-1.0, |b| b.weight);
+            if all_min(&comm, w) != all_max(&comm, w) {
+                return Err(bad(
+                    "balanced",
+                    format!("pair {k}"),
+                    "the same balance and weight on every rank",
+                ));
             }
-            pairs.push(PairTopology {
-                slaves,
-                facets,
-                radius: p.search_radius,
-                penalty: p.penalty.clone(),
-                friction: p.friction.clone(),
-                interval: p.search_interval,
-                local: None,
-            });
+        }
+        let n = model.ids.len();
+        // each pair's facets on every rank, in rank order (a balanced pair's slave facets too)
+        let mut gathered = Vec::with_capacity(model.pairs.len());
+        for (k, p) in model.pairs.iter().enumerate() {
+            let master = gather_facets(&comm, &p.facets, k)?;
+            let slave = match &p.balanced {
+                Some(b) => Some((gather_facets(&comm, &b.slave_facets, k)?, b.weight)),
+                None => None,
+            };
+            gathered.push((master, slave));
         }
         let mut is_master = vec![false; n];
-        for p in &pairs {
-            for f in &p.facets {
+        for (master, slave) in &gathered {
+            for f in master.iter().chain(slave.iter().flat_map(|s| &s.0)) {
                 for &g in f {
                     if let Some(&i) = index.get(&g) {
                         is_master[i] = true;
@@ -381,7 +492,8 @@ impl DistributedContact {
             }
         }
         // every master node's start position on every rank, once: the longest facet edge (the
-        // ghost region's margin), and facets naming a node nobody owns
+        // ghost region's margin), the whole surfaces' areas, and facets naming a node nobody
+        // owns
         let own_masters: Vec<usize> = (0..n).filter(|&i| is_master[i]).collect();
         let ids: Vec<u64> = own_masters.iter().map(|&i| model.ids[i]).collect();
         let pos: Vec<f64> = own_masters
@@ -395,23 +507,49 @@ impl DistributedContact {
             .enumerate()
             .map(|(k, &g)| (g, [all_pos[3 * k], all_pos[3 * k + 1], all_pos[3 * k + 2]]))
             .collect();
-        for (k, p) in pairs.iter().enumerate() {
-            for f in &p.facets {
-                let m = if f[3] == NO_GLOBAL_NODE { 3 } else { 4 };
-                for j in 0..m {
-                    let (a, b) = match (at.get(&f[j]), at.get(&f[(j + 1) % m])) {
-                        (Some(a), Some(b)) => (a, b),
-                        _ => {
-                            return Err(bad(
-                                "master facet",
-                                format!("{f:?} of pair {k}"),
-                                "nodes that some rank owns",
-                            ))
-                        }
-                    };
-                    let d = (0..3).map(|c| (a[c] - b[c]).powi(2)).sum::<f64>().sqrt();
-                    edge = edge.max(d);
-                }
+        let mut edge = 0.0f64;
+        let mut pairs = Vec::new();
+        for (k, ((master, slave), (p, slaves))) in gathered
+            .into_iter()
+            .zip(model.pairs.iter().zip(slaves_of))
+            .enumerate()
+        {
+            let (whole, local_of) = whole_surface(&master, &at, k)?;
+            edge = edge.max(whole.facet_size.iter().copied().fold(0.0, f64::max));
+            let areas = match &p.slave_areas {
+                Some(a) => a.clone(),
+                None => vec![whole.mean_facet_area(); slaves.len()],
+            };
+            let pass = |slaves: Vec<usize>, areas: Vec<f64>, weight: f64, facets| PairTopology {
+                slaves,
+                areas,
+                weight,
+                facets,
+                radius: p.search_radius,
+                penalty: p.penalty.clone(),
+                friction: p.friction.clone(),
+                interval: p.search_interval,
+                local: None,
+            };
+            let weight = slave.as_ref().map_or(1.0, |s| s.1);
+            pairs.push(pass(slaves, areas, weight, master));
+            if let Some((slave_facets, w)) = slave {
+                // the master-on-slave pass: this rank's nodes of the master surface, each with
+                // its tributary area on the whole surface
+                let (slave_whole, _) = whole_surface(&slave_facets, &at, k)?;
+                edge = edge.max(slave_whole.facet_size.iter().copied().fold(0.0, f64::max));
+                let mine: Vec<usize> = (0..n)
+                    .filter(|&i| {
+                        local_of
+                            .get(&model.ids[i])
+                            .is_some_and(|&l| !whole.facets_of_node(l).is_empty())
+                    })
+                    .collect();
+                let areas = mine
+                    .iter()
+                    .map(|&i| whole.tributary_area(local_of[&model.ids[i]]))
+                    .collect();
+                pairs.push(pass(mine, areas, 1.0 - w, slave_facets));
             }
         }
         let h_max = edge;
@@ -561,13 +699,14 @@ impl DistributedContact {
             }
             let surf = model.add_surface(Surface::from_facets(facets))?;
             let slaves: Vec<u32> = p.slaves.iter().map(|&s| s as u32).collect();
-            let set = model.add_node_set(&slaves)?;
+            let set = model.add_node_set_with_areas(&slaves, &p.areas)?;
             p.local = Some(
                 model.add_pair(
                     Pair::new(set, surf)
                         .search_radius(p.radius)
                         .enforce(Enforce::Penalty(p.penalty.clone()))
-                        .friction(p.friction.clone()),
+                        .friction(p.friction.clone())
+                        .pass_weight(p.weight),
                 )?,
             );
             any = true;

@@ -1015,6 +1015,129 @@ fn balanced_pairs_weight_both_passes() {
     }
 }
 
+/// A balanced pair is its two passes (`Pair::pass_weight`): the slaves against the master
+/// weighted w, and the master surface's nodes (each with its tributary area on the master)
+/// against the slave surface weighted 1 − w, as two pure pairs — the forces of every node over
+/// 30 increments of sliding with friction agree on every device (how a rank of a distributed
+/// model states its share of a balanced pair); bad weights are refused by name.
+#[test]
+fn a_balanced_pair_is_its_two_weighted_passes() {
+    let w = 0.3;
+    let build = |split: bool| {
+        let a = plate_quads(5, 5, 1.0, 1.0, 0.0, 0, &|x, y| {
+            0.003 * (4.0 * x).cos() * (3.0 * y).cos()
+        });
+        let b = plate_quads(4, 4, 1.0, 1.0, 0.0, 0, &|_, _| 0.0);
+        let mut m = Model::new_3d();
+        let master = m
+            .add_nodes(&a.positions, &vec![2.0; a.positions.len()])
+            .unwrap();
+        let s = m.add_surface(Surface::quads(&a.facets)).unwrap();
+        let off = m.positions().len() as u32;
+        let pos: Vec<[f64; 3]> = b
+            .positions
+            .iter()
+            .map(|p| [p[0] + 0.07, p[1] - 0.04, 0.001])
+            .collect();
+        let r = m.add_nodes(&pos, &vec![0.5; pos.len()]).unwrap();
+        let quads: Vec<[u32; 4]> = b
+            .facets
+            .iter()
+            .map(|q| [q[0] + off, q[3] + off, q[2] + off, q[1] + off])
+            .collect();
+        let ss = m.add_surface(Surface::quads(&quads)).unwrap();
+        let set = m.add_node_set(&r.to_vec()).unwrap();
+        let pair = || {
+            Pair::new(set, s)
+                .search_radius(0.15)
+                .friction(Friction::coulomb(0.3))
+        };
+        if split {
+            m.add_pair(pair().pass_weight(w)).unwrap();
+            let nodes = master.to_vec();
+            let areas: Vec<f64> = nodes
+                .iter()
+                .map(|&n| m.surface(s).unwrap().tributary_area(n))
+                .collect();
+            let back = m.add_node_set_with_areas(&nodes, &areas).unwrap();
+            m.add_pair(
+                Pair::new(back, ss)
+                    .search_radius(0.15)
+                    .friction(Friction::coulomb(0.3))
+                    .pass_weight(1.0 - w),
+            )
+            .unwrap();
+        } else {
+            m.add_pair(pair().balanced(ss, w)).unwrap();
+        }
+        (m, off as usize)
+    };
+    for d in devices() {
+        let run = |split: bool| {
+            let (m, off) = build(split);
+            let mut c = Contact::new(&d, &m).unwrap();
+            let n = m.positions().len();
+            let mut all = Vec::new();
+            for k in 0..30 {
+                let t = k as f64 * 1e-3;
+                let mut x = m.positions().to_vec();
+                let mut v = vec![[0.0; 3]; n];
+                for i in off..n {
+                    x[i][0] += 2.0 * t;
+                    x[i][2] -= 0.1 * t;
+                    v[i] = [2.0, 0.0, -0.1];
+                }
+                all.push(c.penalty_step(&x, &v, 1e-3).unwrap().forces.clone());
+            }
+            all
+        };
+        let (whole, split) = (run(false), run(true));
+        let scale = whole
+            .iter()
+            .flatten()
+            .flatten()
+            .fold(0.0f64, |a, f| a.max(f.abs()));
+        assert!(scale > 0.0, "{d}: no contact");
+        for (k, (a, b)) in whole.iter().zip(&split).enumerate() {
+            for (fa, fb) in a.iter().zip(b) {
+                for c in 0..3 {
+                    assert!(
+                        (fa[c] - fb[c]).abs() <= 2e-6 * scale,
+                        "{d}, increment {k}: {fa:?} vs {fb:?}"
+                    );
+                }
+            }
+        }
+    }
+    let (mut m, _) = build(false);
+    let set = m.add_node_set(&[0]).unwrap();
+    for (pair, why) in [
+        (
+            Pair::new(set, SurfaceId(0)).pass_weight(1.5),
+            "must lie in [0, 1]",
+        ),
+        (
+            Pair::new(set, SurfaceId(0)).pass_weight(f64::NAN),
+            "must lie in [0, 1]",
+        ),
+        (
+            Pair::new(set, SurfaceId(0))
+                .balanced(SurfaceId(1), 0.5)
+                .pass_weight(0.5),
+            "a pure penalty pair",
+        ),
+        (
+            Pair::new(set, SurfaceId(0))
+                .enforce(Enforce::Kinematic(Default::default()))
+                .pass_weight(0.5),
+            "a pure penalty pair",
+        ),
+    ] {
+        let e = m.add_pair(pair).unwrap_err().to_string();
+        assert!(e.contains("pass weight") && e.contains(why), "{e}");
+    }
+}
+
 /// §6 edges: a node beside a free edge or corner of the master (off its facets, below its
 /// plane) by more than the extension zone (0.1 of a facet) is not in contact — the master ends
 /// there — while one over the facet, exactly over the edge or within the zone is; an interior fold (a valley: two facets sharing an edge) still holds a node in

@@ -26,6 +26,10 @@ pub struct Pair {
     /// When the search runs globally; `None`: the defaults (every 100 increments, every 4 for
     /// self-contact, budget ½ of the radius, fast local tracking).
     pub schedule: Option<crate::search::Schedule>,
+    /// The fraction of each contact's penalty force a pure pair applies (1 unless set): one
+    /// pass of a balanced pair stated as a pure pair of its own, as a rank of a distributed
+    /// model does (a balanced pair's weights come from [`Pair::balanced`]).
+    pub pass_weight: f64,
 }
 
 /// The sliding formulation (seed: "Sliding formulation", "Small-sliding tracking approach").
@@ -307,7 +311,17 @@ impl Pair {
             balanced: None,
             schedule: None,
             sliding: Sliding::Finite,
+            pass_weight: 1.0,
         }
+    }
+
+    /// Sets the fraction (in [0, 1]) of each contact's penalty force this pure pair applies:
+    /// with the same pair's other pass as a second pure pair weighted 1 − `weight` (master
+    /// nodes against the slave surface, each with its tributary area on the master), the two
+    /// make the balanced pair of [`Pair::balanced`]. Penalty enforcement only.
+    pub fn pass_weight(mut self, weight: f64) -> Self {
+        self.pass_weight = weight;
+        self
     }
 
     /// Sets the sliding formulation.
@@ -410,6 +424,22 @@ impl Pair {
                         expected: "kinematic friction on pure finite-sliding pairs (balanced and small-sliding kinematic pairs are frictionless; use penalty enforcement there)",
                     });
                 }
+            }
+        }
+        if self.pass_weight != 1.0 {
+            if !(self.pass_weight.is_finite() && (0.0..=1.0).contains(&self.pass_weight)) {
+                return Err(Error::BadParameter {
+                    name: "pass weight",
+                    value: self.pass_weight.to_string(),
+                    expected: "must lie in [0, 1]",
+                });
+            }
+            if self.balanced.is_some() || !matches!(self.enforce, Enforce::Penalty(_)) {
+                return Err(Error::BadParameter {
+                    name: "pass weight",
+                    value: self.pass_weight.to_string(),
+                    expected: "a pure penalty pair (a balanced pair weighs its passes itself)",
+                });
             }
         }
         if let Some((_, w)) = self.balanced {

@@ -53,7 +53,7 @@ impl PenaltySetup {
             Some(a) => a.to_vec(),
             None => vec![master.mean_facet_area(); slaves.len()],
         };
-        let weight = pair.balanced.map_or(1.0, |(_, w)| w);
+        let weight = pair.balanced.map_or(pair.pass_weight, |(_, w)| w);
         Self::from_parts(model, id, master, slaves, &areas, weight)
     }
 
