@@ -44,6 +44,7 @@ use crate::error::{Error, Result};
 use crate::model::{
     Enforce, Facet, Friction, MasterSurface, Model, Pair, PairId, Penalty, Surface,
 };
+use crate::search::Schedule;
 
 /// Marks the unused fourth node of a triangle in [`RankPair::facets`].
 pub const NO_GLOBAL_NODE: u64 = u64::MAX;
@@ -133,6 +134,22 @@ pub struct DistributedStep {
     pub ghosts: usize,
 }
 
+/// A slave node of this rank in contact after the last increment (see
+/// [`DistributedContact::request_outputs`]).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct SlaveOutput {
+    /// The pair ([`RankModel::pairs`] index; a balanced pair's two passes both report here).
+    pub pair: usize,
+    /// Whether it is a balanced pair's second pass (the slave a master node).
+    pub reverse: bool,
+    /// The slave's global node id.
+    pub node: u64,
+    /// Contact pressure (force over tributary area).
+    pub pressure: f64,
+    /// The contact force on the slave.
+    pub force: [f64; 3],
+}
+
 /// A rank's contact: its local model of own and ghost nodes, and the exchange plan with its
 /// neighbours (see the module's documentation).
 pub struct DistributedContact {
@@ -159,6 +176,15 @@ pub struct DistributedContact {
     anchor: Vec<[f64; 3]>,
     started: bool,
     last: DistributedStep,
+    /// Whether the local contacts compute per-slave outputs.
+    outputs: bool,
+    /// Distributed global searches so far.
+    searches: u64,
+    /// The ghosts' global ids (by source rank, then in the order sent) of the local model.
+    ghost_ids: Vec<u64>,
+    /// Local models built (the first, and after every distributed global search that changed
+    /// the ghosts).
+    rebuilds: u64,
 }
 
 /// One pass of a pair on this rank: its own slaves (or, for a balanced pair's second pass, its
@@ -176,6 +202,8 @@ struct PairTopology {
     interval: u32,
     /// This pair's id in the local contact, when it has one.
     local: Option<PairId>,
+    /// The [`RankModel::pairs`] index it is a pass of, and whether it is the reverse pass.
+    of: (usize, bool),
 }
 
 fn bad(name: &'static str, value: String, expected: &'static str) -> Error {
@@ -187,7 +215,7 @@ fn bad(name: &'static str, value: String, expected: &'static str) -> Error {
 }
 
 /// Gathers every rank's `items` on every rank, in rank order; with each rank's count.
-fn all_gather<T: Equivalence + Clone + Default>(
+pub(crate) fn all_gather<T: Equivalence + Clone + Default>(
     comm: &SimpleCommunicator,
     items: &[T],
 ) -> (Vec<T>, Vec<usize>) {
@@ -212,7 +240,7 @@ fn all_gather<T: Equivalence + Clone + Default>(
 }
 
 /// Sends `out[r]` to rank r and returns what each rank sent here (all-to-all with counts).
-fn exchange<T: Equivalence + Clone + Default>(
+pub(crate) fn exchange<T: Equivalence + Clone + Default>(
     comm: &SimpleCommunicator,
     out: &[Vec<T>],
 ) -> Vec<Vec<T>> {
@@ -245,13 +273,13 @@ fn exchange<T: Equivalence + Clone + Default>(
     res
 }
 
-fn all_min(comm: &SimpleCommunicator, x: f64) -> f64 {
+pub(crate) fn all_min(comm: &SimpleCommunicator, x: f64) -> f64 {
     let mut y = 0.0;
     comm.all_reduce_into(&x, &mut y, mpi::collective::SystemOperation::min());
     y
 }
 
-fn all_max(comm: &SimpleCommunicator, x: f64) -> f64 {
+pub(crate) fn all_max(comm: &SimpleCommunicator, x: f64) -> f64 {
     let mut y = 0.0;
     comm.all_reduce_into(&x, &mut y, mpi::collective::SystemOperation::max());
     y
@@ -419,7 +447,7 @@ fn validate(model: &RankModel) -> Result<Validated> {
 
 /// Whether every rank got on (collective): this rank's own error, or, where another rank failed,
 /// an error naming the first such rank.
-fn agree(comm: &SimpleCommunicator, own: Option<Error>) -> Result<()> {
+pub(crate) fn agree(comm: &SimpleCommunicator, own: Option<Error>) -> Result<()> {
     let me = comm.rank() as f64;
     let first = all_min(comm, if own.is_some() { me } else { f64::INFINITY });
     match own {
@@ -520,19 +548,21 @@ impl DistributedContact {
                 Some(a) => a.clone(),
                 None => vec![whole.mean_facet_area(); slaves.len()],
             };
-            let pass = |slaves: Vec<usize>, areas: Vec<f64>, weight: f64, facets| PairTopology {
-                slaves,
-                areas,
-                weight,
-                facets,
-                radius: p.search_radius,
-                penalty: p.penalty.clone(),
-                friction: p.friction.clone(),
-                interval: p.search_interval,
-                local: None,
-            };
+            let pass =
+                |slaves: Vec<usize>, areas: Vec<f64>, weight: f64, facets, reverse| PairTopology {
+                    slaves,
+                    areas,
+                    weight,
+                    facets,
+                    radius: p.search_radius,
+                    penalty: p.penalty.clone(),
+                    friction: p.friction.clone(),
+                    interval: p.search_interval,
+                    local: None,
+                    of: (k, reverse),
+                };
             let weight = slave.as_ref().map_or(1.0, |s| s.1);
-            pairs.push(pass(slaves, areas, weight, master));
+            pairs.push(pass(slaves, areas, weight, master, false));
             if let Some((slave_facets, w)) = slave {
                 // the master-on-slave pass: this rank's nodes of the master surface, each with
                 // its tributary area on the whole surface
@@ -549,7 +579,7 @@ impl DistributedContact {
                     .iter()
                     .map(|&i| whole.tributary_area(local_of[&model.ids[i]]))
                     .collect();
-                pairs.push(pass(mine, areas, 1.0 - w, slave_facets));
+                pairs.push(pass(mine, areas, 1.0 - w, slave_facets, true));
             }
         }
         let h_max = edge;
@@ -572,12 +602,73 @@ impl DistributedContact {
             anchor: Vec::new(),
             started: false,
             last: DistributedStep::default(),
+            outputs: false,
+            searches: 0,
+            ghost_ids: Vec::new(),
+            rebuilds: 0,
         })
     }
 
     /// What the last increment did.
     pub fn last(&self) -> &DistributedStep {
         &self.last
+    }
+
+    /// Distributed global searches so far.
+    pub fn global_searches(&self) -> u64 {
+        self.searches
+    }
+
+    /// This rank's slave nodes, over every pass (a balanced pair's master nodes count in its
+    /// second pass).
+    pub fn slaves(&self) -> usize {
+        self.pairs.iter().map(|p| p.slaves.len()).sum()
+    }
+
+    /// Local models built so far: the first, and one after each distributed global search that
+    /// changed this rank's ghosts (an unchanged ghost set keeps the local contact).
+    pub fn rebuilds(&self) -> u64 {
+        self.rebuilds
+    }
+
+    /// Whether the next increments compute per-slave outputs for [`Self::contact_outputs`]
+    /// (as [`Contact::request_outputs`]; off by default).
+    pub fn request_outputs(&mut self, on: bool) {
+        self.outputs = on;
+        if let Some(c) = self.contact.as_mut() {
+            c.request_outputs(on);
+        }
+    }
+
+    /// This rank's slaves in contact after the last increment (outputs requested before it), in
+    /// pass order and each pass's slave order; and the energy its slaves' friction has
+    /// dissipated since the start (carried through the rebuilds; every increment, requested or
+    /// not, on the CPU path; with outputs on a GPU).
+    pub fn contact_outputs(&self) -> (Vec<SlaveOutput>, f64) {
+        let (mut list, mut dissipated) = (Vec::new(), 0.0);
+        let Some(c) = self.contact.as_ref() else {
+            return (list, dissipated);
+        };
+        let outs = c.outputs();
+        for p in &self.pairs {
+            let Some(id) = p.local else { continue };
+            for (_, o) in outs.iter().filter(|(k, _)| *k == id) {
+                dissipated += o.frictional_dissipation;
+                for (k, &i) in p.slaves.iter().enumerate() {
+                    let pressure = o.cpress.get(k).copied().unwrap_or(0.0);
+                    if pressure > 0.0 {
+                        list.push(SlaveOutput {
+                            pair: p.of.0,
+                            reverse: p.of.1,
+                            node: self.ids[i],
+                            pressure,
+                            force: o.force.get(k).copied().unwrap_or([0.0; 3]),
+                        });
+                    }
+                }
+            }
+        }
+        (list, dissipated)
     }
 
     /// The motion budget: how far any node may move between distributed global searches (half
@@ -697,12 +788,21 @@ impl DistributedContact {
             if facets.is_empty() {
                 continue;
             }
-            let surf = model.add_surface(Surface::from_facets(facets))?;
+            let surf = model.add_surface(Surface::from_facets(facets.clone()))?;
             let slaves: Vec<u32> = p.slaves.iter().map(|&s| s as u32).collect();
             let set = model.add_node_set_with_areas(&slaves, &p.areas)?;
+            // the single process's schedule: its interval, the defaults otherwise
+            let on_surface: std::collections::HashSet<u32> =
+                facets.iter().flat_map(|f| f.nodes().to_vec()).collect();
+            let self_contact = slaves.iter().any(|s| on_surface.contains(s));
+            let schedule = Schedule {
+                interval: p.interval,
+                ..Schedule::default_for(self_contact)
+            };
             p.local = Some(
                 model.add_pair(
                     Pair::new(set, surf)
+                        .schedule(schedule)
                         .search_radius(p.radius)
                         .enforce(Enforce::Penalty(p.penalty.clone()))
                         .friction(p.friction.clone())
@@ -713,6 +813,7 @@ impl DistributedContact {
         }
         self.contact = if any {
             let mut c = Contact::new(&self.device, &model)?;
+            c.request_outputs(self.outputs);
             if let Some(dt) = self.dt_ref {
                 c.set_reference_increment(dt)?;
             }
@@ -791,6 +892,7 @@ impl DistributedContact {
             ghost_ids = ids;
             bytes += b;
             self.since_search = 0;
+            self.searches += 1;
         }
         self.since_search += 1;
         // the ghosts' state from their owners
@@ -817,9 +919,17 @@ impl DistributedContact {
             .map(|c| [c[3], c[4], c[5]])
             .collect();
         if global {
-            if let Err(e) = self.build_local(x, &gx, &ghost_ids) {
-                self.contact = None;
-                fault = Some(e);
+            if self.started && ghost_ids == self.ghost_ids {
+                // the same ghosts, so the same local model: the local contact goes on (its
+                // search state, grid frame and friction untouched)
+                self.anchor = x.to_vec();
+            } else {
+                if let Err(e) = self.build_local(x, &gx, &ghost_ids) {
+                    self.contact = None;
+                    fault = Some(e);
+                }
+                self.ghost_ids = ghost_ids;
+                self.rebuilds += 1;
             }
             // the anchor of the motion budget: own positions now
             self.anchor.truncate(n_own);

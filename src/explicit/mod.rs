@@ -155,6 +155,9 @@ pub struct Solver {
     last_power: Option<([f64; 3], f64)>,
     /// The body each node is carried by.
     carried: Vec<Option<u32>>,
+    /// The nodes and elements whose energies this solver counts (`None`: all). A rank of a
+    /// distributed run counts its own nodes and elements only; the run adds the ranks' up.
+    pub(crate) counted: Option<(Vec<bool>, Vec<bool>)>,
 }
 
 impl Solver {
@@ -222,6 +225,7 @@ impl Solver {
             balance0: None,
             last_power: None,
             carried: vec![None; n],
+            counted: None,
         })
     }
 
@@ -313,7 +317,14 @@ impl Solver {
         let w = self
             .elements
             .iter()
-            .map(|e| e.add_internal_forces_with(&self.x, &mut f, self.nlgeom))
+            .enumerate()
+            .map(|(k, e)| {
+                let w = e.add_internal_forces_with(&self.x, &mut f, self.nlgeom);
+                match &self.counted {
+                    Some((_, elements)) if !elements[k] => 0.0,
+                    _ => w,
+                }
+            })
             .sum();
         (f, w)
     }
@@ -321,7 +332,30 @@ impl Solver {
     /// One central-difference increment of `dt` (the first moves velocities by half an
     /// increment, Abaqus' start), with penalty forces and kinematic corrections from
     /// `contact` when given.
-    pub fn step(&mut self, dt: f64, mut contact: Option<&mut Contact>) -> Result<()> {
+    pub fn step(&mut self, dt: f64, contact: Option<&mut Contact>) -> Result<()> {
+        self.advance(dt, contact, None)
+    }
+
+    /// One increment as [`Solver::step`], with contact forces the host computed itself (one per
+    /// node, taken as penalty forces: in the velocity update, the contact work and
+    /// [`Solver::contact_force`]) — a distributed contact's, say.
+    pub fn step_with_forces(&mut self, dt: f64, contact_forces: &[[f64; 3]]) -> Result<()> {
+        if contact_forces.len() != self.x.len() {
+            return Err(Error::LengthMismatch {
+                what: "contact forces (one per node)",
+                expected: self.x.len(),
+                got: contact_forces.len(),
+            });
+        }
+        self.advance(dt, None, Some(contact_forces))
+    }
+
+    fn advance(
+        &mut self,
+        dt: f64,
+        mut contact: Option<&mut Contact>,
+        given: Option<&[[f64; 3]]>,
+    ) -> Result<()> {
         if !(dt.is_finite() && dt > 0.0) {
             return Err(Error::BadParameter {
                 name: "dt",
@@ -345,7 +379,7 @@ impl Solver {
             }
         }
         self.increments += 1;
-        let mut penalty = vec![[0.0; 3]; n];
+        let mut penalty = given.map_or_else(|| vec![[0.0; 3]; n], <[_]>::to_vec);
         if let Some(c) = contact.as_deref_mut() {
             if c.has_penalty_pairs() {
                 let r = c.penalty_step(&self.x, &self.v, dt)?;
@@ -495,7 +529,8 @@ impl Solver {
         let (mut kinetic, mut p_ext, mut p_con, mut p_damp) = (0.0, 0.0, 0.0, 0.0);
         let now = |old: f64, new: f64| if self.started { 0.5 * (old + new) } else { old };
         for i in 0..n {
-            if self.carried[i].is_some() {
+            let uncounted = self.counted.as_ref().is_some_and(|(nodes, _)| !nodes[i]);
+            if self.carried[i].is_some() || uncounted {
                 continue;
             }
             for a in 0..3 {

@@ -72,9 +72,13 @@
 //! `run`, naming the key and part but no line.
 
 mod build;
+#[cfg(feature = "mpi")]
+mod distributed;
 mod spec;
 
 pub use build::Built;
+#[cfg(feature = "mpi")]
+pub use distributed::run_distributed;
 pub use spec::{BoundarySpec, ContactSpec, MaterialSpec, PartSpec, RigidSpec, RunSpec, Scene};
 
 use std::collections::BTreeMap;
@@ -239,8 +243,37 @@ pub struct Summary {
     /// Bytes read back per increment after the first.
     pub read_back_bytes_per_increment: f64,
     /// Global searches of the penalty pairs over the run (the schedule's, decided on the device;
-    /// each pass of a balanced pair counts).
+    /// each pass of a balanced pair counts). A distributed run: its distributed global searches.
     pub global_searches: u64,
+    /// A distributed run (`abut run` under `mpirun`): what each rank held, sent and took, in
+    /// rank order; empty for a single process.
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub ranks: Vec<RankSummary>,
+}
+
+/// One rank of a distributed run.
+#[derive(Clone, Debug, Serialize)]
+pub struct RankSummary {
+    /// Nodes the rank owns.
+    pub own_nodes: usize,
+    /// Halo nodes: other ranks' nodes of its elements, their state received every increment.
+    pub halo_nodes: usize,
+    /// Elements it computes (every element with a node of its own: cut elements on each of
+    /// their ranks).
+    pub elements: usize,
+    /// Contact ghosts at the end: other ranks' master nodes near its slaves.
+    pub contact_ghosts: usize,
+    /// Its slave nodes (all pairs, both passes of a balanced pair).
+    pub slaves: usize,
+    /// Bytes it sent per increment, mean over the run: the halo exchange.
+    pub halo_bytes_per_increment: f64,
+    /// Bytes it sent per increment, mean over the run: contact (ghost state out, ghost forces
+    /// back, the regions and ghost lists of distributed global searches).
+    pub contact_bytes_per_increment: f64,
+    /// Wall-clock seconds per increment after the first on this rank.
+    pub seconds_per_increment: f64,
+    /// Local contact models built (see [`crate::distributed::DistributedContact::rebuilds`]).
+    pub contact_rebuilds: u64,
 }
 
 /// Rising and falling edges of a force history (time, force per increment) at half its
@@ -865,6 +898,7 @@ fn run_into(
         uploaded_bytes_per_increment: traffic.uploaded_bytes as f64 / steady,
         read_back_bytes_per_increment: traffic.read_back_bytes as f64 / steady,
         global_searches: contact.as_ref().map_or(0, |c| c.global_searches()),
+        ranks: Vec::new(),
     };
     if let (Some(dir), Some(mut f)) = (output, history) {
         f.flush().map_err(io)?;

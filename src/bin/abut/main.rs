@@ -94,6 +94,10 @@ struct RunArgs {
     /// Directory for history.csv and summary.json.
     #[arg(long)]
     output: Option<std::path::PathBuf>,
+    /// Run as one rank of an MPI job, the model split over the ranks (needs a build with the
+    /// `mpi` feature; the default when `mpirun` started the process).
+    #[arg(long)]
+    mpi: bool,
 }
 
 #[derive(clap::Args, Clone)]
@@ -219,15 +223,51 @@ fn device(b: BackendArg) -> abut::Result<Device> {
 /// Runs of at least this many increments say so when they start.
 const LONG_RUN: u64 = 100_000;
 
+/// Whether this process was started by `mpirun` (Open MPI, MPICH and Intel MPI say so in the
+/// environment).
+fn under_mpirun() -> bool {
+    ["OMPI_COMM_WORLD_SIZE", "PMI_SIZE", "PMIX_RANK"]
+        .iter()
+        .any(|v| std::env::var_os(v).is_some())
+}
+
 fn run_scene(a: &RunArgs) -> abut::Result<()> {
     // mesh files in the scene are relative to its directory
     let scene = abut::scene::Scene::load(&a.scene)?;
+    #[cfg(feature = "mpi")]
+    let universe = if a.mpi || under_mpirun() {
+        Some(mpi::initialize().ok_or(abut::Error::BadParameter {
+            name: "--mpi",
+            value: "MPI initialisation".into(),
+            expected: "MPI not initialised before",
+        })?)
+    } else {
+        None
+    };
+    #[cfg(not(feature = "mpi"))]
+    if a.mpi || under_mpirun() {
+        return Err(abut::Error::BadParameter {
+            name: "--mpi",
+            value: "an MPI run".into(),
+            expected: "a build with the mpi feature: cargo build --release --features mpi",
+        });
+    }
+    #[cfg(feature = "mpi")]
+    let world = universe.as_ref().map(|u| u.world());
+    #[cfg(feature = "mpi")]
+    let root = world
+        .as_ref()
+        .is_none_or(|w| mpi::traits::Communicator::rank(w) == 0);
+    #[cfg(not(feature = "mpi"))]
+    let root = true;
     let device = device(a.backend)?;
-    println!("device: {device}");
-    println!("scene: {}", scene.title);
     let notes = scene.notes();
-    for n in &notes {
-        eprintln!("abut: warning: {n}");
+    if root {
+        println!("device: {device}");
+        println!("scene: {}", scene.title);
+        for n in &notes {
+            eprintln!("abut: warning: {n}");
+        }
     }
     // a bar on a terminal (hidden otherwise), and the estimate once for long runs
     let bar = indicatif::ProgressBar::new(0);
@@ -239,7 +279,7 @@ fn run_scene(a: &RunArgs) -> abut::Result<()> {
     );
     let mut told = false;
     let mut progress = |p: &abut::scene::Progress| {
-        if !told && p.estimated >= LONG_RUN {
+        if root && !told && p.estimated >= LONG_RUN {
             eprintln!(
                 "abut: about {} increments to t = {:e}",
                 p.estimated, p.end_time
@@ -252,9 +292,23 @@ fn run_scene(a: &RunArgs) -> abut::Result<()> {
             bar.set_message(format!("{:.4e}", p.time));
         }
     };
+    if !root {
+        bar.set_draw_target(indicatif::ProgressDrawTarget::hidden());
+    }
+    #[cfg(feature = "mpi")]
+    let run = match world.as_ref() {
+        Some(w) => {
+            abut::scene::run_distributed(&scene, &device, a.output.as_deref(), w, &mut progress)
+        }
+        None => abut::scene::run_with_progress(&scene, &device, a.output.as_deref(), &mut progress),
+    };
+    #[cfg(not(feature = "mpi"))]
     let run = abut::scene::run_with_progress(&scene, &device, a.output.as_deref(), &mut progress);
     bar.finish_and_clear();
     let summary = run?;
+    if !root {
+        return Ok(());
+    }
     for w in summary.warnings.iter().filter(|w| !notes.contains(w)) {
         eprintln!("abut: warning: {w}");
     }

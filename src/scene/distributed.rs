@@ -1,0 +1,772 @@
+//! (features `solver` and `mpi`) A scene run across MPI ranks: the nodes split by recursive
+//! coordinate bisection, each rank integrating its own nodes with the elements around them and
+//! contact through [`DistributedContact`], writing the history and summary a single process
+//! writes.
+//!
+//! Every rank reads and builds the whole scene (the same on each), then keeps its share: its
+//! own nodes (the bisection's part), every element with a node of its own (elements cut by the
+//! partition are computed by every rank that owns one of their nodes), and the other nodes of
+//! those elements as halo copies. An increment: the distributed contact's forces on own nodes;
+//! the central-difference update of every local node with them (an own node's internal force
+//! sums the same elements in the same order as in one process: bitwise the same); then each
+//! owner sends its nodes' new positions and velocities to the ranks holding them as halo (the
+//! halo's own update, missing other ranks' elements, is overwritten). Energies count own nodes
+//! and the elements whose first node is own, added over the ranks in rank order; the stable
+//! increment is the minimum over ranks. Rank 0 writes the output files.
+//!
+//! Not distributed (refused by name): rigid bodies (`[[rigid]]`, moving rigid parts), kinematic
+//! and small- or infinitesimal-sliding pairs, pairs against analytical surfaces, 2D scenes,
+//! `adjust_overclosure`. Fixed rigid parts are held nodes and run. VTK frames are not written
+//! (a warning says so). The single process's tunnelling check (a node past the search radius in
+//! one increment) has no distributed counterpart yet: the distributed global search follows any
+//! node past half the radius since the last one.
+
+use std::collections::BTreeMap;
+use std::io::Write as _;
+use std::path::Path;
+use std::time::Instant;
+
+use mpi::topology::SimpleCommunicator;
+use mpi::traits::*;
+
+use super::{
+    governing_limit, half_plateau_edges, increments_for, remove_all, stress6, ContactNode,
+    PartSummary, Progress, RankSummary, Scene, Summary, OUTPUTS, PARTIALS,
+};
+use crate::device::{Device, Traffic};
+use crate::distributed::{
+    agree, all_gather, all_max, all_min, exchange, DistributedContact, RankBalance, RankModel,
+    RankPair, NO_GLOBAL_NODE,
+};
+use crate::error::{Error, Result};
+use crate::explicit::{Element, Prescribed, Solver};
+use crate::model::{Enforce, Facet, Model, Sliding};
+use crate::search::Schedule;
+
+fn refuse(what: &str, expected: &'static str) -> Error {
+    Error::BadParameter {
+        name: "distributed run",
+        value: what.to_string(),
+        expected,
+    }
+}
+
+/// The values every rank holds, summed over the ranks in rank order (the same bits on every
+/// rank, run after run).
+fn sum_over_ranks(comm: &SimpleCommunicator, values: &[f64]) -> Vec<f64> {
+    let (all, _) = all_gather(comm, values);
+    let mut sum = vec![0.0; values.len()];
+    for chunk in all.chunks_exact(values.len().max(1)) {
+        for (s, v) in sum.iter_mut().zip(chunk) {
+            *s += v;
+        }
+    }
+    sum
+}
+
+/// `e` with its nodes renumbered through `local_of`.
+fn renumbered(e: &Element, local_of: &[u32]) -> Element {
+    let mut e = e.clone();
+    let nodes: &mut [u32] = match &mut e {
+        Element::Bar { nodes, .. } => nodes,
+        Element::Tri3 { nodes, .. } => nodes,
+        Element::Tet4 { nodes, .. } => nodes,
+    };
+    for n in nodes {
+        *n = local_of[*n as usize];
+    }
+    e
+}
+
+/// The facets of `facets` this rank owns (those whose first node it owns), by global ids.
+fn owned_facets(facets: &[Facet], part: &[u32], me: u32) -> Result<Vec<[u64; 4]>> {
+    let mut out = Vec::new();
+    for f in facets {
+        let ids: [u64; 4] = match f {
+            Facet::Triangle(n) => [n[0] as u64, n[1] as u64, n[2] as u64, NO_GLOBAL_NODE],
+            Facet::Quad(n) => n.map(|k| k as u64),
+            Facet::Segment(_) => {
+                return Err(refuse(
+                    "a 2D surface",
+                    "3D surfaces (2D scenes run in one process)",
+                ))
+            }
+        };
+        if part[ids[0] as usize] == me {
+            out.push(ids);
+        }
+    }
+    Ok(out)
+}
+
+/// This rank's contact share of `model`'s pairs.
+fn rank_pairs(model: &Model, part: &[u32], me: u32) -> Result<Vec<RankPair>> {
+    if !model.rigid_pairs().is_empty() {
+        return Err(refuse(
+            "a pair against an analytical surface",
+            "pairs of node sets against meshed surfaces",
+        ));
+    }
+    let mut out = Vec::new();
+    for (k, pair) in model.pairs().iter().enumerate() {
+        let Enforce::Penalty(penalty) = &pair.enforce else {
+            return Err(refuse(
+                &format!("kinematic contact pair {k}"),
+                "penalty pairs (kinematic contact runs in one process)",
+            ));
+        };
+        if pair.sliding != Sliding::Finite {
+            return Err(refuse(
+                &format!("small-sliding contact pair {k}"),
+                "finite-sliding pairs",
+            ));
+        }
+        let master = model.surface(pair.master)?;
+        let set = model.node_set(pair.slave)?;
+        let areas = model.node_set_areas(pair.slave)?;
+        let mine: Vec<usize> = (0..set.len())
+            .filter(|&j| part[set[j] as usize] == me)
+            .collect();
+        let master_nodes = master.nodes();
+        let self_contact = set.iter().any(|s| master_nodes.binary_search(s).is_ok());
+        let schedule = pair
+            .schedule
+            .unwrap_or_else(|| Schedule::default_for(self_contact));
+        out.push(RankPair {
+            slaves: mine.iter().map(|&j| set[j] as u64).collect(),
+            facets: owned_facets(&master.facets, part, me)?,
+            search_radius: pair
+                .search_radius
+                .unwrap_or_else(|| master.mean_facet_size()),
+            penalty: penalty.clone(),
+            friction: pair.friction.clone(),
+            search_interval: schedule.interval,
+            slave_areas: areas.map(|a| mine.iter().map(|&j| a[j]).collect()),
+            balanced: match pair.balanced {
+                Some((s, weight)) => Some(RankBalance {
+                    slave_facets: owned_facets(&model.surface(s)?.facets, part, me)?,
+                    weight,
+                }),
+                None => None,
+            },
+        });
+    }
+    Ok(out)
+}
+
+/// Runs `scene` as one rank of `comm` on `device` (collective: every rank calls it with the
+/// same scene). Rank 0 writes `history.csv` and `summary.json` to `output` as [`super::run`]
+/// does; every rank returns the same summary. Errors are returned on every rank.
+pub fn run_distributed(
+    scene: &Scene,
+    device: &Device,
+    output: Option<&Path>,
+    comm: &SimpleCommunicator,
+    progress: &mut dyn FnMut(&Progress),
+) -> Result<Summary> {
+    let root = comm.rank() == 0;
+    if let Some(dir) = output.filter(|d| root && d.is_dir()) {
+        remove_all(dir, &OUTPUTS);
+        remove_all(dir, &PARTIALS);
+    }
+    let result = run_into(scene, device, output, comm, progress);
+    if let (Err(_), Some(dir)) = (&result, output.filter(|d| root && d.is_dir())) {
+        remove_all(dir, &PARTIALS);
+    }
+    result
+}
+
+fn run_into(
+    scene: &Scene,
+    device: &Device,
+    output: Option<&Path>,
+    comm: &SimpleCommunicator,
+    progress: &mut dyn FnMut(&Progress),
+) -> Result<Summary> {
+    // every rank builds the same scene, so every rank refuses the same things
+    let built = scene.build()?;
+    let (g, model) = (&built.solver, &built.model);
+    if !g.bodies.is_empty() {
+        return Err(refuse(
+            "rigid bodies ([[rigid]] or moving rigid parts)",
+            "deformable parts, fixed rigid parts and penalty pairs",
+        ));
+    }
+    if model.dim() != 3 {
+        return Err(refuse("a 2D scene", "a 3D scene"));
+    }
+    if scene.run.adjust_overclosure {
+        return Err(refuse(
+            "run.adjust_overclosure",
+            "a scene without it (the adjustment runs in one process)",
+        ));
+    }
+    let (size, me) = (comm.size() as usize, comm.rank() as u32);
+    let n = g.x.len();
+    let part = crate::partition::recursive_bisection(&g.x, size)?;
+    let owned: Vec<bool> = part.iter().map(|&p| p == me).collect();
+    // this rank's elements (in the model's order) and nodes (own and halo, in the model's order)
+    let local_elements: Vec<usize> = (0..g.elements.len())
+        .filter(|&k| g.elements[k].nodes().iter().any(|&v| owned[v as usize]))
+        .collect();
+    let mut is_local = owned.clone();
+    for &k in &local_elements {
+        for &v in g.elements[k].nodes() {
+            is_local[v as usize] = true;
+        }
+    }
+    let nodes: Vec<usize> = (0..n).filter(|&i| is_local[i]).collect();
+    let mut local_of = vec![u32::MAX; n];
+    for (l, &i) in nodes.iter().enumerate() {
+        local_of[i] = l as u32;
+    }
+    let mut solver = Solver::new(
+        nodes.iter().map(|&i| g.x[i]).collect(),
+        local_elements
+            .iter()
+            .map(|&k| renumbered(&g.elements[k], &local_of))
+            .collect(),
+        &nodes.iter().map(|&i| g.mass[i]).collect::<Vec<_>>(),
+    )?;
+    // the whole model's masses (a halo node misses the other ranks' elements' shares)
+    solver.mass = nodes.iter().map(|&i| g.mass[i]).collect();
+    solver.v = nodes.iter().map(|&i| g.v[i]).collect();
+    solver.fixed = nodes.iter().map(|&i| g.fixed[i]).collect();
+    solver.loads = nodes.iter().map(|&i| g.loads[i]).collect();
+    solver.prescribed = g
+        .prescribed
+        .iter()
+        .filter(|p| is_local[p.node as usize])
+        .map(|p| Prescribed {
+            node: local_of[p.node as usize],
+            ..*p
+        })
+        .collect();
+    solver.gravity = g.gravity;
+    solver.damping = g.damping;
+    solver.bulk_viscosity = g.bulk_viscosity;
+    solver.nlgeom = g.nlgeom;
+    solver.safety = g.safety;
+    solver.counted = Some((
+        nodes.iter().map(|&i| owned[i]).collect(),
+        local_elements
+            .iter()
+            .map(|&k| owned[g.elements[k].nodes()[0] as usize])
+            .collect(),
+    ));
+    let own: Vec<usize> = (0..nodes.len()).filter(|&l| owned[nodes[l]]).collect();
+    // the halo plan: ask each owner for its nodes held here; learn which own nodes to send where
+    let mut asks: Vec<Vec<u64>> = vec![Vec::new(); size];
+    for &i in nodes.iter().filter(|&&i| !owned[i]) {
+        asks[part[i] as usize].push(i as u64);
+    }
+    let wanted = exchange(comm, &asks);
+    let send: Vec<Vec<usize>> = wanted
+        .iter()
+        .map(|l| l.iter().map(|&i| local_of[i as usize] as usize).collect())
+        .collect();
+    let halo_in: Vec<usize> = asks
+        .iter()
+        .flatten()
+        .map(|&i| local_of[i as usize] as usize)
+        .collect();
+    // the contact share
+    let pairs = rank_pairs(model, &part, me)?;
+    let has_contact = !pairs.is_empty();
+    let own_ids: Vec<u64> = own.iter().map(|&l| nodes[l] as u64).collect();
+    let mut contact = if has_contact {
+        Some(DistributedContact::new(
+            comm,
+            device,
+            RankModel {
+                ids: own_ids,
+                positions: own.iter().map(|&l| solver.x[l]).collect(),
+                masses: own.iter().map(|&l| solver.mass[l]).collect(),
+                pairs,
+            },
+        )?)
+    } else {
+        None
+    };
+    // the slave nodes this rank owns (local indices), for the total contact force
+    let mut slaves: Vec<u32> = built.slaves.iter().flatten().copied().collect();
+    slaves.sort_unstable();
+    slaves.dedup();
+    let own_slaves: Vec<usize> = slaves
+        .iter()
+        .filter(|&&s| owned[s as usize])
+        .map(|&s| local_of[s as usize] as usize)
+        .collect();
+    // each part's own nodes (local indices) and whole mass
+    let part_nodes: Vec<(Vec<usize>, f64, usize)> = built
+        .parts
+        .iter()
+        .map(|p| {
+            let range = p.base..p.base + p.count;
+            let total: f64 = range.clone().map(|i| g.mass[i]).sum();
+            let mine = range
+                .filter(|&i| owned[i])
+                .map(|i| local_of[i] as usize)
+                .collect();
+            (mine, total, p.count)
+        })
+        .collect();
+    let x0 = solver.x.clone();
+    // Σ w·(x − x0) and Σ w·v over each part's own nodes, w its share of the part's mass
+    let part_sums = |solver: &Solver| -> Vec<f64> {
+        let mut out = Vec::with_capacity(6 * part_nodes.len());
+        for (mine, total, count) in &part_nodes {
+            let (mut u, mut v) = ([0.0; 3], [0.0; 3]);
+            for &l in mine {
+                let w = if *total > 0.0 {
+                    solver.mass[l] / total
+                } else {
+                    1.0 / (*count).max(1) as f64
+                };
+                for a in 0..3 {
+                    u[a] += w * (solver.x[l][a] - x0[l][a]);
+                    v[a] += w * solver.v[l][a];
+                }
+            }
+            out.extend(u);
+            out.extend(v);
+        }
+        out
+    };
+
+    let mut built_list = Vec::new();
+    let mut kinds = BTreeMap::<&str, usize>::new();
+    for e in &g.elements {
+        *kinds
+            .entry(match e {
+                Element::Bar { .. } => "bar",
+                Element::Tri3 { hoop: Some(_), .. } => "axisymmetric triangle",
+                Element::Tri3 { .. } => "plane-strain triangle",
+                Element::Tet4 { .. } => "tetrahedron",
+            })
+            .or_default() += 1;
+    }
+    for (k, c) in &kinds {
+        built_list.push(format!("{c} {k} elements"));
+    }
+    for (i, (c, p)) in scene.contact.iter().zip(&built.slaves).enumerate() {
+        built_list.push(format!(
+            "contact {i}: {} slave nodes of {} against {}, penalty{}{}",
+            p.len(),
+            c.slave,
+            c.master,
+            if c.friction > 0.0 {
+                ", friction"
+            } else {
+                ", frictionless (friction compiled out of the penalty kernel)"
+            },
+            if c.balanced.is_some() {
+                ", balanced"
+            } else {
+                ""
+            },
+        ));
+    }
+    built_list.push(format!(
+        "{size} MPI ranks, the nodes split by recursive coordinate bisection (see ranks)"
+    ));
+
+    let io = |e: std::io::Error| Error::BadParameter {
+        name: "output",
+        value: e.to_string(),
+        expected: "a writable directory",
+    };
+    // rank 0 writes; a failure there is agreed, so no rank is left waiting
+    let mut history = None;
+    let mut fault = None;
+    if let (Some(dir), true) = (output, comm.rank() == 0) {
+        let mut header =
+            "time,kinetic,internal,external_work,contact_work,balance_error,contact_force"
+                .to_string();
+        for p in &built.parts {
+            for q in ["ux", "uy", "uz", "vx", "vy", "vz"] {
+                header.push_str(&format!(",{}.{q}", p.name));
+            }
+        }
+        let opened = std::fs::create_dir_all(dir)
+            .and_then(|_| std::fs::File::create(dir.join(".history.csv.partial")))
+            .map(std::io::BufWriter::new)
+            .and_then(|mut f| writeln!(f, "{header}").map(|_| f));
+        match opened {
+            Ok(f) => history = Some(f),
+            Err(e) => fault = Some(io(e)),
+        }
+    }
+    agree(comm, fault)?;
+
+    let element_dt = all_min(comm, solver.stable_increment());
+    let mut dt = scene.run.dt.unwrap_or(element_dt);
+    if !dt.is_finite() {
+        return Err(Error::BadParameter {
+            name: "run.dt",
+            value: "none".into(),
+            expected: "a scene without elements needs a fixed increment",
+        });
+    }
+    let (mut pen, mut contact_dt) = (0.0f64, f64::INFINITY);
+    let (mut drift, mut scale) = (0.0f64, 0.0f64);
+    let mut balance0: Option<f64> = None;
+    let mut energy = [0.0f64; 5];
+    let mut forces: Vec<(f64, f64)> = Vec::new();
+    let mut curve = Vec::new();
+    let mut final_force = [0.0; 3];
+    let mut peak = 0.0f64;
+    let mut first_seconds = 0.0;
+    let mut traffic0: Option<Traffic> = None;
+    let mut t_steady = Instant::now();
+    let mut k = 0usize;
+    let (mut lowest_ratio, mut lowered_from) = (1.0f64, f64::NAN);
+    let (mut over_ratio, mut over_from) = (1.0f64, f64::NAN);
+    let every = scene.run.output_every.max(1);
+    let (mut halo_bytes, mut contact_bytes) = (0usize, 0usize);
+    while solver.time < scene.run.end_time * (1.0 - 1e-12) {
+        let step = dt.min(scene.run.end_time - solver.time);
+        if scene.run.dt.is_none() && dt < element_dt * (1.0 - 1e-12) {
+            lowest_ratio = lowest_ratio.min(dt / element_dt);
+            if lowered_from.is_nan() && dt < 0.999 * element_dt {
+                lowered_from = solver.time;
+            }
+        }
+        let t_step = Instant::now();
+        let t_start = solver.time;
+        let mut f = vec![[0.0; 3]; nodes.len()];
+        let mut reported = None;
+        if let Some(c) = contact.as_mut() {
+            let last = solver.time + step >= scene.run.end_time * (1.0 - 1e-12);
+            c.request_outputs(last);
+            let ox: Vec<[f64; 3]> = own.iter().map(|&l| solver.x[l]).collect();
+            let ov: Vec<[f64; 3]> = own.iter().map(|&l| solver.v[l]).collect();
+            let r = c.step(&ox, &ov, step)?;
+            for (j, &l) in own.iter().enumerate() {
+                f[l] = r.forces[j];
+            }
+            reported = Some((r.stable_dt, r.max_overclosure));
+            contact_bytes += r.bytes_sent;
+        }
+        let stepped = solver.step_with_forces(step, &f);
+        agree(comm, stepped.err())?;
+        // the halo from the owners
+        let out: Vec<Vec<f64>> = send
+            .iter()
+            .map(|l| {
+                l.iter()
+                    .flat_map(|&i| {
+                        let (x, v) = (solver.x[i], solver.v[i]);
+                        [x[0], x[1], x[2], v[0], v[1], v[2]]
+                    })
+                    .collect()
+            })
+            .collect();
+        halo_bytes += 8 * out.iter().map(Vec::len).sum::<usize>();
+        let came: Vec<f64> = exchange(comm, &out).into_iter().flatten().collect();
+        for (&l, s) in halo_in.iter().zip(came.chunks_exact(6)) {
+            solver.x[l] = [s[0], s[1], s[2]];
+            solver.v[l] = [s[3], s[4], s[5]];
+        }
+        k += 1;
+        progress(&Progress {
+            increment: k as u64,
+            estimated: (k as u64)
+                .saturating_add(increments_for(scene.run.end_time - solver.time, dt)),
+            time: solver.time,
+            end_time: scene.run.end_time,
+        });
+        if k == 1 {
+            first_seconds = all_max(comm, t_step.elapsed().as_secs_f64());
+            traffic0 = device.traffic();
+            t_steady = Instant::now();
+        }
+        if let Some((stable, over)) = reported {
+            contact_dt = contact_dt.min(stable);
+            if scene.run.dt.is_some() && step > stable * (1.0 + 1e-9) {
+                if over_from.is_nan() {
+                    over_from = t_start;
+                }
+                over_ratio = over_ratio.max(step / stable);
+            }
+            if scene.run.dt.is_none() {
+                dt = crate::combined_increment(
+                    element_dt,
+                    stable,
+                    scene.run.safety,
+                    scene.run.contact_safety,
+                );
+            }
+            pen = pen.max(over);
+        }
+        // the ranks' shares, added in rank order: contact force on the slaves, energies, and
+        // the parts' motion on output rows
+        let e = &solver.energy;
+        let mut mine = vec![0.0; 3];
+        for &l in &own_slaves {
+            for a in 0..3 {
+                mine[a] += solver.contact_force[l][a];
+            }
+        }
+        mine.extend([
+            e.kinetic,
+            e.internal,
+            e.external_work,
+            e.contact_work,
+            e.damping,
+        ]);
+        let row = k.is_multiple_of(every);
+        if row {
+            mine.extend(part_sums(&solver));
+        }
+        let sums = sum_over_ranks(comm, &mine);
+        final_force = [sums[0], sums[1], sums[2]];
+        let force = (0..3).map(|a| sums[a] * sums[a]).sum::<f64>().sqrt();
+        energy.copy_from_slice(&sums[3..8]);
+        let [kinetic, internal, external, contact_work, damping] = energy;
+        let balance = kinetic + internal - external - contact_work + damping;
+        let b0 = *balance0.get_or_insert(balance);
+        drift = drift.max((balance - b0).abs());
+        let scale_now = energy.iter().fold(0.0f64, |m, x| m.max(x.abs()));
+        scale = scale.max(scale_now);
+        if !balance.is_finite() {
+            return Err(Error::BadParameter {
+                name: "run",
+                value: format!("energy not finite at t = {}", solver.time),
+                expected: "a stable run (reduce run.dt or the penalty scale)",
+            });
+        }
+        peak = peak.max(force);
+        forces.push((solver.time - 0.5 * step, force));
+        if row {
+            curve.push(super::CurveSample {
+                time: solver.time,
+                force: final_force,
+                body_displacement: Vec::new(),
+            });
+            let mut fault = None;
+            if let Some(f) = history.as_mut() {
+                let mut line = format!(
+                    "{},{kinetic},{internal},{external},{contact_work},{},{force}",
+                    solver.time,
+                    (balance - b0).abs() / scale_now.max(1e-300)
+                );
+                for c in &sums[8..] {
+                    line.push_str(&format!(",{c}"));
+                }
+                if let Err(e) = writeln!(f, "{line}") {
+                    fault = Some(io(e));
+                }
+            }
+            agree(comm, fault)?;
+        }
+    }
+    let steady = k.saturating_sub(1).max(1) as f64;
+    let my_seconds = t_steady.elapsed().as_secs_f64() / steady;
+    let seconds = all_max(comm, my_seconds);
+    let per_increment = |b: usize| b as f64 / k.max(1) as f64;
+    let mine = [
+        own.len() as f64,
+        (nodes.len() - own.len()) as f64,
+        local_elements.len() as f64,
+        contact.as_ref().map_or(0.0, |c| c.last().ghosts as f64),
+        contact.as_ref().map_or(0.0, |c| c.slaves() as f64),
+        per_increment(halo_bytes),
+        per_increment(contact_bytes),
+        my_seconds,
+        contact.as_ref().map_or(0.0, |c| c.rebuilds() as f64),
+    ];
+    let ranks: Vec<RankSummary> = all_gather(comm, &mine)
+        .0
+        .chunks_exact(mine.len())
+        .map(|r| RankSummary {
+            own_nodes: r[0] as usize,
+            halo_nodes: r[1] as usize,
+            elements: r[2] as usize,
+            contact_ghosts: r[3] as usize,
+            slaves: r[4] as usize,
+            halo_bytes_per_increment: r[5],
+            contact_bytes_per_increment: r[6],
+            seconds_per_increment: r[7],
+            contact_rebuilds: r[8] as u64,
+        })
+        .collect();
+    let traffic = match (device.traffic(), traffic0) {
+        (Some(now), Some(then)) => now.since(&then),
+        _ => Traffic::default(),
+    };
+    let first = forces.iter().position(|h| h.1 > 0.0);
+    let last = forces.iter().rposition(|h| h.1 > 0.0);
+    let (impact, release, impulse, plateau) = half_plateau_edges(&forces);
+    // the parts: motion summed over the ranks, stress extremes over each rank's own elements
+    let motion = sum_over_ranks(comm, &part_sums(&solver));
+    let mut parts = Vec::new();
+    let mut el = 0;
+    let counted_of: Vec<Option<usize>> = {
+        let mut v = vec![None; g.elements.len()];
+        for (l, &k) in local_elements.iter().enumerate() {
+            if owned[g.elements[k].nodes()[0] as usize] {
+                v[k] = Some(l);
+            }
+        }
+        v
+    };
+    for (j, p) in built.parts.iter().enumerate() {
+        let (mut lo, mut hi) = ([f64::INFINITY; 6], [f64::NEG_INFINITY; 6]);
+        for l in counted_of[el..el + p.elements].iter().flatten() {
+            let s = stress6(solver.stress(*l));
+            for c in 0..6 {
+                lo[c] = lo[c].min(s[c]);
+                hi[c] = hi[c].max(s[c]);
+            }
+        }
+        for c in 0..6 {
+            lo[c] = all_min(comm, lo[c]);
+            hi[c] = all_max(comm, hi[c]);
+        }
+        el += p.elements;
+        if p.elements == 0 {
+            (lo, hi) = ([0.0; 6], [0.0; 6]);
+        }
+        parts.push(PartSummary {
+            name: p.name.clone(),
+            displacement: [0, 1, 2].map(|a| motion[6 * j + a]),
+            velocity: [0, 1, 2].map(|a| motion[6 * j + 3 + a]),
+            stress_min: lo,
+            stress_max: hi,
+        });
+    }
+    // the slaves in contact at the end, every rank's, in (pair, pass, node) order
+    let (outs, dissipated) = contact
+        .as_ref()
+        .map(|c| c.contact_outputs())
+        .unwrap_or_default();
+    let flat: Vec<f64> = outs
+        .iter()
+        .flat_map(|o| {
+            let x = solver.x[local_of[o.node as usize] as usize];
+            let fm = (0..3).map(|a| o.force[a] * o.force[a]).sum::<f64>().sqrt();
+            [
+                o.pair as f64,
+                o.reverse as u8 as f64,
+                o.node as f64,
+                o.pressure,
+                fm,
+                x[0],
+                x[1],
+                x[2],
+            ]
+        })
+        .collect();
+    let (all, _) = all_gather(comm, &flat);
+    let mut rows: Vec<&[f64]> = all.chunks_exact(8).collect();
+    rows.sort_by(|a, b| a[..3].partial_cmp(&b[..3]).expect("finite keys"));
+    let contact_nodes = rows
+        .iter()
+        .map(|r| ContactNode {
+            contact: r[0] as usize,
+            node: r[2] as u32,
+            position: [r[5], r[6], r[7]],
+            pressure: r[3],
+            force: r[4],
+        })
+        .collect();
+    let friction = sum_over_ranks(comm, &[dissipated])[0];
+    let contact_start = first.map_or(f64::NAN, |i| forces[i].0 - 0.5 * dt);
+    let (governing, increment_note) = governing_limit(
+        scene.run.dt.is_some(),
+        contact_dt.is_finite(),
+        lowest_ratio,
+        lowered_from,
+        contact_start,
+        scene.run.contact_safety,
+    );
+    let mut warnings = scene.notes();
+    if over_ratio > 1.0 {
+        warnings.push(format!(
+            "run.dt = {:e} exceeds the penalty contact's stable increment (by up to \
+             {over_ratio:.3}×, from t = {over_from:e}): lower run.dt below it, or multiply the \
+             contact's penalty_scale by {:.3e} or less",
+            scene.run.dt.unwrap_or(f64::NAN),
+            (scene.run.contact_safety / over_ratio).powi(2)
+        ));
+    }
+    if scene.run.vtk_every > 0 && has_contact {
+        warnings.push(
+            "run.vtk_every: a distributed run writes no VTK frames (run the scene in one \
+             process for them)"
+                .into(),
+        );
+    }
+    let [kinetic, internal, external_work, contact_work, _] = energy;
+    let summary = Summary {
+        title: scene.title.clone(),
+        reference: scene.reference.clone(),
+        device: format!("{device} (rank 0 of {size})"),
+        built: built_list,
+        increments: k,
+        end_time: solver.time,
+        first_increment_seconds: first_seconds,
+        seconds_per_increment: seconds,
+        element_increment: element_dt,
+        contact_increment: contact_dt,
+        governing_limit: governing,
+        contact_lowered_increment: 1.0 - lowest_ratio,
+        contact_limit_from: lowered_from,
+        increment_note,
+        anchored_slaves: 0,
+        unanchored_slaves: Vec::new(),
+        warnings,
+        contact_start,
+        contact_end: last.map_or(f64::NAN, |i| forces[i].0 + 0.5 * dt),
+        impact_time: impact,
+        release_time: release,
+        peak_force: peak,
+        plateau_force: plateau,
+        mean_force: if release > impact {
+            let inside: f64 = forces
+                .windows(2)
+                .filter(|w| w[1].0 > impact && w[0].0 < release)
+                .map(|w| w[1].1 * (w[1].0 - w[0].0))
+                .sum();
+            inside / (release - impact)
+        } else {
+            0.0
+        },
+        impulse,
+        final_contact_force: final_force,
+        max_penetration: pen,
+        energy_balance_error: if scale > 0.0 { drift / scale } else { 0.0 },
+        kinetic,
+        internal,
+        external_work,
+        contact_work,
+        frictional_dissipation: friction,
+        parts,
+        bodies: Vec::new(),
+        contact_nodes,
+        curve,
+        dispatches_per_increment: traffic
+            .dispatches
+            .iter()
+            .map(|(k, v)| (k.clone(), *v as f64 / steady))
+            .collect(),
+        uploaded_bytes_per_increment: traffic.uploaded_bytes as f64 / steady,
+        read_back_bytes_per_increment: traffic.read_back_bytes as f64 / steady,
+        global_searches: contact.as_ref().map_or(0, |c| c.global_searches()),
+        ranks,
+    };
+    let mut fault = None;
+    if let (Some(dir), Some(f)) = (output, history) {
+        let written = (|| -> std::io::Result<()> {
+            f.into_inner().map_err(|e| e.into_error())?.sync_all()?;
+            let json = serde_json::to_string_pretty(&summary).map_err(std::io::Error::other)?;
+            std::fs::write(dir.join(".summary.json.partial"), json)?;
+            std::fs::rename(dir.join(".history.csv.partial"), dir.join("history.csv"))?;
+            std::fs::rename(dir.join(".summary.json.partial"), dir.join("summary.json"))
+        })();
+        fault = written.err().map(io);
+    }
+    agree(comm, fault)?;
+    Ok(summary)
+}
