@@ -14,6 +14,8 @@ use std::process::Command;
 
 use serde_json::Value;
 
+mod common;
+
 /// Runs the example under `mpirun -n ranks`; its one line.
 fn run(ranks: usize) -> String {
     run_case(ranks, None)
@@ -155,9 +157,15 @@ fn a_balanced_pair_across_ranks_equals_the_single_process() {
     }
 }
 
-/// `abut run` (this build, with the `mpi` feature) on `scene` into `out`: alone (`ranks` 0),
-/// or under `mpirun -n ranks`. Returns its stderr; panics when it fails.
+/// `abut run` (this build, with the `mpi` feature) on `scene` into `out` on the CPU path:
+/// alone (`ranks` 0), or under `mpirun -n ranks`. Returns its stderr; panics when it fails.
 fn abut_run(scene: &Path, out: &Path, ranks: usize) -> String {
+    abut_run_on(scene, out, ranks, None)
+}
+
+/// [`abut_run`] on the GPU adapter of `gpu` (a wgpu backend name: every rank takes one of
+/// that backend), or on the CPU path.
+fn abut_run_on(scene: &Path, out: &Path, ranks: usize, gpu: Option<&str>) -> String {
     let exe = env!("CARGO_BIN_EXE_abut");
     let mut cmd = if ranks == 0 {
         Command::new(exe)
@@ -168,10 +176,14 @@ fn abut_run(scene: &Path, out: &Path, ranks: usize) -> String {
             .arg(exe);
         c
     };
+    if let Some(b) = gpu {
+        cmd.env("WGPU_BACKEND", b);
+    }
     let o = cmd
         .arg("run")
         .arg(scene)
-        .args(["--backend", "cpu", "--output"])
+        .args(["--backend", if gpu.is_some() { "gpu" } else { "cpu" }])
+        .arg("--output")
         .arg(out)
         .output()
         .expect("abut runs");
@@ -384,4 +396,33 @@ fn a_scene_a_distributed_run_cannot_do_is_refused_by_name() {
         "every rank says why: {err}"
     );
     assert!(!out.join("summary.json").exists());
+}
+
+/// Every rank on a GPU adapter: the mesh drop under `mpirun -n 2` with each rank's search and
+/// penalty on the adapter (lavapipe, llvmpipe's GL) gives the summary and history of a single
+/// process on the same adapter.
+#[test]
+fn a_mesh_drop_across_ranks_on_each_gpu_backend_gives_the_single_process_summary() {
+    for d in common::gpus() {
+        let backend = d.backend_name();
+        let backend = backend.as_str();
+        let base =
+            std::env::temp_dir().join(format!("abut-mpi-{}-gpu-{backend}", std::process::id()));
+        let scene = scenes().join("mesh_drop.toml");
+        abut_run_on(&scene, &base.join("single"), 0, Some(backend));
+        abut_run_on(&scene, &base.join("ranks2"), 2, Some(backend));
+        let (single, history) = read(&base.join("single"));
+        let (split, h) = read(&base.join("ranks2"));
+        assert!(
+            split["device"].as_str().unwrap().contains(backend),
+            "{backend}: {}",
+            split["device"]
+        );
+        let peak = single["peak_force"].as_f64().unwrap();
+        assert!(peak > 0.0, "{backend}: no contact");
+        let mut bad = agree(&single, &split, 0.0, 1e-6, "", peak);
+        bad.extend(same_history(&history, &h, 1e-6));
+        assert!(bad.is_empty(), "{backend}, 2 ranks:\n{}", bad.join("\n"));
+        let _ = std::fs::remove_dir_all(&base);
+    }
 }
