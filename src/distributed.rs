@@ -132,6 +132,25 @@ pub struct DistributedStep {
     pub bytes_sent: usize,
     /// Ghost nodes this rank holds now.
     pub ghosts: usize,
+    /// Pair nodes any rank's local contact saw move farther than their pair's search radius in
+    /// this increment (see [`crate::StepReport::fast_nodes`]; a ghost counts on each rank
+    /// holding it).
+    pub fast_nodes: usize,
+    /// The fastest of them over all ranks (relative to its radius), the same on every rank.
+    pub fastest: Option<FastGlobalNode>,
+}
+
+/// A node that moved farther than its pair's search radius within one increment, by global id.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct FastGlobalNode {
+    /// Its global id.
+    pub node: u64,
+    /// Its pair ([`RankModel::pairs`] index).
+    pub pair: usize,
+    /// Its speed times the increment, model length units.
+    pub distance: f64,
+    /// The pair's search radius.
+    pub radius: f64,
 }
 
 /// A slave node of this rank in contact after the last increment (see
@@ -938,6 +957,8 @@ impl DistributedContact {
         let mut forces = vec![[0.0; 3]; n_own];
         let (mut stable, mut over, mut active) = (f64::INFINITY, 0.0f64, 0usize);
         let mut ghost_forces = vec![[0.0; 3]; gx.len()];
+        // the fastest pair node here: (distance / radius, global id, pair, distance, radius)
+        let mut fast = (0usize, [-1.0, 0.0, 0.0, 0.0, 0.0]);
         if let Some(c) = self.contact.as_mut() {
             let lx: Vec<[f64; 3]> = x.iter().chain(&gx).copied().collect();
             let lv: Vec<[f64; 3]> = v.iter().chain(&gv).copied().collect();
@@ -948,6 +969,29 @@ impl DistributedContact {
                     stable = r.stable_dt;
                     over = r.max_overclosure;
                     active = r.active;
+                    let rep = c.report();
+                    if let Some(f) = rep.fastest {
+                        let node = if f.node < n_own {
+                            self.ids[f.node]
+                        } else {
+                            self.ghost_ids[f.node - n_own]
+                        };
+                        let pair = self
+                            .pairs
+                            .iter()
+                            .find(|p| p.local == Some(f.pair))
+                            .map_or(0, |p| p.of.0);
+                        fast = (
+                            rep.fast_nodes,
+                            [
+                                f.distance / f.radius,
+                                node as f64,
+                                pair as f64,
+                                f.distance,
+                                f.radius,
+                            ],
+                        );
+                    }
                 }
                 Err(e) => fault = Some(e),
             }
@@ -974,6 +1018,20 @@ impl DistributedContact {
             }
         }
         agree(&self.comm, fault)?;
+        let (all_fast, _) = all_gather(&self.comm, &fast.1);
+        let fastest = all_fast
+            .chunks_exact(5)
+            .filter(|f| f[0] > 1.0)
+            .fold(None::<&[f64]>, |best, f| match best {
+                Some(b) if b[0] >= f[0] => Some(b),
+                _ => Some(f),
+            })
+            .map(|f| FastGlobalNode {
+                node: f[1] as u64,
+                pair: f[2] as usize,
+                distance: f[3],
+                radius: f[4],
+            });
         self.last = DistributedStep {
             forces,
             stable_dt: all_min(&self.comm, stable),
@@ -982,6 +1040,8 @@ impl DistributedContact {
             global_search: global,
             bytes_sent: bytes,
             ghosts: gx.len(),
+            fast_nodes: all_sum(&self.comm, fast.0 as u64) as usize,
+            fastest,
         };
         Ok(&self.last)
     }

@@ -375,8 +375,8 @@ fn a_balanced_mesh_drop_across_ranks_gives_the_single_process_summary() {
     let _ = std::fs::remove_dir_all(&dir);
 }
 
-/// What a distributed run cannot do yet is refused by name on every rank (kinematic contact:
-/// the bar impact), and mpirun reports the failure.
+/// What a distributed run cannot do yet is refused by name (kinematic contact: the bar
+/// impact), every rank returns, and mpirun reports the failure.
 #[test]
 fn a_scene_a_distributed_run_cannot_do_is_refused_by_name() {
     let out = std::env::temp_dir().join(format!("abut-mpi-{}-refused", std::process::id()));
@@ -391,9 +391,11 @@ fn a_scene_a_distributed_run_cannot_do_is_refused_by_name() {
         .expect("mpirun runs");
     let err = String::from_utf8_lossy(&o.stderr);
     assert!(!o.status.success(), "{err}");
+    // (mpirun stops the other rank once one has failed; that the run ends shows that neither
+    // was left waiting)
     assert!(
-        err.matches("kinematic contact runs in one process").count() >= 2,
-        "every rank says why: {err}"
+        err.contains("kinematic contact runs in one process"),
+        "the rank says why: {err}"
     );
     assert!(!out.join("summary.json").exists());
 }
@@ -425,4 +427,59 @@ fn a_mesh_drop_across_ranks_on_each_gpu_backend_gives_the_single_process_summary
         assert!(bad.is_empty(), "{backend}, 2 ranks:\n{}", bad.join("\n"));
         let _ = std::fs::remove_dir_all(&base);
     }
+}
+
+/// A node past its pair's search radius within one increment (the mesh drop's box thrown at
+/// 3 km/s) stops the run with the single process's tunnelling error — the same node, pair and
+/// count — and no rank is left waiting.
+#[test]
+fn tunnelling_across_ranks_stops_the_run_with_the_single_process_error() {
+    let text = std::fs::read_to_string(scenes().join("mesh_drop.toml"))
+        .unwrap()
+        .replace(
+            "velocity = [0.0, 0.0, -0.5]",
+            "velocity = [0.0, 0.0, -3000.0]",
+        )
+        .replace(
+            "\"meshes/",
+            &format!("\"{}/", scenes().join("meshes").display()),
+        );
+    assert!(text.contains("-3000.0"));
+    let dir = std::env::temp_dir().join(format!("abut-mpi-{}-fast", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let scene = dir.join("fast_drop.toml");
+    std::fs::write(&scene, text).unwrap();
+    let run = |ranks: usize| {
+        let exe = env!("CARGO_BIN_EXE_abut");
+        let mut cmd = Command::new(if ranks == 0 { exe } else { "mpirun" });
+        if ranks > 0 {
+            cmd.args(["--allow-run-as-root", "--oversubscribe", "-n"])
+                .arg(ranks.to_string())
+                .arg(exe);
+        }
+        let o = cmd
+            .arg("run")
+            .arg(&scene)
+            .args(["--backend", "cpu"])
+            .output()
+            .unwrap();
+        assert!(!o.status.success());
+        String::from_utf8_lossy(&o.stderr).to_string()
+    };
+    let single = run(0);
+    let line = single
+        .lines()
+        .find(|l| l.contains("tunnelling"))
+        .unwrap_or_else(|| panic!("{single}"))
+        .to_string();
+    for ranks in [2, 4] {
+        let err = run(ranks);
+        // (mpirun stops the other ranks once one has failed, so not every rank's line need
+        // come out; that the run ends at all shows that none was left waiting)
+        assert!(
+            err.lines().any(|l| l == line),
+            "{ranks} ranks: the single process's error ({line}):\n{err}"
+        );
+    }
+    let _ = std::fs::remove_dir_all(&dir);
 }

@@ -17,9 +17,8 @@
 //! Not distributed (refused by name): rigid bodies (`[[rigid]]`, moving rigid parts), kinematic
 //! and small- or infinitesimal-sliding pairs, pairs against analytical surfaces, 2D scenes,
 //! `adjust_overclosure`. Fixed rigid parts are held nodes and run. VTK frames are not written
-//! (a warning says so). The single process's tunnelling check (a node past the search radius in
-//! one increment) has no distributed counterpart yet: the distributed global search follows any
-//! node past half the radius since the last one.
+//! (a warning says so). A node that moves past its pair's search radius within one increment
+//! stops the run on every rank with the single process's tunnelling error.
 
 use std::collections::BTreeMap;
 use std::io::Write as _;
@@ -447,6 +446,22 @@ fn run_into(
             }
             reported = Some((r.stable_dt, r.max_overclosure));
             contact_bytes += r.bytes_sent;
+            // the same on every rank: every rank returns it
+            if let Some(f) = r.fastest {
+                return Err(Error::Tunnelling {
+                    increment: k as u64 + 1,
+                    time: t_start,
+                    node: f.node as usize,
+                    pair: f.pair,
+                    distance: f.distance,
+                    radius: f.radius,
+                    more: if r.fast_nodes > 1 {
+                        format!(" ({} more nodes move that far)", r.fast_nodes - 1)
+                    } else {
+                        String::new()
+                    },
+                });
+            }
         }
         let stepped = solver.step_with_forces(step, &f);
         agree(comm, stepped.err())?;
