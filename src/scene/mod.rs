@@ -272,7 +272,8 @@ pub struct RankSummary {
     pub contact_bytes_per_increment: f64,
     /// Wall-clock seconds per increment after the first on this rank.
     pub seconds_per_increment: f64,
-    /// Local contact models built (see [`crate::distributed::DistributedContact::rebuilds`]).
+    /// Local contact models built (`abut::distributed::DistributedContact::rebuilds`, feature
+    /// `mpi`).
     pub contact_rebuilds: u64,
 }
 
