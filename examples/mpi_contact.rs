@@ -16,7 +16,9 @@
 //! the same rank count) — and exits non-zero when a force differs by more than f32 round-off.
 //!
 //! `ABUT_MPI_CASE` picks another model: `self` (a self-contact sheet), `balanced` (a balanced
-//! pair of two plates), `bad-slave` (a rank names a slave it does not own: refused everywhere).
+//! pair of two plates), `stretch` (a plate stretched tenfold under slaves that lie in the middle
+//! of one of its facets), `bad-slave` (a rank names a slave it does not own: refused
+//! everywhere).
 
 use abut::distributed::{DistributedContact, RankBalance, RankModel, RankPair, NO_GLOBAL_NODE};
 use abut::mesh::{plate_quads, point_cloud};
@@ -32,6 +34,13 @@ const BALANCE: f64 = 0.6;
 
 fn main() {
     let universe = mpi::initialize().expect("MPI initialises");
+    // a rank that panics (a failed check on rank 0) takes the job down: unwinding would
+    // finalise MPI while the other ranks wait in a collective, and none would ever return
+    let report = std::panic::take_hook();
+    std::panic::set_hook(Box::new(move |info| {
+        report(info);
+        mpi::topology::SimpleCommunicator::world().abort(1);
+    }));
     let world = universe.world();
     let (rank, size) = (world.rank() as usize, world.size() as usize);
 
@@ -48,6 +57,8 @@ fn main() {
         sheet()
     } else if case == "balanced" {
         two_plates()
+    } else if case == "stretch" {
+        stretching_plate()
     } else {
         plate_and_cloud()
     };
@@ -57,7 +68,7 @@ fn main() {
             .map(|i| [0, 1, 2].map(|a| x0[i][a] + vel[i][a] * t))
             .collect()
     };
-    let radius = 0.1;
+    let radius = if case == "stretch" { 0.2 } else { 0.1 };
 
     // this rank's share
     let part = recursive_bisection(&x0, size).expect("a partition");
@@ -404,5 +415,36 @@ fn two_plates() -> Scene {
                 .map(|f| [f[0], f[3], f[2], f[1]].map(|k| k + nl as u32))
                 .collect(),
         ),
+    }
+}
+
+/// A plate of 4 × 4 quads on [0, 1]² stretched tenfold along x over the run (x = x0·(1 + 9t/T)),
+/// arriving under a strip of 24 static slaves at x ≈ 5 pressed 2 mm below its plane: late in
+/// the run they lie in the middle of one facet 2 m long whose nodes are farther from them than
+/// the ghost margin of the start's facet size (0.25) allows — a rank must widen the margin as
+/// facets stretch, or its slaves lose that facet.
+fn stretching_plate() -> Scene {
+    let plate = plate_quads(4, 4, 1.0, 1.0, 0.0, 0, &|_, _| 0.0);
+    let np = plate.positions.len();
+    let mut x0 = plate.positions.clone();
+    for k in 0..24 {
+        x0.push([
+            5.0 + 0.05 * (k % 2) as f64,
+            0.3 + 0.4 * (k / 2) as f64 / 11.0,
+            -0.002,
+        ]);
+    }
+    let n = x0.len();
+    let mut vel = vec![[0.0; 3]; n];
+    for (v, p) in vel.iter_mut().zip(&plate.positions) {
+        *v = [9.0 * p[0] / (INCREMENTS as f64 * DT), 0.0, 0.0];
+    }
+    Scene {
+        x0,
+        masses: vec![1.0; n],
+        vel,
+        facets: plate.facets.clone(),
+        pairs: vec![((np..n).collect(), Friction::Frictionless)],
+        slave_facets: None,
     }
 }

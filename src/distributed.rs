@@ -8,7 +8,8 @@
 //! `search_interval` increments, and as soon as any node of any rank has moved more than the
 //! motion budget (half the search radius) since the last one, agreed by all ranks in the same
 //! increment — each rank's slave region (the box of its slaves grown by the search radius, twice
-//! the budget and two facet sizes) is gathered, and every rank sends each other rank the master
+//! the budget and two facet sizes: the longest facet edge at the start, or of any rank's local
+//! or own facets at a distributed global search if facets have stretched beyond it) is gathered, and every rank sends each other rank the master
 //! nodes it owns inside that region: those are the other rank's ghosts. A rank then builds its
 //! local contact model: its own nodes, its ghosts, and every master facet all of whose nodes it
 //! has — so every facet within the search radius of its slaves until the next distributed global
@@ -178,8 +179,16 @@ pub struct DistributedContact {
     masses: Vec<f64>,
     index: HashMap<u64, usize>,
     pairs: Vec<PairTopology>,
-    /// The largest facet edge of any pair, all ranks.
+    /// The largest facet edge of any pair, all ranks: at the start, then the largest of that and
+    /// every rank's local facets at each distributed global search (facets that stretch widen
+    /// the ghost margin).
     h_max: f64,
+    /// The local model's facets (local node indices, `u32::MAX` pads a triangle), every pass.
+    local_facets: Vec<[u32; 4]>,
+    /// The facets all of whose nodes this rank owns (own indices, padded likewise).
+    own_facets: Vec<[u32; 4]>,
+    /// The ghosts' positions of the last increment, in the local model's ghost order.
+    ghost_x: Vec<[f64; 3]>,
     /// Owned nodes that are master nodes of some pair.
     master_nodes: Vec<usize>,
     /// Per destination rank: own nodes whose state it receives, in send order.
@@ -602,6 +611,18 @@ impl DistributedContact {
             }
         }
         let h_max = edge;
+        // facets inside this rank's nodes: measured at every distributed global search
+        let own_facets: Vec<[u32; 4]> = pairs
+            .iter()
+            .flat_map(|p| &p.facets)
+            .filter_map(|f| {
+                let mut l = [u32::MAX; 4];
+                for j in 0..if f[3] == NO_GLOBAL_NODE { 3 } else { 4 } {
+                    l[j] = *index.get(&f[j])? as u32;
+                }
+                Some(l)
+            })
+            .collect();
         let size = comm.size() as usize;
         Ok(Self {
             comm,
@@ -611,6 +632,9 @@ impl DistributedContact {
             index,
             pairs,
             h_max,
+            local_facets: Vec::new(),
+            own_facets,
+            ghost_x: Vec::new(),
             master_nodes: (0..n).filter(|&i| is_master[i]).collect(),
             send: vec![Vec::new(); size],
             recv: vec![0; size],
@@ -700,6 +724,33 @@ impl DistributedContact {
             .fold(f64::INFINITY, f64::min)
     }
 
+    /// The longest edge of this rank's local facets (at own positions `x` and the last
+    /// increment's ghost positions) and of the facets all of whose nodes it owns. A facet cut
+    /// between ranks and near no rank's slaves is not measured: one that stretches beyond twice
+    /// the margin before it comes near a slave can still be missed.
+    fn longest_local_edge(&self, x: &[[f64; 3]]) -> f64 {
+        let n_own = x.len();
+        let at = |i: u32| -> Option<[f64; 3]> {
+            let i = i as usize;
+            if i < n_own {
+                Some(x[i])
+            } else {
+                self.ghost_x.get(i - n_own).copied()
+            }
+        };
+        let mut longest = 0.0f64;
+        for f in self.local_facets.iter().chain(&self.own_facets) {
+            let m = if f[3] == u32::MAX { 3 } else { 4 };
+            for j in 0..m {
+                if let (Some(a), Some(b)) = (at(f[j]), at(f[(j + 1) % m])) {
+                    let d = (0..3).map(|c| (a[c] - b[c]).powi(2)).sum::<f64>().sqrt();
+                    longest = longest.max(d);
+                }
+            }
+        }
+        longest
+    }
+
     /// New ghosts for own positions `x`: the send lists, the ghosts' ids and masses. Returns
     /// the ghosts' global ids (by source rank, then in the order sent) and the bytes sent.
     fn choose_ghosts(&mut self, x: &[[f64; 3]]) -> (Vec<u64>, usize) {
@@ -783,6 +834,7 @@ impl DistributedContact {
             });
         }
         let mut any = false;
+        let mut local_facets = Vec::new();
         for p in self.pairs.iter_mut() {
             p.local = None;
             if p.slaves.is_empty() {
@@ -807,6 +859,10 @@ impl DistributedContact {
             if facets.is_empty() {
                 continue;
             }
+            local_facets.extend(facets.iter().map(|f| {
+                let n = f.nodes();
+                [n[0], n[1], n[2], n.get(3).copied().unwrap_or(u32::MAX)]
+            }));
             let surf = model.add_surface(Surface::from_facets(facets.clone()))?;
             let slaves: Vec<u32> = p.slaves.iter().map(|&s| s as u32).collect();
             let set = model.add_node_set_with_areas(&slaves, &p.areas)?;
@@ -846,6 +902,7 @@ impl DistributedContact {
             None
         };
         self.anchor = positions;
+        self.local_facets = local_facets;
         Ok(())
     }
 
@@ -907,6 +964,9 @@ impl DistributedContact {
         let mut bytes = 0;
         let mut ghost_ids = Vec::new();
         if global {
+            // facets that stretched since the start widen the ghost margin (never narrowed)
+            let longest = all_max(&self.comm, self.longest_local_edge(x));
+            self.h_max = self.h_max.max(longest);
             let (ids, b) = self.choose_ghosts(x);
             ghost_ids = ids;
             bytes += b;
@@ -937,6 +997,7 @@ impl DistributedContact {
             .chunks_exact(6)
             .map(|c| [c[3], c[4], c[5]])
             .collect();
+        self.ghost_x.clone_from(&gx);
         if global {
             if self.started && ghost_ids == self.ghost_ids {
                 // the same ghosts, so the same local model: the local contact goes on (its

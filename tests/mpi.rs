@@ -30,6 +30,14 @@ fn run_case(ranks: usize, case: Option<&str>) -> String {
         .to_string()
 }
 
+/// `mpirun` under a time limit of 10 minutes: a job whose ranks deadlock fails the test
+/// instead of holding CI for ever.
+fn mpirun_command() -> Command {
+    let mut c = Command::new("timeout");
+    c.args(["600", "mpirun"]);
+    c
+}
+
 /// The example's output under `mpirun -n ranks`, with `ABUT_MPI_CASE=case`.
 fn mpirun(ranks: usize, case: Option<&str>) -> String {
     let exe = std::env::current_exe().unwrap();
@@ -40,7 +48,7 @@ fn mpirun(ranks: usize, case: Option<&str>) -> String {
         "{} not built: cargo build --release --features mpi --example mpi_contact",
         example.display()
     );
-    let out = Command::new("mpirun")
+    let out = mpirun_command()
         .args([
             "--allow-run-as-root",
             "--oversubscribe",
@@ -65,6 +73,15 @@ fn mpirun(ranks: usize, case: Option<&str>) -> String {
     stdout
 }
 
+/// The number just before `what` in the example's line.
+fn count_before(line: &str, what: &str) -> usize {
+    line.split(what)
+        .next()
+        .and_then(|h| h.rsplit(' ').next())
+        .and_then(|h| h.parse().ok())
+        .unwrap_or_else(|| panic!("a count before '{what}' in {line}"))
+}
+
 fn checksum(line: &str) -> &str {
     line.rsplit("checksum ").next().unwrap()
 }
@@ -79,12 +96,7 @@ fn forces_across_ranks_equal_the_single_process_and_reruns_are_bitwise() {
         }
         if ranks > 1 {
             // slaves' facets passed from one rank's nodes to another's
-            let handovers: usize = a
-                .split(" hand-overs")
-                .next()
-                .and_then(|h| h.rsplit(' ').next())
-                .and_then(|h| h.parse().ok())
-                .expect("a hand-over count");
+            let handovers = count_before(&a, " hand-overs");
             assert!(handovers > 0, "{a}");
         }
         if ranks == 4 {
@@ -119,12 +131,7 @@ fn a_bad_share_is_refused_on_every_rank() {
 fn a_self_contact_sheet_across_ranks_equals_the_single_process() {
     for ranks in [1, 2, 4] {
         let line = run_case(ranks, Some("self"));
-        let active: usize = line
-            .split(" slaves in contact")
-            .next()
-            .and_then(|h| h.rsplit(' ').next())
-            .and_then(|h| h.parse().ok())
-            .expect("a count in contact");
+        let active = count_before(&line, " slaves in contact");
         assert!(active > 100, "{line}");
     }
 }
@@ -138,12 +145,7 @@ fn a_self_contact_sheet_across_ranks_equals_the_single_process() {
 fn a_balanced_pair_across_ranks_equals_the_single_process() {
     for ranks in [1, 2, 4] {
         let line = run_case(ranks, Some("balanced"));
-        let active: usize = line
-            .split(" slaves in contact")
-            .next()
-            .and_then(|h| h.rsplit(' ').next())
-            .and_then(|h| h.parse().ok())
-            .expect("a count in contact");
+        let active = count_before(&line, " slaves in contact");
         assert!(active > 40, "{line}");
         if ranks == 4 {
             assert!(!line.contains(" 0 hand-overs"), "{line}");
@@ -170,7 +172,7 @@ fn abut_run_on(scene: &Path, out: &Path, ranks: usize, gpu: Option<&str>) -> Str
     let mut cmd = if ranks == 0 {
         Command::new(exe)
     } else {
-        let mut c = Command::new("mpirun");
+        let mut c = mpirun_command();
         c.args(["--allow-run-as-root", "--oversubscribe", "-n"])
             .arg(ranks.to_string())
             .arg(exe);
@@ -380,7 +382,7 @@ fn a_balanced_mesh_drop_across_ranks_gives_the_single_process_summary() {
 #[test]
 fn a_scene_a_distributed_run_cannot_do_is_refused_by_name() {
     let out = std::env::temp_dir().join(format!("abut-mpi-{}-refused", std::process::id()));
-    let o = Command::new("mpirun")
+    let o = mpirun_command()
         .args(["--allow-run-as-root", "--oversubscribe", "-n", "2"])
         .arg(env!("CARGO_BIN_EXE_abut"))
         .arg("run")
@@ -451,7 +453,11 @@ fn tunnelling_across_ranks_stops_the_run_with_the_single_process_error() {
     std::fs::write(&scene, text).unwrap();
     let run = |ranks: usize| {
         let exe = env!("CARGO_BIN_EXE_abut");
-        let mut cmd = Command::new(if ranks == 0 { exe } else { "mpirun" });
+        let mut cmd = if ranks == 0 {
+            Command::new(exe)
+        } else {
+            mpirun_command()
+        };
         if ranks > 0 {
             cmd.args(["--allow-run-as-root", "--oversubscribe", "-n"])
                 .arg(ranks.to_string())
@@ -482,4 +488,17 @@ fn tunnelling_across_ranks_stops_the_run_with_the_single_process_error() {
         );
     }
     let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// Facets that stretch widen the ghost margin: a plate stretched tenfold arrives under a strip
+/// of slaves that then lie in the middle of one 2 m facet, its nodes beyond the margin of the
+/// start's facet size — every node's force equals the single process's at 1, 2 and 4 ranks
+/// (with the start's margin the slaves' rank loses that facet and the example fails).
+#[test]
+fn a_stretching_master_stays_in_contact_across_ranks() {
+    for ranks in [1, 2, 4] {
+        let line = run_case(ranks, Some("stretch"));
+        let active = count_before(&line, " slaves in contact");
+        assert!(active >= 10, "{line}");
+    }
 }

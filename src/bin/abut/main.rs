@@ -255,6 +255,16 @@ fn run_scene(a: &RunArgs) -> abut::Result<()> {
     #[cfg(feature = "mpi")]
     let world = universe.as_ref().map(|u| u.world());
     #[cfg(feature = "mpi")]
+    if world.is_some() {
+        // a rank that panics takes the job down (unwinding would finalise MPI while the others
+        // wait in a collective for ever)
+        let report = std::panic::take_hook();
+        std::panic::set_hook(Box::new(move |info| {
+            report(info);
+            mpi::traits::Communicator::abort(&mpi::topology::SimpleCommunicator::world(), 70);
+        }));
+    }
+    #[cfg(feature = "mpi")]
     let root = world
         .as_ref()
         .is_none_or(|w| mpi::traits::Communicator::rank(w) == 0);
