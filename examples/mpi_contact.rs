@@ -20,7 +20,9 @@
 //! of one of its facets), `bad-slave` (a rank names a slave it does not own: refused
 //! everywhere).
 
-use abut::distributed::{DistributedContact, RankBalance, RankModel, RankPair, NO_GLOBAL_NODE};
+use abut::distributed::{
+    all_gather, DistributedContact, RankBalance, RankModel, RankPair, NO_GLOBAL_NODE,
+};
 use abut::mesh::{plate_quads, point_cloud};
 use abut::partition::recursive_bisection;
 use abut::*;
@@ -171,7 +173,8 @@ fn main() {
         // every rank's forces on rank 0, by global id
         let ids: Vec<u64> = own.iter().map(|&i| i as u64).collect();
         let flat: Vec<f64> = step.forces.iter().flatten().copied().collect();
-        let (all_ids, all_f) = gather(&world, &ids, &flat);
+        let (all_ids, _) = all_gather(&world, &ids);
+        let (all_f, _) = all_gather(&world, &flat);
         if let Some(c) = single.as_mut() {
             let r = c.penalty_step(&x, &vel, DT).expect("a single increment");
             let mut dist = vec![[0.0; 3]; n];
@@ -233,37 +236,6 @@ fn main() {
             world.abort(1);
         }
     }
-}
-
-/// Every rank's ids and 3-vectors on every rank, in rank order.
-fn gather(
-    world: &mpi::topology::SimpleCommunicator,
-    ids: &[u64],
-    f: &[f64],
-) -> (Vec<u64>, Vec<f64>) {
-    use mpi::datatype::PartitionMut;
-    let size = world.size() as usize;
-    let mut counts = vec![0i32; size];
-    world.all_gather_into(&(ids.len() as i32), &mut counts[..]);
-    let displs: Vec<i32> = counts
-        .iter()
-        .scan(0, |a, &c| {
-            let d = *a;
-            *a += c;
-            Some(d)
-        })
-        .collect();
-    let total = counts.iter().sum::<i32>() as usize;
-    let mut all_ids = vec![0u64; total];
-    world.all_gather_varcount_into(
-        ids,
-        &mut PartitionMut::new(&mut all_ids[..], &counts[..], &displs[..]),
-    );
-    let c3: Vec<i32> = counts.iter().map(|c| 3 * c).collect();
-    let d3: Vec<i32> = displs.iter().map(|d| 3 * d).collect();
-    let mut all_f = vec![0.0; 3 * total];
-    world.all_gather_varcount_into(f, &mut PartitionMut::new(&mut all_f[..], &c3[..], &d3[..]));
-    (all_ids, all_f)
 }
 
 /// Each rank's three counters (bytes, slaves, µs per increment) on every rank.

@@ -242,8 +242,9 @@ fn bad(name: &'static str, value: String, expected: &'static str) -> Error {
     }
 }
 
-/// Gathers every rank's `items` on every rank, in rank order; with each rank's count.
-pub(crate) fn all_gather<T: Equivalence + Clone + Default>(
+/// Gathers every rank's `items` on every rank, in rank order; with each rank's count
+/// (collective: every rank of `comm` calls it).
+pub fn all_gather<T: Equivalence + Clone + Default>(
     comm: &SimpleCommunicator,
     items: &[T],
 ) -> (Vec<T>, Vec<usize>) {

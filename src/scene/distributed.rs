@@ -20,7 +20,6 @@
 //! (a warning says so). A node that moves past its pair's search radius within one increment
 //! stops the run on every rank with the single process's tunnelling error.
 
-use std::collections::BTreeMap;
 use std::io::Write as _;
 use std::path::Path;
 use std::time::Instant;
@@ -29,8 +28,9 @@ use mpi::topology::SimpleCommunicator;
 use mpi::traits::*;
 
 use super::{
-    governing_limit, half_plateau_edges, increments_for, remove_all, stress6, ContactNode,
-    PartSummary, Progress, RankSummary, Scene, Summary, OUTPUTS, PARTIALS,
+    built_list, clean_run, finish_outputs, force_stats, governing_limit, increments_for,
+    open_history, output_error, over_increment_warning, stress6, ContactNode, PartSummary,
+    Progress, RankSummary, Scene, Summary,
 };
 use crate::device::{Device, Traffic};
 use crate::distributed::{
@@ -163,16 +163,8 @@ pub fn run_distributed(
     comm: &SimpleCommunicator,
     progress: &mut dyn FnMut(&Progress),
 ) -> Result<Summary> {
-    let root = comm.rank() == 0;
-    if let Some(dir) = output.filter(|d| root && d.is_dir()) {
-        remove_all(dir, &OUTPUTS);
-        remove_all(dir, &PARTIALS);
-    }
-    let result = run_into(scene, device, output, comm, progress);
-    if let (Err(_), Some(dir)) = (&result, output.filter(|d| root && d.is_dir())) {
-        remove_all(dir, &PARTIALS);
-    }
-    result
+    let written = output.filter(|_| comm.rank() == 0);
+    clean_run(written, || run_into(scene, device, output, comm, progress))
 }
 
 fn run_into(
@@ -333,65 +325,17 @@ fn run_into(
         out
     };
 
-    let mut built_list = Vec::new();
-    let mut kinds = BTreeMap::<&str, usize>::new();
-    for e in &g.elements {
-        *kinds
-            .entry(match e {
-                Element::Bar { .. } => "bar",
-                Element::Tri3 { hoop: Some(_), .. } => "axisymmetric triangle",
-                Element::Tri3 { .. } => "plane-strain triangle",
-                Element::Tet4 { .. } => "tetrahedron",
-            })
-            .or_default() += 1;
-    }
-    for (k, c) in &kinds {
-        built_list.push(format!("{c} {k} elements"));
-    }
-    for (i, (c, p)) in scene.contact.iter().zip(&built.slaves).enumerate() {
-        built_list.push(format!(
-            "contact {i}: {} slave nodes of {} against {}, penalty{}{}",
-            p.len(),
-            c.slave,
-            c.master,
-            if c.friction > 0.0 {
-                ", friction"
-            } else {
-                ", frictionless (friction compiled out of the penalty kernel)"
-            },
-            if c.balanced.is_some() {
-                ", balanced"
-            } else {
-                ""
-            },
-        ));
-    }
+    let mut built_list = built_list(scene, g, &built.slaves);
     built_list.push(format!(
         "{size} MPI ranks, the nodes split by recursive coordinate bisection (see ranks)"
     ));
 
-    let io = |e: std::io::Error| Error::BadParameter {
-        name: "output",
-        value: e.to_string(),
-        expected: "a writable directory",
-    };
+    let io = output_error;
     // rank 0 writes; a failure there is agreed, so no rank is left waiting
     let mut history = None;
     let mut fault = None;
     if let (Some(dir), true) = (output, comm.rank() == 0) {
-        let mut header =
-            "time,kinetic,internal,external_work,contact_work,balance_error,contact_force"
-                .to_string();
-        for p in &built.parts {
-            for q in ["ux", "uy", "uz", "vx", "vy", "vz"] {
-                header.push_str(&format!(",{}.{q}", p.name));
-            }
-        }
-        let opened = std::fs::create_dir_all(dir)
-            .and_then(|_| std::fs::File::create(dir.join(".history.csv.partial")))
-            .map(std::io::BufWriter::new)
-            .and_then(|mut f| writeln!(f, "{header}").map(|_| f));
-        match opened {
+        match open_history(dir, &built.parts, &built.bodies) {
             Ok(f) => history = Some(f),
             Err(e) => fault = Some(io(e)),
         }
@@ -610,9 +554,7 @@ fn run_into(
         (Some(now), Some(then)) => now.since(&then),
         _ => Traffic::default(),
     };
-    let first = forces.iter().position(|h| h.1 > 0.0);
-    let last = forces.iter().rposition(|h| h.1 > 0.0);
-    let (impact, release, impulse, plateau) = half_plateau_edges(&forces);
+    let stats = force_stats(&forces, dt);
     // the parts: motion summed over the ranks, stress extremes over each rank's own elements
     let motion = sum_over_ranks(comm, &part_sums(&solver));
     let mut parts = Vec::new();
@@ -687,23 +629,21 @@ fn run_into(
         })
         .collect();
     let friction = sum_over_ranks(comm, &[dissipated])[0];
-    let contact_start = first.map_or(f64::NAN, |i| forces[i].0 - 0.5 * dt);
     let (governing, increment_note) = governing_limit(
         scene.run.dt.is_some(),
         contact_dt.is_finite(),
         lowest_ratio,
         lowered_from,
-        contact_start,
+        stats.start,
         scene.run.contact_safety,
     );
     let mut warnings = scene.notes();
     if over_ratio > 1.0 {
-        warnings.push(format!(
-            "run.dt = {:e} exceeds the penalty contact's stable increment (by up to \
-             {over_ratio:.3}×, from t = {over_from:e}): lower run.dt below it, or multiply the \
-             contact's penalty_scale by {:.3e} or less",
+        warnings.push(over_increment_warning(
             scene.run.dt.unwrap_or(f64::NAN),
-            (scene.run.contact_safety / over_ratio).powi(2)
+            over_ratio,
+            over_from,
+            scene.run.contact_safety,
         ));
     }
     if scene.run.vtk_every > 0 && has_contact {
@@ -732,23 +672,14 @@ fn run_into(
         anchored_slaves: 0,
         unanchored_slaves: Vec::new(),
         warnings,
-        contact_start,
-        contact_end: last.map_or(f64::NAN, |i| forces[i].0 + 0.5 * dt),
-        impact_time: impact,
-        release_time: release,
+        contact_start: stats.start,
+        contact_end: stats.end,
+        impact_time: stats.impact,
+        release_time: stats.release,
         peak_force: peak,
-        plateau_force: plateau,
-        mean_force: if release > impact {
-            let inside: f64 = forces
-                .windows(2)
-                .filter(|w| w[1].0 > impact && w[0].0 < release)
-                .map(|w| w[1].1 * (w[1].0 - w[0].0))
-                .sum();
-            inside / (release - impact)
-        } else {
-            0.0
-        },
-        impulse,
+        plateau_force: stats.plateau,
+        mean_force: stats.mean,
+        impulse: stats.impulse,
         final_contact_force: final_force,
         max_penetration: pen,
         energy_balance_error: if scale > 0.0 { drift / scale } else { 0.0 },
@@ -773,14 +704,7 @@ fn run_into(
     };
     let mut fault = None;
     if let (Some(dir), Some(f)) = (output, history) {
-        let written = (|| -> std::io::Result<()> {
-            f.into_inner().map_err(|e| e.into_error())?.sync_all()?;
-            let json = serde_json::to_string_pretty(&summary).map_err(std::io::Error::other)?;
-            std::fs::write(dir.join(".summary.json.partial"), json)?;
-            std::fs::rename(dir.join(".history.csv.partial"), dir.join("history.csv"))?;
-            std::fs::rename(dir.join(".summary.json.partial"), dir.join("summary.json"))
-        })();
-        fault = written.err().map(io);
+        fault = finish_outputs(dir, f, &summary).err().map(io);
     }
     agree(comm, fault)?;
     Ok(summary)

@@ -91,7 +91,8 @@ use serde::Serialize;
 use crate::contact::Contact;
 use crate::device::{Device, Traffic};
 use crate::error::{Error, Result};
-use crate::explicit::Element;
+use crate::explicit::{Element, Solver};
+use build::PartNodes;
 
 /// A part's motion at the end of a run (mass-weighted means over its free nodes).
 #[derive(Clone, Debug, Serialize)]
@@ -394,37 +395,26 @@ pub fn run_with_progress(
     output: Option<&Path>,
     progress: &mut dyn FnMut(&Progress),
 ) -> Result<Summary> {
+    clean_run(output, || run_into(scene, device, output, progress))
+}
+
+/// `run` into `output`: first what an earlier run wrote there is removed, and when `run` fails
+/// its partial files are (see [`run`]).
+fn clean_run(output: Option<&Path>, run: impl FnOnce() -> Result<Summary>) -> Result<Summary> {
     if let Some(dir) = output.filter(|d| d.is_dir()) {
         remove_all(dir, &OUTPUTS);
         remove_all(dir, &PARTIALS);
     }
-    let result = run_into(scene, device, output, progress);
+    let result = run();
     if let (Err(_), Some(dir)) = (&result, output.filter(|d| d.is_dir())) {
         remove_all(dir, &PARTIALS);
     }
     result
 }
 
-/// [`run`] itself: the outputs written under their partial names, renamed at the end.
-fn run_into(
-    scene: &Scene,
-    device: &Device,
-    output: Option<&Path>,
-    progress: &mut dyn FnMut(&Progress),
-) -> Result<Summary> {
-    let built = scene.build()?;
-    let (mut solver, model) = (built.solver, built.model);
-    let x0 = solver.x.clone();
-    let has_contact = !model.pairs().is_empty() || !model.rigid_pairs().is_empty();
-    let mut contact = if has_contact {
-        Some(Contact::new(device, &model)?)
-    } else {
-        None
-    };
-    let mut slaves: Vec<u32> = built.slaves.iter().flatten().copied().collect();
-    slaves.sort_unstable();
-    slaves.dedup();
-    let mut built_list = Vec::new();
+/// What a run built, in words: elements by kind, rigid bodies, each contact pair.
+fn built_list(scene: &Scene, solver: &Solver, slaves: &[Vec<u32>]) -> Vec<String> {
+    let mut list = Vec::new();
     let mut kinds = BTreeMap::<&str, usize>::new();
     for e in &solver.elements {
         *kinds
@@ -437,13 +427,13 @@ fn run_into(
             .or_default() += 1;
     }
     for (k, n) in &kinds {
-        built_list.push(format!("{n} {k} elements"));
+        list.push(format!("{n} {k} elements"));
     }
     if !solver.bodies.is_empty() {
-        built_list.push(format!("{} rigid bodies", solver.bodies.len()));
+        list.push(format!("{} rigid bodies", solver.bodies.len()));
     }
-    for (i, (c, p)) in scene.contact.iter().zip(&built.slaves).enumerate() {
-        built_list.push(format!(
+    for (i, (c, p)) in scene.contact.iter().zip(slaves).enumerate() {
+        list.push(format!(
             "contact {i}: {} slave nodes of {} against {}, {}{}{}{}",
             p.len(),
             c.slave,
@@ -465,33 +455,135 @@ fn run_into(
             }
         ));
     }
-    let io = |e: std::io::Error| Error::BadParameter {
+    list
+}
+
+/// history.csv's header: the energies and force, then each part's and rigid body's mean
+/// displacement and velocity.
+fn history_header(parts: &[PartNodes], bodies: &[(String, usize)]) -> String {
+    let mut header =
+        "time,kinetic,internal,external_work,contact_work,balance_error,contact_force".to_string();
+    for name in parts
+        .iter()
+        .map(|p| &p.name)
+        .chain(bodies.iter().map(|b| &b.0))
+    {
+        for q in ["ux", "uy", "uz", "vx", "vy", "vz"] {
+            header.push_str(&format!(",{name}.{q}"));
+        }
+    }
+    header
+}
+
+/// A history.csv under its partial name in `dir`, its header written (see
+/// [`history_header`]).
+fn open_history(
+    dir: &Path,
+    parts: &[PartNodes],
+    bodies: &[(String, usize)],
+) -> std::io::Result<std::io::BufWriter<std::fs::File>> {
+    std::fs::create_dir_all(dir)?;
+    let mut f = std::io::BufWriter::new(std::fs::File::create(dir.join(".history.csv.partial"))?);
+    writeln!(f, "{}", history_header(parts, bodies))?;
+    Ok(f)
+}
+
+/// The end of a run's output: the history flushed, summary.json written, both renamed to
+/// their final names.
+fn finish_outputs(
+    dir: &Path,
+    history: std::io::BufWriter<std::fs::File>,
+    summary: &Summary,
+) -> std::io::Result<()> {
+    history.into_inner().map_err(|e| e.into_error())?;
+    let json = serde_json::to_string_pretty(summary).map_err(std::io::Error::other)?;
+    std::fs::write(dir.join(".summary.json.partial"), json)?;
+    std::fs::rename(dir.join(".history.csv.partial"), dir.join("history.csv"))?;
+    std::fs::rename(dir.join(".summary.json.partial"), dir.join("summary.json"))
+}
+
+/// The output error of a run.
+fn output_error(e: std::io::Error) -> Error {
+    Error::BadParameter {
         name: "output",
         value: e.to_string(),
         expected: "a writable directory",
+    }
+}
+
+/// What the contact force history (time of each increment's middle, total force) says: first
+/// and last time with force, the half-plateau edges, impulse, plateau and mean force.
+struct ForceStats {
+    start: f64,
+    end: f64,
+    impact: f64,
+    release: f64,
+    impulse: f64,
+    plateau: f64,
+    mean: f64,
+}
+
+fn force_stats(forces: &[(f64, f64)], dt: f64) -> ForceStats {
+    let first = forces.iter().position(|h| h.1 > 0.0);
+    let last = forces.iter().rposition(|h| h.1 > 0.0);
+    let (impact, release, impulse, plateau) = half_plateau_edges(forces);
+    ForceStats {
+        start: first.map_or(f64::NAN, |i| forces[i].0 - 0.5 * dt),
+        end: last.map_or(f64::NAN, |i| forces[i].0 + 0.5 * dt),
+        impact,
+        release,
+        impulse,
+        plateau,
+        mean: if release > impact {
+            let inside: f64 = forces
+                .windows(2)
+                .filter(|w| w[1].0 > impact && w[0].0 < release)
+                .map(|w| w[1].1 * (w[1].0 - w[0].0))
+                .sum();
+            inside / (release - impact)
+        } else {
+            0.0
+        },
+    }
+}
+
+/// The warning of a fixed `run_dt` that exceeded the penalty contact's stable increment by up
+/// to `over_ratio`, from `over_from`.
+fn over_increment_warning(run_dt: f64, over_ratio: f64, over_from: f64, safety: f64) -> String {
+    format!(
+        "run.dt = {run_dt:e} exceeds the penalty contact's stable increment (by up to \
+         {over_ratio:.3}×, from t = {over_from:e}): central differences are unstable there and \
+         the contact results cannot be trusted. Lower run.dt below it — with the automatic \
+         stiffness, which follows the first increment (k ∝ 1/run.dt²), multiply the contact's \
+         penalty_scale by {:.3e} or less instead (ω·Δt ≤ 1, run.contact_safety) — or, in a \
+         scene with elements, leave run.dt out and the increment follows both limits",
+        (safety / over_ratio).powi(2)
+    )
+}
+
+/// [`run`] itself: the outputs written under their partial names, renamed at the end.
+fn run_into(
+    scene: &Scene,
+    device: &Device,
+    output: Option<&Path>,
+    progress: &mut dyn FnMut(&Progress),
+) -> Result<Summary> {
+    let built = scene.build()?;
+    let (mut solver, model) = (built.solver, built.model);
+    let x0 = solver.x.clone();
+    let has_contact = !model.pairs().is_empty() || !model.rigid_pairs().is_empty();
+    let mut contact = if has_contact {
+        Some(Contact::new(device, &model)?)
+    } else {
+        None
     };
+    let mut slaves: Vec<u32> = built.slaves.iter().flatten().copied().collect();
+    slaves.sort_unstable();
+    slaves.dedup();
+    let built_list = built_list(scene, &solver, &built.slaves);
+    let io = output_error;
     let mut history = match output {
-        Some(dir) => {
-            std::fs::create_dir_all(dir).map_err(io)?;
-            let mut f = std::io::BufWriter::new(
-                std::fs::File::create(dir.join(".history.csv.partial")).map_err(io)?,
-            );
-            let mut header =
-                "time,kinetic,internal,external_work,contact_work,balance_error,contact_force"
-                    .to_string();
-            for name in built
-                .parts
-                .iter()
-                .map(|p| &p.name)
-                .chain(built.bodies.iter().map(|b| &b.0))
-            {
-                for q in ["ux", "uy", "uz", "vx", "vy", "vz"] {
-                    header.push_str(&format!(",{name}.{q}"));
-                }
-            }
-            writeln!(f, "{header}").map_err(io)?;
-            Some(f)
-        }
+        Some(dir) => Some(open_history(dir, &built.parts, &built.bodies).map_err(io)?),
         None => None,
     };
     // VTK frames go to a hidden directory renamed only when the run succeeded
@@ -712,9 +804,7 @@ fn run_into(
         (Some(now), Some(then)) => now.since(&then),
         _ => Traffic::default(),
     };
-    let first = forces.iter().position(|h| h.1 > 0.0);
-    let last = forces.iter().rposition(|h| h.1 > 0.0);
-    let (impact, release, impulse, plateau) = half_plateau_edges(&forces);
+    let stats = force_stats(&forces, dt);
     let mut parts = Vec::new();
     let mut el = 0;
     for p in &built.parts {
@@ -794,27 +884,22 @@ fn run_into(
         }
     }
     let e = solver.energy;
-    let contact_start = first.map_or(f64::NAN, |i| forces[i].0 - 0.5 * dt);
     let (governing_limit, increment_note) = governing_limit(
         scene.run.dt.is_some(),
         contact_dt.is_finite(),
         lowest_ratio,
         lowered_from,
-        contact_start,
+        stats.start,
         scene.run.contact_safety,
     );
     let anchoring = contact.as_ref().map(|c| c.anchoring()).unwrap_or_default();
     let mut warnings = scene.notes();
     if over_ratio > 1.0 {
-        warnings.push(format!(
-            "run.dt = {:e} exceeds the penalty contact's stable increment (by up to {over_ratio:.3}×, \
-             from t = {over_from:e}): central differences are unstable there and the contact \
-             results cannot be trusted. Lower run.dt below it — with the automatic stiffness, \
-             which follows the first increment (k ∝ 1/run.dt²), multiply the contact's \
-             penalty_scale by {:.3e} or less instead (ω·Δt ≤ 1, run.contact_safety) — or, in a \
-             scene with elements, leave run.dt out and the increment follows both limits",
+        warnings.push(over_increment_warning(
             scene.run.dt.unwrap_or(f64::NAN),
-            (scene.run.contact_safety / over_ratio).powi(2)
+            over_ratio,
+            over_from,
+            scene.run.contact_safety,
         ));
     }
     if let Some(a) = adjusted.filter(|a| !a.moved.is_empty()) {
@@ -862,23 +947,14 @@ fn run_into(
         contact_lowered_increment: 1.0 - lowest_ratio,
         contact_limit_from: lowered_from,
         increment_note,
-        contact_start,
-        contact_end: last.map_or(f64::NAN, |i| forces[i].0 + 0.5 * dt),
-        impact_time: impact,
-        release_time: release,
+        contact_start: stats.start,
+        contact_end: stats.end,
+        impact_time: stats.impact,
+        release_time: stats.release,
         peak_force: peak,
-        plateau_force: plateau,
-        mean_force: if release > impact {
-            let inside: f64 = forces
-                .windows(2)
-                .filter(|w| w[1].0 > impact && w[0].0 < release)
-                .map(|w| w[1].1 * (w[1].0 - w[0].0))
-                .sum();
-            inside / (release - impact)
-        } else {
-            0.0
-        },
-        impulse,
+        plateau_force: stats.plateau,
+        mean_force: stats.mean,
+        impulse: stats.impulse,
         final_contact_force: final_force,
         max_penetration: pen,
         energy_balance_error: if scale > 0.0 { drift / scale } else { 0.0 },
@@ -901,17 +977,8 @@ fn run_into(
         global_searches: contact.as_ref().map_or(0, |c| c.global_searches()),
         ranks: Vec::new(),
     };
-    if let (Some(dir), Some(mut f)) = (output, history) {
-        f.flush().map_err(io)?;
-        drop(f);
-        let json = serde_json::to_string_pretty(&summary).map_err(|e| Error::BadParameter {
-            name: "summary",
-            value: e.to_string(),
-            expected: "serialisable",
-        })?;
-        std::fs::write(dir.join(".summary.json.partial"), json).map_err(io)?;
-        std::fs::rename(dir.join(".history.csv.partial"), dir.join("history.csv")).map_err(io)?;
-        std::fs::rename(dir.join(".summary.json.partial"), dir.join("summary.json")).map_err(io)?;
+    if let (Some(dir), Some(f)) = (output, history) {
+        finish_outputs(dir, f, &summary).map_err(io)?;
         if series.is_some() {
             let _ = std::fs::remove_dir_all(dir.join("vtk"));
             std::fs::rename(dir.join(".vtk.partial"), dir.join("vtk")).map_err(io)?;
