@@ -40,7 +40,7 @@ struct SearchParams {
     grid_lo_z: f32,
     base_cell: f32,      // the cell size a grid fitted on the device starts from
     cell_capacity: u32,  // cells the buffers hold (a fitted grid has at most this many)
-    _pad0: u32,
+    ref_node: u32,       // the pair's reference master node: motion is measured relative to it
     _pad1: u32,
     _pad2: u32,
 }
@@ -77,6 +77,8 @@ const STATUS_DT_STABLE: u32 = 4u;      // bits of the smallest stable increment 
 const STATUS_DT_APPROACH: u32 = 5u;    // bits of the smallest approach limit (positive f32)
 const STATUS_ACTIVE: u32 = 6u;         // slave nodes in contact
 const STATUS_SLIPPING: u32 = 7u;       // of which slipping
+const STATUS_FAST: u32 = 15u;          // slaves moving farther than the radius relative to the master
+const STATUS_FAST_RATIO: u32 = 27u;    // bits of the largest such relative motion over the radius (f32)
 const STATUS_MAX_OVERCLOSURE: u32 = 14u; // bits of the largest overclosure in contact (f32 ≥ 0)
 const STATUS_FORCE_SCALE: u32 = 16u;  // bits of the largest |force component| of a spring in contact
 const STATUS_ROW_SCALE: u32 = 17u;    // bits of the largest bound share of a spring in contact

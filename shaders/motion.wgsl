@@ -10,7 +10,10 @@
 //           of a device-resident increment make their positions the new reference).
 // Invariants: tracked slaves are followed by the local search whatever they move, so only
 //             the untracked slaves (no facet within the radius at the last global search) and
-//             the master nodes count: if twice one of their displacements reaches the budget —
+//             the master nodes count. Displacements are relative to the pair's reference master
+//             node's (params.ref_node, itself a watched node): |d_s − d_m| ≤ |d_s − d_r| +
+//             |d_m − d_r| for any common d_r, so the bound holds and a contact model travelling
+//             as a whole uses none of the budget. If twice one of them reaches the budget —
 //             an untracked slave and the master could together have closed it —
 //             STATUS_BUDGET_EXCEEDED is set and the increment runs again with a global search.
 //             The largest such displacement is reduced with atomicMax on its bits (positive
@@ -31,7 +34,9 @@ fn motion(@builtin(workgroup_id) wg: vec3<u32>,
     if (k >= params.n_motion_nodes) { return; }
     if (k < params.n_slaves && hits[k].node != NO_NODE) { return; }
     let id = motion_nodes[k];
-    let d = length(nodes[id].xyz - reference[id].xyz);
+    let r = params.ref_node;
+    let base = nodes[r].xyz - reference[r].xyz;
+    let d = length((nodes[id].xyz - reference[id].xyz) - base);
     atomicMax(&status[STATUS_MOTION], bitcast<u32>(d));
     if (2.0 * d >= params.budget) {
         atomicStore(&status[STATUS_BUDGET_EXCEEDED], 1u);

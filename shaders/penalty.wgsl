@@ -19,6 +19,10 @@
 //             with its body's compliance at the contact point and as one share of the bound.
 //             Increments are positive f32, reduced with atomicMin on their bits (order-
 //             preserving for positive floats), so the result is deterministic.
+//             Every slave is tested for fast motion first (STATUS_FAST, STATUS_FAST_RATIO: its
+//             velocity relative to the master near it times dt against pp.search_radius).
+//             A rigid slave part's springs take 1/slave_share of its effective mass each in
+//             the automatic stiffness, so the body on all of them has one slave's frequency.
 //             Every spring within the search radius also writes its shares of the node-wise
 //             frequency bound (bound_light, bound_heavy, heavy bits in status; gather sums
 //             them per node; the derivation is in contact.rs). A spring in contact raises
@@ -115,6 +119,24 @@ fn penalty(@builtin(workgroup_id) wg: vec3<u32>,
     if (i >= pp.n_slaves) { return; }
     if (atomicLoad(&status[STATUS_BUDGET_EXCEEDED]) != 0u) { return; }
     let hit = hits[i];
+    // fast-node test: the slave's velocity relative to the master near it — the master's
+    // velocity at its contact point (a facet within the radius), else the pair's reference
+    // master node's — carrying it farther than the search radius within the increment
+    var v_master = vec3<f32>(0.0);
+    var judged = false;
+    if (hit.facet != NO_FACET) {
+        let ff = facets[hit.facet];
+        for (var j = 0u; j < facet_node_count(ff); j++) { v_master += hit.weights[j] * vel[ff[j]].xyz; }
+        judged = true;
+    } else if (pp.ref_node != NO_NODE) {
+        v_master = vel[pp.ref_node].xyz;
+        judged = true;
+    }
+    let reach = length(vel[hit.slave].xyz - v_master) * pp.dt;
+    if (judged && reach > pp.search_radius) {
+        atomicAdd(&status[STATUS_FAST], 1u);
+        atomicMax(&status[STATUS_FAST_RATIO], bitcast<u32>(reach / pp.search_radius));
+    }
     var o: ContactOut;
     o.force = vec4<f32>(0.0);
     o.tangential = vec4<f32>(0.0);
@@ -183,7 +205,9 @@ fn penalty(@builtin(workgroup_id) wg: vec3<u32>,
     let m_eff = 1.0 / (inv_ms + inv_mm);
     var k = pp.stiffness;
     if (pp.stiffness_mode == STIFFNESS_AUTO) {
-        k = pp.stiffness * m_eff / (pp.dt_ref * pp.dt_ref);   // stiffness: AUTO_STIFFNESS·scale
+        // a rigid slave part's slaves share its effective mass (slave_share = n; 1 otherwise)
+        let m_auto = 1.0 / (inv_ms * pp.slave_share + inv_mm);
+        k = pp.stiffness * m_auto / (pp.dt_ref * pp.dt_ref);   // stiffness: AUTO_STIFFNESS·scale
     } else if (pp.stiffness_mode == STIFFNESS_MODULUS) {
         k = pp.stiffness * pp.modulus * area / h_facet;
     } else if (pp.stiffness_mode == STIFFNESS_PER_AREA) {

@@ -28,7 +28,7 @@ struct PenaltyParams {
     stiffness_mode: u32,
     table_len: u32,
     flags: u32,
-    _pad0: u32,
+    ref_node: u32,                       // the pair's reference master node (fast-node test)
     stiffness: f32,
     modulus: f32,
     dt: f32,
@@ -47,6 +47,10 @@ struct PenaltyParams {
     slave_body: vec4<f32>,               // rigid slave part, as master_body
     slave_inv_inertia: array<vec4<f32>, 3>,
     body_slots: vec4<u32>,               // pair-node slots of the master's, slave's part rows; count
+    search_radius: f32,                  // the pair's search radius (fast-node test)
+    slave_share: f32,                    // rigid slave part: slaves sharing its effective mass (1: none)
+    _pad0: u32,
+    _pad1: u32,
 }
 
 // The compliance (1/effective mass) of a rigid body (centre c, inverse mass w; inverse inertia

@@ -19,7 +19,7 @@
 @group(0) @binding(3) var<storage, read> pair_nodes: array<vec4<u32>>;
 @group(0) @binding(4) var<storage, read> rows: array<f32>;
 
-// Words of the statistics (Rust twin: IncrementStats, 64 bytes).
+// Words of the statistics (Rust twin: IncrementStats, 72 bytes).
 const STAT_STABLE_DT: u32 = 0u;      // f32: the largest stable increment the penalty springs allow
 const STAT_APPROACH_DT: u32 = 1u;    // f32: the approach limit
 const STAT_MAX_OVERCLOSURE: u32 = 2u; // f32: the largest overclosure of a spring in contact
@@ -34,8 +34,10 @@ const STAT_NONFINITE: u32 = 10u;     // the lowest node with a non-finite coordi
 const STAT_LOCAL_CAPPED: u32 = 11u;  // local walks stopped at the iteration cap
 const STAT_MOTION: u32 = 12u;        // f32: the largest motion since a global search
 const STAT_FIT_FAILED: u32 = 13u;    // grids that could not be fitted (since the start)
-const STAT_DAMPING: u32 = 14u;       // f32: the largest contact damping ratio (constant)
-const STAT_INCREMENT: u32 = 15u;     // increments completed (since the start)
+const STAT_FAST: u32 = 14u;          // slaves moving farther than the radius relative to the master
+const STAT_FAST_RATIO: u32 = 15u;    // f32: the largest such relative motion over the radius
+const STAT_DAMPING: u32 = 16u;       // f32: the largest contact damping ratio (constant)
+const STAT_INCREMENT: u32 = 17u;     // increments completed (since the start)
 
 @compute @workgroup_size(1)
 fn pair_stats() {
@@ -48,6 +50,8 @@ fn pair_stats() {
     atomicAdd(&stats[STAT_COLLAPSED], status[STATUS_COLLAPSED]);
     atomicAdd(&stats[STAT_LOCAL_CAPPED], status[STATUS_LOCAL_CAPPED]);
     atomicMax(&stats[STAT_MOTION], status[STATUS_MOTION]);
+    atomicAdd(&stats[STAT_FAST], status[STATUS_FAST]);
+    atomicMax(&stats[STAT_FAST_RATIO], status[STATUS_FAST_RATIO]);
     atomicMin(&stats[STAT_NONFINITE], status[STATUS_NONFINITE]);
     atomicMax(&stats[STAT_FIT_FAILED], plan[PLAN_FIT_FAILED]);
     if (plan[PLAN_GLOBAL] != 0u) {

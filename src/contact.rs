@@ -6,8 +6,8 @@ use crate::error::{Error, Result};
 use crate::geometry::{closest_on_facet, V3};
 use crate::gpu::GpuPenalty;
 use crate::kinematic::{
-    anchored_pass, facets_from, friction_pass, meshed_pass, rigid_pass, BodyState, SlaveCorrection,
-    PASSES,
+    anchored_pass, facets_from, friction_pass, meshed_pass, rigid_pass, BodyState,
+    FrictionCorrection, SlaveCorrection, PASSES,
 };
 use crate::model::{validate_positions, Model, PairId};
 use crate::model::{BodyId, Enforce, MasterSurface, PressureOverclosure, RigidBody, RigidPairId};
@@ -102,51 +102,81 @@ pub struct StepReport {
     /// slave nodes within the search radius that have not touched yet (one may close within an
     /// increment, so their limit applies before contact).
     pub stable_dt_before_contact: bool,
-    /// Pair nodes (slave or master, per pair) whose velocity carries them farther than their
-    /// pair's search radius within this increment: the search cannot follow them, and a slave
-    /// may pass through its master unseen (tunnelling). Host-array increments only.
+    /// Slave nodes (per pair; a balanced pair's master nodes in its second pass) whose
+    /// velocity relative to the master near them carries them farther than their pair's search
+    /// radius within this increment: the search cannot follow them, and a slave may pass
+    /// through its master unseen (tunnelling). The master near a slave is the master's
+    /// velocity at its contact point, or — for a slave with no facet within the radius — the
+    /// velocity of the pair's reference master node ([`GlobalSearch::reference_node`]); so a
+    /// contact model that moves as a whole, or a slave carried along by its master, is never
+    /// fast, while a slave crossing a still or opposing master is. Counted by the penalty
+    /// kernels on every path (host arrays and device-resident: [`IncrementStats::fast_nodes`]).
     pub fast_nodes: usize,
     /// The fastest of them.
     pub fastest: Option<FastNode>,
 }
 
-/// A pair node that moves farther than its pair's search radius within one increment.
+/// A slave node that moves farther than its pair's search radius relative to the master near
+/// it within one increment ([`StepReport::fast_nodes`]).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct FastNode {
     /// The model node.
     pub node: usize,
     /// Its pair (a meshed pair's id).
     pub pair: PairId,
-    /// Its speed times the increment, model length units.
+    /// Its speed relative to the master near it times the increment, model length units.
     pub distance: f64,
     /// The pair's search radius.
     pub radius: f64,
 }
 
-/// The pair nodes of `searches` (slaves and master nodes) that `velocities` carry farther than
-/// the pair's search radius within `dt`: their count and the fastest (relative to its radius).
-fn fast_nodes<'a>(
-    searches: impl Iterator<Item = (PairId, &'a GlobalSearch)>,
+/// The slaves of `search` (pair `pair`) whose velocity relative to the master near them
+/// carries them farther than the pair's search radius within `dt`: their count, and the slave
+/// with the largest relative motion over the radius whether or not it is fast (`None` without
+/// slaves). The master near a slave is its velocity at the slave's contact point in `hits` (the
+/// kernels' raw hits, one per slave: the facet's nodes weighted by the load-transfer weights),
+/// or, for a slave with no facet within the radius, the pair's reference master node's
+/// ([`GlobalSearch::reference_node`]). The penalty kernels apply the same rule in f32
+/// (`STATUS_FAST`); this is its f64 twin, for kinematic pairs and to name the fastest slave.
+fn fast_slaves(
+    pair: PairId,
+    search: &GlobalSearch,
+    hits: &[crate::search::layout::GpuHit],
     velocities: &[[f64; 3]],
     dt: f64,
 ) -> (usize, Option<FastNode>) {
+    let radius = search.radius();
+    let facets = search.kernel_facets();
+    let reference = search.reference_node();
     let (mut count, mut fastest) = (0, None::<FastNode>);
-    for (pair, s) in searches {
-        let radius = s.radius();
-        for &n in s.motion_nodes() {
-            let v = velocities[n as usize];
-            let distance = (v[0] * v[0] + v[1] * v[1] + v[2] * v[2]).sqrt() * dt;
-            if distance > radius {
-                count += 1;
-                if fastest.is_none_or(|f| distance / radius > f.distance / f.radius) {
-                    fastest = Some(FastNode {
-                        node: n as usize,
-                        pair,
-                        distance,
-                        radius,
-                    });
+    for (&slave, h) in search.slaves().iter().zip(hits) {
+        let mut vm = [0.0; 3];
+        if h.facet != crate::search::layout::NO_FACET {
+            let fac = facets[h.facet as usize];
+            for j in 0..crate::cpu::common::facet_node_count(fac) {
+                let v = velocities[fac[j] as usize];
+                for a in 0..3 {
+                    vm[a] += h.weights[j] as f64 * v[a];
                 }
             }
+        } else if reference != crate::model::NO_NODE {
+            vm = velocities[reference as usize];
+        } else {
+            continue;
+        }
+        let v = velocities[slave as usize];
+        let rel = [v[0] - vm[0], v[1] - vm[1], v[2] - vm[2]];
+        let distance = (rel[0] * rel[0] + rel[1] * rel[1] + rel[2] * rel[2]).sqrt() * dt;
+        if distance > radius {
+            count += 1;
+        }
+        if fastest.is_none_or(|f| distance / radius > f.distance / f.radius) {
+            fastest = Some(FastNode {
+                node: slave as usize,
+                pair,
+                distance,
+                radius,
+            });
         }
     }
     (count, fastest)
@@ -221,6 +251,8 @@ struct KinematicRun {
     anchored: bool,
     /// Coulomb friction (μ static, μ kinetic, decay), after the normal correction.
     friction: Option<(f64, f64, f64)>,
+    /// The energy its friction dissipated since the start.
+    dissipated: f64,
     /// Per slave (pass one, then the balanced pass's): behind a free edge of the master
     /// ([`facets_from`]).
     behind: (Vec<bool>, Vec<bool>),
@@ -255,8 +287,9 @@ pub struct KinematicReport {
     pub total_force: f64,
     /// Sum over slaves of the kinematic friction force magnitudes (pairs with friction).
     pub friction_force: f64,
-    /// Nodes of meshed kinematic pairs that the velocities carry farther than their pair's
-    /// search radius within this increment (see [`StepReport::fast_nodes`]).
+    /// Slave nodes of meshed kinematic pairs that the velocities (the predictor's) carry
+    /// farther than their pair's search radius relative to the master near them within this
+    /// increment, by [`StepReport::fast_nodes`]'s rule.
     pub fast_nodes: usize,
     /// The fastest of them.
     pub fastest: Option<FastNode>,
@@ -330,27 +363,29 @@ impl Contact {
                             DeviceKind::Cpu => PenaltyExec::Cpu(CpuPenalty::new(setup, n_nodes)),
                         })
                     };
-                    let setup = PenaltySetup::new(model, id, search.master(), &slaves)?;
+                    let setup = PenaltySetup::new(model, id, search.master(), &slaves)?
+                        .with_search(&search);
                     let exec = make_exec(&setup)?;
                     let back = match pair.balanced {
                         // balanced: the master surface's nodes against the slave surface too
                         Some((surface, _)) => {
                             let slave_surface = model.surface(surface)?.clone();
                             let nodes = search.master().nodes();
+                            let rsearch = GlobalSearch::from_parts(
+                                device,
+                                model,
+                                slave_surface.clone(),
+                                nodes.clone(),
+                                search.radius(),
+                            )?;
                             let reverse = PenaltySetup::reverse(
                                 model,
                                 id,
                                 search.master(),
                                 &slave_surface,
                                 &nodes,
-                            )?;
-                            let rsearch = GlobalSearch::from_parts(
-                                device,
-                                model,
-                                slave_surface,
-                                nodes.clone(),
-                                search.radius(),
-                            )?;
+                            )?
+                            .with_search(&rsearch);
                             let rexec = make_exec(&reverse)?;
                             Some(PairRun {
                                 id,
@@ -418,6 +453,7 @@ impl Contact {
                         id,
                         search,
                         friction,
+                        dissipated: 0.0,
                         behind,
                         back,
                         master,
@@ -590,8 +626,6 @@ impl Contact {
             return Ok(&self.report);
         }
         self.host_increment(positions, velocities, dt)?;
-        (self.report.fast_nodes, self.report.fastest) =
-            fast_nodes(self.pairs.iter().map(|p| (p.id, &p.search)), velocities, dt);
         Ok(&self.report)
     }
 
@@ -719,19 +753,29 @@ impl Contact {
         };
         let before = ke(v, &self.masses) + bodies_kinetic_energy(&self.rigid, bodies);
         let mut report = KinematicReport::default();
-        (report.fast_nodes, report.fastest) = fast_nodes(
-            self.kinematic.iter().flat_map(|k| {
-                std::iter::once((k.id, &k.search)).chain(k.back.iter().map(|b| (k.id, &b.0)))
-            }),
-            v,
-            dt,
-        );
         let masses = &self.masses;
         for kr in &mut self.kinematic {
             let result = kr.search.step(x)?;
+            let mut fast = |search: &GlobalSearch, r: &SearchResult, v: &[[f64; 3]]| {
+                let (count, top) = fast_slaves(kr.id, search, &r.raw, v, dt);
+                report.fast_nodes += count;
+                if let Some(t) = top.filter(|_| count > 0) {
+                    if report
+                        .fastest
+                        .is_none_or(|f| t.distance / t.radius > f.distance / f.radius)
+                    {
+                        report.fastest = Some(t);
+                    }
+                }
+            };
+            fast(&kr.search, &result, v);
             let facets = facets_from(&result, &mut kr.behind.0);
             let back_facets = match &mut kr.back {
-                Some((search, _, _)) => Some(facets_from(&search.step(x)?, &mut kr.behind.1)),
+                Some((search, _, _)) => {
+                    let r = search.step(x)?;
+                    fast(search, &r, v);
+                    Some(facets_from(&r, &mut kr.behind.1))
+                }
                 None => None,
             };
             let back = kr
@@ -821,6 +865,7 @@ impl Contact {
                 first.get_or_insert(c);
             }
             let c = first.unwrap_or_default();
+            let mut friction = None;
             if let (Some(mu), None, false) = (kr.friction, &back, kr.anchored) {
                 let ft = friction_pass(
                     &kr.master,
@@ -834,9 +879,12 @@ impl Contact {
                     dt,
                 );
                 report.friction_force += ft
+                    .force
                     .iter()
                     .map(|f| (f[0] * f[0] + f[1] * f[1] + f[2] * f[2]).sqrt())
                     .sum::<f64>();
+                kr.dissipated += ft.dissipation;
+                friction = Some(ft);
             }
             // what is left, measured on the corrected positions
             let left = if kr.anchored {
@@ -870,6 +918,10 @@ impl Contact {
             report.max_overclosure_after = report.max_overclosure_after.max(left);
             tally(&mut report, &c);
             fill_kinematic_output(&mut kr.output, &c, &kr.areas, Some(result));
+            if let Some(ft) = &friction {
+                add_kinematic_friction(&mut kr.output, ft, &kr.areas);
+            }
+            kr.output.frictional_dissipation = kr.dissipated;
         }
         for rr in &mut self.rigid {
             let body = &mut bodies[rr.body.0];
@@ -1071,6 +1123,29 @@ fn tally(report: &mut KinematicReport, c: &[SlaveCorrection]) {
             report.active += 1;
             report.total_force += s.force;
             report.max_overclosure = report.max_overclosure.max(s.overclosure);
+        }
+    }
+}
+
+/// Books a kinematic pair's friction in its outputs: CSHEAR1/2 (the friction force along the
+/// contact's tangent directions over the tributary area), the slave's total force, CFS, and the
+/// stick or slip state of each slave in contact.
+fn add_kinematic_friction(o: &mut PairOutput, ft: &FrictionCorrection, areas: &[f64]) {
+    for k in 0..o.force.len().min(ft.force.len()) {
+        let f = ft.force[k];
+        if o.cstatus[k] == Some(ContactStatus::Slip) && ft.stick[k] {
+            o.cstatus[k] = Some(ContactStatus::Stick);
+        }
+        if f == [0.0; 3] {
+            continue;
+        }
+        let (t1, t2) = crate::geometry::tangent_directions(V3::from_array(o.normal[k]));
+        let f3 = V3::from_array(f);
+        o.cshear1[k] = f3.dot(t1) / areas[k];
+        o.cshear2[k] = f3.dot(t2) / areas[k];
+        for a in 0..3 {
+            o.force[k][a] += f[a];
+            o.cfs[a] += f[a];
         }
     }
 }

@@ -206,13 +206,15 @@ pub enum Error {
         /// What the inputs there were, and what to look at.
         cause: String,
     },
-    /// A node moved farther than its pair's search radius within one increment: the search
-    /// cannot follow it, and a slave may pass through its master unseen (tunnelling).
+    /// A slave node moved farther than its pair's search radius relative to the master near it
+    /// within one increment: the search cannot follow it, and it may pass through its master
+    /// unseen (tunnelling).
     #[error(
-        "increment {increment} (t = {time:e}): node {node} of contact pair {pair} moves \
-         {distance:e} in one increment, farther than the pair's search radius {radius:e}: \
-         contact would be missed (tunnelling); take a smaller increment (run.dt, run.safety) \
-         or a larger search radius (the contact's search_radius){more}"
+        "increment {increment} (t = {time:e}): slave node {node} of contact pair {pair} moves \
+         {distance:e} relative to the master near it in one increment, farther than the \
+         pair's search radius {radius:e}: contact would be missed (tunnelling); take a smaller \
+         increment (run.dt, run.safety) or a larger search radius (the contact's \
+         search_radius){more}"
     )]
     Tunnelling {
         /// The increment (1 = the first).

@@ -264,6 +264,20 @@ fn correct(
     out
 }
 
+/// What the kinematic friction of one pair did in one increment ([`friction_pass`]).
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct FrictionCorrection {
+    /// Each slave's friction force (model frame; zero where it is not in contact or does not
+    /// slide relative to the master).
+    pub force: Vec<[f64; 3]>,
+    /// Each slave's state: `true` where the force stopped its slip within the increment
+    /// (stick), `false` where the Coulomb limit capped it (slip) or there was none.
+    pub stick: Vec<bool>,
+    /// The kinetic energy the friction corrections removed, Σ ½·m·(|v|² − |v + Δv|²) over the
+    /// nodes they changed (model energy units, ≥ 0): the frictional dissipation.
+    pub dissipation: f64,
+}
+
 /// Coulomb friction of a kinematic pair, after its normal correction (Abaqus' kinematic
 /// friction): each slave in contact gets the tangential force that would stop its relative slip
 /// within the increment, `m*·|v_t|/Δt` with the two-body mass `1/m* = 1/m_s + Σ w_j²/m_j`, but no
@@ -271,7 +285,7 @@ fn correct(
 /// slave and by the weights on its master facet's nodes. `v` (corrected for the normal) and `x`
 /// move by the tangential velocity change (and its `Δt`). Stick is exact (no elastic pre-slip);
 /// the coefficient decays with slip rate as the penalty's does. Returns each slave's friction
-/// force (model frame; zero where it is not in contact).
+/// force and state and the energy dissipated.
 #[allow(clippy::too_many_arguments)]
 pub fn friction_pass(
     master: &MasterSurface,
@@ -283,9 +297,13 @@ pub fn friction_pass(
     normal_force: &[f64],
     mu: (f64, f64, f64),
     dt: f64,
-) -> Vec<[f64; 3]> {
+) -> FrictionCorrection {
     let (mu_s, mu_k, decay) = mu;
-    let mut out = vec![[0.0; 3]; slaves.len()];
+    let mut out = FrictionCorrection {
+        force: vec![[0.0; 3]; slaves.len()],
+        stick: vec![false; slaves.len()],
+        dissipation: 0.0,
+    };
     // forces first (every slave on the same velocities), then the changes
     let mut dv = vec![V3::<f64>::zero(); x.len()];
     for (k, (&s, f)) in slaves.iter().zip(facet_of).enumerate() {
@@ -311,13 +329,15 @@ pub fn friction_pass(
         let v_t = v_rel - n * v_rel.dot(n);
         let speed = v_t.length2().sqrt();
         if speed == 0.0 {
+            out.stick[k] = true;
             continue;
         }
         let mu = mu_k + (mu_s - mu_k) * (-decay * speed).exp();
         let stick = speed / (inv_m * dt);
         let f = stick.min(mu * f_n);
+        out.stick[k] = stick <= mu * f_n;
         let ft = v_t * (-f / speed);
-        out[k] = ft.to_array();
+        out.force[k] = ft.to_array();
         dv[s as usize] = dv[s as usize] + ft * (dt / masses[s as usize]);
         for (j, &m) in nodes.iter().enumerate() {
             dv[m as usize] = dv[m as usize] - ft * (pr.weights[j] * dt / masses[m as usize]);
@@ -325,10 +345,15 @@ pub fn friction_pass(
     }
     for (i, d) in dv.iter().enumerate() {
         let d = d.to_array();
+        if d == [0.0; 3] {
+            continue;
+        }
+        let before = V3::from_array(v[i]).length2();
         for a in 0..3 {
             v[i][a] += d[a];
             x[i][a] += d[a] * dt;
         }
+        out.dissipation += 0.5 * masses[i] * (before - V3::from_array(v[i]).length2());
     }
     out
 }

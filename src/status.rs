@@ -114,7 +114,12 @@ pub const STATUS_TABLE: [StatusWord; STATUS_WORDS] = [
         Owner::Penalty,
         0,
     ),
-    w(15, "unused", Owner::Unused, 0),
+    w(
+        STATUS_FAST,
+        "slaves moving beyond the radius relative to the master",
+        Owner::Penalty,
+        0,
+    ),
     w(
         STATUS_FORCE_SCALE,
         "gather's force scale (f32 bits)",
@@ -181,7 +186,12 @@ pub const STATUS_TABLE: [StatusWord; STATUS_WORDS] = [
         Owner::Search,
         u32::MAX,
     ),
-    w(27, "unused", Owner::Unused, 0),
+    w(
+        STATUS_FAST_RATIO,
+        "largest relative motion over the radius (f32 bits)",
+        Owner::Penalty,
+        0,
+    ),
 ];
 
 /// Every word at its reset value (the image the GPU executors copy resets from).
@@ -288,7 +298,7 @@ mod tests {
             assert_eq!(w.index, i, "{}", w.name);
         }
         assert_eq!(NO_LIMIT_BITS, crate::penalty::layout::NO_LIMIT.to_bits());
-        assert_eq!(owned_runs(Owner::Penalty), vec![(4, 4), (14, 1), (16, 2)]);
+        assert_eq!(owned_runs(Owner::Penalty), vec![(4, 4), (14, 4), (27, 1)]);
         let mut s = [7u32; STATUS_WORDS];
         reset(&mut s, Owner::Penalty);
         assert_eq!(Status(s).dt_stable(), crate::penalty::layout::NO_LIMIT);

@@ -268,8 +268,11 @@ fn resident_steps(device: &Device, s: &Scene, steps: usize) -> Vec<Step> {
             q.submit([enc.finish()]);
             let forces: Vec<[f32; 4]> =
                 bytemuck::pod_collect_to_vec(&read(device, &b.f, (n * 16) as u64));
-            let st: IncrementStats =
-                bytemuck::pod_read_unaligned(&read(device, c.stats_buffer().unwrap(), 64));
+            let st: IncrementStats = bytemuck::pod_read_unaligned(&read(
+                device,
+                c.stats_buffer().unwrap(),
+                abut::search::layout::STATS_BYTES,
+            ));
             assert_eq!(st.increment as usize, k + 1, "{device}: increment counter");
             out.push(step_from(&forces, &st));
         }

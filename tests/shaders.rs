@@ -258,6 +258,8 @@ fn resident_twins_match_rust() {
         ("STATUS_NONFINITE", l::STATUS_NONFINITE),
         ("STATUS_FALLBACK", l::STATUS_FALLBACK),
         ("STATUS_BUDGET_EXCEEDED", l::STATUS_BUDGET_EXCEEDED),
+        ("STATUS_FAST", l::STATUS_FAST),
+        ("STATUS_FAST_RATIO", l::STATUS_FAST_RATIO),
     ] {
         assert_eq!(constant_u32(&m, name) as usize, v, "{name}");
     }
@@ -277,8 +279,13 @@ fn resident_twins_match_rust() {
     assert_eq!((4 * l::PLAN_PARAMS) % 256, 0);
     assert!(l::PLAN_PARAMS + std::mem::size_of::<SearchParams>() / 4 <= l::PLAN_SLOTS);
     let st = parse("stats");
-    assert_eq!(constant_u32(&st, "STAT_INCREMENT") as usize, 15);
-    assert_eq!(std::mem::size_of::<l::IncrementStats>(), 16 * 4);
+    assert_eq!(
+        constant_u32(&st, "STAT_INCREMENT") as usize,
+        l::STATS_WORDS - 1
+    );
+    assert_eq!(std::mem::size_of::<l::IncrementStats>(), l::STATS_WORDS * 4);
+    assert_eq!(constant_u32(&st, "STAT_FAST") as usize, 14);
+    assert_eq!(constant_u32(&st, "STAT_FAST_RATIO") as usize, 15);
     assert_eq!(
         constant_u32(&st, "STAT_DAMPING") as usize,
         l::STATS_RESET_WORDS

@@ -16,7 +16,7 @@ use crate::gpu::{GpuIncrement, STATS_RING};
 use crate::penalty::layout::{ContactOut, NO_LIMIT};
 use crate::search::layout::{
     GpuHit, IncrementStats, PLAN_CROWDED, PLAN_FORCE, PLAN_SEARCHED, PLAN_SINCE_GLOBAL, PLAN_SLOTS,
-    PLAN_TRIGGER, STATS_RESET_WORDS, STATUS_WORDS,
+    PLAN_TRIGGER, STATS_BYTES, STATS_RESET_WORDS, STATS_WORDS, STATUS_WORDS,
 };
 use crate::search::GlobalSearch;
 
@@ -60,7 +60,7 @@ pub(crate) enum Resident {
         /// The node-wise bound's rows per model node.
         rows: Vec<f32>,
         /// The statistics words (`IncrementStats`).
-        stats: [u32; 16],
+        stats: [u32; STATS_WORDS],
         /// Statistics not yet collected (at most `STATS_RING`, as on a GPU).
         queue: Vec<IncrementStats>,
         /// Increments whose statistics found the queue full.
@@ -210,9 +210,7 @@ impl Contact {
                 )?))
             }
             Some(PenaltyExec::Cpu(_)) => {
-                let mut first = [0u32; 16];
-                first[..STATS_RESET_WORDS].copy_from_slice(&stats::reset_image());
-                first[14] = damping.to_bits();
+                let first = stats::first_image(damping);
                 Resident::Cpu {
                     rows: vec![0.0; self.n_nodes],
                     stats: first,
@@ -455,7 +453,7 @@ impl Contact {
     }
 
     /// The device buffer of the last device-resident increment's statistics
-    /// ([`IncrementStats`], 64 bytes, STORAGE | COPY_SRC): a host integrator running on the
+    /// ([`IncrementStats`], 72 bytes, STORAGE | COPY_SRC): a host integrator running on the
     /// device binds it to read `stable_dt` there. `None` on the CPU path and before the first
     /// increment.
     pub fn stats_buffer(&self) -> Option<&wgpu::Buffer> {
@@ -584,7 +582,7 @@ impl Contact {
                         f: buffer("forces", n as u64 * 16, state),
                         staging: buffer(
                             "increment readback",
-                            n as u64 * 16 + 64 * (1 + self.pairs.len() as u64) + outputs,
+                            n as u64 * 16 + STATS_BYTES + 64 * self.pairs.len() as u64 + outputs,
                             wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
                         ),
                     }
@@ -665,6 +663,25 @@ impl Contact {
             ..Default::default()
         };
         self.global_total += st.global_searches as u64;
+        self.report.fast_nodes = st.fast_nodes as usize;
+        if st.fast_nodes > 0 {
+            // the kernels counted them; name the fastest from this increment's hits
+            let mut fastest: Option<super::FastNode> = None;
+            for k in 0..self.pairs.len() {
+                let hits = match raws.get(k) {
+                    Some(raw) => raw.hits.clone(),
+                    None => self.last_hits(k)?,
+                };
+                let pr = &self.pairs[k];
+                let (_, top) = super::fast_slaves(pr.id, &pr.search, &hits, velocities, dt);
+                if let Some(t) = top {
+                    if fastest.is_none_or(|f| t.distance / t.radius > f.distance / f.radius) {
+                        fastest = Some(t);
+                    }
+                }
+            }
+            self.report.fastest = fastest;
+        }
         // name the slave whose contact gave it (its master nodes share the value), else the node
         let forces = &self.report.forces;
         let on_slave = self.pairs.iter().find_map(|p| {
@@ -712,6 +729,41 @@ impl Contact {
             fill_output(&mut pr.output, &raw.out, &pr.setup.areas, result);
         }
         Ok(())
+    }
+
+    /// The raw hits of pair run `k` after the last host-array increment (read back from the
+    /// GPU when it has them).
+    fn last_hits(&self, k: usize) -> Result<Vec<GpuHit>> {
+        let pr = &self.pairs[k];
+        let ns = pr.search.slaves().len();
+        match (&pr.exec, pr.search.gpu()) {
+            (PenaltyExec::Gpu(p), Some(g)) => {
+                let bytes = (ns * std::mem::size_of::<GpuHit>()) as u64;
+                if bytes == 0 {
+                    return Ok(Vec::new());
+                }
+                let ctx = p.context();
+                let staging = ctx.device.create_buffer(&wgpu::BufferDescriptor {
+                    label: Some("hits readback"),
+                    size: bytes,
+                    usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
+                    mapped_at_creation: false,
+                });
+                let mut enc = ctx
+                    .device
+                    .create_command_encoder(&wgpu::CommandEncoderDescriptor {
+                        label: Some("hits readback"),
+                    });
+                enc.copy_buffer_to_buffer(g.resident_outputs().2, 0, &staging, 0, bytes);
+                crate::gpu::submit(&ctx, enc);
+                let raw = crate::gpu::buffers::read_back(&ctx, &staging, bytes, "hits readback")?;
+                Ok(bytemuck::pod_collect_to_vec(&raw))
+            }
+            _ => {
+                let c = pr.search.cpu().ok_or_else(mixed)?;
+                Ok(c.resident_outputs().2[..ns].to_vec())
+            }
+        }
     }
 
     /// Runs one increment on abut's own arrays `mode` (positions `x`, per pair relative to its
@@ -768,8 +820,8 @@ impl Contact {
                 let Some(Resident::Gpu(inc)) = &self.resident else {
                     return Err(mixed());
                 };
-                enc.copy_buffer_to_buffer(inc.stats(), 0, staging, forces_bytes, 64);
-                let mut offset = forces_bytes + 64;
+                enc.copy_buffer_to_buffer(inc.stats(), 0, staging, forces_bytes, STATS_BYTES);
+                let mut offset = forces_bytes + STATS_BYTES;
                 // every pair's schedule words
                 let heads = offset;
                 for pr in &self.pairs {
@@ -808,7 +860,7 @@ impl Contact {
                 let forces: Vec<[f32; 4]> =
                     bytemuck::pod_collect_to_vec(&bytes[..forces_bytes as usize]);
                 let st: IncrementStats = bytemuck::pod_read_unaligned(
-                    &bytes[forces_bytes as usize..forces_bytes as usize + 64],
+                    &bytes[forces_bytes as usize..(forces_bytes + STATS_BYTES) as usize],
                 );
                 let plans: Vec<Vec<u32>> = (0..self.pairs.len())
                     .map(|k| {

@@ -4,7 +4,8 @@ use super::common::node;
 use crate::model::NO_NODE;
 use crate::search::layout::{GpuHit, SearchParams, STATUS_BUDGET_EXCEEDED, STATUS_MOTION};
 
-/// One "invocation" per motion node; tracked slaves are skipped.
+/// One "invocation" per motion node; tracked slaves are skipped. Each displacement since the
+/// reference is taken relative to the pair's reference master node's (`params.ref_node`).
 pub fn motion(
     params: &SearchParams,
     nodes: &[[f32; 4]],
@@ -20,7 +21,10 @@ pub fn motion(
         if k < params.n_slaves as usize && hits[k].node != NO_NODE {
             continue;
         }
-        let d = (node(nodes, id) - node(reference, id)).length2().sqrt();
+        let base = node(nodes, params.ref_node) - node(reference, params.ref_node);
+        let d = ((node(nodes, id) - node(reference, id)) - base)
+            .length2()
+            .sqrt();
         status[STATUS_MOTION] = status[STATUS_MOTION].max(d.to_bits());
         if 2.0 * d >= params.budget {
             status[STATUS_BUDGET_EXCEEDED] = 1;

@@ -6,10 +6,12 @@ use rayon::prelude::*;
 
 use super::common::{facet_node_count, node};
 use crate::geometry::{tangent_directions, V3};
+use crate::model::NO_NODE;
 use crate::penalty::layout::*;
 use crate::search::layout::{
-    GpuHit, NO_FACET, STATUS_ACTIVE, STATUS_DT_APPROACH, STATUS_DT_STABLE, STATUS_FORCE_SCALE,
-    STATUS_MAX_OVERCLOSURE, STATUS_ROW_SCALE, STATUS_SLIPPING,
+    GpuHit, NO_FACET, STATUS_ACTIVE, STATUS_DT_APPROACH, STATUS_DT_STABLE, STATUS_FAST,
+    STATUS_FAST_RATIO, STATUS_FORCE_SCALE, STATUS_MAX_OVERCLOSURE, STATUS_ROW_SCALE,
+    STATUS_SLIPPING,
 };
 
 const E_MINUS_1: f32 = 1.718_281_8;
@@ -158,6 +160,28 @@ pub fn penalty(
         .with_min_len(super::PAR_MIN)
         .for_each(|(i, (slave_state, slot))| {
             let hit = hits[i];
+            // fast-node test (as the WGSL): velocity relative to the master near the slave
+            let mut v_master = V3::<f32>::zero();
+            let mut judged = false;
+            if hit.facet != NO_FACET {
+                let ff = facets[hit.facet as usize];
+                for j in 0..facet_node_count(ff) {
+                    let v = vel[ff[j] as usize];
+                    v_master = v_master + V3::new(v[0], v[1], v[2]) * hit.weights[j];
+                }
+                judged = true;
+            } else if pp.ref_node != NO_NODE {
+                let v = vel[pp.ref_node as usize];
+                v_master = V3::new(v[0], v[1], v[2]);
+                judged = true;
+            }
+            let vs = vel[hit.slave as usize];
+            let reach = (V3::new(vs[0], vs[1], vs[2]) - v_master).length2().sqrt() * pp.dt;
+            if judged && reach > pp.search_radius {
+                status[STATUS_FAST].fetch_add(1, Ordering::Relaxed);
+                status[STATUS_FAST_RATIO]
+                    .fetch_max((reach / pp.search_radius).to_bits(), Ordering::Relaxed);
+            }
             let mut o = ContactOut {
                 force: [0.0; 4],
                 tangential: [0.0; 4],
@@ -230,7 +254,8 @@ pub fn penalty(
             let m_eff = 1.0 / (inv_ms + inv_mm);
             let mut k = pp.stiffness;
             if pp.stiffness_mode == STIFFNESS_AUTO {
-                k = pp.stiffness * m_eff / (pp.dt_ref * pp.dt_ref);
+                let m_auto = 1.0 / (inv_ms * pp.slave_share + inv_mm);
+                k = pp.stiffness * m_auto / (pp.dt_ref * pp.dt_ref);
             } else if pp.stiffness_mode == STIFFNESS_MODULUS {
                 k = pp.stiffness * pp.modulus * area / h_facet;
             } else if pp.stiffness_mode == STIFFNESS_PER_AREA {

@@ -18,8 +18,10 @@ const NONFINITE: usize = 10;
 const LOCAL_CAPPED: usize = 11;
 const MOTION: usize = 12;
 const FIT_FAILED: usize = 13;
-const DAMPING: usize = 14;
-const INCREMENT: usize = 15;
+const FAST: usize = 14;
+const FAST_RATIO: usize = 15;
+const DAMPING: usize = 16;
+const INCREMENT: usize = 17;
 
 /// The reset values of the statistics' first [`STATS_RESET_WORDS`] words.
 pub fn reset_image() -> [u32; STATS_RESET_WORDS] {
@@ -30,8 +32,17 @@ pub fn reset_image() -> [u32; STATS_RESET_WORDS] {
     w
 }
 
+/// The statistics before the first increment: the reset words, and the largest contact
+/// damping ratio `damping` of the penalty pairs (a constant word).
+pub fn first_image(damping: f32) -> [u32; STATS_WORDS] {
+    let mut w = [0u32; STATS_WORDS];
+    w[..STATS_RESET_WORDS].copy_from_slice(&reset_image());
+    w[DAMPING] = damping.to_bits();
+    w
+}
+
 /// One "invocation" per pair: its status words into the statistics (WGSL: `pair_stats`).
-pub fn pair_stats(status: &[u32], plan: &mut [u32], stats: &mut [u32; 16]) {
+pub fn pair_stats(status: &[u32], plan: &mut [u32], stats: &mut [u32; STATS_WORDS]) {
     stats[STABLE_DT] = stats[STABLE_DT].min(status[STATUS_DT_STABLE]);
     stats[APPROACH_DT] = stats[APPROACH_DT].min(status[STATUS_DT_APPROACH]);
     stats[MAX_OVERCLOSURE] = stats[MAX_OVERCLOSURE].max(status[STATUS_MAX_OVERCLOSURE]);
@@ -41,6 +52,8 @@ pub fn pair_stats(status: &[u32], plan: &mut [u32], stats: &mut [u32; 16]) {
     stats[COLLAPSED] += status[STATUS_COLLAPSED];
     stats[LOCAL_CAPPED] += status[STATUS_LOCAL_CAPPED];
     stats[MOTION] = stats[MOTION].max(status[STATUS_MOTION]);
+    stats[FAST] += status[STATUS_FAST];
+    stats[FAST_RATIO] = stats[FAST_RATIO].max(status[STATUS_FAST_RATIO]);
     stats[NONFINITE] = stats[NONFINITE].min(status[STATUS_NONFINITE]);
     stats[FIT_FAILED] = stats[FIT_FAILED].max(plan[PLAN_FIT_FAILED]);
     if plan[PLAN_GLOBAL] != 0 {
@@ -65,7 +78,7 @@ pub fn pair_stats(status: &[u32], plan: &mut [u32], stats: &mut [u32; 16]) {
 /// 1e-4 or less); a rigid node (u ≈ 1e-6 of the slave's) takes only ~1e-4 of each spring it
 /// carries, and a node a contact does not weigh (w = 0) none. The penalty pass computes each
 /// spring's share, the gather sums them per pair node, add_forces over the pairs per node.
-pub fn bound_max(pair_nodes: &[PairNode], rows: &[f32], stats: &mut [u32; 16]) {
+pub fn bound_max(pair_nodes: &[PairNode], rows: &[f32], stats: &mut [u32; STATS_WORDS]) {
     for pn in pair_nodes {
         stats[OMEGA2] = stats[OMEGA2].max(rows[pn.node as usize].max(0.0).to_bits());
     }
@@ -73,7 +86,7 @@ pub fn bound_max(pair_nodes: &[PairNode], rows: &[f32], stats: &mut [u32; 16]) {
 
 /// One "invocation": the stable increment from the bound, the increment counted
 /// (WGSL: `finish_stats`).
-pub fn finish_stats(stats: &mut [u32; 16]) {
+pub fn finish_stats(stats: &mut [u32; STATS_WORDS]) {
     let w2 = f32::from_bits(stats[OMEGA2]);
     if w2 > 0.0 {
         let z = f32::from_bits(stats[DAMPING]);

@@ -523,17 +523,41 @@ impl Element {
         sigma
     }
 
-    /// Adds linear bulk viscosity (Abaqus' b1 form, pressure `b1·ρ·c·L·ε̇_vol` with L the
-    /// element's stable length and c its wave speed) at velocities `v` to `f`, and returns
-    /// its power (≤ 0: it only dissipates).
+    /// The volumetric strain rate at velocities `v` (1/s; negative in compression): a bar's
+    /// axial rate along its current axis, a continuum element's Σ v_i·∇N_i.
+    pub fn volumetric_rate(&self, x: &[[f64; 3]], v: &[[f64; 3]]) -> f64 {
+        match self {
+            Element::Bar { nodes, length0, .. } => {
+                let d = sub(x[nodes[1] as usize], x[nodes[0] as usize]);
+                let u = d * (1.0 / d.length2().sqrt());
+                sub(v[nodes[1] as usize], v[nodes[0] as usize]).dot(u) / length0
+            }
+            Element::Tri3 { nodes, grad, .. } => nodes
+                .iter()
+                .zip(grad)
+                .map(|(&n, g)| v[n as usize][0] * g[0] + v[n as usize][1] * g[1])
+                .sum(),
+            Element::Tet4 { nodes, grad, .. } => nodes
+                .iter()
+                .zip(grad)
+                .map(|(&n, g)| (0..3).map(|r| v[n as usize][r] * g[r]).sum::<f64>())
+                .sum(),
+        }
+    }
+
+    /// Adds bulk viscosity at velocities `v` to `f` in Abaqus' form, the pressure
+    /// `b1·ρ·c·L·ε̇_vol` (linear) plus `ρ·(b2·L·ε̇_vol)²` in compression only (quadratic), with L
+    /// the element's stable length and c its wave speed, and returns its power (≤ 0: it only
+    /// dissipates).
     pub fn add_bulk_viscosity(
         &self,
         x: &[[f64; 3]],
         v: &[[f64; 3]],
-        b1: f64,
+        (b1, b2): (f64, f64),
         f: &mut [[f64; 3]],
     ) -> f64 {
         let c_len = self.stable_increment();
+        let rate = self.volumetric_rate(x, v);
         match self {
             Element::Bar {
                 nodes,
@@ -541,13 +565,10 @@ impl Element {
                 length0,
                 material,
             } => {
-                // axial strain rate along the current axis
                 let d = sub(x[nodes[1] as usize], x[nodes[0] as usize]);
                 let u = d * (1.0 / d.length2().sqrt());
-                let dv = sub(v[nodes[1] as usize], v[nodes[0] as usize]);
-                let rate = dv.dot(u) / length0;
                 let c = length0 / c_len;
-                let p = b1 * material.density * c * length0 * rate;
+                let p = viscous_pressure(material.density, c, *length0, rate, b1, b2);
                 let t = (u * (p * area)).to_array();
                 for a in 0..3 {
                     f[nodes[0] as usize][a] += t[a];
@@ -564,39 +585,56 @@ impl Element {
                 ..
             } => {
                 let g = grad.map(|g| [g[0], g[1], 0.0]);
-                volumetric_dashpot(nodes, &g, area0 * thickness, material, c_len, b1, v, f)
+                let c = material.p_wave_speed();
+                let p = viscous_pressure(material.density, c, c_len * c, rate, b1, b2);
+                volumetric_dashpot(nodes, &g, area0 * thickness, p, rate, f)
             }
             Element::Tet4 {
                 nodes,
                 volume0,
                 grad,
                 material,
-            } => volumetric_dashpot(nodes, grad, *volume0, material, c_len, b1, v, f),
+            } => {
+                let c = material.p_wave_speed();
+                let p = viscous_pressure(material.density, c, c_len * c, rate, b1, b2);
+                volumetric_dashpot(nodes, grad, *volume0, p, rate, f)
+            }
         }
+    }
+
+    /// The fraction of critical damping bulk viscosity gives the element's highest mode at
+    /// velocities `v` (Abaqus: ξ = b1 − b2²·(L/c)·min(0, ε̇_vol)), which lowers its stable
+    /// increment to `stable_increment()·(√(1 + ξ²) − ξ)`.
+    pub fn bulk_damping_ratio(&self, x: &[[f64; 3]], v: &[[f64; 3]], (b1, b2): (f64, f64)) -> f64 {
+        if b2 == 0.0 {
+            return b1;
+        }
+        b1 - b2 * b2 * self.stable_increment() * self.volumetric_rate(x, v).min(0.0)
     }
 }
 
-/// Linear bulk viscosity of a continuum element of reference volume `vol`: the pressure
-/// b1·ρ·c·L·ε̇_vol, with ε̇_vol = Σ v_i·∇N_i, L = c·`c_len` the stable length, applied as
-/// −vol·p·∇N_i; returns its power (≤ 0).
-#[allow(clippy::too_many_arguments)]
+/// The bulk viscosity pressure (tension positive, as the rate): `b1·ρ·c·L·ε̇` plus, in
+/// compression (ε̇ < 0), `−ρ·(b2·L·ε̇)²`; its product with the rate is never negative.
+fn viscous_pressure(density: f64, c: f64, length: f64, rate: f64, b1: f64, b2: f64) -> f64 {
+    let quadratic = if rate < 0.0 {
+        density * (b2 * length * rate).powi(2)
+    } else {
+        0.0
+    };
+    b1 * density * c * length * rate - quadratic
+}
+
+/// Bulk viscosity of a continuum element of reference volume `vol`: the pressure `p` (from
+/// [`viscous_pressure`] at the volumetric rate `rate` = Σ v_i·∇N_i) applied as −vol·p·∇N_i;
+/// returns its power (≤ 0).
 fn volumetric_dashpot(
     nodes: &[u32],
     grad: &[[f64; 3]],
     vol: f64,
-    material: &Material,
-    c_len: f64,
-    b1: f64,
-    v: &[[f64; 3]],
+    p: f64,
+    rate: f64,
     f: &mut [[f64; 3]],
 ) -> f64 {
-    let rate: f64 = nodes
-        .iter()
-        .zip(grad)
-        .map(|(&n, g)| (0..3).map(|r| v[n as usize][r] * g[r]).sum::<f64>())
-        .sum();
-    let c = material.p_wave_speed();
-    let p = b1 * material.density * c * (c_len * c) * rate;
     for (&n, g) in nodes.iter().zip(grad) {
         for r in 0..3 {
             f[n as usize][r] -= vol * p * g[r];

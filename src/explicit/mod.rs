@@ -126,8 +126,11 @@ pub struct Solver {
     pub loads: Vec<[f64; 3]>,
     /// Mass-proportional damping coefficient α (force −α·m·v).
     pub damping: f64,
-    /// Linear bulk viscosity b1 (Abaqus' default is 0.06; 0 = none).
+    /// Linear bulk viscosity b1 (Abaqus' default is 0.06, scenes' too; 0 = none).
     pub bulk_viscosity: f64,
+    /// Quadratic bulk viscosity b2, acting in compression only (Abaqus' default is 1.2, scenes'
+    /// too; 0 = none).
+    pub bulk_viscosity_quadratic: f64,
     /// Large-strain kinematics (true, the default) or small strain (Abaqus' NLGEOM=NO, see
     /// [`Element::add_internal_forces_with`]).
     pub nlgeom: bool,
@@ -150,6 +153,9 @@ pub struct Solver {
     /// The largest overclosure contact resolved so far (kinematic pairs: before the
     /// correction; penalty: carried with force), the increment and the node's pair report.
     worst_overclosure: (f64, u64),
+    /// The increment of the last step (0 before the first), and the penalty contact's stable
+    /// increment it reported (∞: none limited it; NaN: no penalty contact ran).
+    last_increment: (f64, f64),
     balance0: Option<f64>,
     /// (external, contact, damping) power at the last step's time, and the increment since.
     last_power: Option<([f64; 3], f64)>,
@@ -213,6 +219,7 @@ impl Solver {
             gravity: [0.0; 3],
             damping: 0.0,
             bulk_viscosity: 0.0,
+            bulk_viscosity_quadratic: 0.0,
             nlgeom: true,
             safety: 0.9,
             time: 0.0,
@@ -222,6 +229,7 @@ impl Solver {
             started: false,
             increments: 0,
             worst_overclosure: (0.0, 0),
+            last_increment: (0.0, f64::NAN),
             balance0: None,
             last_power: None,
             carried: vec![None; n],
@@ -288,16 +296,19 @@ impl Solver {
         self.bodies.iter().map(|b| b.state).collect()
     }
 
-    /// The largest stable increment of the elements, times the safety factor and the bulk
-    /// viscosity's reduction √(1+b1²) − b1 (∞ with no elements).
+    /// The largest stable increment of the elements, times the safety factor and each
+    /// element's bulk viscosity reduction √(1+ξ²) − ξ, ξ = b1 − b2²·(L/c)·min(0, ε̇_vol) at the
+    /// current velocities (Abaqus' form; ξ = b1 at rest) (∞ with no elements).
     pub fn stable_increment(&self) -> f64 {
-        let b = self.bulk_viscosity;
+        let b = (self.bulk_viscosity, self.bulk_viscosity_quadratic);
         self.safety
-            * ((1.0 + b * b).sqrt() - b)
             * self
                 .elements
                 .iter()
-                .map(Element::stable_increment)
+                .map(|e| {
+                    let z = e.bulk_damping_ratio(&self.x, &self.v, b);
+                    e.stable_increment() * ((1.0 + z * z).sqrt() - z)
+                })
                 .fold(f64::INFINITY, f64::min)
     }
 
@@ -368,9 +379,10 @@ impl Solver {
         // bulk viscosity acts with the half-step velocities (the last ones known); its power is
         // booked with the velocities at this step's time, like the damping's
         let mut bulk = vec![[0.0; 3]; n];
-        if self.bulk_viscosity > 0.0 {
+        if self.bulk_viscosity > 0.0 || self.bulk_viscosity_quadratic > 0.0 {
+            let b = (self.bulk_viscosity, self.bulk_viscosity_quadratic);
             for e in &self.elements {
-                e.add_bulk_viscosity(&self.x, &self.v, self.bulk_viscosity, &mut bulk);
+                e.add_bulk_viscosity(&self.x, &self.v, b, &mut bulk);
             }
             for i in 0..n {
                 for a in 0..3 {
@@ -379,10 +391,12 @@ impl Solver {
             }
         }
         self.increments += 1;
+        self.last_increment = (dt, f64::NAN);
         let mut penalty = given.map_or_else(|| vec![[0.0; 3]; n], <[_]>::to_vec);
         if let Some(c) = contact.as_deref_mut() {
             if c.has_penalty_pairs() {
                 let r = c.penalty_step(&self.x, &self.v, dt)?;
+                self.last_increment.1 = r.stable_dt;
                 self.note_overclosure(r.max_overclosure);
                 penalty = r.forces.clone();
             }
@@ -587,23 +601,49 @@ impl Solver {
     /// under it), and the elements' stable increment.
     pub fn blow_up_hint(&self) -> String {
         let (h, at) = self.worst_overclosure;
+        let increment = self.increment_hint();
         if h > 0.0 {
             format!(
                 "; contact resolved an overclosure of {h:e} at increment {at}: an overclosure \
                  resolved within one increment strains the elements under it (an initial one: \
                  remove it from the mesh, or move the slave nodes onto the master strain-free \
                  first: `adjust_overclosure = true` in a scene's [run], \
-                 Contact::adjust_initial_overclosure in code); else check the time increment \
-                 against the stable one ({:e})",
-                self.stable_increment()
+                 Contact::adjust_initial_overclosure in code); else {increment}"
             )
         } else {
             format!(
-                "; no contact overclosure was resolved: check the time increment against the \
-                 stable one ({:e}), the loads and the material",
-                self.stable_increment()
+                "; no contact overclosure was resolved: {increment}, the loads and the material"
             )
         }
+    }
+
+    /// What to check of the time increment: the one in force at the last step against the
+    /// limits there were — the elements' stable increment, the penalty contact's — or why
+    /// there was none.
+    fn increment_hint(&self) -> String {
+        let (dt, contact) = self.last_increment;
+        if dt == 0.0 {
+            return "no increment has been taken yet".into();
+        }
+        let elements = if self.elements.is_empty() {
+            "no elements limit it (the model has none)".to_string()
+        } else {
+            format!(
+                "the elements' stable increment is {:e}",
+                self.stable_increment()
+            )
+        };
+        let contact = if contact.is_nan() {
+            String::new()
+        } else if contact.is_finite() {
+            format!(
+                ", the penalty contact's {contact:e} (take at most about half of it for \
+                 contact that persists)"
+            )
+        } else {
+            ", no penalty spring within reach limited it".to_string()
+        };
+        format!("check the increment in force, {dt:e}: {elements}{contact}")
     }
 
     /// Remembers the largest overclosure contact has resolved, and when.

@@ -9,14 +9,12 @@ use std::sync::Arc;
 use crate::device::GpuContext;
 use crate::error::{Error, Result};
 use crate::passes::{self, Buf};
-use crate::search::layout::{IncrementStats, ITEM_WORKGROUP, STATS_RESET_WORDS};
+use crate::search::layout::{IncrementStats, ITEM_WORKGROUP, STATS_BYTES, STATS_RESET_WORDS};
 use wgpu::BufferUsages as U;
 
 /// Staging buffers in the statistics ring: how many increments the host may fall behind before
 /// an increment's statistics are dropped from it (the device buffer always has the latest).
 pub const STATS_RING: usize = 8;
-
-const STATS_BYTES: u64 = std::mem::size_of::<IncrementStats>() as u64;
 
 /// The state of one staging buffer of the ring.
 const FREE: u8 = 0;
@@ -94,9 +92,7 @@ impl GpuIncrement {
                 STATS_BYTES,
                 U::COPY_SRC | U::COPY_DST,
             );
-            let mut first = [0u32; 16];
-            first[..STATS_RESET_WORDS].copy_from_slice(&crate::cpu::stats::reset_image());
-            first[14] = damping.to_bits();
+            let first = crate::cpu::stats::first_image(damping);
             super::upload(&ctx, &stats, 0, bytemuck::cast_slice(&first));
             super::upload(&ctx, &stats_image, 0, bytemuck::cast_slice(&first));
             let finish_group = super::bind(d, &finish_stats, &passes::FINISH_STATS, |b| match b {
@@ -160,7 +156,7 @@ impl GpuIncrement {
         &self.rows
     }
 
-    /// The statistics buffer (`IncrementStats`, 64 bytes, STORAGE | COPY_SRC).
+    /// The statistics buffer (`IncrementStats`, 72 bytes, STORAGE | COPY_SRC).
     pub(crate) fn stats(&self) -> &wgpu::Buffer {
         &self.stats
     }

@@ -64,8 +64,9 @@ pub struct PenaltyParams {
     pub table_len: u32,
     /// `PENALTY_*` flag bits.
     pub flags: u32,
-    /// Padding.
-    pub _pad0: u32,
+    /// The pair's reference master node (model node id): a slave with no facet within the
+    /// search radius is judged fast on its velocity relative to this node's.
+    pub ref_node: u32,
     /// Auto: scale; modulus: scale; absolute: k (force per length).
     pub stiffness: f32,
     /// Young's modulus for the modulus rule.
@@ -106,8 +107,17 @@ pub struct PenaltyParams {
     /// and the slave's (y) rigid part (`NO_SLAVE`: none), and how many such slots follow the
     /// pair's nodes (z); w unused.
     pub body_slots: [u32; 4],
+    /// The pair's search radius (model length units): a slave whose velocity relative to the
+    /// master near it carries it farther within the increment is counted fast (`STATUS_FAST`).
+    pub search_radius: f32,
+    /// Slaves of a rigid part (`slave_body`): the number of slave nodes the part's effective
+    /// mass is shared among by the automatic stiffness (each spring gets 1/n of it, so the
+    /// body on its n springs has the frequency one slave of a meshed body has); 1 otherwise.
+    pub slave_share: f32,
+    /// Padding.
+    pub _pad: [u32; 2],
 }
-const _: () = assert!(std::mem::size_of::<PenaltyParams>() == 352);
+const _: () = assert!(std::mem::size_of::<PenaltyParams>() == 368);
 
 /// Per-slave state kept between increments. WGSL twin: `SlaveState`.
 #[repr(C)]

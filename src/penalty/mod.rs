@@ -7,6 +7,7 @@ use crate::error::Result;
 use crate::model::{
     Friction, MasterSurface, Model, Pair, PairId, Penalty, PressureOverclosure, Stiffness,
 };
+use crate::search::GlobalSearch;
 use layout::*;
 
 /// A rigid part's state for one increment: what a penalty spring on it needs.
@@ -177,6 +178,9 @@ impl PenaltySetup {
         let mut params = base_params(pen, &pair.friction, slaves.len(), master.active.len());
         params.weight = weight as f32;
         params.body_slots = [slots[0], slots[1], (pair_nodes.len() - n_nodes) as u32, 0];
+        if slave_part.is_some() {
+            params.slave_share = slaves.len().max(1) as f32;
+        }
         if pair.sliding != crate::model::Sliding::Finite {
             params.flags |= PENALTY_ANCHORED;
         }
@@ -190,6 +194,14 @@ impl PenaltySetup {
             friction: !matches!(pair.friction, Friction::Frictionless),
             params,
         })
+    }
+
+    /// Binds the setup to its pair's search: the search radius and the reference master node
+    /// the fast-node test measures against ([`GlobalSearch::reference_node`]).
+    pub fn with_search(mut self, search: &GlobalSearch) -> Self {
+        self.params.search_radius = search.radius() as f32;
+        self.params.ref_node = search.reference_node();
+        self
     }
 
     /// The parameters of one increment `dt` with reference increment `dt_ref`.
@@ -249,7 +261,7 @@ fn base_params(
         stiffness_mode: STIFFNESS_AUTO,
         table_len: 0,
         flags: 0,
-        _pad0: 0,
+        ref_node: crate::model::NO_NODE,
         stiffness: 1.0,
         modulus: 0.0,
         dt: 0.0,
@@ -268,6 +280,9 @@ fn base_params(
         slave_body: [0.0; 4],
         slave_inv_inertia: [[0.0; 4]; 3],
         body_slots: [NO_SLAVE, NO_SLAVE, 0, 0],
+        search_radius: f32::MAX,
+        slave_share: 1.0,
+        _pad: [0; 2],
     };
     match pen.stiffness {
         Stiffness::Auto { scale } => p.stiffness = (AUTO_STIFFNESS * scale) as f32,

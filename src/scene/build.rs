@@ -640,6 +640,7 @@ impl Scene {
         solver.safety = self.run.safety;
         solver.damping = self.run.damping;
         solver.bulk_viscosity = self.run.bulk_viscosity;
+        solver.bulk_viscosity_quadratic = self.run.bulk_viscosity_quadratic;
         solver.nlgeom = self.run.nlgeom;
         let part = |name: &str| {
             parts

@@ -236,6 +236,7 @@ fn run_into(
     solver.gravity = g.gravity;
     solver.damping = g.damping;
     solver.bulk_viscosity = g.bulk_viscosity;
+    solver.bulk_viscosity_quadratic = g.bulk_viscosity_quadratic;
     solver.nlgeom = g.nlgeom;
     solver.safety = g.safety;
     solver.counted = Some((

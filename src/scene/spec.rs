@@ -62,9 +62,13 @@ pub struct RunSpec {
     /// Mass-proportional damping α (force −α·m·v), for dynamic relaxation to a static state.
     #[serde(default)]
     pub damping: f64,
-    /// Linear bulk viscosity b1 (0 = none).
-    #[serde(default)]
+    /// Linear bulk viscosity b1 (default 0.06, Abaqus/Explicit's; 0 = none).
+    #[serde(default = "default_bulk_linear")]
     pub bulk_viscosity: f64,
+    /// Quadratic bulk viscosity b2, in compression only (default 1.2, Abaqus/Explicit's;
+    /// 0 = none).
+    #[serde(default = "default_bulk_quadratic")]
+    pub bulk_viscosity_quadratic: f64,
     /// Large-strain kinematics (default true); false: small strain, Abaqus' NLGEOM=NO.
     #[serde(default = "default_true")]
     pub nlgeom: bool,
@@ -88,6 +92,17 @@ fn default_safety() -> f64 {
 }
 fn default_contact_safety() -> f64 {
     0.5
+}
+/// Abaqus/Explicit's default linear bulk viscosity.
+pub const DEFAULT_BULK_VISCOSITY: f64 = 0.06;
+/// Abaqus/Explicit's default quadratic bulk viscosity.
+pub const DEFAULT_BULK_VISCOSITY_QUADRATIC: f64 = 1.2;
+
+fn default_bulk_linear() -> f64 {
+    DEFAULT_BULK_VISCOSITY
+}
+fn default_bulk_quadratic() -> f64 {
+    DEFAULT_BULK_VISCOSITY_QUADRATIC
 }
 fn default_every() -> usize {
     1
@@ -558,6 +573,7 @@ impl Scene {
             for (key, v) in [
                 ("run.damping", r.damping),
                 ("run.bulk_viscosity", r.bulk_viscosity),
+                ("run.bulk_viscosity_quadratic", r.bulk_viscosity_quadratic),
             ] {
                 if !(v.is_finite() && v >= 0.0) {
                     return bad(key, v.to_string(), "must be finite and not negative");

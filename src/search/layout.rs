@@ -44,6 +44,13 @@ pub const STATUS_DT_APPROACH: usize = 5;
 pub const STATUS_ACTIVE: usize = 6;
 /// Status word: slave nodes slipping (WGSL: `STATUS_SLIPPING`).
 pub const STATUS_SLIPPING: usize = 7;
+/// Status word: slave nodes whose velocity relative to the master near them carries them
+/// farther than the search radius within the increment (the penalty pass; WGSL:
+/// `STATUS_FAST`).
+pub const STATUS_FAST: usize = 15;
+/// Status word: bits of the largest relative motion over the search radius of those slaves, a
+/// positive f32 (WGSL: `STATUS_FAST_RATIO`).
+pub const STATUS_FAST_RATIO: usize = 27;
 /// Number of status words.
 pub const STATUS_WORDS: usize = 28;
 /// Status word: bits of the largest force component magnitude of a penalty spring in contact
@@ -125,8 +132,12 @@ pub struct SearchParams {
     pub base_cell: f32,
     /// Cells the search's buffers hold: a grid fitted on the device has at most this many.
     pub cell_capacity: u32,
+    /// The pair's reference master node (model node id): the motion budget measures every
+    /// node's displacement relative to this node's, so that a contact model travelling as a
+    /// whole uses none of it ([`crate::search::GlobalSearch::reference_node`]).
+    pub ref_node: u32,
     /// Padding.
-    pub _pad: [u32; 3],
+    pub _pad: [u32; 2],
 }
 const _: () = assert!(std::mem::size_of::<SearchParams>() == 96);
 
@@ -431,12 +442,26 @@ pub struct IncrementStats {
     pub motion: f32,
     /// Grids that could not be fitted, since the start (the last grid was kept).
     pub fit_failed: u32,
+    /// Slave nodes whose velocity relative to the master near them (its velocity at their
+    /// contact point, or the pair's reference master node's for a slave with no facet within
+    /// the radius) carries them farther than their pair's search radius within this increment:
+    /// the search cannot follow them and they may pass through the master unseen (tunnelling).
+    pub fast_nodes: u32,
+    /// The largest such relative motion over its pair's search radius (> 1 when `fast_nodes`
+    /// is not 0; 0 when none).
+    pub fast_ratio: f32,
     /// The largest contact damping ratio of the penalty pairs (constant).
     pub damping: f32,
     /// Increments completed since the start (this one included).
     pub increment: u32,
 }
-const _: () = assert!(std::mem::size_of::<IncrementStats>() == 64);
+const _: () = assert!(std::mem::size_of::<IncrementStats>() == 72);
+
+/// Bytes of [`IncrementStats`].
+pub const STATS_BYTES: u64 = std::mem::size_of::<IncrementStats>() as u64;
+
+/// Words of [`IncrementStats`].
+pub const STATS_WORDS: usize = std::mem::size_of::<IncrementStats>() / 4;
 
 /// Words of [`IncrementStats`] reset at the start of every increment (the last two persist).
-pub const STATS_RESET_WORDS: usize = 14;
+pub const STATS_RESET_WORDS: usize = 16;

@@ -190,6 +190,28 @@ pub struct Prepared {
     pub n_nodes: usize,
 }
 
+/// The master node nearest the centroid of `master_nodes` at `positions` (ties: the lowest id;
+/// `NO_NODE` for an empty list).
+fn reference_node(master_nodes: &[u32], positions: &[[f64; 3]]) -> u32 {
+    let n = master_nodes.len().max(1) as f64;
+    let mut c = [0.0; 3];
+    for &m in master_nodes {
+        let x = positions[m as usize];
+        for a in 0..3 {
+            c[a] += x[a] / n;
+        }
+    }
+    let mut best = (f64::INFINITY, crate::model::NO_NODE);
+    for &m in master_nodes {
+        let x = positions[m as usize];
+        let d2: f64 = (0..3).map(|a| (x[a] - c[a]) * (x[a] - c[a])).sum();
+        if d2 < best.0 {
+            best = (d2, m);
+        }
+    }
+    best.1
+}
+
 /// When a pair searches globally (seed: "Finite-sliding tracking", "Tracking approach for
 /// self-contact pairs"; Abaqus' *CONTACT CONTROLS).
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -253,6 +275,8 @@ pub struct GlobalSearch {
     masses: Vec<f32>,
     adjacency: Arc<[u32]>,
     motion_nodes: Arc<[u32]>,
+    /// The master node whose motion every other motion is measured against.
+    ref_node: u32,
     /// Active facets, padded: the kernels' facet list.
     facets: Arc<[[u32; 4]]>,
     /// The search tree's leaf slots ([`tree::leaf_order`] of the facet centroids).
@@ -351,6 +375,7 @@ impl GlobalSearch {
         }
         adjacency[n_nodes] = adjacency.len() as u32;
         let master_nodes = master.nodes();
+        let ref_node = reference_node(&master_nodes, model.positions());
         let self_contact = slaves.iter().any(|s| master_nodes.binary_search(s).is_ok());
         let mut motion_nodes = slaves.clone();
         let mut sorted = slaves.clone();
@@ -399,6 +424,7 @@ impl GlobalSearch {
             masses: model.masses().iter().map(|&m| m as f32).collect(),
             adjacency: adjacency.into(),
             motion_nodes: motion_nodes.into(),
+            ref_node,
             schedule: Schedule::default_for(self_contact),
             self_contact,
             frame: None,
@@ -855,9 +881,7 @@ impl GlobalSearch {
         };
         let interval = self.schedule.interval;
         self.resident_origin = Some(origin);
-        self.resident_span = (0..3)
-            .map(|a| prep.grid.dims[a] as f64 * prep.grid.cell_size)
-            .fold(self.radius, f64::max);
+        self.resident_span = self.master_span(positions);
         match &mut self.executor {
             Executor::Gpu(g) => g.make_resident(&prep, interval, anchored, frame),
             Executor::Cpu(c) => {
@@ -877,9 +901,25 @@ impl GlobalSearch {
         }
     }
 
+    /// The active facets in the kernels' layout (padded node ids; a raw hit's `facet` indexes
+    /// this list).
+    pub(crate) fn kernel_facets(&self) -> &[[u32; 4]] {
+        &self.facets
+    }
+
     /// The nodes the motion budget watches: the slaves, then the master nodes that are not.
     pub(crate) fn motion_nodes(&self) -> &[u32] {
         &self.motion_nodes
+    }
+
+    /// The pair's reference master node (model node id): the master node nearest the centroid
+    /// of the master's nodes at the model's positions (ties: the lowest id). Motion is judged
+    /// relative to the master, not to the model's frame: the motion budget measures every
+    /// watched node's displacement since the last global search minus this node's, and a slave
+    /// with no facet within the radius is judged fast ([`crate::StepReport::fast_nodes`]) on
+    /// its velocity minus this node's — so a contact model that travels as a whole uses neither.
+    pub fn reference_node(&self) -> u32 {
+        self.ref_node
     }
 
     /// Whether this search evaluates fixed anchors (small or infinitesimal sliding).
@@ -892,11 +932,35 @@ impl GlobalSearch {
         self.resident_origin.unwrap_or([0.0; 3])
     }
 
-    /// Host arrays: when a node of the master has travelled more than 16 times the frame's
-    /// extent from its origin (f32 would lose precision there, and contact is only ever near the
-    /// master), the frame moves to the grid the host fits at `positions` and the next increment
-    /// searches globally, which resets everything that was relative to the old origin. Returns
-    /// whether it moved.
+    /// The largest extent of the master's nodes along an axis at `positions` (model length
+    /// units; the search radius for a master of no extent): what the frame's reach is measured
+    /// in — the master's own size, never the radius, so that a large radius does not let the
+    /// master travel far from the frame's origin.
+    fn master_span(&self, positions: &[[f64; 3]]) -> f64 {
+        let mut lo = [f64::INFINITY; 3];
+        let mut hi = [f64::NEG_INFINITY; 3];
+        for &n in &self.motion_nodes[self.master_start()..] {
+            let x = positions[n as usize];
+            for a in 0..3 {
+                lo[a] = lo[a].min(x[a]);
+                hi[a] = hi[a].max(x[a]);
+            }
+        }
+        let span = (0..self.dim as usize)
+            .map(|a| hi[a] - lo[a])
+            .fold(0.0, f64::max);
+        if span > 0.0 && span.is_finite() {
+            span
+        } else {
+            self.radius
+        }
+    }
+
+    /// Host arrays: when a node of the master has travelled more than 16 times the master's own
+    /// extent ([`Self::master_span`], not the search radius) from the frame's origin (f32 would
+    /// lose precision there, and contact is only ever near the master), the frame moves to the
+    /// grid the host fits at `positions` and the next increment searches globally, which resets
+    /// everything that was relative to the old origin. Returns whether it moved.
     pub(crate) fn rebase_if_far(&mut self, positions: &[[f64; 3]]) -> Result<bool> {
         let o = self.resident_frame();
         let reach = 16.0 * self.resident_span;
@@ -913,9 +977,7 @@ impl GlobalSearch {
             return Ok(false);
         }
         self.resident_origin = Some(prep.grid.frame);
-        self.resident_span = (0..3)
-            .map(|a| prep.grid.dims[a] as f64 * prep.grid.cell_size)
-            .fold(self.radius, f64::max);
+        self.resident_span = self.master_span(positions);
         match &mut self.executor {
             Executor::Gpu(g) => g.request_global(),
             Executor::Cpu(c) => c.request_global(),
@@ -972,6 +1034,14 @@ impl GlobalSearch {
         match &self.executor {
             Executor::Gpu(g) => Some(g),
             Executor::Cpu(_) => None,
+        }
+    }
+
+    /// The CPU executor, if this search runs on the CPU path.
+    pub(crate) fn cpu(&self) -> Option<&CpuSearch> {
+        match &self.executor {
+            Executor::Gpu(_) => None,
+            Executor::Cpu(c) => Some(c),
         }
     }
 
@@ -1101,7 +1171,8 @@ impl GlobalSearch {
             grid_lo: grid.lo_in_frame(),
             base_cell: Grid::base_cell(self.radius, extent_sum / n_facets as f64) as f32,
             cell_capacity: grid.n_cells(),
-            _pad: [0; 3],
+            ref_node: self.ref_node,
+            _pad: [0; 2],
         };
         Ok(Prepared {
             params,

@@ -1,0 +1,368 @@
+//! Issue 30, items 1, 2 and 4: motion is judged relative to the master. A contact model that
+//! travels or accelerates as a whole raises no tunnelling alarm and uses none of the motion
+//! budget, on host arrays and device-resident increments, in 2D and 3D, penalty and kinematic;
+//! a slave that crosses a still or opposing master by more than the radius in one increment is
+//! still counted (the device counts it into the statistics); and a master that travels 10⁵ of
+//! its own size with a search radius 10³ times that size keeps its gaps to f32 round-off of
+//! its own size.
+
+#![cfg(feature = "solver")]
+
+mod common;
+
+use abut::explicit::Solver;
+use abut::mesh::plate_quads;
+use abut::*;
+use common::gpus;
+
+fn devices() -> Vec<Device> {
+    let mut d = vec![Device::cpu()];
+    d.extend(gpus().iter().cloned());
+    d
+}
+
+const K: f64 = 1e4;
+const F: f64 = 10.0;
+const M_SLAVE: f64 = 1.0;
+const M_NODE: f64 = 0.5;
+const RADIUS: f64 = 0.2;
+
+/// A free master (a 2 × 2 plate of quads in 3D, a line of two segments in 2D, nodal masses
+/// `M_NODE`, no elements) and one slave point mass at its middle node, overclosed 10 % past
+/// the static overclosure it has when a load F presses it and the pair accelerates together. Returns the model, the slave's node and the middle master node.
+fn plate_and_mass(dim: u32, enforce: Enforce) -> (Model, usize, usize) {
+    let mut m = if dim == 3 {
+        Model::new_3d()
+    } else {
+        Model::new_2d()
+    };
+    // 10 % past the static overclosure of the pair accelerating together
+    let h = 1.1 * F * M_NODE / (M_SLAVE + M_NODE) / K;
+    let (x, surface, middle) = if dim == 3 {
+        let p = plate_quads(2, 2, 2.0, 2.0, 0.0, 0, &|_, _| 0.0);
+        (p.positions.clone(), Surface::quads(&p.facets), 4)
+    } else {
+        (
+            vec![[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [2.0, 0.0, 0.0]],
+            // a→b along −x: the outward normal (t_y, −t_x) is +y, as the plate's is +z
+            Surface::segments(&[[1, 0], [2, 1]]),
+            1,
+        )
+    };
+    let np = x.len();
+    m.add_nodes(&x, &vec![M_NODE; np]).unwrap();
+    let s = m.add_surface(surface).unwrap();
+    let mut p = x[middle];
+    p[dim as usize - 1] -= h;
+    let r = m.add_nodes(&[p], &[M_SLAVE]).unwrap();
+    let set = m.add_node_set(&r.to_vec()).unwrap();
+    m.add_pair(Pair::new(set, s).search_radius(RADIUS).enforce(enforce))
+        .unwrap();
+    (m, np, middle)
+}
+
+fn penalty() -> Enforce {
+    Enforce::Penalty(Penalty {
+        stiffness: Stiffness::Absolute(K),
+        ..Default::default()
+    })
+}
+
+/// The slave pressed by a load onto the free master, the whole model launched at `speed`
+/// radii per increment along the pressing direction's opposite and sideways: the pair travels
+/// and accelerates together. Runs 300 increments at 0.99 of the exact two-body limit (penalty;
+/// kinematic: at the same increment). Returns the most fast nodes any increment counted, and
+/// the overclosure's range over its static value after the first 20 increments.
+fn travel(d: &Device, dim: u32, enforce: Enforce, speed: f64) -> (usize, f64, f64) {
+    let kinematic = matches!(enforce, Enforce::Kinematic(_));
+    let (m, slave, middle) = plate_and_mass(dim, enforce);
+    let n = m.positions().len();
+    let up = dim as usize - 1;
+    let mut point = vec![M_NODE; n];
+    point[slave] = M_SLAVE;
+    let mut solver = Solver::new(m.positions().to_vec(), Vec::new(), &point).unwrap();
+    // the exact limit of the spring between the slave and the middle node, damped
+    let z = DEFAULT_CONTACT_DAMPING;
+    let exact = 2.0 / (K * (1.0 / M_SLAVE + 1.0 / M_NODE)).sqrt() * ((1.0 + z * z).sqrt() - z);
+    let dt = 0.99 * exact;
+    let v = speed * RADIUS / dt;
+    for vi in &mut solver.v {
+        vi[0] = 0.6 * v;
+        vi[up] = 0.8 * v;
+    }
+    // the load presses the slave onto the master (towards −up) and both go along
+    solver.loads[slave][up] = -F;
+    // the master's other nodes are held to the middle one's motion by nothing: load them so
+    // that every master node accelerates as the middle one does (the static share)
+    let a = F / (M_SLAVE + M_NODE);
+    for k in 0..n {
+        if k != slave && k != middle {
+            solver.loads[k][up] = -a * M_NODE;
+        }
+    }
+    let h_static = F * M_NODE / (M_SLAVE + M_NODE) / K;
+    let mut contact = Contact::new(d, &m).unwrap();
+    let (mut most, mut hi, mut lo) = (0usize, 0.0f64, f64::INFINITY);
+    for k in 0..300 {
+        solver.step(dt, Some(&mut contact)).unwrap();
+        let fast = if kinematic {
+            contact.kinematic_report().fast_nodes
+        } else {
+            contact.report().fast_nodes
+        };
+        most = most.max(fast);
+        let h = solver.x[middle][up] - solver.x[slave][up];
+        if k >= 20 && !kinematic {
+            hi = hi.max(h / h_static);
+            lo = lo.min(h / h_static);
+        }
+    }
+    // the pair travelled far beyond the radius, in one increment and in all
+    let travelled = (0..3)
+        .map(|a| (solver.x[slave][a] - m.positions()[slave][a]).powi(2))
+        .sum::<f64>()
+        .sqrt();
+    assert!(
+        travelled > 100.0 * RADIUS,
+        "{d}: travelled only {travelled}"
+    );
+    (most, hi, lo)
+}
+
+/// A free two-body pair accelerating under a load while the whole model travels at 2 and 40
+/// radii per increment: no slave is ever fast, 2D and 3D, penalty and kinematic, every device;
+/// the penalty spring stays bounded at 0.99 of the exact increment (the overclosure within
+/// ±60 % of its static value, and the contact closed).
+#[test]
+fn a_pair_travelling_and_accelerating_together_is_not_tunnelling() {
+    for d in devices() {
+        for dim in [2, 3] {
+            for enforce in [penalty(), Enforce::Kinematic(Kinematic::default())] {
+                let kinematic = matches!(enforce, Enforce::Kinematic(_));
+                for speed in [2.0, 40.0] {
+                    let (most, hi, lo) = travel(&d, dim, enforce.clone(), speed);
+                    let what = format!("{d}, {dim}D, kinematic={kinematic}, speed {speed}");
+                    assert_eq!(most, 0, "{what}: fast nodes counted");
+                    if !kinematic {
+                        assert!(hi < 1.6 && lo > 0.4, "{what}: overclosure {lo}..{hi}");
+                    }
+                }
+            }
+        }
+    }
+}
+
+/// Positions and velocities of a scripted increment `k`: the whole model at `v_all`, the slave
+/// besides at `v_slave`, from the model's positions.
+fn scripted(
+    m: &Model,
+    slave: usize,
+    v_all: [f64; 3],
+    v_slave: [f64; 3],
+    dt: f64,
+    k: usize,
+) -> (Vec<[f64; 3]>, Vec<[f64; 3]>) {
+    let t = k as f64 * dt;
+    let x = m
+        .positions()
+        .iter()
+        .enumerate()
+        .map(|(i, p)| {
+            let extra = if i == slave { v_slave } else { [0.0; 3] };
+            [0, 1, 2].map(|a| p[a] + (v_all[a] + extra[a]) * t)
+        })
+        .collect();
+    let v = (0..m.positions().len())
+        .map(|i| {
+            let extra = if i == slave { v_slave } else { [0.0; 3] };
+            [0, 1, 2].map(|a| v_all[a] + extra[a])
+        })
+        .collect();
+    (x, v)
+}
+
+fn vec4(a: &[[f64; 3]]) -> Vec<[f32; 4]> {
+    a.iter()
+        .map(|p| [p[0] as f32, p[1] as f32, p[2] as f32, 0.0])
+        .collect()
+}
+
+/// Runs `steps` device-resident increments of the scripted motion; returns each increment's
+/// statistics.
+fn resident(
+    d: &Device,
+    m: &Model,
+    script: impl Fn(usize) -> (Vec<[f64; 3]>, Vec<[f64; 3]>),
+    dt: f64,
+    steps: usize,
+) -> Vec<IncrementStats> {
+    let mut c = Contact::new(d, m).unwrap();
+    let n = m.positions().len();
+    let mut out = Vec::new();
+    if d.is_gpu() {
+        let (dev, q) = d.wgpu().unwrap();
+        let make = |label| {
+            dev.create_buffer(&wgpu::BufferDescriptor {
+                label: Some(label),
+                size: (n * 16) as u64,
+                usage: wgpu::BufferUsages::STORAGE
+                    | wgpu::BufferUsages::COPY_DST
+                    | wgpu::BufferUsages::COPY_SRC,
+                mapped_at_creation: false,
+            })
+        };
+        let (bx, bv, bf) = (make("x"), make("v"), make("f"));
+        for k in 0..steps {
+            let (x, v) = script(k);
+            q.write_buffer(&bx, 0, bytemuck::cast_slice(&vec4(&x)));
+            q.write_buffer(&bv, 0, bytemuck::cast_slice(&vec4(&v)));
+            let mut enc = dev.create_command_encoder(&Default::default());
+            enc.clear_buffer(&bf, 0, None);
+            c.encode_increment(
+                ResidentIo::Gpu {
+                    encoder: &mut enc,
+                    positions: &bx,
+                    velocities: &bv,
+                    forces: &bf,
+                },
+                dt,
+            )
+            .unwrap();
+            q.submit([enc.finish()]);
+            // the lagged ring: wait for the device, then collect what it finished
+            dev.poll(wgpu::PollType::wait_indefinitely()).unwrap();
+            out.extend(c.collect_stats().unwrap());
+        }
+        for _ in 0..8 {
+            dev.poll(wgpu::PollType::wait_indefinitely()).unwrap();
+            out.extend(c.collect_stats().unwrap());
+        }
+    } else {
+        for k in 0..steps {
+            let (x, v) = script(k);
+            let mut f = vec![[0.0f32; 4]; n];
+            c.encode_increment(
+                ResidentIo::Cpu {
+                    positions: &vec4(&x),
+                    velocities: &vec4(&v),
+                    forces: &mut f,
+                },
+                dt,
+            )
+            .unwrap();
+            out.extend(c.collect_stats().unwrap());
+        }
+    }
+    assert_eq!(out.len(), steps, "{d}: every increment's statistics");
+    out
+}
+
+/// Device-resident increments count fast slaves on the device, into the statistics: none while
+/// the whole model travels at 5 radii per increment (and no global search for the budget), and
+/// every increment once the slave alone crosses the still master at 2 radii per increment —
+/// its relative motion over the radius in `fast_ratio`. 2D and 3D, every device; host arrays
+/// count the same.
+#[test]
+fn the_device_counts_fast_slaves_into_the_statistics() {
+    let dt = 1e-3;
+    for d in devices() {
+        for dim in [2u32, 3] {
+            let (m, slave, _) = plate_and_mass(dim, penalty());
+            let up = dim as usize - 1;
+            let mut along = [0.0; 3];
+            along[0] = 0.6;
+            along[up] = 0.8;
+            let v_all = along.map(|c| 5.0 * RADIUS / dt * c);
+            let mut down = [0.0; 3];
+            down[up] = -2.0 * RADIUS / dt;
+            let what = format!("{d}, {dim}D");
+            // together
+            let st = resident(
+                &d,
+                &m,
+                |k| scripted(&m, slave, v_all, [0.0; 3], dt, k),
+                dt,
+                12,
+            );
+            for (k, s) in st.iter().enumerate() {
+                assert_eq!(
+                    s.fast_nodes, 0,
+                    "{what}: travelling together, increment {k}"
+                );
+                assert_eq!(
+                    s.budget_searches, 0,
+                    "{what}: budget used by travelling, {k}"
+                );
+            }
+            // the slave alone moves through the still master
+            let st = resident(
+                &d,
+                &m,
+                |k| scripted(&m, slave, [0.0; 3], down, dt, k),
+                dt,
+                4,
+            );
+            for (k, s) in st.iter().enumerate() {
+                assert_eq!(s.fast_nodes, 1, "{what}: crossing, increment {k}");
+                assert!(
+                    (s.fast_ratio - 2.0).abs() < 1e-4,
+                    "{what}: ratio {}",
+                    s.fast_ratio
+                );
+            }
+            // host arrays: the same counts, and the slave named
+            for (v_slave, expect) in [([0.0; 3], 0), (down, 1)] {
+                let mut c = Contact::new(&d, &m).unwrap();
+                for k in 0..4 {
+                    let (x, v) = scripted(&m, slave, v_all, v_slave, dt, k);
+                    let r = c.penalty_step(&x, &v, dt).unwrap();
+                    assert_eq!(r.fast_nodes, expect, "{what}: host arrays, increment {k}");
+                    assert_eq!(r.fastest.map(|f| f.node), (expect > 0).then_some(slave));
+                }
+            }
+        }
+    }
+}
+
+/// Host arrays: the unit plate and a slave 0.01 above it travel together 10⁵ plate sizes in 200
+/// increments with a search radius of 10³: the gap stays at 0.01 to f32 round-off of the
+/// plate's size (the frame follows the master, whatever the radius), and nothing is fast.
+#[test]
+fn a_master_travelling_far_with_a_large_radius_keeps_its_gaps() {
+    let gap = 0.01;
+    for d in devices() {
+        let mut m = Model::new_3d();
+        let p = plate_quads(2, 2, 1.0, 1.0, 0.0, 0, &|_, _| 0.0);
+        let np = p.positions.len();
+        m.add_nodes(&p.positions, &vec![1.0; np]).unwrap();
+        let s = m.add_surface(Surface::quads(&p.facets)).unwrap();
+        let r = m.add_nodes(&[[0.3, 0.4, gap]], &[1.0]).unwrap();
+        let set = m.add_node_set(&r.to_vec()).unwrap();
+        m.add_pair(Pair::new(set, s).search_radius(1e3).enforce(penalty()))
+            .unwrap();
+        let n = m.positions().len();
+        let mut c = Contact::new(&d, &m).unwrap();
+        c.request_outputs(true);
+        let dt = 1e-3;
+        let step = [5e2, -3e2, 4e2]; // |step| ≈ 707: 200 increments ≈ 1.4·10⁵
+        let v = vec![step.map(|s| s / dt); n];
+        let mut worst = 0.0f64;
+        for k in 0..=200 {
+            let x: Vec<[f64; 3]> = m
+                .positions()
+                .iter()
+                .map(|p| [0, 1, 2].map(|a| p[a] + step[a] * k as f64))
+                .collect();
+            let rep = c.penalty_step(&x, &v, dt).unwrap();
+            assert_eq!(rep.fast_nodes, 0, "{d}: increment {k}");
+            let out = c.outputs();
+            let copen = out[0].1.copen[0];
+            worst = worst.max((copen - gap).abs());
+        }
+        // f32 round-off of the plate's size (1): a few ulps of numbers up to 16 sizes
+        assert!(
+            worst < 2e-5,
+            "{d}: gap off by {worst} after travelling 1.4e5"
+        );
+    }
+}
