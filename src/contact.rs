@@ -110,7 +110,7 @@ pub struct StepReport {
     /// velocity of the pair's reference master node ([`GlobalSearch::reference_node`]); so a
     /// contact model that moves as a whole, or a slave carried along by its master, is never
     /// fast, while a slave crossing a still or opposing master is. Counted by the penalty
-    /// kernels on every path (host arrays and device-resident: [`IncrementStats::fast_nodes`]).
+    /// kernels on every path (host arrays and device-resident: [`crate::IncrementStats::fast_nodes`]).
     pub fast_nodes: usize,
     /// The fastest of them.
     pub fastest: Option<FastNode>,

@@ -133,9 +133,9 @@ pub struct DistributedStep {
     pub bytes_sent: usize,
     /// Ghost nodes this rank holds now.
     pub ghosts: usize,
-    /// Pair nodes any rank's local contact saw move farther than their pair's search radius in
-    /// this increment (see [`crate::StepReport::fast_nodes`]; a ghost counts on each rank
-    /// holding it).
+    /// Slave nodes the ranks' local contacts saw move farther than their pair's search radius
+    /// relative to the master near them in this increment (see
+    /// [`crate::StepReport::fast_nodes`]; each slave is counted by the rank that owns it).
     pub fast_nodes: usize,
     /// The fastest of them over all ranks (relative to its radius), the same on every rank.
     pub fastest: Option<FastGlobalNode>,

@@ -172,7 +172,7 @@ friction = {mu}
                 "{d}: CSHEAR1 {:?}",
                 o.cshear1
             );
-            assert!(o.cstatus.iter().any(|s| *s == Some(ContactStatus::Slip)));
+            assert!(o.cstatus.contains(&Some(ContactStatus::Slip)));
         }
     }
 }

@@ -112,7 +112,10 @@ impl Default for Penalty {
 /// (`1/m* = 1/m_s + Σ N_i²/m_i`, slave mass and the master nodes' masses weighted by the
 /// load-transfer weights) and Δt the reference increment (the first increment's, unless set).
 /// abut's `½·SOFSCL` is `scale` (1 by default): each contact spring then has
-/// ω·Δt_ref = √scale. At a node carried by elements at their stable increment (ω_e·Δt_ref ≈ 1.8
+/// ω·Δt_ref = √scale. The slaves of a rigid part ([`crate::Model::add_rigid_part`]) share the
+/// body's effective mass: each of its n slave springs takes m*/n of it (the body's compliance
+/// at the slave times n), so the body on all n springs has ω·Δt_ref = √scale, as one slave of
+/// a meshed body of the same mass spread over n nodes would — not √n times more (issue 30). At a node carried by elements at their stable increment (ω_e·Δt_ref ≈ 1.8
 /// at safety 0.9) the spring is about 0.6 times the underlying element's stiffness — stiff enough
 /// that a wave reaches a rigid wall within two increments and the plateau force is within 2 % of
 /// ρ·c·v·A (tests/hard_cases.rs) — and it costs about 13 % of the increment where the springs

@@ -12,7 +12,8 @@
 //! # dt = 1e-3              # a fixed increment instead (stability studies)
 //! gravity = [0, 0, -9.81]  # default none
 //! damping = 0.0            # mass-proportional α, for dynamic relaxation
-//! bulk_viscosity = 0.0     # linear b1
+//! bulk_viscosity = 0.06    # linear b1 (default 0.06, Abaqus/Explicit's; 0: none)
+//! bulk_viscosity_quadratic = 1.2  # b2, in compression only (default 1.2, Abaqus'; 0: none)
 //! nlgeom = true            # false: small-strain kinematics (Abaqus' NLGEOM=NO)
 //! output_every = 10        # history rows every this many increments (default 1)
 //! vtk_every = 100          # a VTK frame of the contact state (vtk/contact.pvd) every 100
@@ -79,7 +80,10 @@ mod spec;
 pub use build::Built;
 #[cfg(feature = "mpi")]
 pub use distributed::run_distributed;
-pub use spec::{BoundarySpec, ContactSpec, MaterialSpec, PartSpec, RigidSpec, RunSpec, Scene};
+pub use spec::{
+    BoundarySpec, ContactSpec, MaterialSpec, PartSpec, RigidSpec, RunSpec, Scene,
+    DEFAULT_BULK_VISCOSITY, DEFAULT_BULK_VISCOSITY_QUADRATIC,
+};
 
 use std::collections::BTreeMap;
 use std::io::Write as _;

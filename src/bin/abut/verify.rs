@@ -268,6 +268,39 @@ pub const CASES: &[Case] = &[
     },
 ];
 
+/// The run settings a case's exact answer depends on, against the scene defaults (Abaqus'):
+/// bulk viscosity and the penalty contacts' damping.
+fn settings(scene: &Scene) -> String {
+    use abut::scene::{DEFAULT_BULK_VISCOSITY, DEFAULT_BULK_VISCOSITY_QUADRATIC};
+    let r = &scene.run;
+    let bulk = if r.bulk_viscosity == DEFAULT_BULK_VISCOSITY
+        && r.bulk_viscosity_quadratic == DEFAULT_BULK_VISCOSITY_QUADRATIC
+    {
+        "(the default, Abaqus/Explicit's)"
+    } else {
+        "(the case's own: its exact answer assumes it)"
+    };
+    let damping: Vec<String> = scene
+        .contact
+        .iter()
+        .filter(|c| c.enforce.as_deref() != Some("kinematic"))
+        .map(|c| {
+            let d = c.damping.unwrap_or(abut::DEFAULT_CONTACT_DAMPING);
+            format!("{d}")
+        })
+        .collect();
+    format!(
+        "bulk viscosity linear {} quadratic {} {bulk}; penalty contact damping {}",
+        r.bulk_viscosity,
+        r.bulk_viscosity_quadratic,
+        if damping.is_empty() {
+            "— (no penalty pair)".to_string()
+        } else {
+            format!("{} of critical", damping.join(", "))
+        }
+    )
+}
+
 /// Runs the cases named in `only` (all when empty) on `device`; returns whether all passed.
 pub fn verify(device: &Device, only: &[String]) -> abut::Result<bool> {
     println!("abut verify: VERIFICATION.md through scenes/ on {device}");
@@ -287,6 +320,7 @@ pub fn verify(device: &Device, only: &[String]) -> abut::Result<bool> {
             1e3 * s.seconds_per_increment,
             1e3 * s.first_increment_seconds
         );
+        println!("  settings: {}", settings(&scene));
         println!(
             "  {:<30} {:>13} {:>13} {:>10}  {:<24}",
             "quantity", "measured", "exact", "error", "tolerance"
