@@ -366,3 +366,110 @@ fn a_master_travelling_far_with_a_large_radius_keeps_its_gaps() {
         );
     }
 }
+
+/// `abut run` on the mechanism the issue met: a point mass pressed by a load onto a free rigid
+/// plate (3D) or line (2D), nothing else, so the pair accelerates together far beyond the search
+/// radius per increment by the end — runs to the end with no tunnelling error, the mass resting
+/// on its master. The same mass driven at a fixed plate by a load 100 times larger passes the
+/// radius per increment within four increments and stops with the tunnelling error, whose hint
+/// names the increment in force and that no elements limit it (not a stable increment of ∞).
+#[test]
+fn a_mass_pressed_onto_a_free_rigid_master_runs_and_a_thrown_one_is_named() {
+    use abut::scene::{run, Scene};
+    let scene = |two_d: bool, motion: &str, height: f64, push: f64, end: f64| {
+        let (master, face, up) = if two_d {
+            (
+                "shape = \"line\"\norigin = [0.0, 0.0, 0.0]\nsize = [1.0, 0.0, 0.0]\ndivisions = [2, 0, 0]",
+                "y+",
+                1,
+            )
+        } else {
+            (
+                "shape = \"plate\"\norigin = [0.0, 0.0, 0.0]\nsize = [1.0, 1.0, 0.0]\ndivisions = [2, 2, 0]",
+                "z+",
+                2,
+            )
+        };
+        let mut load = [0.0; 3];
+        load[up] = -push;
+        let load = format!("[{}, {}, {}]", load[0], load[1], load[2]);
+        let mut p = [0.5, 0.5, 0.0];
+        p[up] = height;
+        format!(
+            r#"
+title = "a point mass and a rigid master"
+[run]
+end_time = {end}
+dt = 2e-3
+[[part]]
+name = "mass"
+shape = "points"
+points = [[{}, {}, {}]]
+mass = 1.0
+[[part]]
+name = "master"
+{master}
+motion = "{motion}"
+mass = 4.0
+[[boundary]]
+part = "mass"
+face = "all"
+load = {load}
+[[contact]]
+slave = "mass"
+slave_face = "all"
+master = "master"
+master_face = "{face}"
+stiffness = 1.0e5
+search_radius = 0.05
+"#,
+            p[0], p[1], p[2]
+        )
+    };
+    for two_d in [false, true] {
+        // pressed: a = 50/5 = 10; at t = 3 the pair moves 30·Δt = 0.06 per increment (Δt =
+        // 2e-3, ω·Δt = 0.71 for the spring between the mass and the plate), beyond the radius
+        let s = run(
+            &Scene::parse(&scene(two_d, "free", 1e-4, 50.0, 3.0)).unwrap(),
+            &Device::cpu(),
+            None,
+        )
+        .unwrap_or_else(|e| panic!("2D {two_d}: {e}"));
+        let b = &s.bodies[0];
+        let speed = b.velocity.iter().map(|v| v * v).sum::<f64>().sqrt();
+        let dt = s.end_time / s.increments as f64;
+        assert!(
+            speed * dt > 0.05,
+            "2D {two_d}: the pair moves {} per increment, not beyond the radius",
+            speed * dt
+        );
+        assert!(
+            (s.final_contact_force
+                .iter()
+                .map(|f| f * f)
+                .sum::<f64>()
+                .sqrt()
+                - 40.0)
+                .abs()
+                < 4.0,
+            "2D {two_d}: resting on the plate: {:?} (m·a of the plate, 40)",
+            s.final_contact_force
+        );
+        // driven at a fixed master from 1 above: beyond the radius per increment at the fourth
+        let e = run(
+            &Scene::parse(&scene(two_d, "fixed", 1.0, 5000.0, 0.1)).unwrap(),
+            &Device::cpu(),
+            None,
+        )
+        .unwrap_err();
+        let msg = e.to_string();
+        assert!(matches!(e, Error::Tunnelling { .. }), "2D {two_d}: {msg}");
+        assert!(
+            msg.contains("relative to the master")
+                && msg.contains("increment in force")
+                && msg.contains("no elements limit it")
+                && !msg.contains("(inf)"),
+            "2D {two_d}: {msg}"
+        );
+    }
+}
