@@ -13,7 +13,7 @@ mod common;
 use abut::explicit::Solver;
 use abut::mesh::plate_quads;
 use abut::*;
-use common::gpus;
+use common::{gpus, node_buffers, read_buffer, vec4};
 
 fn devices() -> Vec<Device> {
     let mut d = vec![Device::cpu()];
@@ -181,12 +181,6 @@ fn scripted(
     (x, v)
 }
 
-fn vec4(a: &[[f64; 3]]) -> Vec<[f32; 4]> {
-    a.iter()
-        .map(|p| [p[0] as f32, p[1] as f32, p[2] as f32, 0.0])
-        .collect()
-}
-
 /// A host program's device-resident increments: its own position, velocity and force buffers
 /// on a GPU (vec4<f32> per node), or its own arrays on the CPU path.
 struct Resident {
@@ -199,19 +193,7 @@ struct Resident {
 impl Resident {
     fn new(d: &Device, m: &Model) -> Self {
         let n = m.positions().len();
-        let buffers = d.wgpu().map(|(dev, _)| {
-            let make = |label| {
-                dev.create_buffer(&wgpu::BufferDescriptor {
-                    label: Some(label),
-                    size: (n * 16) as u64,
-                    usage: wgpu::BufferUsages::STORAGE
-                        | wgpu::BufferUsages::COPY_DST
-                        | wgpu::BufferUsages::COPY_SRC,
-                    mapped_at_creation: false,
-                })
-            };
-            [make("x"), make("v"), make("f")]
-        });
+        let buffers = d.is_gpu().then(|| node_buffers(d, n));
         Self {
             contact: Contact::new(d, m).unwrap(),
             device: d.clone(),
@@ -241,20 +223,8 @@ impl Resident {
                         dt,
                     )
                     .unwrap();
-                let staging = dev.create_buffer(&wgpu::BufferDescriptor {
-                    label: Some("test readback"),
-                    size: (n * 16) as u64,
-                    usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
-                    mapped_at_creation: false,
-                });
-                enc.copy_buffer_to_buffer(bf, 0, &staging, 0, (n * 16) as u64);
                 q.submit([enc.finish()]);
-                let slice = staging.slice(..);
-                slice.map_async(wgpu::MapMode::Read, |r| r.unwrap());
-                dev.poll(wgpu::PollType::wait_indefinitely()).unwrap();
-                let out = bytemuck::pod_collect_to_vec(&slice.get_mapped_range().unwrap());
-                staging.unmap();
-                out
+                bytemuck::pod_collect_to_vec(&read_buffer(&self.device, bf, (n * 16) as u64))
             }
             _ => {
                 let mut f = vec![[0.0f32; 4]; n];

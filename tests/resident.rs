@@ -11,7 +11,7 @@ use abut::{
     Contact, Device, Enforce, Friction, IncrementStats, Model, Pair, Penalty, ResidentIo,
     Stiffness, Surface,
 };
-use common::gpus;
+use common::{gpus, node_buffers, read_buffer as read, vec4};
 
 /// Rounds to f32 and back: positions both paths see exactly.
 fn f32r(v: f64) -> f64 {
@@ -173,12 +173,6 @@ fn host_steps(device: &Device, s: &Scene, steps: usize) -> Vec<Step> {
         .collect()
 }
 
-fn vec4(a: &[[f64; 3]]) -> Vec<[f32; 4]> {
-    a.iter()
-        .map(|p| [p[0] as f32, p[1] as f32, p[2] as f32, 0.0])
-        .collect()
-}
-
 fn step_from(forces: &[[f32; 4]], st: &IncrementStats) -> Step {
     Step {
         forces: forces
@@ -204,42 +198,8 @@ struct Buffers {
 }
 
 fn buffers(device: &Device, n: usize) -> Buffers {
-    let (d, _) = device.wgpu().unwrap();
-    let make = |label| {
-        d.create_buffer(&wgpu::BufferDescriptor {
-            label: Some(label),
-            size: (n * 16) as u64,
-            usage: wgpu::BufferUsages::STORAGE
-                | wgpu::BufferUsages::COPY_DST
-                | wgpu::BufferUsages::COPY_SRC,
-            mapped_at_creation: false,
-        })
-    };
-    Buffers {
-        x: make("test positions"),
-        v: make("test velocities"),
-        f: make("test forces"),
-    }
-}
-
-/// Reads `bytes` of `buffer` back (the test's own readback, not abut's).
-fn read(device: &Device, buffer: &wgpu::Buffer, bytes: u64) -> Vec<u8> {
-    let (d, q) = device.wgpu().unwrap();
-    let staging = d.create_buffer(&wgpu::BufferDescriptor {
-        label: Some("test readback"),
-        size: bytes,
-        usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
-        mapped_at_creation: false,
-    });
-    let mut enc = d.create_command_encoder(&Default::default());
-    enc.copy_buffer_to_buffer(buffer, 0, &staging, 0, bytes);
-    q.submit([enc.finish()]);
-    let slice = staging.slice(..);
-    slice.map_async(wgpu::MapMode::Read, |r| r.unwrap());
-    d.poll(wgpu::PollType::wait_indefinitely()).unwrap();
-    let out = slice.get_mapped_range().unwrap().to_vec();
-    staging.unmap();
-    out
+    let [x, v, f] = node_buffers(device, n);
+    Buffers { x, v, f }
 }
 
 fn resident_steps(device: &Device, s: &Scene, steps: usize) -> Vec<Step> {

@@ -272,3 +272,51 @@ pub fn run(device: &Device, model: &Model, pair: PairId) -> SearchResult {
     let mut s = GlobalSearch::new(device, model, pair).unwrap();
     s.run(model.positions()).unwrap()
 }
+
+/// Positions or velocities as the kernels' `vec4<f32>` per node.
+pub fn vec4(a: &[[f64; 3]]) -> Vec<[f32; 4]> {
+    a.iter()
+        .map(|p| [p[0] as f32, p[1] as f32, p[2] as f32, 0.0])
+        .collect()
+}
+
+/// A host program's own device buffers for `n` nodes, `vec4<f32>` each (STORAGE, COPY_DST,
+/// COPY_SRC): positions, velocities, forces. Panics on a device without an adapter.
+pub fn node_buffers(device: &Device, n: usize) -> [wgpu::Buffer; 3] {
+    let (d, _) = device.wgpu().expect("a GPU device");
+    let make = |label| {
+        d.create_buffer(&wgpu::BufferDescriptor {
+            label: Some(label),
+            size: (n * 16) as u64,
+            usage: wgpu::BufferUsages::STORAGE
+                | wgpu::BufferUsages::COPY_DST
+                | wgpu::BufferUsages::COPY_SRC,
+            mapped_at_creation: false,
+        })
+    };
+    [
+        make("test positions"),
+        make("test velocities"),
+        make("test forces"),
+    ]
+}
+
+/// Reads `bytes` of `buffer` back (the test's own readback, not abut's).
+pub fn read_buffer(device: &Device, buffer: &wgpu::Buffer, bytes: u64) -> Vec<u8> {
+    let (d, q) = device.wgpu().expect("a GPU device");
+    let staging = d.create_buffer(&wgpu::BufferDescriptor {
+        label: Some("test readback"),
+        size: bytes,
+        usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
+        mapped_at_creation: false,
+    });
+    let mut enc = d.create_command_encoder(&Default::default());
+    enc.copy_buffer_to_buffer(buffer, 0, &staging, 0, bytes);
+    q.submit([enc.finish()]);
+    let slice = staging.slice(..);
+    slice.map_async(wgpu::MapMode::Read, |r| r.unwrap());
+    d.poll(wgpu::PollType::wait_indefinitely()).unwrap();
+    let out = slice.get_mapped_range().unwrap().to_vec();
+    staging.unmap();
+    out
+}
