@@ -235,7 +235,11 @@ impl Contact {
     /// waited for; on the CPU path the increment runs at once. The first call readies the pairs
     /// (pipelines, buffers sized for the model — not for positions — and the frame and anchors
     /// from the model's positions). Penalty pairs only; a `Contact` that runs device-resident
-    /// increments no longer runs host-array ones ([`Contact::penalty_step`]).
+    /// increments no longer runs host-array ones ([`Contact::penalty_step`]). The caller's
+    /// positions are absolute f32: far from the origin they carry fewer digits of a gap (at
+    /// 300 model sizes, about 10⁻⁵ of the size) — host arrays, subtracted in f64, do not.
+    /// Slaves moving farther than the search radius relative to the master near them are
+    /// counted in the statistics ([`crate::IncrementStats::fast_nodes`]).
     pub fn encode_increment(&mut self, io: ResidentIo<'_>, dt: f64) -> Result<()> {
         positive_dt(dt)?;
         if let Some(pr) = self
