@@ -396,7 +396,10 @@ velocity = [0.0, 0.0, {mv}]
     /// impact as kinematic contact does — the force reaches half of ρ·c·v·A within two
     /// increments of the exact impact time and its plateau (the mean over the middle half of
     /// the contact) is within 2 % of it — on a wall and between two bars, for two materials,
-    /// speeds and meshes; and it costs at most 14 % of the elements' increment.
+    /// speeds and meshes, and (issue 30, item 8) four more 20-element rods — all at the scene
+    /// defaults, Abaqus' bulk viscosity included; and it costs at most 14 % of the elements'
+    /// increment. (The edge-to-edge mean, impulse over the half-force span, is 2.5–3.5 % low on
+    /// 20 elements: the spring's rise time Z/k, docs/BENCHMARKS.md; it is not the plateau.)
     #[test]
     fn default_penalty_follows_bar_impacts_within_two_increments_and_two_percent() {
         // (elements, length, area, E, ρ, speed, gap, two bars)
@@ -405,6 +408,12 @@ velocity = [0.0, 0.0, {mv}]
             (40, 1.0, 0.01, 70e9, 2700.0, 5.0, 2e-3, false),
             (20, 10.0, 4.0, 1.0, 1.0, 0.1, 0.1, true),
             (40, 0.5, 1e-4, 3e9, 1200.0, 2.0, 1e-3, true),
+            // issue 30, item 8: more 20-element rods on a wall (steel, aluminium, a polymer, a
+            // soft long rod), 0.3–10 m, 1–20 m/s
+            (20, 1.0, 1e-4, 210e9, 7850.0, 10.0, 1e-3, false),
+            (20, 0.5, 1e-3, 70e9, 2700.0, 20.0, 1e-3, false),
+            (20, 0.3, 1e-4, 3e9, 1200.0, 5.0, 5e-4, false),
+            (20, 10.0, 1.0, 1e6, 1e3, 1.0, 0.05, false),
         ];
         for d in [Device::cpu()]
             .into_iter()
