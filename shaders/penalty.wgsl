@@ -111,6 +111,25 @@ fn tangent_t1(n: vec3<f32>) -> vec3<f32> {
     return normalize_or_zero(axis - n * dot(axis, n));
 }
 
+// The master's velocity at a contact point: the facet's nodes by the load-transfer weights (the
+// same sum, in the same order, as the penalty pass's own).
+fn facet_velocity(fac: vec4<u32>, w: vec4<f32>) -> vec3<f32> {
+    var vm = vec3<f32>(0.0);
+    for (var j = 0u; j < facet_node_count(fac); j++) { vm += w[j] * vel[fac[j]].xyz; }
+    return vm;
+}
+
+// The fast-node test: slave s's velocity relative to the master near it, `v_master`, carrying
+// it farther than the search radius within the increment is counted (STATUS_FAST) and its
+// ratio to the radius kept if largest (STATUS_FAST_RATIO, non-negative f32 bits).
+fn count_fast(s: u32, v_master: vec3<f32>) {
+    let reach = length(vel[s].xyz - v_master) * pp.dt;
+    if (reach > pp.search_radius) {
+        atomicAdd(&status[STATUS_FAST], 1u);
+        atomicMax(&status[STATUS_FAST_RATIO], bitcast<u32>(reach / pp.search_radius));
+    }
+}
+
 @compute @workgroup_size(64)
 fn penalty(@builtin(workgroup_id) wg: vec3<u32>,
            @builtin(num_workgroups) nwg: vec3<u32>,
@@ -119,24 +138,6 @@ fn penalty(@builtin(workgroup_id) wg: vec3<u32>,
     if (i >= pp.n_slaves) { return; }
     if (atomicLoad(&status[STATUS_BUDGET_EXCEEDED]) != 0u) { return; }
     let hit = hits[i];
-    // fast-node test: the slave's velocity relative to the master near it — the master's
-    // velocity at its contact point (a facet within the radius), else the pair's reference
-    // master node's — carrying it farther than the search radius within the increment
-    var v_master = vec3<f32>(0.0);
-    var judged = false;
-    if (hit.facet != NO_FACET) {
-        let ff = facets[hit.facet];
-        for (var j = 0u; j < facet_node_count(ff); j++) { v_master += hit.weights[j] * vel[ff[j]].xyz; }
-        judged = true;
-    } else if (pp.ref_node != NO_NODE) {
-        v_master = vel[pp.ref_node].xyz;
-        judged = true;
-    }
-    let reach = length(vel[hit.slave].xyz - v_master) * pp.dt;
-    if (judged && reach > pp.search_radius) {
-        atomicAdd(&status[STATUS_FAST], 1u);
-        atomicMax(&status[STATUS_FAST_RATIO], bitcast<u32>(reach / pp.search_radius));
-    }
     var o: ContactOut;
     o.force = vec4<f32>(0.0);
     o.tangential = vec4<f32>(0.0);
@@ -153,6 +154,13 @@ fn penalty(@builtin(workgroup_id) wg: vec3<u32>,
     // beside it and below the facet's plane is remembered as behind the edge (history.y)
     let beside = (hit.candidates & HIT_BESIDE_FREE_EDGE) != 0u;
     if (hit.facet == NO_FACET || beside) {
+        // fast-node test against the reference master node, or (beside a free edge) the
+        // facet's velocity at the point
+        if (hit.facet != NO_FACET) {
+            count_fast(hit.slave, facet_velocity(facets[hit.facet], hit.weights));
+        } else if (pp.ref_node != NO_NODE) {
+            count_fast(hit.slave, vel[pp.ref_node].xyz);
+        }
         state[i].tangential_area = vec4<f32>(0.0, 0.0, 0.0, area);
         let behind = select(0.0, 1.0, beside && hit.point_gap.w < 0.0);
         state[i].history = vec4<f32>(o.dissipation, behind, 0.0, 0.0);
@@ -176,6 +184,7 @@ fn penalty(@builtin(workgroup_id) wg: vec3<u32>,
         share[j] = abs(w) / sqrt(nodes[node].w);
         h_facet = max(h_facet, length(nodes[fac[(j + 1u) % n]].xyz - nodes[node].xyz));
     }
+    count_fast(s, vm);
     var nrm = normalize_or_zero(nsum);
     if (dot(nrm, nrm) == 0.0) { nrm = hit.normal_dist.xyz; }
     let p = nodes[s].xyz;

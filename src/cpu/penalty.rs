@@ -128,6 +128,16 @@ pub fn body_compliance(body: [f32; 4], j: &[[f32; 4]; 3], p: V3<f32>, n: V3<f32>
     body[3] + u.dot(ju)
 }
 
+/// The master's velocity at a contact point: facet `fac`'s nodes by the load-transfer weights
+/// `w`, summed in the penalty pass's order (WGSL: `facet_velocity`).
+fn facet_velocity(vel: &[[f32; 4]], fac: [u32; 4], w: [f32; 4]) -> V3<f32> {
+    let mut vm = V3::<f32>::zero();
+    for j in 0..facet_node_count(fac) {
+        vm = vm + node(vel, fac[j]) * w[j];
+    }
+    vm
+}
+
 /// One "invocation" per slave node (WGSL: `penalty`); `friction` is the FRICTION override.
 #[allow(clippy::too_many_arguments)]
 pub fn penalty(
@@ -153,6 +163,15 @@ pub fn penalty(
     let min_word = |k: usize, v: f32| {
         status[k].fetch_min(v.to_bits(), Ordering::Relaxed);
     };
+    // the fast-node test (WGSL: `count_fast`)
+    let count_fast = |s: u32, v_master: V3<f32>| {
+        let reach = (node(vel, s) - v_master).length2().sqrt() * pp.dt;
+        if reach > pp.search_radius {
+            status[STATUS_FAST].fetch_add(1, Ordering::Relaxed);
+            status[STATUS_FAST_RATIO]
+                .fetch_max((reach / pp.search_radius).to_bits(), Ordering::Relaxed);
+        }
+    };
     state[..n]
         .par_iter_mut()
         .zip(out[..n].par_iter_mut())
@@ -160,28 +179,6 @@ pub fn penalty(
         .with_min_len(super::PAR_MIN)
         .for_each(|(i, (slave_state, slot))| {
             let hit = hits[i];
-            // fast-node test (as the WGSL): velocity relative to the master near the slave
-            let mut v_master = V3::<f32>::zero();
-            let mut judged = false;
-            if hit.facet != NO_FACET {
-                let ff = facets[hit.facet as usize];
-                for j in 0..facet_node_count(ff) {
-                    let v = vel[ff[j] as usize];
-                    v_master = v_master + V3::new(v[0], v[1], v[2]) * hit.weights[j];
-                }
-                judged = true;
-            } else if pp.ref_node != NO_NODE {
-                let v = vel[pp.ref_node as usize];
-                v_master = V3::new(v[0], v[1], v[2]);
-                judged = true;
-            }
-            let vs = vel[hit.slave as usize];
-            let reach = (V3::new(vs[0], vs[1], vs[2]) - v_master).length2().sqrt() * pp.dt;
-            if judged && reach > pp.search_radius {
-                status[STATUS_FAST].fetch_add(1, Ordering::Relaxed);
-                status[STATUS_FAST_RATIO]
-                    .fetch_max((reach / pp.search_radius).to_bits(), Ordering::Relaxed);
-            }
             let mut o = ContactOut {
                 force: [0.0; 4],
                 tangential: [0.0; 4],
@@ -196,6 +193,12 @@ pub fn penalty(
             o.dissipation = slave_state.history[0];
             let beside = hit.candidates & crate::search::layout::HIT_BESIDE_FREE_EDGE != 0;
             if hit.facet == NO_FACET || beside {
+                if hit.facet != NO_FACET {
+                    let fac = facets[hit.facet as usize];
+                    count_fast(hit.slave, facet_velocity(vel, fac, hit.weights));
+                } else if pp.ref_node != NO_NODE {
+                    count_fast(hit.slave, node(vel, pp.ref_node));
+                }
                 slave_state.tangential_area = [0.0, 0.0, 0.0, area];
                 let behind = if beside && hit.point_gap[3] < 0.0 {
                     1.0
@@ -227,6 +230,7 @@ pub fn penalty(
                         .sqrt(),
                 );
             }
+            count_fast(s, vm);
             let mut nrm = nsum.normalize_or_zero();
             if nrm.length2() == 0.0 {
                 nrm = V3::new(hit.normal_dist[0], hit.normal_dist[1], hit.normal_dist[2]);
