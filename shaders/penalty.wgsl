@@ -19,7 +19,7 @@
 //             with its body's compliance at the contact point and as one share of the bound.
 //             Increments are positive f32, reduced with atomicMin on their bits (order-
 //             preserving for positive floats), so the result is deterministic.
-//             Every slave is tested for fast motion first (STATUS_FAST, STATUS_FAST_RATIO: its
+//             Every slave is tested for fast motion (count_fast: STATUS_FAST, STATUS_FAST_RATIO; its
 //             velocity relative to the master near it times dt against pp.search_radius).
 //             A rigid slave part's springs take 1/slave_share of its effective mass each in
 //             the automatic stiffness, so the body on all of them has one slave's frequency.

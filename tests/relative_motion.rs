@@ -569,3 +569,61 @@ search_radius = 0.05
         );
     }
 }
+
+/// Host arrays: the host leaves the global search's dispatches out only when it has proved the
+/// device's schedule will choose the local one, and it proves it with the device's own measure,
+/// motion relative to the reference master node. An untracked slave moving 0.45 of the budget
+/// towards the plate while the plate moves 0.1 of it towards the slave: each under half the
+/// budget on its own, 0.55 together, so the device searches globally — and the slave, now
+/// within the radius, is found, on every device.
+#[test]
+fn a_budget_search_from_relative_motion_is_not_left_out() {
+    let radius = 0.2;
+    let budget = 0.5 * radius; // the default motion budget
+    for d in devices() {
+        let mut m = Model::new_3d();
+        let p = plate_quads(2, 2, 1.0, 1.0, 0.0, 0, &|_, _| 0.0);
+        let np = p.positions.len();
+        m.add_nodes(&p.positions, &vec![1.0; np]).unwrap();
+        let s = m.add_surface(Surface::quads(&p.facets)).unwrap();
+        let r = m
+            .add_nodes(&[[0.5, 0.4, radius + 0.4 * budget]], &[1.0])
+            .unwrap();
+        let set = m.add_node_set(&r.to_vec()).unwrap();
+        m.add_pair(Pair::new(set, s).search_radius(radius).enforce(penalty()))
+            .unwrap();
+        let n = m.positions().len();
+        let dt = 1e-3;
+        let mut c = Contact::new(&d, &m).unwrap();
+        c.request_outputs(true);
+        let v0 = vec![[0.0; 3]; n];
+        let first = c.penalty_step(m.positions(), &v0, dt).unwrap();
+        assert_eq!(first.global_searches, 1, "{d}: the first increment");
+        assert!(c.outputs()[0]
+            .1
+            .search
+            .as_ref()
+            .unwrap()
+            .contact(0)
+            .is_none());
+        // one increment later: the slave 0.45 budget down, the plate 0.1 budget up
+        let mut x = m.positions().to_vec();
+        let mut v = v0.clone();
+        for (i, (xi, vi)) in x.iter_mut().zip(&mut v).enumerate() {
+            let dz = if i == n - 1 {
+                -0.45 * budget
+            } else {
+                0.1 * budget
+            };
+            xi[2] += dz;
+            vi[2] = dz / dt;
+        }
+        let rep = c.penalty_step(&x, &v, dt).unwrap();
+        assert_eq!(rep.global_searches, 1, "{d}: the budget's global search");
+        let hit = c.outputs()[0].1.search.as_ref().unwrap().contact(0);
+        assert!(
+            hit.is_some(),
+            "{d}: the slave, within the radius now, is found"
+        );
+    }
+}

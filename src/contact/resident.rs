@@ -111,13 +111,17 @@ pub(crate) struct HostSchedule {
     forced: bool,
     /// Positions of the watched nodes at the last global search (model units).
     reference: Vec<[f64; 3]>,
+    /// The pair's reference master node's position then ([`GlobalSearch::reference_node`]):
+    /// the device measures every displacement relative to its.
+    reference_node_at: [f64; 3],
 }
 
 impl HostSchedule {
     /// Whether the schedule of `search` will choose the local search at `positions`: not the
     /// first or a requested increment, the interval not come round, no crowding, and every
     /// watched node (tracked slaves included, which the device does not count) has moved less
-    /// than half the budget since the last global search, with a margin for f32 round-off.
+    /// than half the budget relative to the reference master node since the last global
+    /// search — the device's measure (motion.wgsl) — with a margin for f32 round-off.
     fn surely_local(&self, search: &GlobalSearch, positions: &[[f64; 3]]) -> bool {
         let sched = search.schedule();
         if !self.searched
@@ -130,13 +134,15 @@ impl HostSchedule {
         }
         let budget = sched.budget * search.radius();
         let limit = (0.49 * budget).powi(2);
+        let xr = positions[search.reference_node() as usize];
+        let base = [0, 1, 2].map(|a| xr[a] - self.reference_node_at[a]);
         search
             .motion_nodes()
             .iter()
             .zip(&self.reference)
             .all(|(&n, r)| {
                 let x = positions[n as usize];
-                (0..3).map(|a| (x[a] - r[a]).powi(2)).sum::<f64>() < limit
+                (0..3).map(|a| (x[a] - r[a] - base[a]).powi(2)).sum::<f64>() < limit
             })
     }
 
@@ -152,6 +158,7 @@ impl HostSchedule {
                 .iter()
                 .map(|&n| positions[n as usize])
                 .collect();
+            self.reference_node_at = positions[search.reference_node() as usize];
         }
     }
 }
