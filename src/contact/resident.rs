@@ -112,7 +112,7 @@ pub(crate) struct HostSchedule {
     /// Positions of the watched nodes at the last global search (model units).
     reference: Vec<[f64; 3]>,
     /// The pair's reference master node's position then ([`GlobalSearch::reference_node`]):
-    /// the device measures every displacement relative to its.
+    /// the device measures every displacement relative to it.
     reference_node_at: [f64; 3],
 }
 
