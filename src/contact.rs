@@ -18,7 +18,9 @@ use crate::penalty::PenaltySetup;
 use crate::search::{GlobalSearch, SearchResult};
 
 mod resident;
+mod restart;
 mod rigid_parts;
+mod warnings;
 pub use resident::ResidentIo;
 
 /// The penalty executor of one pair, on the same device as its search.

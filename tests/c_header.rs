@@ -1,0 +1,27 @@
+//! include/abut.h is what cbindgen makes of src/capi/ now: a stale header fails here.
+//! `ABUT_BLESS=1 cargo test --test c_header` writes it.
+#![cfg(feature = "capi")]
+
+#[test]
+fn the_committed_c_header_is_cbindgens() {
+    let root = env!("CARGO_MANIFEST_DIR");
+    let config = cbindgen::Config::from_file(format!("{root}/capi/cbindgen.toml"))
+        .expect("capi/cbindgen.toml reads");
+    let mut made = Vec::new();
+    cbindgen::Builder::new()
+        .with_crate(root)
+        .with_config(config)
+        .generate()
+        .expect("cbindgen parses src/capi")
+        .write(&mut made);
+    let path = format!("{root}/include/abut.h");
+    if std::env::var_os("ABUT_BLESS").is_some() {
+        std::fs::write(&path, &made).expect("include/abut.h writes");
+    }
+    let committed = std::fs::read(&path).unwrap_or_default();
+    assert!(
+        committed == made,
+        "include/abut.h is stale: src/capi/ changed; run `ABUT_BLESS=1 cargo test --release \
+         --test c_header` and commit the header"
+    );
+}
