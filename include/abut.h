@@ -233,7 +233,7 @@ enum AbutStiffness
 #endif // defined(__cplusplus) || __STDC_VERSION__ >= 202311L
  {
   /*
-   `k = scale·m*/Δt_ref²` (the default, scale 1).
+   `k = scale·m_eff/Δt_ref²`, m_eff the two-body mass (the default, scale 1).
    */
   ABUT_STIFFNESS_AUTO = 0,
   /*

@@ -88,7 +88,7 @@ pub enum AbutEnforcement {
 #[repr(i32)]
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum AbutStiffness {
-    /// `k = scale·m*/Δt_ref²` (the default, scale 1).
+    /// `k = scale·m_eff/Δt_ref²`, m_eff the two-body mass (the default, scale 1).
     Auto = 0,
     /// `k = scale·E·A_s/h_m` with E = `stiffness_value` (stress units).
     Modulus = 1,
