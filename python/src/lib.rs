@@ -360,6 +360,7 @@ impl Model {
 
     /// Adds a contact pair of node set `slave` against surface `master` (a surface's own nodes
     /// against it: self-contact); returns its id. See the package docs for every option.
+    #[allow(clippy::too_many_arguments)]
     #[pyo3(signature = (slave, master, *, enforcement = "penalty", stiffness = "auto",
         stiffness_value = 0.0, stiffness_scale = 1.0, law = None,
         damping = abut::DEFAULT_CONTACT_DAMPING, mu = None, mu_kinetic = None, decay = 0.0,
@@ -838,10 +839,10 @@ impl Contact {
         d.set_item("cshear1", o.cshear1.clone().into_pyarray(py))?;
         d.set_item("cshear2", o.cshear2.clone().into_pyarray(py))?;
         let rows = |v: &[[f64; 3]]| -> PyResult<Bound<'py, PyArray2<f64>>> {
-            Ok(v.as_flattened()
+            v.as_flattened()
                 .to_vec()
                 .into_pyarray(py)
-                .reshape([v.len(), 3])?)
+                .reshape([v.len(), 3])
         };
         d.set_item("normal", rows(&o.normal)?)?;
         d.set_item("force", rows(&o.force)?)?;
