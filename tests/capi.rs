@@ -839,3 +839,162 @@ fn bad_input_across_the_c_abi_gives_named_errors_never_a_crash() {
         ok(abut_contact_free(null_mut()));
     }
 }
+
+#[test]
+fn c_abi_kinematic_increments_equal_the_rust_apis_bit_for_bit() {
+    // the sheet on the plate by a kinematic pair with friction; the plate's nodes on a rigid
+    // plane below by a rigid pair; every node falls under gravity and the plane's body moves
+    let s = sheet(5, 0.15);
+    let plate_nodes: Vec<u32> = (0..16).collect();
+    let (dt, eye) = (2e-4, [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]]);
+    let mut rm = Model::new_3d();
+    rm.add_nodes(&s.coords, &s.masses).unwrap();
+    let plate = rm.add_surface(Surface::quads(&s.quads)).unwrap();
+    let set = rm.add_node_set(&s.slaves).unwrap();
+    let under = rm.add_node_set(&plate_nodes).unwrap();
+    rm.add_pair(
+        Pair::new(set, plate)
+            .friction(Friction::coulomb(0.3))
+            .enforce(abut::Enforce::Kinematic(abut::Kinematic::default())),
+    )
+    .unwrap();
+    let plane = abut::Analytical::Plane {
+        point: [0.0, 0.0, -0.002],
+        normal: [0.0, 0.0, 1.0],
+    };
+    let body = rm
+        .add_rigid_body(abut::RigidBody {
+            mass: 100.0,
+            inertia: eye,
+            surface: plane,
+        })
+        .unwrap();
+    rm.add_rigid_pair(abut::RigidPair {
+        slave: under,
+        body,
+        softened: None,
+    })
+    .unwrap();
+    let cm = c_model(&s, 0.0); // nodes, plate, sheet set (and a penalty pair, pair 0)
+    let flat_eye = [1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0];
+    unsafe {
+        let (mut under_c, mut pair, mut body_c) = (0, 0, 0);
+        ok(abut_model_add_node_set(
+            cm,
+            plate_nodes.as_ptr(),
+            16,
+            null(),
+            &mut under_c,
+        ));
+        let mut o = std::mem::zeroed();
+        ok(abut_pair_options_default(&mut o));
+        o.enforcement = AbutEnforcement::Kinematic as i32;
+        o.friction = 1;
+        o.mu = 0.3;
+        ok(abut_model_add_pair(cm, 0, 0, &o, &mut pair));
+        let surf = AbutAnalytical {
+            kind: AbutSurfaceKind::Plane as i32,
+            point: [0.0, 0.0, -0.002],
+            direction: [0.0, 0.0, 1.0],
+            radius: 0.0,
+        };
+        ok(abut_model_add_rigid_body(
+            cm,
+            100.0,
+            flat_eye.as_ptr(),
+            &surf,
+            &mut body_c,
+        ));
+        ok(abut_model_add_rigid_pair(
+            cm,
+            under_c,
+            body_c,
+            null(),
+            &mut pair,
+        ));
+    }
+    for d in devices() {
+        let mut rust = Contact::new(&d, &rm).unwrap();
+        let dev = c_device(&d);
+        let mut c = null_mut();
+        unsafe {
+            ok(abut_contact_new(dev, cm, &mut c));
+            ok(abut_device_free(dev));
+        }
+        let (mut xr, mut vr) = (s.coords.clone(), start_velocities(&s));
+        let (mut xc, mut vc) = (xr.clone(), vr.clone());
+        let mut br = vec![abut::BodyState::at([0.0, 0.0, 0.0])];
+        let mut bc = [AbutBodyState {
+            position: [0.0; 3],
+            rotation: flat_eye,
+            velocity: [0.0; 3],
+            angular_velocity: [0.0; 3],
+        }];
+        let mut corrected = 0;
+        for inc in 0..80 {
+            // the host's predictor: gravity on every node, the body coasting
+            for (x, v) in [(&mut xr, &mut vr), (&mut xc, &mut vc)] {
+                for k in 0..x.len() {
+                    v[k][2] -= dt * 200.0;
+                    for a in 0..3 {
+                        x[k][a] += dt * v[k][a];
+                    }
+                }
+            }
+            for a in 0..3 {
+                br[0].position[a] += dt * br[0].velocity[a];
+                bc[0].position[a] += dt * bc[0].velocity[a];
+            }
+            let r = rust
+                .kinematic_step(&mut xr, &mut vr, &mut br, dt)
+                .unwrap()
+                .clone();
+            unsafe {
+                ok(abut_contact_kinematic_step(
+                    c,
+                    xc.as_flattened_mut().as_mut_ptr(),
+                    vc.as_flattened_mut().as_mut_ptr(),
+                    xc.len(),
+                    bc.as_mut_ptr(),
+                    1,
+                    dt,
+                ))
+            };
+            let bits = |a: &[[f64; 3]]| {
+                a.as_flattened()
+                    .iter()
+                    .map(|x| x.to_bits())
+                    .collect::<Vec<_>>()
+            };
+            assert_eq!(bits(&xr), bits(&xc), "{d}: positions at increment {inc}");
+            assert_eq!(bits(&vr), bits(&vc), "{d}: velocities at increment {inc}");
+            assert_eq!(
+                bits(&[br[0].position, br[0].velocity]),
+                bits(&[bc[0].position, bc[0].velocity])
+            );
+            let mut kr = AbutKinematicReport::default();
+            unsafe { ok(abut_contact_kinematic_report(c, &mut kr)) };
+            assert_eq!(kr.active, r.active as u64);
+            assert_eq!(
+                kr.kinetic_energy_change.to_bits(),
+                r.kinetic_energy_change.to_bits()
+            );
+            corrected += r.active;
+            // rigid outputs through the C arrays
+            let mut len = 0;
+            unsafe {
+                ok(abut_contact_output_len(
+                    c,
+                    AbutPairKind::Rigid as i32,
+                    0,
+                    0,
+                    &mut len,
+                ))
+            };
+            assert_eq!(len, 16);
+        }
+        assert!(corrected > 100, "{d}: {corrected} corrections");
+        unsafe { ok(abut_contact_free(c)) };
+    }
+    unsafe { ok(abut_model_free(cm)) };
+}

@@ -102,6 +102,15 @@ impl From<Error> for Fail {
 /// The result of a call's body.
 pub(crate) type Outcome = std::result::Result<(), Fail>;
 
+/// Records `fail` of C entry point `call` as this thread's last error (and `entry`'s), its
+/// message led by the call's name, and returns its status.
+fn record_in(call: &str, mut fail: Fail, entry: Option<&Entry>) -> AbutStatus {
+    if !fail.message.starts_with(call) {
+        fail.message = format!("{call}: {}", fail.message);
+    }
+    record(fail, entry)
+}
+
 /// Records `fail` as this thread's last error (and `entry`'s) and returns its status.
 fn record(fail: Fail, entry: Option<&Entry>) -> AbutStatus {
     if let Some(e) = entry {
@@ -130,7 +139,7 @@ fn panic_message(payload: &(dyn std::any::Any + Send)) -> String {
 pub(crate) fn guard(call: &str, body: impl FnOnce() -> Outcome) -> AbutStatus {
     match catch_unwind(AssertUnwindSafe(body)) {
         Ok(Ok(())) => AbutStatus::Ok,
-        Ok(Err(f)) => record(f, None),
+        Ok(Err(f)) => record_in(call, f, None),
         Err(p) => record(
             Fail::new(
                 AbutStatus::Panic,
@@ -208,7 +217,7 @@ pub(crate) fn with_object(
     drop(object);
     match outcome {
         Ok(Ok(())) => AbutStatus::Ok,
-        Ok(Err(f)) => record(f, Some(&entry)),
+        Ok(Err(f)) => record_in(call, f, Some(&entry)),
         Err(p) => {
             let what = format!(
                 "an internal error (panic) in {call}: {}",
