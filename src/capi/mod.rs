@@ -4,7 +4,7 @@
 //! Conventions every function keeps (the header's preamble says the same to C programmers):
 //! - every call returns an [`AbutStatus`]; on failure the message, naming the item at fault as
 //!   the Rust error does, is kept per handle (`abut_*_error`) and per thread (`abut_last_error`);
-//! - handles are opaque and checked ([`handles`]): null, freed and wrong-kind handles are named
+//! - handles are opaque and checked (`handles.rs`): null, freed and wrong-kind handles are named
 //!   errors; a panic is caught at the boundary;
 //! - arrays are the caller's, f64 and xyz interleaved, read (or written) during the call only;
 //!   abut keeps no pointer the caller passed;
