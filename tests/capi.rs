@@ -163,6 +163,21 @@ fn devices() -> Vec<Device> {
     all
 }
 
+/// One penalty increment through the C ABI on the caller's arrays.
+fn c_step(
+    c: *mut AbutContact,
+    x: &[[f64; 3]],
+    v: &[[f64; 3]],
+    dt: f64,
+    f: &mut [[f64; 3]],
+    mode: AbutForceMode,
+) -> AbutStatus {
+    let n = x.len();
+    let (x, v) = (x.as_flattened().as_ptr(), v.as_flattened().as_ptr());
+    let f = f.as_flattened_mut().as_mut_ptr();
+    unsafe { abut_contact_penalty_step(c, x, v, n, dt, f, mode as i32) }
+}
+
 /// The host loop of the examples, one increment: forces on the sheet from the contact, a
 /// body force pressing it onto the plate; central differences on the sheet.
 fn advance(s: &Sheet, x: &mut [[f64; 3]], v: &mut [[f64; 3]], f: &[[f64; 3]], dt: f64) {
@@ -206,17 +221,7 @@ fn c_abi_increments_equal_the_rust_apis_bit_for_bit_on_every_device() {
         let mut touched = 0;
         for inc in 0..120 {
             let fr = rust.penalty_step(&xr, &vr, dt).unwrap().forces.clone();
-            unsafe {
-                ok(abut_contact_penalty_step(
-                    c,
-                    xc.as_flattened().as_ptr(),
-                    vc.as_flattened().as_ptr(),
-                    xc.len(),
-                    dt,
-                    fc.as_flattened_mut().as_mut_ptr(),
-                    AbutForceMode::Write as i32,
-                ));
-            }
+            ok(c_step(c, &xc, &vc, dt, &mut fc, AbutForceMode::Write));
             let bits = |f: &[[f64; 3]]| {
                 f.as_flattened()
                     .iter()
@@ -296,18 +301,8 @@ fn c_abi_increments_equal_the_rust_apis_bit_for_bit_on_every_device() {
         // adding to the host's forces adds
         let mut fa = vec![[1.5; 3]; xc.len()];
         let before = rust.penalty_step(&xr, &vr, dt).unwrap().forces.clone();
-        unsafe {
-            ok(abut_contact_penalty_step(
-                c,
-                xc.as_flattened().as_ptr(),
-                vc.as_flattened().as_ptr(),
-                xc.len(),
-                dt,
-                fa.as_flattened_mut().as_mut_ptr(),
-                AbutForceMode::Add as i32,
-            ));
-            ok(abut_contact_free(c));
-        }
+        ok(c_step(c, &xc, &vc, dt, &mut fa, AbutForceMode::Add));
+        unsafe { ok(abut_contact_free(c)) };
         for (a, b) in fa.iter().zip(&before) {
             for k in 0..3 {
                 assert_eq!(a[k].to_bits(), (1.5 + b[k]).to_bits());
@@ -329,17 +324,7 @@ fn run_c(
     let mut f = vec![[0.0; 3]; x.len()];
     let mut all = Vec::new();
     for _ in 0..incs {
-        unsafe {
-            ok(abut_contact_penalty_step(
-                c,
-                x.as_flattened().as_ptr(),
-                v.as_flattened().as_ptr(),
-                x.len(),
-                dt,
-                f.as_flattened_mut().as_mut_ptr(),
-                AbutForceMode::Write as i32,
-            ))
-        };
+        ok(c_step(c, x, v, dt, &mut f, AbutForceMode::Write));
         all.push(f.as_flattened().iter().map(|x| x.to_bits()).collect());
         advance(s, x, v, &f, dt);
     }

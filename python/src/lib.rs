@@ -123,24 +123,25 @@ fn bad(msg: String) -> PyErr {
     BadValueError::new_err(msg)
 }
 
+/// Checks that an array is (n, 3) and C-contiguous, as abut reads it in place.
+fn check_points(shape: &[usize], c_contiguous: bool, what: &str) -> PyResult<()> {
+    if shape.len() != 2 || shape[1] != 3 {
+        return Err(LengthError::new_err(format!(
+            "{what}: shape {shape:?}, expected (n, 3)"
+        )));
+    }
+    if !c_contiguous {
+        return Err(bad(format!(
+            "{what}: not C-contiguous (pass numpy.ascontiguousarray(...); abut uses it in place)"
+        )));
+    }
+    Ok(())
+}
+
 /// An (n, 3) float64 C-contiguous array as points, in place.
 fn points<'a>(a: &'a PyReadonlyArray2<'_, f64>, what: &str) -> PyResult<&'a [[f64; 3]]> {
-    if a.shape()[1] != 3 {
-        return Err(LengthError::new_err(format!(
-            "{what}: shape {:?}, expected (n, 3)",
-            a.shape()
-        )));
-    }
-    if !a.is_c_contiguous() {
-        return Err(bad(format!(
-            "{what}: not C-contiguous (pass numpy.ascontiguousarray(...); abut reads it in place)"
-        )));
-    }
-    let flat = a.as_slice().map_err(|_| {
-        bad(format!(
-            "{what}: not C-contiguous (pass numpy.ascontiguousarray(...); abut reads it in place)"
-        ))
-    })?;
+    check_points(a.shape(), a.is_c_contiguous(), what)?;
+    let flat = a.as_slice().map_err(|e| bad(format!("{what}: {e}")))?;
     Ok(bytemuck::cast_slice(flat))
 }
 
@@ -149,22 +150,8 @@ fn points_mut<'a>(
     a: &'a mut PyReadwriteArray2<'_, f64>,
     what: &str,
 ) -> PyResult<&'a mut [[f64; 3]]> {
-    if a.shape()[1] != 3 {
-        return Err(LengthError::new_err(format!(
-            "{what}: shape {:?}, expected (n, 3)",
-            a.shape()
-        )));
-    }
-    if !a.is_c_contiguous() {
-        return Err(bad(format!(
-            "{what}: not C-contiguous (abut corrects it in place)"
-        )));
-    }
-    let flat = a.as_slice_mut().map_err(|_| {
-        bad(format!(
-            "{what}: not C-contiguous (abut corrects it in place)"
-        ))
-    })?;
+    check_points(a.shape(), a.is_c_contiguous(), what)?;
+    let flat = a.as_slice_mut().map_err(|e| bad(format!("{what}: {e}")))?;
     Ok(bytemuck::cast_slice_mut(flat))
 }
 
@@ -670,14 +657,11 @@ impl Contact {
                         r.forces.len()
                     )));
                 }
-                for (o, f) in o.iter_mut().zip(&r.forces) {
-                    for a in 0..3 {
-                        if add {
-                            o[a] += f[a];
-                        } else {
-                            o[a] = f[a];
-                        }
-                    }
+                if add {
+                    let o = o.as_flattened_mut().iter_mut();
+                    o.zip(r.forces.as_flattened()).for_each(|(o, f)| *o += f);
+                } else {
+                    o.copy_from_slice(&r.forces);
                 }
             }
             Ok(out)
