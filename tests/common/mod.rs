@@ -3,6 +3,9 @@
 
 use std::sync::OnceLock;
 
+#[cfg(feature = "capi")]
+pub mod capi;
+
 use abut::cpu::brute_force::{brute_force, OracleHit};
 use abut::geometry::{closest_on_facet, V3};
 use abut::model::MasterSurface;
