@@ -975,6 +975,19 @@ AbutStatus abut_contact_save_state(const struct AbutContact *contact, uint8_t *b
 AbutStatus abut_contact_restore_state(struct AbutContact *contact, const uint8_t *buf, size_t len);
 
 /*
+ The increment for nodes that carry elements and penalty springs together (the host's vote
+ for its next increment): from the elements' stable increment `element_dt` (already times
+ `safety`) and the contact's `contact_dt` (`AbutReport::stable_dt`),
+ 1/Δt² = 1/Δt_elements² + 1/(safety·Δt_contact)², and no more than
+ `contact_safety·Δt_contact`. Typical factors: `safety` 0.9, `contact_safety` 0.5. `*dt`
+ receives it (∞ when neither limits).
+
+ # Safety
+ `dt` valid.
+ */
+AbutStatus abut_combined_increment(double element_dt, double contact_dt, double safety, double contact_safety, double *dt);
+
+/*
  Makes a device: `kind` an `AbutDeviceKind`; for `ABUT_DEVICE_KIND_GPU`, `backend` an
  `AbutBackend` and `name` (may be null: any) text the adapter's name must contain,
  case-insensitive. `*out` receives the handle. Errors: no such adapter

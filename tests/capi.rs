@@ -384,3 +384,27 @@ fn c_abi_kinematic_increments_equal_the_rust_apis_bit_for_bit() {
     }
     unsafe { ok(abut_model_free(cm)) };
 }
+
+#[test]
+fn the_combined_increment_is_the_rust_one_and_refuses_what_is_not_positive() {
+    for (e, c) in [
+        (1e-5, 3e-5),
+        (2e-6, 1e-6),
+        (1e-4, f64::INFINITY),
+        (f64::INFINITY, 5e-5),
+    ] {
+        let mut dt = 0.0;
+        unsafe { ok(abut_combined_increment(e, c, 0.9, 0.5, &mut dt)) };
+        assert_eq!(
+            dt.to_bits(),
+            abut::combined_increment(e, c, 0.9, 0.5).to_bits()
+        );
+    }
+    let mut dt = 0.0;
+    let s = unsafe { abut_combined_increment(1e-5, f64::NAN, 0.9, 0.5, &mut dt) };
+    fails(s, AbutStatus::BadValue, &["contact_dt = NaN"]);
+    let s = unsafe { abut_combined_increment(1e-5, 1e-5, 0.0, 0.5, &mut dt) };
+    fails(s, AbutStatus::BadValue, &["safety = 0"]);
+    let s = unsafe { abut_combined_increment(1e-5, 1e-5, 0.9, 0.5, null_mut()) };
+    fails(s, AbutStatus::NullPointer, &["dt"]);
+}

@@ -122,6 +122,13 @@ module abut
       integer(c_size_t), intent(out), optional :: len
     end function
 
+    integer(c_int32_t) function abut_combined_increment(element_dt, contact_dt, safety, &
+        contact_safety, dt) bind(c, name="abut_combined_increment")
+      import :: c_int32_t, c_double
+      real(c_double), value :: element_dt, contact_dt, safety, contact_safety
+      real(c_double), intent(out) :: dt
+    end function
+
     ! --- devices
     integer(c_int32_t) function abut_device_new(kind, backend, name, out) &
         bind(c, name="abut_device_new")

@@ -41,6 +41,7 @@ from ._abut import (  # noqa: F401  (the extension module's names are the packag
     OutOfRangeError,
     Report,
     __version__,
+    combined_increment,
     run_scene_json,
 )
 
@@ -57,6 +58,7 @@ __all__ = [
     "Model",
     "OutOfRangeError",
     "Report",
+    "combined_increment",
     "run_scene",
 ]
 

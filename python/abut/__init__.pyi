@@ -165,6 +165,11 @@ class Contact:
     def save_state(self) -> bytes: ...
     def restore_state(self, state: bytes) -> None: ...
 
+def combined_increment(
+    element_dt: float, contact_dt: float, safety: float = 0.9, contact_safety: float = 0.5
+) -> float:
+    """The increment for nodes carrying elements and penalty springs together."""
+
 def run_scene_json(path: str, output: str, device: Optional[Device] = None) -> str: ...
 def run_scene(
     path: Union[str, "os.PathLike[str]"],

@@ -39,6 +39,15 @@ fn run_scene_json(path: &str, output: &str, device: Option<&Device>) -> PyResult
     })
 }
 
+/// The increment for nodes that carry elements and penalty springs together: from the
+/// elements' stable increment (already times `safety`) and the contact's (`Report.stable_dt`),
+/// 1/dt² = 1/dt_elements² + 1/(safety·dt_contact)², at most contact_safety·dt_contact.
+#[pyfunction]
+#[pyo3(signature = (element_dt, contact_dt, safety = 0.9, contact_safety = 0.5))]
+fn combined_increment(element_dt: f64, contact_dt: f64, safety: f64, contact_safety: f64) -> f64 {
+    abut::combined_increment(element_dt, contact_dt, safety, contact_safety)
+}
+
 /// abut's extension module.
 #[pymodule]
 fn _abut(m: &Bound<'_, PyModule>) -> PyResult<()> {
@@ -47,6 +56,7 @@ fn _abut(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<Contact>()?;
     m.add_class::<Report>()?;
     m.add_function(wrap_pyfunction!(run_scene_json, m)?)?;
+    m.add_function(wrap_pyfunction!(combined_increment, m)?)?;
     let py = m.py();
     m.add("AbutError", py.get_type::<AbutError>())?;
     m.add("LengthError", py.get_type::<LengthError>())?;

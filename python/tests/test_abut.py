@@ -215,6 +215,12 @@ def test_every_bad_input_raises_a_named_exception():
     assert issubclass(abut.LengthError, abut.AbutError)
 
 
+def test_the_combined_increment_takes_both_limits():
+    both = abut.combined_increment(1e-5, 3e-5)
+    assert both < 1e-5 and both == abut.combined_increment(1e-5, 3e-5, 0.9, 0.5)
+    assert abut.combined_increment(1e-5, float("inf")) == 1e-5
+
+
 def test_run_scene_returns_history_and_summary(tmp_path):
     history, summary = abut.run_scene(ROOT / "scenes/incline.toml", abut.Device.cpu(), tmp_path)
     assert history["time"].dtype == np.float64 and len(history["time"]) > 10

@@ -542,3 +542,40 @@ pub unsafe extern "C" fn abut_contact_restore_state(
         Ok(c.restore_state(s)?)
     })
 }
+
+/// The increment for nodes that carry elements and penalty springs together (the host's vote
+/// for its next increment): from the elements' stable increment `element_dt` (already times
+/// `safety`) and the contact's `contact_dt` (`AbutReport::stable_dt`),
+/// 1/Δt² = 1/Δt_elements² + 1/(safety·Δt_contact)², and no more than
+/// `contact_safety·Δt_contact`. Typical factors: `safety` 0.9, `contact_safety` 0.5. `*dt`
+/// receives it (∞ when neither limits).
+///
+/// # Safety
+/// `dt` valid.
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn abut_combined_increment(
+    element_dt: f64,
+    contact_dt: f64,
+    safety: f64,
+    contact_safety: f64,
+    dt: *mut f64,
+) -> AbutStatus {
+    const CALL: &str = "abut_combined_increment";
+    handles::guard(CALL, || {
+        for (name, value) in [
+            ("element_dt", element_dt),
+            ("contact_dt", contact_dt),
+            ("safety", safety),
+            ("contact_safety", contact_safety),
+        ] {
+            if !(value > 0.0) {
+                return Err(Fail::new(
+                    AbutStatus::BadValue,
+                    format!("{CALL}: {name} = {value}: must be positive (∞ for no limit)"),
+                ));
+            }
+        }
+        let out = crate::combined_increment(element_dt, contact_dt, safety, contact_safety);
+        unsafe { put(dt, out, CALL, "dt") }
+    })
+}
