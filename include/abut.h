@@ -40,7 +40,7 @@
 #define ABUT_NO_NODE UINT32_MAX
 
 /*
- What a call did. Every `abut_*` call but the `*_free`s and the error readers returns one.
+ What a call did. Every `abut_*` call but `abut_version` returns one.
  */
 enum AbutStatus
 #if defined(__cplusplus) || __STDC_VERSION__ >= 202311L

@@ -2,7 +2,7 @@
 //! structs it fills or reads. Every struct is `#[repr(C)]` and holds only numbers, fixed arrays
 //! and pointers; enumerations cross the boundary as `int32_t` and are checked on the way in.
 
-/// What a call did. Every `abut_*` call but the `*_free`s and the error readers returns one.
+/// What a call did. Every `abut_*` call but `abut_version` returns one.
 #[repr(i32)]
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum AbutStatus {
