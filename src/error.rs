@@ -255,6 +255,57 @@ pub enum Error {
     },
 }
 
+/// What kind of fault an [`Error`](enum@Error) is: the class a binding reports it as (the C
+/// ABI's status, the Python exception).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum ErrorKind {
+    /// An array's length does not match what it describes.
+    Length,
+    /// An id or index names nothing.
+    OutOfRange,
+    /// A value is not allowed (NaN, infinite, out of its range; an empty or repeated set).
+    BadValue,
+    /// A surface's facets cannot be used.
+    Geometry,
+    /// No adapter, or the GPU failed.
+    Device,
+    /// The contact or the solution failed during an increment.
+    Contact,
+    /// A file could not be read or parsed.
+    Io,
+}
+
+impl Error {
+    /// The kind of fault this is.
+    pub fn kind(&self) -> ErrorKind {
+        use ErrorKind as K;
+        match self {
+            Error::LengthMismatch { .. } => K::Length,
+            Error::IndexOutOfRange { .. } | Error::UnknownId { .. } => K::OutOfRange,
+            Error::NonFiniteCoordinate { .. }
+            | Error::CoordinateOutOfRange { .. }
+            | Error::BadMass { .. }
+            | Error::BadParameter { .. }
+            | Error::Empty { .. }
+            | Error::DuplicateNode { .. } => K::BadValue,
+            Error::RepeatedNode { .. }
+            | Error::AllFacetsDegenerate { .. }
+            | Error::WrongDimension { .. }
+            | Error::NonPlanarNode { .. } => K::Geometry,
+            Error::NoAdapter { .. }
+            | Error::AdapterLimit { .. }
+            | Error::TooLarge { .. }
+            | Error::RequestDevice { .. }
+            | Error::Gpu { .. }
+            | Error::DeviceLost { .. } => K::Device,
+            Error::NonFiniteResult { .. } | Error::Tunnelling { .. } | Error::Diverged { .. } => {
+                K::Contact
+            }
+            Error::Parse { .. } | Error::Io { .. } => K::Io,
+        }
+    }
+}
+
 /// Result with the library's [`Error`](enum@Error).
 pub type Result<T, E = Error> = std::result::Result<T, E>;
 

@@ -32,7 +32,7 @@ pub use contact::{
     OverclosureReport, PairOutput, ResidentIo, StepReport,
 };
 pub use device::{Backend, Device, Traffic};
-pub use error::{Error, Result};
+pub use error::{Error, ErrorKind, Result};
 pub use kinematic::BodyState;
 pub use model::{
     Analytical, BodyId, Enforce, Facet, Friction, Kinematic, Model, NodeRange, NodeSetId, Pair,

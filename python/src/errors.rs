@@ -59,31 +59,16 @@ create_exception!(
 
 /// The Python exception for a library error.
 pub(crate) fn raise(e: abut::Error) -> PyErr {
-    use abut::Error as E;
+    use abut::error::ErrorKind as K;
     let m = e.to_string();
-    match e {
-        E::LengthMismatch { .. } => LengthError::new_err(m),
-        E::IndexOutOfRange { .. } | E::UnknownId { .. } => OutOfRangeError::new_err(m),
-        E::NonFiniteCoordinate { .. }
-        | E::CoordinateOutOfRange { .. }
-        | E::BadMass { .. }
-        | E::BadParameter { .. }
-        | E::Empty { .. }
-        | E::DuplicateNode { .. } => BadValueError::new_err(m),
-        E::RepeatedNode { .. }
-        | E::AllFacetsDegenerate { .. }
-        | E::WrongDimension { .. }
-        | E::NonPlanarNode { .. } => GeometryError::new_err(m),
-        E::NoAdapter { .. }
-        | E::AdapterLimit { .. }
-        | E::TooLarge { .. }
-        | E::RequestDevice { .. }
-        | E::Gpu { .. }
-        | E::DeviceLost { .. } => DeviceError::new_err(m),
-        E::NonFiniteResult { .. } | E::Tunnelling { .. } | E::Diverged { .. } => {
-            ContactError::new_err(m)
-        }
-        E::Parse { .. } | E::Io { .. } => IoError::new_err(m),
+    match e.kind() {
+        K::Length => LengthError::new_err(m),
+        K::OutOfRange => OutOfRangeError::new_err(m),
+        K::BadValue => BadValueError::new_err(m),
+        K::Geometry => GeometryError::new_err(m),
+        K::Device => DeviceError::new_err(m),
+        K::Contact => ContactError::new_err(m),
+        K::Io => IoError::new_err(m),
     }
 }
 

@@ -71,29 +71,15 @@ impl Fail {
 
 impl From<Error> for Fail {
     fn from(e: Error) -> Self {
-        let status = match &e {
-            Error::LengthMismatch { .. } => AbutStatus::Length,
-            Error::IndexOutOfRange { .. } | Error::UnknownId { .. } => AbutStatus::OutOfRange,
-            Error::NonFiniteCoordinate { .. }
-            | Error::CoordinateOutOfRange { .. }
-            | Error::BadMass { .. }
-            | Error::BadParameter { .. }
-            | Error::Empty { .. }
-            | Error::DuplicateNode { .. } => AbutStatus::BadValue,
-            Error::RepeatedNode { .. }
-            | Error::AllFacetsDegenerate { .. }
-            | Error::WrongDimension { .. }
-            | Error::NonPlanarNode { .. } => AbutStatus::Geometry,
-            Error::NoAdapter { .. }
-            | Error::AdapterLimit { .. }
-            | Error::TooLarge { .. }
-            | Error::RequestDevice { .. }
-            | Error::Gpu { .. }
-            | Error::DeviceLost { .. } => AbutStatus::Device,
-            Error::NonFiniteResult { .. } | Error::Tunnelling { .. } | Error::Diverged { .. } => {
-                AbutStatus::Contact
-            }
-            Error::Parse { .. } | Error::Io { .. } => AbutStatus::Io,
+        use crate::error::ErrorKind as K;
+        let status = match e.kind() {
+            K::Length => AbutStatus::Length,
+            K::OutOfRange => AbutStatus::OutOfRange,
+            K::BadValue => AbutStatus::BadValue,
+            K::Geometry => AbutStatus::Geometry,
+            K::Device => AbutStatus::Device,
+            K::Contact => AbutStatus::Contact,
+            K::Io => AbutStatus::Io,
         };
         Fail::new(status, e.to_string())
     }
