@@ -19,6 +19,13 @@ fn the_committed_c_header_is_cbindgens() {
         std::fs::write(&path, &made).expect("include/abut.h writes");
     }
     let committed = std::fs::read(&path).unwrap_or_default();
+    // the one constant written by hand in capi/cbindgen.toml is the Rust one
+    assert_eq!(abut::capi::ABUT_NO_NODE, u32::MAX);
+    let text = String::from_utf8_lossy(&made);
+    assert!(
+        text.contains("#define ABUT_NO_NODE UINT32_MAX"),
+        "ABUT_NO_NODE in the header"
+    );
     assert!(
         committed == made,
         "include/abut.h is stale: src/capi/ changed; run `ABUT_BLESS=1 cargo test --release \
