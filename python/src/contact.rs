@@ -108,13 +108,17 @@ impl Contact {
 
     /// Computes the output variables every increment (`output`) when True.
     fn request_outputs(&self, yes: bool) -> PyResult<()> {
-        self.lock()?.request_outputs(yes);
-        Ok(())
+        guarded("Contact.request_outputs", || {
+            self.lock()?.request_outputs(yes);
+            Ok(())
+        })
     }
 
     /// Sets the reference increment of the automatic stiffness (default: the first `dt`).
     fn set_reference_increment(&self, dt: f64) -> PyResult<()> {
-        self.lock()?.set_reference_increment(dt).map_err(raise)
+        guarded("Contact.set_reference_increment", || {
+            self.lock()?.set_reference_increment(dt).map_err(raise)
+        })
     }
 
     /// One penalty increment at positions `x` and velocities `v` ((n, 3) float64, read in place)
@@ -163,21 +167,23 @@ impl Contact {
     /// The report of the last penalty increment.
     #[getter]
     fn report(&self) -> PyResult<Report> {
-        let c = self.lock()?;
-        let r = c.report();
-        Ok(Report {
-            stable_dt: r.stable_dt,
-            approach_dt: r.approach_dt,
-            max_overclosure: r.max_overclosure,
-            active: r.active,
-            slipping: r.slipping,
-            fast_nodes: r.fast_nodes,
-            fastest: r.fastest.map(|f| (f.node, f.pair.0, f.distance, f.radius)),
-            global_searches: r.global_searches,
-            unanchored: r.unanchored,
-            max_overclosure_after: 0.0,
-            kinetic_energy_change: 0.0,
-            warnings: r.warnings(),
+        guarded("Contact.report", || {
+            let c = self.lock()?;
+            let r = c.report();
+            Ok(Report {
+                stable_dt: r.stable_dt,
+                approach_dt: r.approach_dt,
+                max_overclosure: r.max_overclosure,
+                active: r.active,
+                slipping: r.slipping,
+                fast_nodes: r.fast_nodes,
+                fastest: r.fastest.map(|f| (f.node, f.pair.0, f.distance, f.radius)),
+                global_searches: r.global_searches,
+                unanchored: r.unanchored,
+                max_overclosure_after: 0.0,
+                kinetic_energy_change: 0.0,
+                warnings: r.warnings(),
+            })
         })
     }
 
@@ -228,21 +234,23 @@ impl Contact {
     /// The report of the last kinematic increment.
     #[getter]
     fn kinematic_report(&self) -> PyResult<Report> {
-        let c = self.lock()?;
-        let r = c.kinematic_report();
-        Ok(Report {
-            stable_dt: f64::INFINITY,
-            approach_dt: f64::INFINITY,
-            max_overclosure: r.max_overclosure,
-            active: r.active,
-            slipping: 0,
-            fast_nodes: r.fast_nodes,
-            fastest: r.fastest.map(|f| (f.node, f.pair.0, f.distance, f.radius)),
-            global_searches: 0,
-            unanchored: 0,
-            max_overclosure_after: r.max_overclosure_after,
-            kinetic_energy_change: r.kinetic_energy_change,
-            warnings: r.warnings(),
+        guarded("Contact.kinematic_report", || {
+            let c = self.lock()?;
+            let r = c.kinematic_report();
+            Ok(Report {
+                stable_dt: f64::INFINITY,
+                approach_dt: f64::INFINITY,
+                max_overclosure: r.max_overclosure,
+                active: r.active,
+                slipping: 0,
+                fast_nodes: r.fast_nodes,
+                fastest: r.fastest.map(|f| (f.node, f.pair.0, f.distance, f.radius)),
+                global_searches: 0,
+                unanchored: 0,
+                max_overclosure_after: r.max_overclosure_after,
+                kinetic_energy_change: r.kinetic_energy_change,
+                warnings: r.warnings(),
+            })
         })
     }
 
@@ -277,56 +285,58 @@ impl Contact {
         pass_: usize,
         rigid: bool,
     ) -> PyResult<Bound<'py, PyDict>> {
-        let c = self.lock()?;
-        let all: Vec<&abut::PairOutput> = if rigid {
-            c.rigid_outputs()
-                .into_iter()
-                .filter(|(id, _)| id.0 == pair)
-                .map(|(_, o)| o)
-                .collect()
-        } else {
-            c.outputs()
-                .into_iter()
-                .filter(|(id, _)| id.0 == pair)
-                .map(|(_, o)| o)
-                .collect()
-        };
-        let n = all.len();
-        let o = all.get(pass_).ok_or_else(|| {
-            OutOfRangeError::new_err(format!(
-                "pass {pass_} of pair {pair}: it has {n} pass(es) with outputs"
-            ))
-        })?;
-        let d = PyDict::new(py);
-        d.set_item("slaves", o.slaves.clone().into_pyarray(py))?;
-        let cs: Vec<i32> = o
-            .cstatus
-            .iter()
-            .map(|s| match s {
-                None => -1,
-                Some(abut::ContactStatus::Open) => 0,
-                Some(abut::ContactStatus::Stick) => 1,
-                Some(abut::ContactStatus::Slip) => 2,
-            })
-            .collect();
-        d.set_item("cstatus", cs.into_pyarray(py))?;
-        d.set_item("copen", o.copen.clone().into_pyarray(py))?;
-        d.set_item("cpress", o.cpress.clone().into_pyarray(py))?;
-        d.set_item("cshear1", o.cshear1.clone().into_pyarray(py))?;
-        d.set_item("cshear2", o.cshear2.clone().into_pyarray(py))?;
-        let rows = |v: &[[f64; 3]]| -> PyResult<Bound<'py, PyArray2<f64>>> {
-            v.as_flattened()
-                .to_vec()
-                .into_pyarray(py)
-                .reshape([v.len(), 3])
-        };
-        d.set_item("normal", rows(&o.normal)?)?;
-        d.set_item("force", rows(&o.force)?)?;
-        d.set_item("cfn", o.cfn.to_vec().into_pyarray(py))?;
-        d.set_item("cfs", o.cfs.to_vec().into_pyarray(py))?;
-        d.set_item("contact_energy", o.contact_energy)?;
-        d.set_item("frictional_dissipation", o.frictional_dissipation)?;
-        Ok(d)
+        guarded("Contact.output", || {
+            let c = self.lock()?;
+            let all: Vec<&abut::PairOutput> = if rigid {
+                c.rigid_outputs()
+                    .into_iter()
+                    .filter(|(id, _)| id.0 == pair)
+                    .map(|(_, o)| o)
+                    .collect()
+            } else {
+                c.outputs()
+                    .into_iter()
+                    .filter(|(id, _)| id.0 == pair)
+                    .map(|(_, o)| o)
+                    .collect()
+            };
+            let n = all.len();
+            let o = all.get(pass_).ok_or_else(|| {
+                OutOfRangeError::new_err(format!(
+                    "pass {pass_} of pair {pair}: it has {n} pass(es) with outputs"
+                ))
+            })?;
+            let d = PyDict::new(py);
+            d.set_item("slaves", o.slaves.clone().into_pyarray(py))?;
+            let cs: Vec<i32> = o
+                .cstatus
+                .iter()
+                .map(|s| match s {
+                    None => -1,
+                    Some(abut::ContactStatus::Open) => 0,
+                    Some(abut::ContactStatus::Stick) => 1,
+                    Some(abut::ContactStatus::Slip) => 2,
+                })
+                .collect();
+            d.set_item("cstatus", cs.into_pyarray(py))?;
+            d.set_item("copen", o.copen.clone().into_pyarray(py))?;
+            d.set_item("cpress", o.cpress.clone().into_pyarray(py))?;
+            d.set_item("cshear1", o.cshear1.clone().into_pyarray(py))?;
+            d.set_item("cshear2", o.cshear2.clone().into_pyarray(py))?;
+            let rows = |v: &[[f64; 3]]| -> PyResult<Bound<'py, PyArray2<f64>>> {
+                v.as_flattened()
+                    .to_vec()
+                    .into_pyarray(py)
+                    .reshape([v.len(), 3])
+            };
+            d.set_item("normal", rows(&o.normal)?)?;
+            d.set_item("force", rows(&o.force)?)?;
+            d.set_item("cfn", o.cfn.to_vec().into_pyarray(py))?;
+            d.set_item("cfs", o.cfs.to_vec().into_pyarray(py))?;
+            d.set_item("contact_energy", o.contact_energy)?;
+            d.set_item("frictional_dissipation", o.frictional_dissipation)?;
+            Ok(d)
+        })
     }
 
     /// The contact's state as bytes (a restart: `restore_state` on a Contact of the same model

@@ -3,8 +3,10 @@
 //!
 //! Arrays: positions, velocities and forces are (n, 3) float64; C-contiguous inputs are read in
 //! place (no copy), others are refused with a named error rather than copied silently. Every
-//! call runs inside `catch_unwind`: a panic becomes an `abut.AbutError`, never an abort. Errors
-//! are raised as the subclass of `abut.AbutError` for their kind, carrying the library's message.
+//! call that does work in the library runs inside `catch_unwind`: a panic becomes an
+//! `abut.AbutError`, never an abort (the few left out build empty objects or return plain
+//! values; PyO3 raises its PanicException for those, never unwinding into Python). Errors are
+//! raised as the subclass of `abut.AbutError` for their kind, carrying the library's message.
 mod contact;
 mod device;
 mod errors;
