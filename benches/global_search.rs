@@ -12,8 +12,8 @@
 use std::fmt::Write as _;
 use std::time::{Duration, Instant};
 
-use abut::cpu::brute_force::brute_force;
 use abut::mesh::{plate_triangles, point_cloud};
+use abut::search::brute_force::brute_force;
 use abut::{Device, GlobalSearch, Model, Pair, PairId, SearchResult, Surface};
 use parry3d::math::Vector as PVec;
 use parry3d::query::PointQuery;

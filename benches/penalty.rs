@@ -14,7 +14,7 @@ use std::fmt::Write as _;
 use std::time::{Duration, Instant};
 
 use abut::mesh::{plate_triangles, point_cloud, SplitMix64};
-use abut::search::Schedule;
+use abut::model::Schedule;
 use abut::{
     Contact, Device, Enforce, Friction, GlobalSearch, Model, Pair, PairId, Penalty, Stiffness,
     Surface,

@@ -9,7 +9,8 @@ use std::fmt::Write as _;
 use std::time::Instant;
 
 use abut::mesh::{plate_triangles, point_cloud};
-use abut::search::{Schedule, Trigger};
+use abut::model::Schedule;
+use abut::search::Trigger;
 use abut::{Device, GlobalSearch, Model, Pair, Surface};
 
 fn main() {

@@ -15,7 +15,7 @@
 //             plane more than 10° off the current smoothed normal at X0 (the deformed master),
 //             in STATUS_PLANE_OFF.
 
-// Rust twin: Anchor (src/search/layout.rs), 64 bytes.
+// Rust twin: Anchor (src/abi/search.rs), 64 bytes.
 struct Anchor {
     facet: u32,
     node: u32,

@@ -1,6 +1,6 @@
 // common.wgsl — prepended to every kernel by src/gpu/shaders.rs.
 // Constants, the structs shared with Rust, dispatch folding and the closest-point geometry.
-// Rust twins: src/search/layout.rs (structs), src/geometry.rs (geometry, same operation order).
+// Rust twins: src/abi/search.rs (structs), src/geometry.rs (geometry, same operation order).
 
 const NO_NODE: u32 = 0xffffffffu;
 const NO_FACET: u32 = 0xffffffffu;
@@ -17,7 +17,7 @@ const ITEM_WORKGROUP: u32 = 64u;
 // Lower corner of an empty box (upper: its negation): no point is within any distance of it.
 const EMPTY_LO: f32 = 3.0e38;
 
-// Rust twin: SearchParams (src/search/layout.rs), 96 bytes.
+// Rust twin: SearchParams (src/abi/search.rs), 96 bytes.
 struct SearchParams {
     cell_size: f32,
     inv_cell_size: f32,
@@ -53,7 +53,7 @@ fn grid_lo(p: SearchParams) -> vec3<f32> {
 const FLAG_WIDE_LOCAL: u32 = 1u;
 const FLAG_SELF_CONTACT: u32 = 2u;
 
-// Rust twin: GpuHit (src/search/layout.rs), 64 bytes. One per slave node.
+// Rust twin: GpuHit (src/abi/search.rs), 64 bytes. One per slave node.
 struct Hit {
     facet: u32,          // index into the active facet list, NO_FACET when none within the radius
     node: u32,           // tracked master node (nearest node of that facet), NO_NODE when none
@@ -64,7 +64,7 @@ struct Hit {
     weights: vec4<f32>,     // load-transfer weights of the facet's nodes
 }
 
-// Status words (Rust twin: STATUS_* in src/search/layout.rs).
+// Status words (Rust twin: STATUS_* in src/abi/status.rs).
 const STATUS_BUDGET_EXCEEDED: u32 = 2u; // the motion budget is used up: rerun with a global search
 const STATUS_LOCAL_ITERATIONS: u32 = 3u; // most local-search iterations
 const STATUS_MOTION: u32 = 8u;         // bits of the largest motion since the last global search
@@ -88,7 +88,7 @@ const STATUS_COLLAPSED: u32 = 19u;    // master facets collapsed at the global s
 const STATUS_NONFINITE: u32 = 26u;    // lowest node with a non-finite coordinate, NO_NODE if none
 
 // The plan of a device-resident increment: one buffer per search, u32 words (Rust twins:
-// PLAN_* in src/search/layout.rs). Words 0..16 the schedule's state, 64..88 the SearchParams
+// PLAN_* in src/abi/search.rs). Words 0..16 the schedule's state, 64..88 the SearchParams
 // the schedule fitted (the search passes bind them as their uniform), then PLAN_SLOT_WORDS per
 // dispatch slot: the
 // live indirect arguments (x, y, z, 0), then the full-size ones (x, y, z, kind).

@@ -1,5 +1,5 @@
 // penalty_common.wgsl — shared by the penalty kernels (prepended after common.wgsl).
-// Rust twins: src/penalty/layout.rs.
+// Rust twins: src/abi/penalty.rs.
 
 const NO_SLAVE: u32 = 0xffffffffu;
 const CSTATUS_OPEN: u32 = 0u;

@@ -18,7 +18,7 @@ const SCAN_WORKGROUP: u32 = 64u;
 const SCAN_PER_THREAD: u32 = 16u;
 const SCAN_BLOCK: u32 = 1024u;
 
-// Rust twin: ScanParams (src/search/layout.rs), 16 bytes.
+// Rust twin: ScanParams (src/abi/search.rs), 16 bytes.
 struct ScanParams {
     n: u32,
     in_offset: u32,

@@ -16,7 +16,7 @@
 //             infinite coordinate is named in STATUS_NONFINITE (the lowest such node) and left
 //             out of the box.
 
-// Rust twin: FrameParams (src/search/layout.rs), 32 bytes.
+// Rust twin: FrameParams (src/abi/search.rs), 32 bytes.
 struct FrameParams {
     origin: vec4<f32>,
     n_nodes: u32,

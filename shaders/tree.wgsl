@@ -29,7 +29,7 @@
 //             collapsed at these positions (facet_collapsed) gets an empty box (no slave finds
 //             it) and is counted in STATUS_COLLAPSED. No loop.
 
-// Rust twin: TreeParams (src/search/layout.rs), 16 bytes.
+// Rust twin: TreeParams (src/abi/search.rs), 16 bytes.
 struct TreeParams {
     bottom: u32,  // the level this pass computes: the leaves from their facets, else from below
     _pad0: u32,

@@ -1,5 +1,8 @@
 //! The per-increment object a host program drives: search and enforcement of every pair.
 
+use crate::abi::penalty::{
+    ContactOut, SlaveState, CSTATUS_MASK, CSTATUS_OPEN, CSTATUS_SLIP, CSTATUS_STICK,
+};
 use crate::cpu::CpuPenalty;
 use crate::device::{Device, DeviceKind};
 use crate::error::{Error, Result};
@@ -11,9 +14,6 @@ use crate::kinematic::{
 };
 use crate::model::{validate_positions, Model, PairId};
 use crate::model::{BodyId, Enforce, MasterSurface, PressureOverclosure, RigidBody, RigidPairId};
-use crate::penalty::layout::{
-    ContactOut, SlaveState, CSTATUS_MASK, CSTATUS_OPEN, CSTATUS_SLIP, CSTATUS_STICK,
-};
 use crate::penalty::PenaltySetup;
 use crate::search::{GlobalSearch, SearchResult};
 
@@ -143,7 +143,7 @@ pub struct FastNode {
 fn fast_slaves(
     pair: PairId,
     search: &GlobalSearch,
-    hits: &[crate::search::layout::GpuHit],
+    hits: &[crate::abi::search::GpuHit],
     velocities: &[[f64; 3]],
     dt: f64,
 ) -> (usize, Option<FastNode>) {
@@ -153,9 +153,9 @@ fn fast_slaves(
     let (mut count, mut fastest) = (0, None::<FastNode>);
     for (&slave, h) in search.slaves().iter().zip(hits) {
         let mut vm = [0.0; 3];
-        if h.facet != crate::search::layout::NO_FACET {
+        if h.facet != crate::abi::search::NO_FACET {
             let fac = facets[h.facet as usize];
-            for j in 0..crate::cpu::common::facet_node_count(fac) {
+            for j in 0..crate::model::facet_node_count(fac) {
                 let v = velocities[fac[j] as usize];
                 for a in 0..3 {
                     vm[a] += h.weights[j] as f64 * v[a];
@@ -366,7 +366,7 @@ impl Contact {
                         })
                     };
                     let setup = PenaltySetup::new(model, id, search.master(), &slaves)?
-                        .with_search(&search);
+                        .with_search(search.radius(), search.reference_node());
                     let exec = make_exec(&setup)?;
                     let back = match pair.balanced {
                         // balanced: the master surface's nodes against the slave surface too
@@ -387,7 +387,7 @@ impl Contact {
                                 &slave_surface,
                                 &nodes,
                             )?
-                            .with_search(&rsearch);
+                            .with_search(rsearch.radius(), rsearch.reference_node());
                             let rexec = make_exec(&reverse)?;
                             Some(PairRun {
                                 id,
@@ -1233,7 +1233,7 @@ fn fill_output(o: &mut PairOutput, outs: &[ContactOut], areas: &[f32], search: S
             }));
         let area = areas[k] as f64;
         let nrm = [c.normal_gap[0], c.normal_gap[1], c.normal_gap[2]];
-        let (t1, t2) = crate::cpu::penalty::tangents(nrm);
+        let (t1, t2) = crate::geometry::tangents_f32(nrm);
         let ft = [
             c.tangential[0] as f64,
             c.tangential[1] as f64,

@@ -42,10 +42,10 @@ use mpi::Count;
 use crate::contact::Contact;
 use crate::device::Device;
 use crate::error::{Error, Result};
+use crate::model::Schedule;
 use crate::model::{
     Enforce, Facet, Friction, MasterSurface, Model, Pair, PairId, Penalty, Surface,
 };
-use crate::search::Schedule;
 
 /// Marks the unused fourth node of a triangle in [`RankPair::facets`].
 pub const NO_GLOBAL_NODE: u64 = u64::MAX;

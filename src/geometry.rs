@@ -491,3 +491,9 @@ pub fn tangent_directions<T: Real>(n: V3<T>) -> (V3<T>, V3<T>) {
     let t1 = (axis - n * axis.dot(n)).normalize_or_zero();
     (t1, n.cross(t1))
 }
+
+/// Local tangent directions of a contact normal in f32 (the kernel's convention), for outputs.
+pub fn tangents_f32(n: [f32; 3]) -> ([f32; 3], [f32; 3]) {
+    let (t1, t2) = tangent_directions(V3::new(n[0], n[1], n[2]));
+    (t1.to_array(), t2.to_array())
+}

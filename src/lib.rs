@@ -1,6 +1,7 @@
 #![doc = include_str!("../README.md")]
 #![warn(missing_docs)]
 
+pub mod abi;
 #[cfg(feature = "capi")]
 pub mod capi;
 pub mod contact;
@@ -19,14 +20,14 @@ pub mod kinematic;
 pub mod mesh;
 pub mod model;
 pub mod partition;
-pub mod passes;
 pub mod penalty;
+pub mod plan;
 pub mod query;
 #[cfg(feature = "solver")]
 pub mod scene;
 pub mod search;
-pub mod status;
 
+pub use abi::stats::IncrementStats;
 pub use contact::{
     combined_increment, Anchoring, Contact, ContactStatus, FastNode, KinematicReport,
     OverclosureReport, PairOutput, ResidentIo, StepReport,
@@ -37,7 +38,6 @@ pub use kinematic::BodyState;
 pub use model::{
     Analytical, BodyId, Enforce, Facet, Friction, Kinematic, Model, NodeRange, NodeSetId, Pair,
     PairId, Penalty, PressureOverclosure, RigidBody, RigidPair, RigidPairId, RigidPart,
-    RigidPartId, Sliding, Stiffness, Surface, SurfaceId, DEFAULT_CONTACT_DAMPING,
+    RigidPartId, Schedule, Sliding, Stiffness, Surface, SurfaceId, DEFAULT_CONTACT_DAMPING,
 };
-pub use search::layout::IncrementStats;
 pub use search::{ContactPoint, GlobalSearch, SearchResult, SearchStats};

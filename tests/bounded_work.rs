@@ -7,13 +7,7 @@ mod common;
 
 use abut::mesh::SplitMix64;
 use abut::*;
-use common::gpus;
-
-fn devices() -> Vec<Device> {
-    let mut d = vec![Device::cpu()];
-    d.extend(gpus().iter().cloned());
-    d
-}
+use common::{devices, gpus};
 
 /// One quad master facet (the unit square at z = 0, normal +z, corner masses 1e3) and `n`
 /// slave nodes scattered over it, each `depth` below it: every slave is in contact with the one
@@ -131,7 +125,7 @@ fn searched_like_the_oracle(
     radius: f64,
     name: &str,
 ) -> SearchResult {
-    use abut::cpu::brute_force::brute_force;
+    use abut::search::brute_force::brute_force;
     use common::{assert_same_search, tolerance};
     let r = m.add_nodes(slaves, &vec![1.0; slaves.len()]).unwrap();
     let set = m.add_node_set(&r.to_vec()).unwrap();
@@ -217,7 +211,7 @@ fn hundred_thousand_facets_within_the_radius() {
         let per_slave = |r: &SearchResult| -> Vec<u32> {
             r.raw
                 .iter()
-                .map(|h| h.candidates & !abut::search::layout::HIT_BESIDE_FREE_EDGE)
+                .map(|h| h.candidates & !abut::abi::search::HIT_BESIDE_FREE_EDGE)
                 .collect()
         };
         let mut counts = per_slave(&wide);
@@ -309,7 +303,7 @@ fn hundred_thousand_facets_at_one_distance() {
 /// `fold_dispatch` on the host and copied by the schedule, must be valid by construction.
 #[test]
 fn folded_dispatches_stay_within_the_limits() {
-    use abut::search::layout::fold_dispatch;
+    use abut::abi::search::fold_dispatch;
     use proptest::prelude::*;
     let check = |items: u32, per: u32, max: u32| {
         let (x, y) = fold_dispatch(items, per, max);

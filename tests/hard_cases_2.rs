@@ -8,13 +8,7 @@ mod common;
 
 use abut::mesh::plate_quads;
 use abut::*;
-use common::gpus;
-
-fn devices() -> Vec<Device> {
-    let mut d = vec![Device::cpu()];
-    d.extend(gpus().iter().cloned());
-    d
-}
+use common::devices;
 
 /// A fixed master plate (4 × 4 quads on [0, 4]², nodes of mass 10¹²) and `k × k` slave nodes in
 /// a square at the plate's middle, overclosed by 10⁻⁴: as one free rigid part of mass `mass`

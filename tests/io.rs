@@ -5,6 +5,8 @@
 
 mod common;
 
+use common::devices;
+
 use std::path::{Path, PathBuf};
 
 use abut::io::{gmsh, inp, vtk, ElementKind};
@@ -15,12 +17,6 @@ fn data(p: &str) -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR"))
         .join("tests/data")
         .join(p)
-}
-
-fn devices() -> Vec<Device> {
-    let mut d = vec![Device::cpu()];
-    d.extend(common::gpus().iter().cloned());
-    d
 }
 
 /// Area-weighted normal (sum of facet normal × area) and total area of facets.

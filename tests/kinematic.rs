@@ -6,13 +6,7 @@
 mod common;
 
 use abut::*;
-use common::gpus;
-
-fn devices() -> Vec<Device> {
-    let mut d = vec![Device::cpu()];
-    d.extend(gpus().iter().cloned());
-    d
-}
+use common::devices;
 
 fn kinematic(softened: Option<PressureOverclosure>) -> Enforce {
     Enforce::Kinematic(Kinematic { softened })

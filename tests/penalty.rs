@@ -6,13 +6,7 @@ mod common;
 
 use abut::mesh::{plate_quads, point_cloud, SplitMix64};
 use abut::*;
-use common::gpus;
-
-fn devices() -> Vec<Device> {
-    let mut d = vec![Device::cpu()];
-    d.extend(gpus().iter().cloned());
-    d
-}
+use common::{devices, gpus};
 
 fn penalty(k: f64) -> Enforce {
     Enforce::Penalty(Penalty {

@@ -4,17 +4,11 @@
 
 mod common;
 
-use abut::cpu::brute_force::brute_force;
 use abut::mesh::{plate_quads, plate_triangles, point_cloud, polyline};
 use abut::query::{Feature, PointQuery};
-use abut::{Device, Model, Surface};
-use common::gpus;
-
-fn devices() -> Vec<Device> {
-    let mut d = vec![Device::cpu()];
-    d.extend(gpus().iter().cloned());
-    d
-}
+use abut::search::brute_force::brute_force;
+use abut::{Model, Surface};
+use common::devices;
 
 /// The feature of a brute-force contact from its weights (the rule `PointQuery` documents).
 fn feature(weights: &[f64; 4], n: usize) -> Feature {

@@ -10,16 +10,11 @@
 
 mod common;
 
+use abut::abi::stats::IncrementStats;
 use abut::explicit::Solver;
 use abut::mesh::plate_quads;
 use abut::*;
-use common::{gpus, node_buffers, read_buffer, vec4};
-
-fn devices() -> Vec<Device> {
-    let mut d = vec![Device::cpu()];
-    d.extend(gpus().iter().cloned());
-    d
-}
+use common::{devices, node_buffers, read_buffer, vec4};
 
 const K: f64 = 1e4;
 const F: f64 = 10.0;

@@ -5,8 +5,9 @@
 
 mod common;
 
+use abut::abi::stats::STATS_BYTES;
 use abut::mesh::plate_quads;
-use abut::search::Schedule;
+use abut::model::Schedule;
 use abut::{
     Contact, Device, Enforce, Friction, IncrementStats, Model, Pair, Penalty, ResidentIo,
     Stiffness, Surface,
@@ -228,11 +229,8 @@ fn resident_steps(device: &Device, s: &Scene, steps: usize) -> Vec<Step> {
             q.submit([enc.finish()]);
             let forces: Vec<[f32; 4]> =
                 bytemuck::pod_collect_to_vec(&read(device, &b.f, (n * 16) as u64));
-            let st: IncrementStats = bytemuck::pod_read_unaligned(&read(
-                device,
-                c.stats_buffer().unwrap(),
-                abut::search::layout::STATS_BYTES,
-            ));
+            let st: IncrementStats =
+                bytemuck::pod_read_unaligned(&read(device, c.stats_buffer().unwrap(), STATS_BYTES));
             assert_eq!(st.increment as usize, k + 1, "{device}: increment counter");
             out.push(step_from(&forces, &st));
         }
@@ -377,7 +375,8 @@ fn bounce_scene(n: usize) -> (Model, std::ops::Range<u32>, f64) {
 /// bounce as on the CPU path's mirror of the same program.
 #[test]
 fn resident_increments_neither_read_back_nor_wait() {
-    use abut::gpu::{CentralDifference, IntegrateParams};
+    use abut::abi::integrate::IntegrateParams;
+    use abut::gpu::CentralDifference;
     let (model, range, dt) = bounce_scene(300);
     let n = model.positions().len();
     let steps = 1000;
@@ -637,5 +636,62 @@ fn a_nan_in_device_positions_is_named() {
         }
         let e = err.unwrap_or_else(|| panic!("{d}: no error for a NaN position"));
         assert!(e.contains("node 37"), "{d}: {e}");
+    }
+}
+
+/// Pipelines are compiled once per device: a balanced pair (two searches and two penalty
+/// sides) compiles each pass at most once, and a second `Contact` on the same device compiles
+/// nothing (each search used to compile its 14 pipelines, each penalty side its 5).
+#[test]
+fn pipelines_are_compiled_once_per_device() {
+    if gpus().is_empty() {
+        return;
+    }
+    // fresh devices: the shared ones' counters move with the other tests of this binary
+    for device in Device::all_gpus().into_iter().flatten() {
+        let s = scene(usize::MAX, true, 4);
+        let before = device.traffic().unwrap();
+        let mut first = Contact::new(&device, &s.model).unwrap();
+        for k in 0..3 {
+            let (x, v) = (s.motion)(k);
+            first.penalty_step(&x, &v, s.dt).unwrap();
+        }
+        let once = device.traffic().unwrap().since(&before);
+        assert!(
+            once.pipelines_compiled > 0
+                && once.pipelines_compiled <= abut::abi::passes::PASSES.len() as u64,
+            "{device}: {} pipelines for {} passes",
+            once.pipelines_compiled,
+            abut::abi::passes::PASSES.len()
+        );
+        assert!(
+            once.shader_modules_compiled <= abut::abi::shaders::KERNELS.len() as u64,
+            "{device}: {} shader modules for {} kernel files",
+            once.shader_modules_compiled,
+            abut::abi::shaders::KERNELS.len()
+        );
+        let mid = device.traffic().unwrap();
+        let mut second = Contact::new(&device, &s.model).unwrap();
+        for k in 0..3 {
+            let (x, v) = (s.motion)(k);
+            second.penalty_step(&x, &v, s.dt).unwrap();
+        }
+        let again = device.traffic().unwrap().since(&mid);
+        assert_eq!(
+            (again.pipelines_compiled, again.shader_modules_compiled),
+            (0, 0),
+            "{device}: a second contact compiled again"
+        );
+        // every pass the increments recorded is a declared group (the benchmarks' rows)
+        for label in device.traffic().unwrap().dispatches.keys() {
+            assert!(
+                abut::abi::groups::by_label(label).is_some(),
+                "{device}: pass '{label}' is declared by no group"
+            );
+        }
+        eprintln!(
+            "{device}: {} pipelines, {} shader modules for a balanced pair and a second contact",
+            once.pipelines_compiled, once.shader_modules_compiled
+        );
     }
 }

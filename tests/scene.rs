@@ -3,14 +3,10 @@
 
 mod common;
 
+use common::devices;
+
 use abut::scene::{run, Scene};
 use abut::Device;
-
-fn devices() -> Vec<Device> {
-    let mut d = vec![Device::cpu()];
-    d.extend(common::gpus().iter().cloned());
-    d
-}
 
 #[test]
 fn bar_impact_scene_reproduces_the_impulse_and_rebound() {

@@ -9,12 +9,6 @@ use abut::mesh::{plate_quads, point_cloud, polyline};
 use abut::{Device, Error, GlobalSearch, Model, PairId, SearchResult, Surface};
 use common::*;
 
-fn devices() -> Vec<Device> {
-    let mut d = vec![Device::cpu()];
-    d.extend(gpus().iter().cloned());
-    d
-}
-
 /// A warped unit plate of 8 × 8 quads at z ≈ 0 (facet size 1/8) and slaves over it and around
 /// it: 400 within 0.05 of its plane, 200 from 0.3 below to 0.6 above, some beside the plate.
 fn plate_scene(radius: f64, shift: [f64; 3]) -> (Model, PairId) {
@@ -265,7 +259,7 @@ fn facet_sizes_varying_a_hundredfold() {
             let mut counts: Vec<u32> = r
                 .raw
                 .iter()
-                .map(|h| h.candidates & !abut::search::layout::HIT_BESIDE_FREE_EDGE)
+                .map(|h| h.candidates & !abut::abi::search::HIT_BESIDE_FREE_EDGE)
                 .collect();
             counts.sort_unstable();
             medians.push(counts[counts.len() / 2]);
@@ -297,7 +291,7 @@ fn box_bounds_beyond_the_box_grid_act_as_infinite() {
     tiny.params.box_margin *= 2f32.powi(-24);
     let reference = CpuSearch::default().run(&fitted).unwrap();
     let cpu = CpuSearch::default().run(&tiny).unwrap();
-    let same = |a: &abut::search::layout::GpuHit, b: &abut::search::layout::GpuHit| {
+    let same = |a: &abut::abi::search::GpuHit, b: &abut::abi::search::GpuHit| {
         a.facet == b.facet
             && a.node == b.node
             && a.point_gap.map(f32::to_bits) == b.point_gap.map(f32::to_bits)
@@ -306,7 +300,7 @@ fn box_bounds_beyond_the_box_grid_act_as_infinite() {
     };
     let found = reference.iter().filter(|h| h.facet != u32::MAX).count();
     assert!(found > 100, "too few contacts to be a test: {found}");
-    let candidates = |h: &[abut::search::layout::GpuHit]| -> u64 {
+    let candidates = |h: &[abut::abi::search::GpuHit]| -> u64 {
         h.iter().map(|h| (h.candidates & 0x7fff_ffff) as u64).sum()
     };
     assert!(

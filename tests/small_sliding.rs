@@ -8,13 +8,7 @@ mod common;
 use abut::mesh::plate_quads;
 use abut::search::Trigger;
 use abut::*;
-use common::gpus;
-
-fn devices() -> Vec<Device> {
-    let mut d = vec![Device::cpu()];
-    d.extend(gpus().iter().cloned());
-    d
-}
+use common::{devices, gpus};
 
 fn rotate_x(p: [f64; 3], th: f64) -> [f64; 3] {
     let (s, c) = th.sin_cos();

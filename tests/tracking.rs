@@ -7,15 +7,10 @@
 mod common;
 
 use abut::mesh::{plate_quads, plate_triangles, sphere_triangles};
-use abut::search::{Schedule, Trigger};
+use abut::model::Schedule;
+use abut::search::Trigger;
 use abut::*;
-use common::{facet_distance, gpus};
-
-fn devices() -> Vec<Device> {
-    let mut d = vec![Device::cpu()];
-    d.extend(gpus().iter().cloned());
-    d
-}
+use common::{devices, facet_distance, gpus};
 
 #[derive(Debug, Default)]
 struct Tally {
@@ -453,7 +448,7 @@ fn local_search_parity_and_determinism() {
         x
     };
     for schedule in [schedule(100), wide(100)] {
-        let run = |d: &Device| -> Vec<Vec<abut::search::layout::GpuHit>> {
+        let run = |d: &Device| -> Vec<Vec<abut::abi::search::GpuHit>> {
             let mut s = GlobalSearch::new(d, &m, p).unwrap();
             s.set_schedule(schedule).unwrap();
             (0..60)

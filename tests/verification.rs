@@ -4,16 +4,12 @@
 
 mod common;
 
+use common::devices;
+
 use std::f64::consts::PI;
 
 use abut::scene::{run, Scene, Summary};
 use abut::Device;
-
-fn devices() -> Vec<Device> {
-    let mut d = vec![Device::cpu()];
-    d.extend(common::gpus().iter().cloned());
-    d
-}
 
 fn scene(name: &str) -> String {
     std::fs::read_to_string(format!("{}/scenes/{name}", env!("CARGO_MANIFEST_DIR"))).unwrap()

@@ -214,7 +214,7 @@ impl Model {
                 }
             };
             p.search_radius = search_radius;
-            p.schedule = schedule.map(|(interval, budget, wide_local)| abut::search::Schedule {
+            p.schedule = schedule.map(|(interval, budget, wide_local)| abut::model::Schedule {
                 interval,
                 budget,
                 wide_local,

@@ -3,8 +3,8 @@
 use super::handles::{self, Fail, Object};
 use super::types::*;
 use super::{input, put, times, ABUT_NO_NODE};
+use crate::model::Schedule;
 use crate::model::{Facet, NodeSetId, SurfaceId};
-use crate::search::Schedule;
 use crate::{
     Analytical, BodyId, Enforce, Friction, Kinematic, Model, Pair, Penalty, PressureOverclosure,
     RigidBody, RigidPair, Sliding, Stiffness, Surface,

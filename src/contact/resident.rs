@@ -10,14 +10,16 @@
 //! (GPU or CPU path), runs them all.
 
 use super::{fill_output, positive_dt, Contact, PenaltyExec, StepReport};
+use crate::abi::penalty::{ContactOut, NO_LIMIT};
+use crate::abi::search::plan_params;
+use crate::abi::search::{
+    GpuHit, PLAN_CROWDED, PLAN_FORCE, PLAN_SEARCHED, PLAN_SINCE_GLOBAL, PLAN_SLOTS, PLAN_TRIGGER,
+};
+use crate::abi::stats::{IncrementStats, STATS_BYTES, STATS_RESET_WORDS, STATS_WORDS};
+use crate::abi::status::STATUS_WORDS;
 use crate::cpu::{gather, stats};
 use crate::error::{Error, Result};
 use crate::gpu::{GpuIncrement, STATS_RING};
-use crate::penalty::layout::{ContactOut, NO_LIMIT};
-use crate::search::layout::{
-    GpuHit, IncrementStats, PLAN_CROWDED, PLAN_FORCE, PLAN_SEARCHED, PLAN_SINCE_GLOBAL, PLAN_SLOTS,
-    PLAN_TRIGGER, STATS_BYTES, STATS_RESET_WORDS, STATS_WORDS, STATUS_WORDS,
-};
 use crate::search::GlobalSearch;
 
 /// The caller's arrays for one device-resident increment.
@@ -217,7 +219,7 @@ impl Contact {
                 )?))
             }
             Some(PenaltyExec::Cpu(_)) => {
-                let first = stats::first_image(damping);
+                let first = crate::abi::stats::first_image(damping);
                 Resident::Cpu {
                     rows: vec![0.0; self.n_nodes],
                     stats: first,
@@ -392,7 +394,7 @@ impl Contact {
                     }
                 }
                 rows.iter_mut().for_each(|r| *r = 0.0);
-                words[..STATS_RESET_WORDS].copy_from_slice(&stats::reset_image());
+                words[..STATS_RESET_WORDS].copy_from_slice(&crate::abi::stats::reset_image());
                 for (k, pr) in self.pairs.iter_mut().enumerate() {
                     let mut pp = pr.setup.params(dt, dt_ref);
                     pr.setup
@@ -459,7 +461,7 @@ impl Contact {
             },
             dt,
         )?;
-        crate::gpu::submit(&ctx, encoder);
+        crate::device::submit(&ctx, encoder);
         Ok(())
     }
 
@@ -729,7 +731,7 @@ impl Contact {
         }
         let first = self.host_increments == 1;
         for (pr, raw) in self.pairs.iter_mut().zip(raws) {
-            let params = crate::cpu::schedule::plan_params(&raw.plan);
+            let params = plan_params(&raw.plan);
             let result = pr.search.resident_result(
                 raw.hits,
                 &raw.status,
@@ -766,7 +768,7 @@ impl Contact {
                         label: Some("hits readback"),
                     });
                 enc.copy_buffer_to_buffer(g.resident_outputs().2, 0, &staging, 0, bytes);
-                crate::gpu::submit(&ctx, enc);
+                crate::device::submit(&ctx, enc);
                 let raw = crate::gpu::buffers::read_back(&ctx, &staging, bytes, "hits readback")?;
                 Ok(bytemuck::pod_collect_to_vec(&raw))
             }
@@ -864,7 +866,7 @@ impl Contact {
                         layout.push((start, ns as usize));
                     }
                 }
-                crate::gpu::submit(&ctx, enc);
+                crate::device::submit(&ctx, enc);
                 let bytes =
                     crate::gpu::buffers::read_back(&ctx, staging, offset, "penalty increment")?;
                 ctx.take_uncaptured("penalty increment")?;

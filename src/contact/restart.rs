@@ -11,8 +11,8 @@
 //! restart's positions) and the kinematic pairs' running dissipation total (an output).
 
 use super::Contact;
+use crate::abi::penalty::SlaveState;
 use crate::error::{Error, Result};
-use crate::penalty::layout::SlaveState;
 
 /// The first bytes of a saved state: the format's name and version.
 const MAGIC: &[u8; 8] = b"abutst01";

@@ -1,8 +1,9 @@
 //! CPU mirror of `shaders/anchor.wgsl`: small sliding's contact points from fixed anchors.
 
 use super::common::{facet_node_count, node};
+use crate::abi::search::*;
+use crate::abi::status::{STATUS_PLANE_OFF, STATUS_SLID_TOO_FAR};
 use crate::geometry::V3;
-use crate::search::layout::*;
 
 const COS_10_DEGREES: f32 = 0.984_807_7;
 

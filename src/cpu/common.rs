@@ -1,20 +1,10 @@
 //! CPU twin of the non-geometry helpers of `shaders/common.wgsl` (the geometry itself is
 //! [`crate::geometry`], run in f32).
 
+use crate::abi::search::SearchParams;
 use crate::geometry::V3;
+pub use crate::model::facet_node_count;
 use crate::model::NO_NODE;
-use crate::search::layout::SearchParams;
-
-/// Number of nodes of a padded facet (WGSL: `facet_node_count`).
-pub fn facet_node_count(f: [u32; 4]) -> usize {
-    if f[2] == NO_NODE {
-        2
-    } else if f[3] == NO_NODE {
-        3
-    } else {
-        4
-    }
-}
 
 /// Grid-local position of node `n` (WGSL: `nodes[n].xyz`).
 pub fn node(nodes: &[[f32; 4]], n: u32) -> V3<f32> {
@@ -59,7 +49,7 @@ pub fn excluded(
     s: u32,
     fac: [u32; 4],
 ) -> bool {
-    use crate::search::layout::FLAG_SELF_CONTACT;
+    use crate::abi::search::FLAG_SELF_CONTACT;
     if p.flags & FLAG_SELF_CONTACT == 0 {
         return false;
     }

@@ -2,19 +2,16 @@
 //! exactly in 64-bit fixed point (two u32 words with a carry, as the shader does).
 
 use super::common::facet_node_count;
-use crate::penalty::layout::{
+use crate::abi::penalty::{
     ContactOut, PairNode, PenaltyParams, CSTATUS_MASK, CSTATUS_OPEN, HEAVY_SHIFT, HEAVY_SLAVE,
     NO_SLAVE,
 };
-use crate::search::layout::{GpuHit, STATUS_BUDGET_EXCEEDED, STATUS_FORCE_SCALE, STATUS_ROW_SCALE};
+use crate::abi::search::GpuHit;
+use crate::abi::status::{STATUS_BUDGET_EXCEEDED, STATUS_FORCE_SCALE, STATUS_ROW_SCALE};
 
 /// Bits below the sign that a fixed-point sum may use (WGSL: `FIXED_BITS`).
 pub const FIXED_BITS: i32 = 60;
 const TWO_32: f32 = 4_294_967_296.0;
-
-/// Words of the fixed-point accumulator per pair node: fx, fy, fz and the bound row, each as a
-/// (low, high) pair (WGSL: `acc`).
-pub const ACC_WORDS_PER_NODE: usize = 8;
 
 /// 2^e for e in [−126, 127], built from its bits (WGSL: `pow2`).
 pub fn pow2(e: i32) -> f32 {

@@ -1,6 +1,6 @@
 //! CPU mirror of `shaders/integrate.wgsl`: central differences for point masses.
 
-use crate::gpu::IntegrateParams;
+use crate::abi::integrate::IntegrateParams;
 
 /// One "invocation" per node: v ← v + dt·(f/m + a), x ← x + dt·v for the nodes of the range
 /// with a positive mass; every force zeroed (xyz).

@@ -4,9 +4,10 @@ use rayon::prelude::*;
 
 use super::common::{excluded, facet_collapsed, facet_node_count, node};
 use super::nearest_facet::project;
+use crate::abi::search::*;
+use crate::abi::status::{STATUS_BUDGET_EXCEEDED, STATUS_LOCAL_CAPPED, STATUS_LOCAL_ITERATIONS};
 use crate::geometry::{Projection, V3};
 use crate::model::NO_NODE;
-use crate::search::layout::*;
 
 struct Best {
     facet: u32,

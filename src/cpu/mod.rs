@@ -10,7 +10,6 @@
 //! adapter exists.
 
 pub mod anchor;
-pub mod brute_force;
 pub mod common;
 pub mod gather;
 pub mod integrate;
@@ -29,9 +28,12 @@ pub mod tree;
 use std::sync::atomic::AtomicU32;
 use std::sync::Arc;
 
+use crate::abi::penalty::ACC_WORDS_PER_NODE;
+use crate::abi::search::{box_words, BEST_WORDS};
+use crate::abi::search::{tree_passes, GpuHit, ScanLevels};
+use crate::abi::status::STATUS_WORDS;
 use crate::error::Result;
-use crate::search::layout::{tree_passes, GpuHit, ScanLevels, STATUS_WORDS};
-use crate::search::{Prepared, Step, STEPS};
+use crate::plan::{Prepared, Step, STEPS};
 
 /// Fewest invocations a thread of the CPU path takes at once (below it, splitting costs more
 /// than it gains).
@@ -135,7 +137,7 @@ pub(crate) fn hits_mut(hits: &mut Arc<Vec<GpuHit>>) -> &mut Vec<GpuHit> {
 /// The buffers of one search on the CPU; they only grow.
 #[derive(Clone, Debug, Default)]
 pub struct CpuWorkspace {
-    /// The search tree's packed boxes (one per heap node, `search::tree::boxes`).
+    /// The search tree's packed boxes (one per heap node, `abi::boxes`).
     pub boxes: Vec<[u32; 4]>,
     /// The same boxes decoded (lower, upper corner per heap node; the bits the kernels decode
     /// at each test): the CPU walk reads these instead of decoding every box it tests.
@@ -150,7 +152,7 @@ pub struct CpuWorkspace {
     pub reference: Vec<[f32; 4]>,
     /// Nearest-facet work items: each slave's chunk count, scanned to its first item.
     pub work: Vec<u32>,
-    /// Nearest-facet record per walk position (`nearest_facet::BEST_WORDS` words).
+    /// Nearest-facet record per walk position (`BEST_WORDS` words).
     pub best: Vec<u32>,
     /// The slaves' positions and node ids in walk order (`nearest_facet::walk_start`).
     pub walk_points: Vec<[u32; 4]>,
@@ -160,7 +162,7 @@ pub struct CpuWorkspace {
 #[derive(Clone, Debug, Default)]
 pub struct CpuSearch {
     /// Small sliding: the slaves' anchors (local runs evaluate them instead of searching).
-    anchors: Option<Vec<crate::search::layout::Anchor>>,
+    anchors: Option<Vec<crate::abi::search::Anchor>>,
     ws: CpuWorkspace,
     /// Device-resident increments: the plan and the nodes they keep.
     resident: Option<Box<resident::CpuResident>>,
@@ -187,7 +189,7 @@ impl CpuSearch {
                 expected: "a global search first",
             });
         }
-        let mut status = crate::status::reset_image();
+        let mut status = crate::abi::status::reset_image();
         if let Some(anchors) = &self.anchors {
             anchor::anchor(
                 &prep.params,
@@ -224,7 +226,7 @@ impl CpuSearch {
     }
 
     /// Small sliding: installs the slaves' anchors.
-    pub fn set_anchors(&mut self, anchors: &[crate::search::layout::Anchor]) {
+    pub fn set_anchors(&mut self, anchors: &[crate::abi::search::Anchor]) {
         self.anchors = Some(anchors.to_vec());
     }
 
@@ -239,20 +241,20 @@ impl CpuSearch {
     }
 
     /// The search tree's packed boxes after the last global search (one per heap node,
-    /// `search::tree::boxes`).
+    /// `abi::boxes`).
     pub fn tree_boxes(&self) -> &[[u32; 4]] {
         &self.ws.boxes
     }
 
     /// Sizes and resets the workspace for a global search of `prep`.
     fn reset(&mut self, prep: &Prepared) {
-        crate::status::reset(&mut self.ws.status, crate::status::Owner::Search);
+        crate::abi::status::reset(&mut self.ws.status, crate::abi::status::Owner::Search);
         self.ws
             .boxes
-            .resize(tree::box_words(prep.params.tree_levels), [0; 4]);
+            .resize(box_words(prep.params.tree_levels), [0; 4]);
         self.ws
             .corners
-            .resize(tree::box_words(prep.params.tree_levels), [[0.0; 4]; 2]);
+            .resize(box_words(prep.params.tree_levels), [[0.0; 4]; 2]);
         hits_mut(&mut self.ws.hits).resize(prep.slaves.len(), GpuHit::miss(0, 0));
     }
 
@@ -269,7 +271,7 @@ impl CpuSearch {
 /// Runs one step of the search on the CPU workspace (the CPU half of a split run).
 pub fn run_step(
     step: Step,
-    params: &crate::search::layout::SearchParams,
+    params: &crate::abi::search::SearchParams,
     prep: &Prepared,
     ws: &mut CpuWorkspace,
 ) {
@@ -294,7 +296,7 @@ pub fn run_step(
             ws.work.clear();
             ws.work.resize(work_levels.words as usize, 0);
             ws.best.clear();
-            ws.best.resize(n * nearest_facet::BEST_WORDS, 0);
+            ws.best.resize(n * BEST_WORDS, 0);
             ws.walk_points.resize(n, [0; 4]);
             nearest_facet::walk_start(
                 params,
@@ -336,11 +338,11 @@ pub fn run_step(
 #[derive(Clone, Debug)]
 pub struct CpuPenalty {
     /// Friction force and area per slave.
-    pub state: Vec<crate::penalty::layout::SlaveState>,
+    pub state: Vec<crate::abi::penalty::SlaveState>,
     /// Smoothed normal per model node.
     pub normals: Vec<[f32; 4]>,
     /// Result per slave.
-    pub out: Vec<crate::penalty::layout::ContactOut>,
+    pub out: Vec<crate::abi::penalty::ContactOut>,
     /// Fixed-point force sums per pair node (gather's accumulator).
     pub acc: Vec<u32>,
     /// Force per pair node.
@@ -363,13 +365,13 @@ impl CpuPenalty {
     pub fn run(
         &mut self,
         setup: &crate::penalty::PenaltySetup,
-        pp: &crate::penalty::layout::PenaltyParams,
+        pp: &crate::abi::penalty::PenaltyParams,
         prep: &Prepared,
         vel: &[[f32; 4]],
         hits: &[GpuHit],
         status: &mut [u32; STATUS_WORDS],
     ) {
-        crate::status::reset(status, crate::status::Owner::Penalty);
+        crate::abi::status::reset(status, crate::abi::status::Owner::Penalty);
         let n_slaves = pp.n_slaves as usize;
         nodal_normals::nodal_normals(
             pp,
@@ -394,7 +396,7 @@ impl CpuPenalty {
         );
         self.acc.clear();
         self.acc
-            .resize(setup.pair_nodes.len() * gather::ACC_WORDS_PER_NODE, 0);
+            .resize(setup.pair_nodes.len() * ACC_WORDS_PER_NODE, 0);
         gather::scatter_forces(
             pp,
             &setup.facet_nodes,

@@ -1,8 +1,9 @@
 //! CPU mirror of `shaders/motion.wgsl`: the motion budget since the last global search.
 
 use super::common::node;
+use crate::abi::search::{GpuHit, SearchParams};
+use crate::abi::status::{STATUS_BUDGET_EXCEEDED, STATUS_MOTION};
 use crate::model::NO_NODE;
-use crate::search::layout::{GpuHit, SearchParams, STATUS_BUDGET_EXCEEDED, STATUS_MOTION};
 
 /// One "invocation" per motion node; tracked slaves are skipped. Each displacement since the
 /// reference is taken relative to the pair's reference master node's (`params.ref_node`).

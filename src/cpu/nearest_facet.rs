@@ -1,16 +1,20 @@
 //! CPU mirror of `shaders/nearest_facet.wgsl`: the nearest active facet of each slave node, by
 //! a pruned walk of the search tree, finished in bounded chunks where the walk's cap cut it off.
+//!
+//! Long file: it mirrors one 531-line shader with seven entry points, function for function,
+//! so that each can be read beside its WGSL.
 
 use rayon::prelude::*;
 
 use super::common::{excluded, facet_node_count, node, share_node};
 use super::PAR_MIN;
-use crate::geometry::{closest_on_quad, closest_on_segment, closest_on_triangle, Projection, V3};
-use crate::search::layout::{
-    GpuHit, SearchParams, FLAG_SELF_CONTACT, HIT_BESIDE_FREE_EDGE, NO_FACET, STATUS_CROWDED,
-    STATUS_FALLBACK, WALK_GROUP,
+use crate::abi::boxes;
+use crate::abi::search::BEST_WORDS;
+use crate::abi::search::{
+    GpuHit, SearchParams, FLAG_SELF_CONTACT, HIT_BESIDE_FREE_EDGE, NO_FACET, WALK_GROUP,
 };
-use crate::search::tree::boxes;
+use crate::abi::status::{STATUS_CROWDED, STATUS_FALLBACK};
+use crate::geometry::{closest_on_quad, closest_on_segment, closest_on_triangle, Projection, V3};
 
 /// Nearest point on a padded facet (WGSL: `project`).
 pub fn project(nodes: &[[f32; 4]], p: V3<f32>, fac: [u32; 4]) -> Projection<f32> {
@@ -36,11 +40,6 @@ pub const WALK_VISITS: u32 = 2048;
 /// A subtree is skipped when its box's distance² exceeds the bound by this factor
 /// (WGSL: `PRUNE_SLACK`).
 pub const PRUNE_SLACK: f32 = 1.0001;
-
-/// Words of a slave's `best` record (WGSL: `BEST_WORDS`): distance² bits, the chunks' facet at
-/// it, unused, candidates, the walk's facet, the first leaf slot left to the chunks, the walk's
-/// distance² bits, unused.
-pub const BEST_WORDS: usize = 8;
 
 /// The slave at walk position t (WGSL: `walk_point`): grid-local position and node id.
 fn walk_point(c: &Candidates<'_>, t: usize) -> (V3<f32>, u32) {
@@ -73,7 +72,7 @@ pub struct Candidates<'a> {
     pub walk_points: &'a [[u32; 4]],
     /// Active facet of each leaf slot of the tree.
     pub order: &'a [u32],
-    /// The tree's packed boxes (one per heap node, `search::tree::boxes`).
+    /// The tree's packed boxes (one per heap node, `abi::boxes`).
     pub boxes: &'a [[u32; 4]],
     /// The same boxes decoded: lower and upper corner (w 0) per heap node.
     pub corners: &'a [[[f32; 4]; 2]],

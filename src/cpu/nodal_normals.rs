@@ -1,8 +1,8 @@
 //! CPU mirror of `shaders/nodal_normals.wgsl`: smoothed nodal normals of the master nodes.
 
 use super::common::{facet_node_count, node};
+use crate::abi::penalty::{PairNode, PenaltyParams};
 use crate::geometry::V3;
-use crate::penalty::layout::{PairNode, PenaltyParams};
 
 /// Area vector of a facet (WGSL: `facet_area_normal`).
 pub fn facet_area_normal(nodes: &[[f32; 4]], fac: [u32; 4]) -> V3<f32> {

@@ -5,14 +5,15 @@ use std::sync::atomic::Ordering;
 use rayon::prelude::*;
 
 use super::common::{facet_node_count, node};
-use crate::geometry::{tangent_directions, V3};
-use crate::model::NO_NODE;
-use crate::penalty::layout::*;
-use crate::search::layout::{
-    GpuHit, NO_FACET, STATUS_ACTIVE, STATUS_DT_APPROACH, STATUS_DT_STABLE, STATUS_FAST,
-    STATUS_FAST_RATIO, STATUS_FORCE_SCALE, STATUS_MAX_OVERCLOSURE, STATUS_ROW_SCALE,
-    STATUS_SLIPPING,
+use crate::abi::penalty::*;
+use crate::abi::search::{GpuHit, NO_FACET};
+use crate::abi::status::STATUS_BUDGET_EXCEEDED;
+use crate::abi::status::{
+    STATUS_ACTIVE, STATUS_DT_APPROACH, STATUS_DT_STABLE, STATUS_FAST, STATUS_FAST_RATIO,
+    STATUS_FORCE_SCALE, STATUS_MAX_OVERCLOSURE, STATUS_ROW_SCALE, STATUS_SLIPPING,
 };
+use crate::geometry::V3;
+use crate::model::NO_NODE;
 
 const E_MINUS_1: f32 = 1.718_281_8;
 
@@ -152,7 +153,7 @@ pub fn penalty(
     out: &mut [ContactOut],
     status: &mut [u32],
 ) {
-    if status[crate::search::layout::STATUS_BUDGET_EXCEEDED] != 0 {
+    if status[STATUS_BUDGET_EXCEEDED] != 0 {
         return;
     }
     let n = pp.n_slaves as usize;
@@ -191,7 +192,7 @@ pub fn penalty(
             let (mut dt_stable, mut dt_approach) = (NO_LIMIT, NO_LIMIT);
             let area = slave_state.tangential_area[3];
             o.dissipation = slave_state.history[0];
-            let beside = hit.candidates & crate::search::layout::HIT_BESIDE_FREE_EDGE != 0;
+            let beside = hit.candidates & crate::abi::search::HIT_BESIDE_FREE_EDGE != 0;
             if hit.facet == NO_FACET || beside {
                 if hit.facet != NO_FACET {
                     let fac = facets[hit.facet as usize];
@@ -339,10 +340,4 @@ pub fn penalty(
             }
             *slot = o;
         });
-}
-
-/// Local tangent directions of a contact normal in f32 (the kernel's convention), for outputs.
-pub fn tangents(n: [f32; 3]) -> ([f32; 3], [f32; 3]) {
-    let (t1, t2) = tangent_directions(V3::new(n[0], n[1], n[2]));
-    (t1.to_array(), t2.to_array())
 }

@@ -3,9 +3,10 @@
 //! out as the caller's device buffers would be.
 
 use super::{anchor, local_search, motion, run_step, schedule, to_local, CpuSearch};
+use crate::abi::search::*;
+use crate::abi::status::STATUS_WORDS;
 use crate::error::{Error, Result};
-use crate::search::layout::*;
-use crate::search::{Prepared, STEPS};
+use crate::plan::{Prepared, STEPS};
 
 /// What a CPU search keeps for its device-resident increments.
 #[derive(Clone, Debug)]
@@ -30,11 +31,12 @@ impl CpuSearch {
         frame_origin: [f32; 3],
     ) {
         let plan = fresh_plan(&prep.params, interval);
-        self.ws
-            .boxes
-            .resize(super::tree::box_words(prep.params.tree_levels), [0; 4]);
+        self.ws.boxes.resize(
+            crate::abi::search::box_words(prep.params.tree_levels),
+            [0; 4],
+        );
         self.ws.corners.resize(
-            super::tree::box_words(prep.params.tree_levels),
+            crate::abi::search::box_words(prep.params.tree_levels),
             [[0.0; 4]; 2],
         );
         super::hits_mut(&mut self.ws.hits).resize(prep.slaves.len(), GpuHit::miss(0, 0));
@@ -96,7 +98,7 @@ impl CpuSearch {
             });
         }
         let mut status = self.ws.status;
-        crate::status::reset(&mut status, crate::status::Owner::Search);
+        crate::abi::status::reset(&mut status, crate::abi::status::Owner::Search);
         let mut params: SearchParams = bytemuck::pod_read_unaligned(bytemuck::cast_slice(
             &r.plan[PLAN_PARAMS..PLAN_PARAMS + 24],
         ));
@@ -133,7 +135,7 @@ impl CpuSearch {
             &self.ws.hits,
         );
         schedule::schedule(&mut r.plan, &mut status, &mut r.args);
-        params = schedule::plan_params(&r.plan);
+        params = plan_params(&r.plan);
         if r.plan[PLAN_GLOBAL] == 0 {
             local_search::local_search(
                 &params,

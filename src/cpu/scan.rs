@@ -1,6 +1,6 @@
 //! CPU mirror of `shaders/scan.wgsl`: blocked exclusive prefix sum, level by level.
 
-use crate::search::layout::{ScanLevels, ScanParams, SCAN_BLOCK};
+use crate::abi::search::{ScanLevels, ScanParams, SCAN_BLOCK};
 
 /// Scans each block of `sp.n` words at `sp.in_offset` exclusively, in place, and writes each
 /// block's total to `data[sp.sums_offset + block]` (WGSL: `scan_blocks`).

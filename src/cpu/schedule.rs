@@ -1,6 +1,7 @@
 //! CPU mirror of `shaders/schedule.wgsl`: the schedule of a device-resident increment.
 
-use crate::search::layout::*;
+use crate::abi::search::*;
+use crate::abi::status::{STATUS_BOX, STATUS_BUDGET_EXCEEDED};
 
 /// Cells of a grid of cell size h over extents `ext` in `dim` dimensions (WGSL: `cell_count`).
 fn cell_count(ext: [f32; 3], h: f32, dim: u32) -> f32 {
@@ -67,11 +68,6 @@ fn fit_grid(params: &SearchParams, plan: &mut [u32], status: &[u32]) -> bool {
     plan[b + 17] = g[1].to_bits();
     plan[b + 18] = g[2].to_bits();
     true
-}
-
-/// The SearchParams words of a plan.
-pub fn plan_params(plan: &[u32]) -> SearchParams {
-    bytemuck::pod_read_unaligned(bytemuck::cast_slice(&plan[PLAN_PARAMS..PLAN_PARAMS + 24]))
 }
 
 /// One "invocation": global or local, the fitted grid, the dispatch slots; `args` is the

@@ -1,65 +1,29 @@
 //! CPU mirror of `shaders/stats.wgsl`: the statistics of a device-resident increment.
 
-use crate::penalty::layout::PairNode;
-use crate::search::layout::*;
-
-/// Words of the statistics (WGSL: `STAT_*`), in [`IncrementStats`] order.
-const STABLE_DT: usize = 0;
-const APPROACH_DT: usize = 1;
-const MAX_OVERCLOSURE: usize = 2;
-const OMEGA2: usize = 3;
-const ACTIVE: usize = 4;
-const SLIPPING: usize = 5;
-const GLOBAL: usize = 6;
-const BUDGET: usize = 7;
-const FALLBACKS: usize = 8;
-const COLLAPSED: usize = 9;
-const NONFINITE: usize = 10;
-const LOCAL_CAPPED: usize = 11;
-const MOTION: usize = 12;
-const FIT_FAILED: usize = 13;
-const FAST: usize = 14;
-const FAST_RATIO: usize = 15;
-const DAMPING: usize = 16;
-const INCREMENT: usize = 17;
-
-/// The reset values of the statistics' first [`STATS_RESET_WORDS`] words.
-pub fn reset_image() -> [u32; STATS_RESET_WORDS] {
-    let mut w = [0u32; STATS_RESET_WORDS];
-    w[STABLE_DT] = crate::penalty::layout::NO_LIMIT.to_bits();
-    w[APPROACH_DT] = crate::penalty::layout::NO_LIMIT.to_bits();
-    w[NONFINITE] = u32::MAX;
-    w
-}
-
-/// The statistics before the first increment: the reset words, and the largest contact
-/// damping ratio `damping` of the penalty pairs (a constant word).
-pub fn first_image(damping: f32) -> [u32; STATS_WORDS] {
-    let mut w = [0u32; STATS_WORDS];
-    w[..STATS_RESET_WORDS].copy_from_slice(&reset_image());
-    w[DAMPING] = damping.to_bits();
-    w
-}
+use crate::abi::penalty::PairNode;
+use crate::abi::search::*;
+use crate::abi::stats::*;
+use crate::abi::status::*;
 
 /// One "invocation" per pair: its status words into the statistics (WGSL: `pair_stats`).
 pub fn pair_stats(status: &[u32], plan: &mut [u32], stats: &mut [u32; STATS_WORDS]) {
-    stats[STABLE_DT] = stats[STABLE_DT].min(status[STATUS_DT_STABLE]);
-    stats[APPROACH_DT] = stats[APPROACH_DT].min(status[STATUS_DT_APPROACH]);
-    stats[MAX_OVERCLOSURE] = stats[MAX_OVERCLOSURE].max(status[STATUS_MAX_OVERCLOSURE]);
-    stats[ACTIVE] += status[STATUS_ACTIVE];
-    stats[SLIPPING] += status[STATUS_SLIPPING];
-    stats[FALLBACKS] += status[STATUS_FALLBACK];
-    stats[COLLAPSED] += status[STATUS_COLLAPSED];
-    stats[LOCAL_CAPPED] += status[STATUS_LOCAL_CAPPED];
-    stats[MOTION] = stats[MOTION].max(status[STATUS_MOTION]);
-    stats[FAST] += status[STATUS_FAST];
-    stats[FAST_RATIO] = stats[FAST_RATIO].max(status[STATUS_FAST_RATIO]);
-    stats[NONFINITE] = stats[NONFINITE].min(status[STATUS_NONFINITE]);
-    stats[FIT_FAILED] = stats[FIT_FAILED].max(plan[PLAN_FIT_FAILED]);
+    stats[STAT_STABLE_DT] = stats[STAT_STABLE_DT].min(status[STATUS_DT_STABLE]);
+    stats[STAT_APPROACH_DT] = stats[STAT_APPROACH_DT].min(status[STATUS_DT_APPROACH]);
+    stats[STAT_MAX_OVERCLOSURE] = stats[STAT_MAX_OVERCLOSURE].max(status[STATUS_MAX_OVERCLOSURE]);
+    stats[STAT_ACTIVE] += status[STATUS_ACTIVE];
+    stats[STAT_SLIPPING] += status[STATUS_SLIPPING];
+    stats[STAT_FALLBACKS] += status[STATUS_FALLBACK];
+    stats[STAT_COLLAPSED] += status[STATUS_COLLAPSED];
+    stats[STAT_LOCAL_CAPPED] += status[STATUS_LOCAL_CAPPED];
+    stats[STAT_MOTION] = stats[STAT_MOTION].max(status[STATUS_MOTION]);
+    stats[STAT_FAST] += status[STATUS_FAST];
+    stats[STAT_FAST_RATIO] = stats[STAT_FAST_RATIO].max(status[STATUS_FAST_RATIO]);
+    stats[STAT_NONFINITE] = stats[STAT_NONFINITE].min(status[STATUS_NONFINITE]);
+    stats[STAT_FIT_FAILED] = stats[STAT_FIT_FAILED].max(plan[PLAN_FIT_FAILED]);
     if plan[PLAN_GLOBAL] != 0 {
-        stats[GLOBAL] += 1;
+        stats[STAT_GLOBAL] += 1;
         if plan[PLAN_TRIGGER] == TRIGGER_BUDGET {
-            stats[BUDGET] += 1;
+            stats[STAT_BUDGET] += 1;
         }
         plan[PLAN_CROWDED] = status[STATUS_CROWDED];
     }
@@ -80,18 +44,18 @@ pub fn pair_stats(status: &[u32], plan: &mut [u32], stats: &mut [u32; STATS_WORD
 /// spring's share, the gather sums them per pair node, add_forces over the pairs per node.
 pub fn bound_max(pair_nodes: &[PairNode], rows: &[f32], stats: &mut [u32; STATS_WORDS]) {
     for pn in pair_nodes {
-        stats[OMEGA2] = stats[OMEGA2].max(rows[pn.node as usize].max(0.0).to_bits());
+        stats[STAT_OMEGA2] = stats[STAT_OMEGA2].max(rows[pn.node as usize].max(0.0).to_bits());
     }
 }
 
 /// One "invocation": the stable increment from the bound, the increment counted
 /// (WGSL: `finish_stats`).
 pub fn finish_stats(stats: &mut [u32; STATS_WORDS]) {
-    let w2 = f32::from_bits(stats[OMEGA2]);
+    let w2 = f32::from_bits(stats[STAT_OMEGA2]);
     if w2 > 0.0 {
-        let z = f32::from_bits(stats[DAMPING]);
+        let z = f32::from_bits(stats[STAT_DAMPING]);
         let dt = 2.0 / w2.sqrt() * ((1.0 + z * z).sqrt() - z);
-        stats[STABLE_DT] = stats[STABLE_DT].min(dt.to_bits());
+        stats[STAT_STABLE_DT] = stats[STAT_STABLE_DT].min(dt.to_bits());
     }
-    stats[INCREMENT] += 1;
+    stats[STAT_INCREMENT] += 1;
 }

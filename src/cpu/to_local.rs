@@ -1,8 +1,7 @@
 //! CPU mirror of `shaders/to_local.wgsl`: model-frame f32 positions into the local frame.
 
-use crate::search::layout::{
-    ordered_bits, FrameParams, SearchParams, STATUS_BOX, STATUS_FRAME_STALE, STATUS_NONFINITE,
-};
+use crate::abi::search::{ordered_bits, FrameParams, SearchParams};
+use crate::abi::status::{STATUS_BOX, STATUS_FRAME_STALE, STATUS_NONFINITE};
 
 /// One "invocation" per model node; keeps each node's mass (w), flags a master node outside
 /// the grid's box, widens the master box and names the lowest non-finite node (status words).

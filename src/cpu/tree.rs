@@ -4,14 +4,9 @@ use rayon::prelude::*;
 
 use super::common::{facet_collapsed, facet_node_count, node};
 use super::PAR_MIN;
-use crate::search::layout::{SearchParams, TreeParams, NO_FACET, STATUS_COLLAPSED};
-use crate::search::tree::boxes::{self, EMPTY};
-
-/// Packed boxes (`[u32; 4]`, `search::tree::boxes`) of a tree of `levels` levels: one per heap
-/// node, nodes 0..2^(levels+1) (node 0 unused).
-pub fn box_words(levels: u32) -> usize {
-    2usize << levels
-}
+use crate::abi::boxes::{self, EMPTY};
+use crate::abi::search::{SearchParams, TreeParams, NO_FACET};
+use crate::abi::status::STATUS_COLLAPSED;
 
 /// The packed box of leaf slot `j` (WGSL: `leaf_box`) and whether its facet collapsed.
 fn leaf_box(

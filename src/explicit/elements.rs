@@ -3,6 +3,10 @@
 //! corotational (engineering strain (l − L0)/L0 along the current axis, so a 1D wave is exactly
 //! the linear one whatever its amplitude), triangles and tetrahedra St Venant–Kirchhoff
 //! (Green–Lagrange strain, second Piola–Kirchhoff stress).
+//!
+//! Long file: the element kinds are one enum, and its two `impl` blocks (geometry, masses and
+//! stable lengths; internal forces with bulk viscosity) match on every kind, so each formula
+//! sits beside the other kinds' and beside the shared strain and stress helpers at the end.
 
 use crate::geometry::V3;
 

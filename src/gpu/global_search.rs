@@ -4,16 +4,19 @@
 use std::sync::Arc;
 
 use super::buffers::{read_back, read_back_with, GrowBuffer};
+use crate::abi::groups;
+use crate::abi::passes::{self, Buf};
+use crate::abi::search::{box_words, BEST_WORDS};
+use crate::abi::search::{
+    tree_passes, Anchor, FrameParams, GpuHit, ScanLevels, ScanParams, SearchParams, TreeParams,
+    ITEM_WORKGROUP, SCAN_BLOCK, TREE_WORKGROUP,
+};
+use crate::abi::status::STATUS_WORDS;
+use crate::abi::status::{owned_runs, Owner};
 use crate::cpu::CpuWorkspace;
 use crate::device::GpuContext;
 use crate::error::{Error, Result};
-use crate::passes::{self, Buf};
-use crate::search::layout::{
-    tree_passes, Anchor, FrameParams, GpuHit, ScanLevels, ScanParams, SearchParams, TreeParams,
-    ITEM_WORKGROUP, SCAN_BLOCK, STATUS_WORDS, TREE_WORKGROUP,
-};
-use crate::search::{Prepared, Step, STEPS};
-use crate::status::{owned_runs, Owner};
+use crate::plan::{Prepared, Step, STEPS};
 use wgpu::BufferUsages as U;
 
 mod resident;
@@ -148,49 +151,23 @@ impl GpuSearch {
             usage: U::UNIFORM | U::COPY_DST,
             mapped_at_creation: false,
         });
-        let scope = device.push_error_scope(wgpu::ErrorFilter::Validation);
-        let mut modules = std::collections::HashMap::new();
-        for pass in [
-            &passes::TREE_REFIT,
-            &passes::SCAN_BLOCKS,
-            &passes::NEAREST_WALK,
-            &passes::LOCAL_SEARCH,
-            &passes::MOTION,
-            &passes::TO_LOCAL,
-            &passes::ANCHOR,
-        ] {
-            match super::module(device, pass.stem) {
-                Ok(m) => modules.insert(pass.stem, m),
-                Err(e) => {
-                    let _ = pollster::block_on(scope.pop());
-                    return Err(e);
-                }
-            };
-        }
-        let pipeline =
-            |pass: &passes::Pass| super::pipeline(device, &modules[pass.stem], pass, &[]);
+        let pipeline = |pass: &'static passes::Pass| ctx.pipeline(pass, &[]);
         let pipelines = Pipelines {
-            tree_refit: pipeline(&passes::TREE_REFIT),
-            scan_blocks: pipeline(&passes::SCAN_BLOCKS),
-            scan_add: pipeline(&passes::SCAN_ADD),
-            walk_start: pipeline(&passes::WALK_START),
-            nearest_walk: pipeline(&passes::NEAREST_WALK),
-            nearest_args: pipeline(&passes::NEAREST_ARGS),
-            nearest_chunks: pipeline(&passes::NEAREST_CHUNKS),
-            nearest_ties: pipeline(&passes::NEAREST_TIES),
-            nearest_crowded: pipeline(&passes::NEAREST_CROWDED),
-            nearest_facet: pipeline(&passes::NEAREST_FACET),
-            local_search: pipeline(&passes::LOCAL_SEARCH),
-            motion: pipeline(&passes::MOTION),
-            to_local: pipeline(&passes::TO_LOCAL),
-            anchor: pipeline(&passes::ANCHOR),
+            tree_refit: pipeline(&passes::TREE_REFIT)?,
+            scan_blocks: pipeline(&passes::SCAN_BLOCKS)?,
+            scan_add: pipeline(&passes::SCAN_ADD)?,
+            walk_start: pipeline(&passes::WALK_START)?,
+            nearest_walk: pipeline(&passes::NEAREST_WALK)?,
+            nearest_args: pipeline(&passes::NEAREST_ARGS)?,
+            nearest_chunks: pipeline(&passes::NEAREST_CHUNKS)?,
+            nearest_ties: pipeline(&passes::NEAREST_TIES)?,
+            nearest_crowded: pipeline(&passes::NEAREST_CROWDED)?,
+            nearest_facet: pipeline(&passes::NEAREST_FACET)?,
+            local_search: pipeline(&passes::LOCAL_SEARCH)?,
+            motion: pipeline(&passes::MOTION)?,
+            to_local: pipeline(&passes::TO_LOCAL)?,
+            anchor: pipeline(&passes::ANCHOR)?,
         };
-        if let Some(e) = pollster::block_on(scope.pop()) {
-            return Err(Error::Gpu {
-                during: "compiling the search pipelines".into(),
-                message: e.to_string(),
-            });
-        }
         let storage = U::STORAGE | U::COPY_DST;
         let buffers = Buffers {
             params: device.create_buffer(&wgpu::BufferDescriptor {
@@ -245,7 +222,7 @@ impl GpuSearch {
             }),
             plan: device.create_buffer(&wgpu::BufferDescriptor {
                 label: Some("device-resident plan"),
-                size: (crate::search::layout::PLAN_WORDS * 4) as u64,
+                size: (crate::abi::search::PLAN_WORDS * 4) as u64,
                 usage: U::STORAGE | U::INDIRECT | U::UNIFORM | U::COPY_SRC | U::COPY_DST,
                 mapped_at_creation: false,
             }),
@@ -254,7 +231,7 @@ impl GpuSearch {
             &ctx,
             &buffers.status_reset,
             0,
-            bytemuck::cast_slice(&crate::status::reset_image()),
+            bytemuck::cast_slice(&crate::abi::status::reset_image()),
         );
         Ok(Self {
             ctx,
@@ -327,9 +304,7 @@ impl GpuSearch {
             .walk_points
             .ensure(d, l, (prep.slaves.len() * 16) as u64)?;
         replaced |= b.order.ensure(d, l, (prep.order.len() * 4).max(4) as u64)?;
-        replaced |= b
-            .boxes
-            .ensure(d, l, crate::cpu::tree::box_words(levels) as u64 * 16)?;
+        replaced |= b.boxes.ensure(d, l, box_words(levels) as u64 * 16)?;
         replaced |= b.hits.ensure(d, l, hits_bytes)?;
         replaced |= b.reference.ensure(d, l, (prep.n_nodes * 16) as u64)?;
         replaced |= b.anchors.ensure(
@@ -348,11 +323,9 @@ impl GpuSearch {
         replaced |= b
             .work_scan_params
             .ensure(d, l, work.levels.len() as u64 * UNIFORM_STRIDE)?;
-        replaced |= b.best.ensure(
-            d,
-            l,
-            (prep.slaves.len() * crate::cpu::nearest_facet::BEST_WORDS * 4) as u64,
-        )?;
+        replaced |= b
+            .best
+            .ensure(d, l, (prep.slaves.len() * BEST_WORDS * 4) as u64)?;
         b.readback.ensure(d, l, READBACK_HITS_OFFSET + hits_bytes)?;
         self.static_dirty |= replaced;
         if replaced || self.tree_levels != Some(levels) || self.work_levels != work.levels.len() {
@@ -679,7 +652,7 @@ impl GpuSearch {
             label: Some("positions readback"),
         });
         enc.copy_buffer_to_buffer(buffer, 0, &staging, 0, bytes);
-        super::submit(&self.ctx, enc);
+        crate::device::submit(&self.ctx, enc);
         let raw = read_back(&self.ctx, &staging, bytes, "positions readback")?;
         let v: Vec<[f32; 4]> = bytemuck::pod_collect_to_vec(&raw);
         Ok(v.iter()
@@ -688,7 +661,7 @@ impl GpuSearch {
     }
 
     /// Reads back the search tree's packed boxes after the last global search (one per heap
-    /// node, `search::tree::boxes`). A debugging and testing aid (it allocates and waits).
+    /// node, `abi::boxes`). A debugging and testing aid (it allocates and waits).
     pub fn tree_boxes(&self) -> Result<Vec<[u32; 4]>> {
         let Some(levels) = self.tree_levels.filter(|_| self.searched) else {
             return Err(Error::Gpu {
@@ -697,7 +670,7 @@ impl GpuSearch {
             });
         };
         let d = &self.ctx.device;
-        let bytes = crate::cpu::tree::box_words(levels) as u64 * 16;
+        let bytes = box_words(levels) as u64 * 16;
         let staging = d.create_buffer(&wgpu::BufferDescriptor {
             label: Some("tree readback"),
             size: bytes,
@@ -708,7 +681,7 @@ impl GpuSearch {
             label: Some("tree readback"),
         });
         enc.copy_buffer_to_buffer(&self.buffers.boxes.buffer, 0, &staging, 0, bytes);
-        super::submit(&self.ctx, enc);
+        crate::device::submit(&self.ctx, enc);
         let raw = read_back(&self.ctx, &staging, bytes, "tree readback")?;
         Ok(bytemuck::pod_collect_to_vec(&raw))
     }
@@ -738,14 +711,16 @@ impl GpuSearch {
         if first == 0 {
             reset_status(&mut enc, &b.status_reset, &b.status, Owner::Search);
         }
-        let dispatch = |enc: &mut wgpu::CommandEncoder, label: &str, work: &[super::Work<'_>]| {
-            super::run_pass(&self.ctx, enc, label, work, max_dim)
+        let dispatch = |enc: &mut wgpu::CommandEncoder,
+                        group: &'static groups::Group,
+                        work: &[super::Work<'_>]| {
+            super::run_pass(&self.ctx, enc, group, work, max_dim)
         };
         if let Some((_, _, group)) = &self.to_local_group {
             if self.device_positions.is_some() {
                 dispatch(
                     &mut enc,
-                    "to_local",
+                    &groups::DIRECT_TO_LOCAL,
                     &[(&p.to_local, group, prep.n_nodes as u32, ITEM_WORKGROUP)],
                 );
             }
@@ -754,13 +729,13 @@ impl GpuSearch {
         if local && self.anchored {
             dispatch(
                 &mut enc,
-                "anchor",
+                &groups::DIRECT_ANCHOR,
                 &[(&p.anchor, &bg.anchor, params.n_slaves, ITEM_WORKGROUP)],
             );
         } else if local {
             dispatch(
                 &mut enc,
-                "motion + local_search",
+                &groups::DIRECT_LOCAL,
                 &[
                     (
                         &p.motion,
@@ -786,7 +761,7 @@ impl GpuSearch {
                         .zip(&bg.tree_refit)
                         .map(|(tp, g)| (&p.tree_refit, g, 1u32 << tp.bottom, TREE_WORKGROUP))
                         .collect();
-                    dispatch(&mut enc, "tree_refit", &work);
+                    dispatch(&mut enc, &groups::DIRECT_TREE_REFIT, &work);
                 }
                 Step::NearestFacet => {
                     let work = work_levels(prep);
@@ -794,7 +769,7 @@ impl GpuSearch {
                         (
                             &p.walk_start,
                             &bg.walk_start,
-                            params.n_slaves.div_ceil(crate::search::layout::WALK_GROUP),
+                            params.n_slaves.div_ceil(crate::abi::search::WALK_GROUP),
                             ITEM_WORKGROUP,
                         ),
                         (
@@ -806,7 +781,7 @@ impl GpuSearch {
                     ];
                     scan_work(p, &work, &bg.work_scan_blocks, &bg.work_scan_add, &mut seq);
                     seq.push((&p.nearest_args, &bg.nearest_args, 1, 1));
-                    dispatch(&mut enc, "nearest_facet: walk + scan", &seq);
+                    dispatch(&mut enc, &groups::DIRECT_WALK_SCAN, &seq);
                     let chunks = [
                         (&p.nearest_chunks, &bg.nearest_chunks, 0),
                         (&p.nearest_ties, &bg.nearest_ties, 0),
@@ -814,12 +789,12 @@ impl GpuSearch {
                     super::run_indirect_pass(
                         &self.ctx,
                         &mut enc,
-                        "nearest_facet: chunks",
+                        &groups::DIRECT_CHUNKS,
                         &chunks,
                         &b.args,
                     );
                     let mut last = Vec::new();
-                    if params.flags & crate::search::layout::FLAG_SELF_CONTACT != 0 {
+                    if params.flags & crate::abi::search::FLAG_SELF_CONTACT != 0 {
                         last.push((
                             &p.nearest_crowded,
                             &bg.nearest_crowded,
@@ -833,7 +808,7 @@ impl GpuSearch {
                         params.n_slaves,
                         ITEM_WORKGROUP,
                     ));
-                    dispatch(&mut enc, "nearest_facet", &last);
+                    dispatch(&mut enc, &groups::DIRECT_NEAREST, &last);
                 }
             }
         }
@@ -862,7 +837,7 @@ impl GpuSearch {
                 hits_bytes,
             );
         }
-        super::submit(&self.ctx, enc);
+        crate::device::submit(&self.ctx, enc);
         if let Some(e) = pollster::block_on(scope.pop()) {
             return Err(Error::Gpu {
                 during: "contact increment".into(),

@@ -6,10 +6,12 @@
 use std::sync::atomic::{AtomicU8, Ordering};
 use std::sync::Arc;
 
+use crate::abi::groups;
+use crate::abi::passes::{self, Buf};
+use crate::abi::search::ITEM_WORKGROUP;
+use crate::abi::stats::{IncrementStats, STATS_BYTES, STATS_RESET_WORDS};
 use crate::device::GpuContext;
 use crate::error::{Error, Result};
-use crate::passes::{self, Buf};
-use crate::search::layout::{IncrementStats, ITEM_WORKGROUP, STATS_BYTES, STATS_RESET_WORDS};
 use wgpu::BufferUsages as U;
 
 /// Staging buffers in the statistics ring: how many increments the host may fall behind before
@@ -66,12 +68,10 @@ impl GpuIncrement {
         let d = &ctx.device;
         let scope = d.push_error_scope(wgpu::ErrorFilter::Validation);
         let made = (|| -> Result<Self> {
-            let module = super::module(d, "stats")?;
-            let pipe = |p| super::pipeline(d, &module, p, &[]);
             let (pair_stats, bound_max, finish_stats) = (
-                pipe(&passes::PAIR_STATS),
-                pipe(&passes::BOUND_MAX),
-                pipe(&passes::FINISH_STATS),
+                ctx.pipeline(&passes::PAIR_STATS, &[])?,
+                ctx.pipeline(&passes::BOUND_MAX, &[])?,
+                ctx.pipeline(&passes::FINISH_STATS, &[])?,
             );
             let buffer = |label, size: u64, usage| {
                 d.create_buffer(&wgpu::BufferDescriptor {
@@ -92,7 +92,7 @@ impl GpuIncrement {
                 STATS_BYTES,
                 U::COPY_SRC | U::COPY_DST,
             );
-            let first = crate::cpu::stats::first_image(damping);
+            let first = crate::abi::stats::first_image(damping);
             super::upload(&ctx, &stats, 0, bytemuck::cast_slice(&first));
             super::upload(&ctx, &stats_image, 0, bytemuck::cast_slice(&first));
             let finish_group = super::bind(d, &finish_stats, &passes::FINISH_STATS, |b| match b {
@@ -177,7 +177,7 @@ impl GpuIncrement {
     pub(crate) fn pair_dispatch(&self, k: usize) -> super::Group<'_> {
         let g = &self.pairs[k];
         (
-            "pair_stats",
+            &groups::STATS_PAIR,
             vec![super::Dispatch::Direct((
                 &self.pair_stats,
                 &g.pair_stats,
@@ -207,7 +207,7 @@ impl GpuIncrement {
             1,
             1,
         )));
-        ("bound_max + finish_stats", work)
+        (&groups::STATS_FINISH, work)
     }
 
     /// Encodes, after the increment's compute pass, a copy of the statistics into a free staging

@@ -4,31 +4,14 @@
 
 use std::sync::Arc;
 
-use bytemuck::{Pod, Zeroable};
 use wgpu::BufferUsages as U;
 
+use crate::abi::groups;
+use crate::abi::integrate::IntegrateParams;
+use crate::abi::passes::{self, Buf};
+use crate::abi::search::ITEM_WORKGROUP;
 use crate::device::{Device, DeviceKind, GpuContext};
 use crate::error::{Error, Result};
-use crate::passes::{self, Buf};
-use crate::search::layout::ITEM_WORKGROUP;
-
-/// Uniform parameters of `integrate.wgsl` (WGSL twin: `IntegrateParams`, 32 bytes).
-#[repr(C)]
-#[derive(Clone, Copy, Debug, PartialEq, Pod, Zeroable)]
-pub struct IntegrateParams {
-    /// xyz: a body acceleration applied to every integrated node (gravity, length/s²); w: the
-    /// increment dt (s).
-    pub acceleration: [f32; 4],
-    /// First node integrated.
-    pub first: u32,
-    /// Nodes integrated from `first`.
-    pub count: u32,
-    /// Model nodes (every node's force is zeroed).
-    pub n_nodes: u32,
-    /// Padding.
-    pub _pad: u32,
-}
-const _: () = assert!(std::mem::size_of::<IntegrateParams>() == 32);
 
 /// The central-difference integrator of a range of point masses on one GPU device.
 pub struct CentralDifference {
@@ -64,15 +47,7 @@ impl CentralDifference {
             });
         }
         let d = &ctx.device;
-        let scope = d.push_error_scope(wgpu::ErrorFilter::Validation);
-        let module = super::module(d, passes::INTEGRATE.stem);
-        let pipeline = module.map(|m| super::pipeline(d, &m, &passes::INTEGRATE, &[]));
-        if let Some(e) = pollster::block_on(scope.pop()) {
-            return Err(Error::Gpu {
-                during: "compiling the integrator".into(),
-                message: e.to_string(),
-            });
-        }
+        let pipeline = ctx.pipeline(&passes::INTEGRATE, &[]);
         let params = d.create_buffer(&wgpu::BufferDescriptor {
             label: Some("integrate params"),
             size: std::mem::size_of::<IntegrateParams>() as u64,
@@ -154,7 +129,7 @@ impl CentralDifference {
         super::run_pass(
             &self.ctx,
             enc,
-            "integrate",
+            &groups::INTEGRATOR,
             &[(&self.pipeline, group, self.n_nodes, ITEM_WORKGROUP)],
             self.ctx.limits.max_compute_workgroups_per_dimension,
         );

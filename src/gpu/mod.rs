@@ -6,12 +6,11 @@ mod global_search;
 mod increment;
 mod integrate;
 mod penalty;
-pub mod shaders;
 
 pub use global_search::{GpuSearch, SharedBuffers};
 pub(crate) use increment::GpuIncrement;
 pub use increment::STATS_RING;
-pub use integrate::{CentralDifference, IntegrateParams};
+pub use integrate::CentralDifference;
 pub use penalty::GpuPenalty;
 
 /// One dispatch of a compute pass: pipeline, its bind group, items, items per workgroup.
@@ -22,10 +21,11 @@ pub(crate) type Work<'a> = (&'a wgpu::ComputePipeline, &'a wgpu::BindGroup, u32,
 pub(crate) fn run_pass(
     ctx: &crate::device::GpuContext,
     enc: &mut wgpu::CommandEncoder,
-    label: &str,
+    group: &'static crate::abi::groups::Group,
     work: &[Work<'_>],
     max_dim: u32,
 ) {
+    let label = group.label;
     if let Ok(mut t) = ctx.traffic.lock() {
         *t.dispatches.entry(label.to_string()).or_default() += work.len() as u64;
         t.workgroups += work
@@ -36,7 +36,7 @@ pub(crate) fn run_pass(
     let mut profiler = ctx.profiler.lock().ok();
     let mut pass = begin_pass(&mut profiler, enc, label);
     for &(pipe, group, n, per) in work {
-        let (x, y) = crate::search::layout::fold_dispatch(n, per, max_dim);
+        let (x, y) = crate::abi::search::fold_dispatch(n, per, max_dim);
         pass.set_pipeline(pipe);
         pass.set_bind_group(0, group, &[]);
         pass.dispatch_workgroups(x, y, 1);
@@ -52,10 +52,11 @@ pub(crate) type IndirectWork<'a> = (&'a wgpu::ComputePipeline, &'a wgpu::BindGro
 pub(crate) fn run_indirect_pass(
     ctx: &crate::device::GpuContext,
     enc: &mut wgpu::CommandEncoder,
-    label: &str,
+    group: &'static crate::abi::groups::Group,
     work: &[IndirectWork<'_>],
     args: &wgpu::Buffer,
 ) {
+    let label = group.label;
     if let Ok(mut t) = ctx.traffic.lock() {
         *t.dispatches.entry(label.to_string()).or_default() += work.len() as u64;
     }
@@ -83,7 +84,7 @@ pub(crate) enum Dispatch<'a> {
 }
 
 /// Dispatches under one label (a kernel or a few that belong together).
-pub(crate) type Group<'a> = (&'static str, Vec<Dispatch<'a>>);
+pub(crate) type Group<'a> = (&'static crate::abi::groups::Group, Vec<Dispatch<'a>>);
 
 /// Records `groups` in order: all in one compute pass (WebGPU's usage scopes are per dispatch,
 /// so a dispatch may read as its indirect arguments or uniform what an earlier one wrote), or,
@@ -96,9 +97,9 @@ pub(crate) fn record_groups(
     max_dim: u32,
 ) {
     if let Ok(mut t) = ctx.traffic.lock() {
-        for (label, work) in groups {
-            let n = work.len() as u64;
-            match t.dispatches.get_mut(*label) {
+        for (group, work) in groups {
+            let (label, n) = (group.label, work.len() as u64);
+            match t.dispatches.get_mut(label) {
                 Some(c) => *c += n,
                 None => {
                     t.dispatches.insert(label.to_string(), n);
@@ -116,8 +117,8 @@ pub(crate) fn record_groups(
     let mut profiler = ctx.profiler.lock().ok();
     let timed = profiler.as_ref().is_some_and(|p| p.is_some());
     if timed {
-        for (label, work) in groups {
-            let mut pass = begin_pass(&mut profiler, enc, label);
+        for (group, work) in groups {
+            let mut pass = begin_pass(&mut profiler, enc, group.label);
             let mut bound = None;
             record_work(&mut pass, work, &mut bound, max_dim);
         }
@@ -159,7 +160,7 @@ fn record_work<'a>(
         *bound = Some((pipe, group));
         match *d {
             Dispatch::Direct((_, _, n, per)) => {
-                let (x, y) = crate::search::layout::fold_dispatch(n, per, max_dim);
+                let (x, y) = crate::abi::search::fold_dispatch(n, per, max_dim);
                 pass.dispatch_workgroups(x, y, 1);
             }
             Dispatch::Indirect(_, _, args, offset) => {
@@ -171,7 +172,7 @@ fn record_work<'a>(
 
 /// Begins compute pass `label`, with timestamps around it when the profiler has room.
 fn begin_pass<'e>(
-    profiler: &mut Option<std::sync::MutexGuard<'_, Option<Profiler>>>,
+    profiler: &mut Option<std::sync::MutexGuard<'_, Option<crate::device::Profiler>>>,
     enc: &'e mut wgpu::CommandEncoder,
     label: &str,
 ) -> wgpu::ComputePass<'e> {
@@ -198,162 +199,13 @@ pub(crate) fn upload(
     ctx.queue.write_buffer(buffer, offset, data);
 }
 
-/// Finishes and submits `enc`, counting the submission; with timestamps on, resolves them,
-/// waits for them and adds each pass's GPU time to the device's traffic.
-pub(crate) fn submit(ctx: &crate::device::GpuContext, mut enc: wgpu::CommandEncoder) {
-    if let Ok(mut t) = ctx.traffic.lock() {
-        t.submits += 1;
-    }
-    let mut profiler = ctx.profiler.lock().ok();
-    let p = profiler.as_mut().and_then(|p| p.as_mut());
-    match p {
-        Some(p) if !p.labels.is_empty() => {
-            p.resolve(&mut enc);
-            ctx.queue.submit([enc.finish()]);
-            if let Ok(mut t) = ctx.traffic.lock() {
-                t.waits += 1;
-            }
-            let times = p.read(&ctx.device, ctx.queue.get_timestamp_period());
-            if let Ok(mut t) = ctx.traffic.lock() {
-                for (label, ns) in times {
-                    *t.pass_ns.entry(label).or_default() += ns;
-                }
-            }
-        }
-        _ => {
-            ctx.queue.submit([enc.finish()]);
-        }
-    }
-}
-
-/// Timestamp queries around compute passes (see `Device::enable_timestamps`).
-pub(crate) struct Profiler {
-    set: wgpu::QuerySet,
-    resolve: wgpu::Buffer,
-    readback: wgpu::Buffer,
-    /// Labels of the passes given timestamps since the last submission, in order.
-    labels: Vec<String>,
-}
-
-/// Passes with timestamps per submission (later ones go untimed).
-const PROFILED_PASSES: u32 = 32;
-
-impl Profiler {
-    pub(crate) fn new(device: &wgpu::Device) -> Self {
-        let n = 2 * PROFILED_PASSES;
-        let set = device.create_query_set(&wgpu::QuerySetDescriptor {
-            label: Some("abut timestamps"),
-            ty: wgpu::QueryType::Timestamp,
-            count: n,
-        });
-        let buffer = |usage| {
-            device.create_buffer(&wgpu::BufferDescriptor {
-                label: Some("abut timestamps"),
-                size: 8 * n as u64,
-                usage,
-                mapped_at_creation: false,
-            })
-        };
-        Self {
-            set,
-            resolve: buffer(wgpu::BufferUsages::QUERY_RESOLVE | wgpu::BufferUsages::COPY_SRC),
-            readback: buffer(wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST),
-            labels: Vec::new(),
-        }
-    }
-
-    /// The timestamp writes for the next pass, labelled `label` (none once the set is full).
-    fn next(&mut self, label: &str) -> Option<wgpu::ComputePassTimestampWrites<'_>> {
-        let k = self.labels.len() as u32;
-        if k >= PROFILED_PASSES {
-            return None;
-        }
-        self.labels.push(label.to_string());
-        Some(wgpu::ComputePassTimestampWrites {
-            query_set: &self.set,
-            beginning_of_pass_write_index: Some(2 * k),
-            end_of_pass_write_index: Some(2 * k + 1),
-        })
-    }
-
-    fn resolve(&self, enc: &mut wgpu::CommandEncoder) {
-        let n = 2 * self.labels.len() as u32;
-        enc.resolve_query_set(&self.set, 0..n, &self.resolve, 0);
-        enc.copy_buffer_to_buffer(&self.resolve, 0, &self.readback, 0, 8 * n as u64);
-    }
-
-    /// Waits for the resolved timestamps; (label, nanoseconds) per pass.
-    fn read(&mut self, device: &wgpu::Device, period_ns: f32) -> Vec<(String, f64)> {
-        let n = 2 * self.labels.len() as u64;
-        let labels = std::mem::take(&mut self.labels);
-        let slice = self.readback.slice(..8 * n);
-        let (tx, rx) = std::sync::mpsc::channel();
-        slice.map_async(wgpu::MapMode::Read, move |r| {
-            let _ = tx.send(r);
-        });
-        let _ = device.poll(wgpu::PollType::wait_indefinitely());
-        if !matches!(rx.recv(), Ok(Ok(()))) {
-            return Vec::new();
-        }
-        let stamps: Vec<u64> = match slice.get_mapped_range() {
-            Ok(view) => bytemuck::pod_collect_to_vec(&view),
-            Err(_) => return Vec::new(),
-        };
-        self.readback.unmap();
-        labels
-            .into_iter()
-            .enumerate()
-            .map(|(k, l)| {
-                let d = stamps[2 * k + 1].saturating_sub(stamps[2 * k]);
-                (l, d as f64 * period_ns as f64)
-            })
-            .collect()
-    }
-}
-
-/// Compiles the pipeline of `pass` from `module` (its stem's source), with the pipeline-
-/// overridable `constants`.
-pub(crate) fn pipeline(
-    device: &wgpu::Device,
-    module: &wgpu::ShaderModule,
-    pass: &crate::passes::Pass,
-    constants: &[(&str, f64)],
-) -> wgpu::ComputePipeline {
-    device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
-        label: Some(pass.entry),
-        layout: None,
-        module,
-        entry_point: Some(pass.entry),
-        compilation_options: wgpu::PipelineCompilationOptions {
-            constants,
-            ..Default::default()
-        },
-        cache: None,
-    })
-}
-
-/// Compiles the shader module of kernel file `stem` (preludes prepended).
-pub(crate) fn module(
-    device: &wgpu::Device,
-    stem: &str,
-) -> crate::error::Result<wgpu::ShaderModule> {
-    let src = shaders::source(stem).ok_or_else(|| crate::error::Error::Gpu {
-        during: "compiling the pipelines".into(),
-        message: format!("no kernel file '{stem}'"),
-    })?;
-    Ok(device.create_shader_module(wgpu::ShaderModuleDescriptor {
-        label: Some(stem),
-        source: wgpu::ShaderSource::Wgsl(src.into()),
-    }))
-}
-
 /// The bind group of `pass` on `pipeline`: each declared binding gets the buffer `resource`
 /// gives for its role; a role the executor does not hold is an error naming it.
 pub(crate) fn bind<'a>(
     device: &wgpu::Device,
     pipeline: &wgpu::ComputePipeline,
-    pass: &crate::passes::Pass,
-    resource: impl Fn(crate::passes::Buf) -> Option<wgpu::BindingResource<'a>>,
+    pass: &crate::abi::passes::Pass,
+    resource: impl Fn(crate::abi::passes::Buf) -> Option<wgpu::BindingResource<'a>>,
 ) -> crate::error::Result<wgpu::BindGroup> {
     let mut entries = Vec::with_capacity(pass.bindings.len());
     for b in pass.bindings {

@@ -5,12 +5,14 @@ use std::sync::Arc;
 
 use super::buffers::GrowBuffer;
 use super::global_search::SharedBuffers;
+use crate::abi::groups;
+use crate::abi::passes::{self, Buf};
+use crate::abi::penalty::ACC_WORDS_PER_NODE;
+use crate::abi::penalty::{PenaltyParams, SlaveState};
+use crate::abi::search::ITEM_WORKGROUP;
 use crate::device::GpuContext;
 use crate::error::{Error, Result};
-use crate::passes::{self, Buf};
-use crate::penalty::layout::{PenaltyParams, SlaveState};
 use crate::penalty::PenaltySetup;
-use crate::search::layout::ITEM_WORKGROUP;
 use wgpu::BufferUsages as U;
 
 struct Pipelines {
@@ -89,7 +91,7 @@ impl GpuPenalty {
             .device
             .create_command_encoder(&wgpu::CommandEncoderDescriptor::default());
         enc.copy_buffer_to_buffer(&self.state, 0, &staging, 0, bytes);
-        super::submit(&self.ctx, enc);
+        crate::device::submit(&self.ctx, enc);
         super::buffers::read_back_with(
             &self.ctx,
             &staging,
@@ -108,34 +110,14 @@ impl GpuPenalty {
     pub fn new(ctx: Arc<GpuContext>, setup: &PenaltySetup, n_nodes: usize) -> Result<Self> {
         let d = &ctx.device;
         let limits = &ctx.limits;
-        let scope = d.push_error_scope(wgpu::ErrorFilter::Validation);
         let friction = [("FRICTION", if setup.friction { 1.0 } else { 0.0 })];
-        let modules = [&passes::NODAL_NORMALS, &passes::PENALTY, &passes::GATHER]
-            .map(|pass| super::module(d, pass.stem));
-        let [normals, penalty, gather] = match modules {
-            [Ok(n), Ok(p), Ok(g)] => [n, p, g],
-            modules => {
-                let _ = pollster::block_on(scope.pop());
-                let e = modules.into_iter().find_map(|m| m.err());
-                return Err(e.unwrap_or_else(|| Error::Gpu {
-                    during: "compiling the penalty pipelines".into(),
-                    message: "a shader module could not be made".into(),
-                }));
-            }
-        };
         let pipelines = Pipelines {
-            nodal_normals: super::pipeline(d, &normals, &passes::NODAL_NORMALS, &[]),
-            penalty: super::pipeline(d, &penalty, &passes::PENALTY, &friction),
-            scatter: super::pipeline(d, &gather, &passes::SCATTER_FORCES, &[]),
-            gather: super::pipeline(d, &gather, &passes::GATHER, &[]),
-            add_forces: super::pipeline(d, &gather, &passes::ADD_FORCES, &[]),
+            nodal_normals: ctx.pipeline(&passes::NODAL_NORMALS, &[])?,
+            penalty: ctx.pipeline(&passes::PENALTY, &friction)?,
+            scatter: ctx.pipeline(&passes::SCATTER_FORCES, &[])?,
+            gather: ctx.pipeline(&passes::GATHER, &[])?,
+            add_forces: ctx.pipeline(&passes::ADD_FORCES, &[])?,
         };
-        if let Some(e) = pollster::block_on(scope.pop()) {
-            return Err(Error::Gpu {
-                during: "compiling the penalty pipelines".into(),
-                message: e.to_string(),
-            });
-        }
         let n_slaves = setup.areas.len() as u32;
         let n_pair_nodes = setup.pair_nodes.len() as u32;
         let check = |what: &str, bytes: u64| -> Result<u64> {
@@ -193,7 +175,7 @@ impl GpuPenalty {
         );
         let acc_bytes = check(
             "fixed-point force sums",
-            n_pair_nodes as u64 * (4 * crate::cpu::gather::ACC_WORDS_PER_NODE) as u64,
+            n_pair_nodes as u64 * (4 * ACC_WORDS_PER_NODE) as u64,
         )?;
         Ok(Self {
             params: d.create_buffer(&wgpu::BufferDescriptor {
@@ -291,14 +273,14 @@ impl GpuPenalty {
         let iw = ITEM_WORKGROUP;
         vec![
             (
-                "nodal_normals + penalty",
+                &groups::NORMALS_PENALTY,
                 vec![
                     Direct((&p.nodal_normals, &g.nodal_normals, self.n_pair_nodes, iw)),
                     Direct((&p.penalty, &g.penalty, self.n_slaves, iw)),
                 ],
             ),
             (
-                "scatter_forces + gather + add_forces",
+                &groups::SCATTER_GATHER_ADD,
                 vec![
                     Direct((&p.scatter, &g.scatter, self.n_slaves, iw)),
                     Direct((&p.gather, &g.gather, self.n_pair_nodes, iw)),

@@ -14,11 +14,11 @@ use std::path::{Path, PathBuf};
 
 use crate::error::{Error, Result};
 use crate::io::{ElementKind, MeshData, MeshElement};
+use crate::model::Schedule;
 use crate::model::{
     Enforce, Facet, Friction, Kinematic, Model, NodeSetId, Pair, PairId, Penalty,
     PressureOverclosure, Sliding, Stiffness, Surface, SurfaceId,
 };
-use crate::search::Schedule;
 
 /// `*SURFACE BEHAVIOR, PRESSURE-OVERCLOSURE=…`.
 #[derive(Clone, Debug, PartialEq)]

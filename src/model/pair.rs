@@ -25,7 +25,7 @@ pub struct Pair {
     pub sliding: Sliding,
     /// When the search runs globally; `None`: the defaults (every 100 increments, every 4 for
     /// self-contact, budget ½ of the radius, fast local tracking).
-    pub schedule: Option<crate::search::Schedule>,
+    pub schedule: Option<Schedule>,
     /// The fraction of each contact's penalty force a pure pair applies (1 unless set): one
     /// pass of a balanced pair stated as a pure pair of its own, as a rank of a distributed
     /// model does (a balanced pair's weights come from [`Pair::balanced`]).
@@ -334,7 +334,7 @@ impl Pair {
     }
 
     /// Sets when the search runs globally (Abaqus' *CONTACT CONTROLS).
-    pub fn schedule(mut self, schedule: crate::search::Schedule) -> Self {
+    pub fn schedule(mut self, schedule: Schedule) -> Self {
         self.schedule = Some(schedule);
         self
     }
@@ -474,5 +474,36 @@ impl Pair {
             }
         }
         Ok(())
+    }
+}
+
+/// When a pair searches globally (seed: "Finite-sliding tracking", "Tracking approach for
+/// self-contact pairs"; Abaqus' *CONTACT CONTROLS).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Schedule {
+    /// A global search every this many increments (the first increment always searches
+    /// globally). Defaults: 100 for two-surface pairs, 4 for self-contact.
+    pub interval: u32,
+    /// Motion budget as a fraction of the search radius: when an untracked slave node (none of
+    /// whose facets was within the radius at the last global search) or a master node has
+    /// moved more than half of `budget·radius` since then (the two together could have used it
+    /// up), the increment searches globally; tracked slaves are followed by the local search.
+    /// Every contact within `(1 − budget)·radius` is then tracked. Default 0.5.
+    pub budget: f64,
+    /// The slightly more expensive local search: also the facets around every node of the
+    /// nearest facet found around the tracked node (Abaqus' FAST LOCAL TRACKING=NO). The fast
+    /// walk can settle on a node none of whose facets is the nearest (obtuse triangles); this
+    /// one does not (measured in tests/tracking.rs).
+    pub wide_local: bool,
+}
+
+impl Schedule {
+    /// The defaults for a two-surface pair (`self_contact` false) or a self-contact pair.
+    pub fn default_for(self_contact: bool) -> Self {
+        Self {
+            interval: if self_contact { 4 } else { 100 },
+            budget: 0.5,
+            wide_local: false,
+        }
     }
 }

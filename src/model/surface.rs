@@ -281,3 +281,14 @@ impl MasterSurface {
         sum / self.active.len() as f64
     }
 }
+
+/// Number of nodes of a padded facet (WGSL twin: `facet_node_count` in common.wgsl).
+pub fn facet_node_count(f: [u32; 4]) -> usize {
+    if f[2] == NO_NODE {
+        2
+    } else if f[3] == NO_NODE {
+        3
+    } else {
+        4
+    }
+}

@@ -1,14 +1,11 @@
 //! Penalty enforcement of a contact pair: the static data its kernels need, and the
 //! parameters of one increment. The kernels are `shaders/{nodal_normals,penalty,gather}.wgsl` (GPU, [`crate::gpu::GpuPenalty`]) and their mirrors in [`crate::cpu`].
 
-pub mod layout;
-
+use crate::abi::penalty::*;
 use crate::error::Result;
 use crate::model::{
     Friction, MasterSurface, Model, Pair, PairId, Penalty, PressureOverclosure, Stiffness,
 };
-use crate::search::GlobalSearch;
-use layout::*;
 
 /// A rigid part's state for one increment: what a penalty spring on it needs.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -196,11 +193,12 @@ impl PenaltySetup {
         })
     }
 
-    /// Binds the setup to its pair's search: the search radius and the reference master node
-    /// the fast-node test measures against ([`GlobalSearch::reference_node`]).
-    pub fn with_search(mut self, search: &GlobalSearch) -> Self {
-        self.params.search_radius = search.radius() as f32;
-        self.params.ref_node = search.reference_node();
+    /// Binds the setup to its pair's search: the search `radius` (model units) and the
+    /// reference master node `ref_node` the fast-node test measures against
+    /// (`GlobalSearch::reference_node`).
+    pub fn with_search(mut self, radius: f64, ref_node: u32) -> Self {
+        self.params.search_radius = radius as f32;
+        self.params.ref_node = ref_node;
         self
     }
 

@@ -10,11 +10,11 @@ use crate::io::{ElementKind, MeshData};
 use crate::mesh::rect_triangles_on;
 use crate::mesh::{arc_segments, block_tets_on, graded, graded_with_core, plate_quads};
 use crate::mesh::{polyline, sphere_triangles};
+use crate::model::Schedule;
 use crate::model::{
     Analytical, Enforce, Facet, Friction, Kinematic, Model, Pair, Penalty, RigidBody, RigidPair,
     Sliding, Stiffness, Surface,
 };
-use crate::search::Schedule;
 
 use super::spec::{axis_of, bad, PartSpec, Scene};
 

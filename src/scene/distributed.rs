@@ -39,8 +39,8 @@ use crate::distributed::{
 };
 use crate::error::{Error, Result};
 use crate::explicit::{Element, Prescribed, Solver};
+use crate::model::Schedule;
 use crate::model::{Enforce, Facet, Model, Sliding};
-use crate::search::Schedule;
 
 fn refuse(what: &str, expected: &'static str) -> Error {
     Error::BadParameter {

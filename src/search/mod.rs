@@ -10,34 +10,23 @@
 //! work in grid-local f32 coordinates; [`GlobalSearch::run`] converts the result back to model
 //! coordinates in f64.
 
-pub mod grid;
-pub mod layout;
+pub mod brute_force;
 pub mod tree;
 
+pub use crate::plan::{grid, Prepared, Step, STEPS};
+
+use crate::abi::search as layout;
+use crate::abi::status::Status;
+use crate::abi::status::STATUS_WORDS;
 use crate::cpu::CpuSearch;
 use crate::device::{Device, DeviceKind};
 use crate::error::{Error, Result};
 use crate::gpu::GpuSearch;
+use crate::model::Schedule;
 use crate::model::{validate_positions, MasterSurface, Model, PairId};
-use crate::status::Status;
-use grid::Grid;
+use crate::plan::grid::Grid;
 use layout::{GpuHit, SearchParams, NO_FACET};
 use std::sync::Arc;
-
-/// The steps of one global search, in order (shader and CPU mirror of the same name).
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum Step {
-    /// The search tree's boxes from the positions, leaves up (`tree.wgsl`); collapsed facets
-    /// get empty boxes.
-    TreeRefit,
-    /// Nearest facet per slave node (`nearest_facet.wgsl`: a walk of the tree pruned by the
-    /// best distance, at most `WALK_VISITS` nodes; what a capped walk did not reach projected
-    /// in chunks of bounded size, combined by atomic minima, ties to the lowest id).
-    NearestFacet,
-}
-
-/// All steps of a global search, in order.
-pub const STEPS: [Step; 2] = [Step::TreeRefit, Step::NearestFacet];
 
 /// The contact partner found for one slave node, in model coordinates.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -159,37 +148,6 @@ impl SearchResult {
     }
 }
 
-/// Input of one search in the kernels' layout: grid-local f32 nodes, active facets, slaves.
-#[derive(Clone, Debug)]
-pub struct Prepared {
-    /// Uniform parameters.
-    pub params: SearchParams,
-    /// The grid (its origin is the local frame).
-    pub grid: Grid,
-    /// Every model node, grid-local, w = its mass.
-    pub nodes: Vec<[f32; 4]>,
-    /// Active facets, padded node ids (the pair's constant, shared).
-    pub facets: Arc<[[u32; 4]]>,
-    /// Slave node ids (the pair's constant, shared).
-    pub slaves: Arc<[u32]>,
-    /// The active facet of each leaf slot of the search tree, `NO_FACET` for an empty slot
-    /// ([`tree::leaf_order`]; the pair's constant, shared).
-    pub order: Arc<[u32]>,
-    /// The slaves' indices in Morton order of their positions at the start: the order the
-    /// tree walks take them in, so neighbouring invocations walk the same branches (the pair's
-    /// constant, shared).
-    pub walk_order: Arc<[u32]>,
-    /// Active facets of each model node: words 0..=n_nodes are starts within this same array,
-    /// then the lists (local_search.wgsl's layout).
-    pub adjacency: Arc<[u32]>,
-    /// The nodes whose motion the budget measures: slaves, then master nodes not slaves.
-    pub motion_nodes: Arc<[u32]>,
-    /// A local-search increment (in the frame of the last global search) rather than a global one.
-    pub local: bool,
-    /// Model nodes (`nodes` is empty when the positions stay on the device).
-    pub n_nodes: usize,
-}
-
 /// The master node nearest the centroid of `master_nodes` at `positions` (ties: the lowest id;
 /// `NO_NODE` for an empty list).
 fn reference_node(master_nodes: &[u32], positions: &[[f64; 3]]) -> u32 {
@@ -210,37 +168,6 @@ fn reference_node(master_nodes: &[u32], positions: &[[f64; 3]]) -> u32 {
         }
     }
     best.1
-}
-
-/// When a pair searches globally (seed: "Finite-sliding tracking", "Tracking approach for
-/// self-contact pairs"; Abaqus' *CONTACT CONTROLS).
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct Schedule {
-    /// A global search every this many increments (the first increment always searches
-    /// globally). Defaults: 100 for two-surface pairs, 4 for self-contact.
-    pub interval: u32,
-    /// Motion budget as a fraction of the search radius: when an untracked slave node (none of
-    /// whose facets was within the radius at the last global search) or a master node has
-    /// moved more than half of `budget·radius` since then (the two together could have used it
-    /// up), the increment searches globally; tracked slaves are followed by the local search.
-    /// Every contact within `(1 − budget)·radius` is then tracked. Default 0.5.
-    pub budget: f64,
-    /// The slightly more expensive local search: also the facets around every node of the
-    /// nearest facet found around the tracked node (Abaqus' FAST LOCAL TRACKING=NO). The fast
-    /// walk can settle on a node none of whose facets is the nearest (obtuse triangles); this
-    /// one does not (measured in tests/tracking.rs).
-    pub wide_local: bool,
-}
-
-impl Schedule {
-    /// The defaults for a two-surface pair (`self_contact` false) or a self-contact pair.
-    pub fn default_for(self_contact: bool) -> Self {
-        Self {
-            interval: if self_contact { 4 } else { 100 },
-            budget: 0.5,
-            wide_local: false,
-        }
-    }
 }
 
 /// Why an increment searched the way it did.
@@ -394,7 +321,7 @@ impl GlobalSearch {
         let centroids: Vec<[f64; 3]> = facets
             .iter()
             .map(|fac| {
-                let n = crate::cpu::common::facet_node_count(*fac);
+                let n = crate::model::facet_node_count(*fac);
                 let mut c = [0.0; 3];
                 for &id in &fac[..n] {
                     let x = model.positions()[id as usize];
@@ -574,7 +501,7 @@ impl GlobalSearch {
         &mut self,
         positions: &[[f64; 3]],
         mut global: Option<Trigger>,
-    ) -> Result<(SearchResult, [u32; layout::STATUS_WORDS])> {
+    ) -> Result<(SearchResult, [u32; STATUS_WORDS])> {
         let mut anchored_first = false;
         loop {
             // small sliding's first increment: the global search alone, to anchor the slaves,
@@ -990,7 +917,7 @@ impl GlobalSearch {
     pub(crate) fn resident_result(
         &self,
         raw: Vec<GpuHit>,
-        status: &[u32; layout::STATUS_WORDS],
+        status: &[u32; STATUS_WORDS],
         params: &SearchParams,
         trigger: u32,
         first: bool,
@@ -1064,8 +991,8 @@ impl GlobalSearch {
     }
 
     /// The search tree's packed boxes after the last global search (one per heap node, node 0
-    /// unused; local frame, decoded by [`tree::boxes::unpack`] with the step
-    /// [`tree::boxes::box_step`] of [`layout::SearchParams::box_margin`]; read back from the
+    /// unused; local frame, decoded by [`crate::abi::boxes::unpack`] with the step
+    /// [`crate::abi::boxes::box_step`] of [`layout::SearchParams::box_margin`]; read back from the
     /// GPU on a GPU device): for tests of the refit and for debugging.
     pub fn tree_boxes(&self) -> Result<Vec<[u32; 4]>> {
         match &self.executor {
@@ -1085,7 +1012,7 @@ impl GlobalSearch {
         grid: Grid,
         raw: Arc<Vec<GpuHit>>,
         trigger: Trigger,
-        status: &[u32; layout::STATUS_WORDS],
+        status: &[u32; STATUS_WORDS],
     ) -> SearchResult {
         let candidates = raw
             .iter()
@@ -1127,7 +1054,7 @@ impl GlobalSearch {
         let mut hi = glam::DVec4::splat(f64::NEG_INFINITY);
         let mut extent_sum = 0.0;
         for fac in self.facets.iter() {
-            let n = crate::cpu::common::facet_node_count(*fac);
+            let n = crate::model::facet_node_count(*fac);
             let x = |j: usize| {
                 let p = positions[fac[j.min(n - 1)] as usize];
                 glam::DVec4::new(p[0], p[1], p[2], 0.0)

@@ -153,9 +153,7 @@ pub fn c_device(d: &Device) -> *mut AbutDevice {
 }
 
 pub fn devices() -> Vec<Device> {
-    let mut all = vec![Device::cpu()];
-    all.extend(super::gpus().iter().cloned());
-    all
+    super::devices()
 }
 
 /// One penalty increment through the C ABI on the caller's arrays.

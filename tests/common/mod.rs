@@ -6,10 +6,17 @@ use std::sync::OnceLock;
 #[cfg(feature = "capi")]
 pub mod capi;
 
-use abut::cpu::brute_force::{brute_force, OracleHit};
 use abut::geometry::{closest_on_facet, V3};
 use abut::model::MasterSurface;
+use abut::search::brute_force::{brute_force, OracleHit};
 use abut::{Device, GlobalSearch, Model, Pair, PairId, SearchResult};
+
+/// The CPU path and every GPU adapter ([`gpus`]): the devices a test runs on.
+pub fn devices() -> Vec<Device> {
+    let mut all = vec![Device::cpu()];
+    all.extend(gpus().iter().cloned());
+    all
+}
 
 /// Every GPU adapter to run parity tests on (all backends, narrowed by `WGPU_BACKEND`).
 ///

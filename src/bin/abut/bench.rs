@@ -12,8 +12,9 @@ use std::fmt::Write as _;
 use std::path::PathBuf;
 use std::time::Instant;
 
+use abut::abi::groups::{self, Group};
 use abut::mesh::{plate_quads, SplitMix64};
-use abut::search::Schedule;
+use abut::model::Schedule;
 use abut::{
     Contact, Device, Enforce, GlobalSearch, Kinematic, Model, Pair, Penalty, Sliding, Stiffness,
     Surface,
@@ -273,7 +274,7 @@ fn measure(device: &Device, c: &Config) -> abut::Result<Row> {
         *vi = [sc.u, 0.0, -sc.v0];
     }
     // k of the automatic rule on a rigid master: AUTO_STIFFNESS·scale·m/dt² (m = 1)
-    let k = abut::penalty::layout::AUTO_STIFFNESS * c.scale / (sc.dt * sc.dt);
+    let k = abut::abi::penalty::AUTO_STIFFNESS * c.scale / (sc.dt * sc.dt);
     let omega = (c.enforce == Enf::Penalty).then(|| k.sqrt());
     let mut touched = vec![false; n];
     let mut deepest = vec![0.0f64; n];
@@ -484,14 +485,17 @@ fn search_rows(devices: &[Device], slaves: usize) -> abut::Result<Vec<SearchRow>
 /// `ContactOut`, a quad facet touches 4 nodes; a plate node has 4 facets; there are about 4
 /// slaves per facet and per master node (the scene's ratio).
 pub(crate) fn kernel_bytes() -> Vec<(&'static str, f64)> {
-    use abut::passes;
-    // (kernel, bytes per slave); the passes that run them are in PASSES
+    use abut::abi::passes;
+    // (kernel, bytes per slave); the groups that run them are in PASSES
     let node = 16.0;
-    let hit = std::mem::size_of::<abut::search::layout::GpuHit>() as f64;
-    let out = std::mem::size_of::<abut::penalty::layout::ContactOut>() as f64;
+    let hit = std::mem::size_of::<abut::abi::search::GpuHit>() as f64;
+    let out = std::mem::size_of::<abut::abi::penalty::ContactOut>() as f64;
     let facet = 16.0;
     let per_master = 0.25; // master nodes (or facets) per slave
+    let nodes = 1.0 + per_master; // slaves and master nodes, per slave
     vec![
+        // the caller's positions in (16 B) and the frame's nodes out (16 B), per node
+        (passes::TO_LOCAL.entry, 32.0 * nodes),
         // positions now and at the last global search, of slaves and master nodes
         (
             passes::MOTION.entry,
@@ -526,14 +530,40 @@ pub(crate) fn kernel_bytes() -> Vec<(&'static str, f64)> {
             passes::GATHER.entry,
             (node + 32.0 + node + 28.0) + per_master * (node + 32.0 + node),
         ),
+        // each pair node: its record (16 B), its force (16 B), the caller's force read and
+        // written (32 B) and its bound row (8 B)
+        (passes::ADD_FORCES.entry, 72.0 * nodes),
     ]
 }
 
-/// The compute passes of a steady penalty increment and the kernels each runs.
-const PASSES: &[(&str, &[&str])] = &[
-    ("motion + local_search", &["motion", "local_search"]),
-    ("nodal_normals + penalty", &["nodal_normals", "penalty"]),
-    ("scatter_forces + gather", &["scatter_forces", "gather"]),
+/// Compulsory bytes per slave of `group` in a steady local increment: the sum over its kernels,
+/// the schedule's one invocation counted as nothing. A kernel with no declared bytes is an error
+/// naming it (a group changed and this table did not).
+pub(crate) fn group_bytes(group: &Group, kb: &[(&'static str, f64)]) -> Result<f64, String> {
+    group
+        .passes
+        .iter()
+        .filter(|p| p.entry != abut::abi::passes::SCHEDULE.entry)
+        .map(|p| {
+            kb.iter()
+                .find(|e| e.0 == p.entry)
+                .map(|e| e.1)
+                .ok_or_else(|| {
+                    format!(
+                        "no compulsory bytes declared for kernel '{}' (group '{}')",
+                        p.entry, group.label
+                    )
+                })
+        })
+        .sum()
+}
+
+/// The compute passes (groups, as the increment records them) of a steady penalty increment.
+const PASSES: [&Group; 4] = [
+    &groups::TO_LOCAL_MOTION_SCHEDULE,
+    &groups::LOCAL,
+    &groups::NORMALS_PENALTY,
+    &groups::SCATTER_GATHER_ADD,
 ];
 
 /// The bandwidth of a copy kernel on `device` (bytes read + written per second), or of a host
@@ -938,7 +968,6 @@ pub fn bench(a: &BenchArgs) -> abut::Result<()> {
     }
     let _ = writeln!(md, "\n## Bandwidth bound\n");
     let kb = kernel_bytes();
-    let bytes_of = |k: &str| kb.iter().find(|e| e.0 == k).map_or(0.0, |e| e.1);
     let total: f64 = kb.iter().map(|k| k.1).sum();
     let largest = *sizes.last().unwrap_or(&1);
     let _ = writeln!(md, "Bytes a steady penalty increment (local search) moves per slave node, by kernel: the compulsory traffic of its bindings (see `kernel_bytes` in src/bin/abut/bench.rs). The bound is that traffic at the bandwidth of a copy kernel measured on the same adapter in this run (a host memory copy for the CPU path); the fraction is the bound over the measured time, per pass from the GPU timestamps where there are some, and for the whole increment from the wall clock — base configuration, {largest} slaves.\n");
@@ -961,10 +990,20 @@ pub fn bench(a: &BenchArgs) -> abut::Result<()> {
             continue;
         };
         let per_slave = |ms: f64| ms * 1e6 / largest as f64;
-        for (pass, kernels) in PASSES {
-            let bytes: f64 = kernels.iter().map(|k| bytes_of(k)).sum();
+        if let Some(k) = r.pass_ms.keys().find(|k| groups::by_label(k).is_none()) {
+            return Err(pass_err(format!("a pass '{k}' that no group declares")));
+        }
+        for group in PASSES {
+            let pass = group.label;
+            let bytes = group_bytes(group, &kb).map_err(pass_err)?;
             let bound = bytes / bw * 1e9;
-            if let Some(&ms) = r.pass_ms.get(*pass) {
+            if r.pass_ms.is_empty() {
+                continue; // no timestamps on this adapter: the whole increment below
+            }
+            let Some(&ms) = r.pass_ms.get(pass) else {
+                return Err(pass_err(format!("{backend}: no pass '{pass}'")));
+            };
+            {
                 let measured = per_slave(ms);
                 fractions.push((backend.clone(), pass.to_string(), bound / measured));
                 let _ = writeln!(
@@ -1029,6 +1068,15 @@ pub fn bench(a: &BenchArgs) -> abut::Result<()> {
         json_path.display()
     );
     Ok(())
+}
+
+/// A benchmark pass that does not match what the increment records.
+fn pass_err(value: String) -> abut::Error {
+    abut::Error::BadParameter {
+        name: "bench pass",
+        value,
+        expected: "the groups the increment records (abi::groups)",
+    }
 }
 
 pub(crate) fn io_err(p: &std::path::Path, e: std::io::Error) -> abut::Error {

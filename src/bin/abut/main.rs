@@ -10,8 +10,8 @@ mod verify;
 use std::process::ExitCode;
 use std::time::{Duration, Instant};
 
-use abut::cpu::brute_force::brute_force;
 use abut::mesh::{plate_quads, point_cloud};
+use abut::search::brute_force::brute_force;
 use abut::{Contact, Device, Enforce, GlobalSearch, Model, Pair, Penalty, Stiffness, Surface};
 use clap::{Parser, Subcommand, ValueEnum};
 
@@ -596,7 +596,7 @@ fn bounce_resident(device: &Device, s: &BounceScene) -> abut::Result<BounceRun> 
         None => {
             let setup = t0.elapsed();
             let m32: Vec<f32> = masses.iter().map(|&m| m as f32).collect();
-            let ip = abut::gpu::IntegrateParams {
+            let ip = abut::abi::integrate::IntegrateParams {
                 acceleration: [0.0, 0.0, 0.0, s.dt as f32],
                 first: s.drops.start,
                 count: s.drops.len() as u32,

@@ -10,6 +10,7 @@
 use std::fmt::Write as _;
 use std::time::Instant;
 
+use abut::abi::groups::{self, Group};
 use abut::gpu::CentralDifference;
 use abut::{Contact, Device, ResidentIo};
 
@@ -24,33 +25,36 @@ const H100_DISPATCH: f64 = 2.0e-6;
 
 /// Compulsory bytes per slave of each compute pass of a local device-resident increment (the
 /// scene has 0.25 master nodes per slave; see `bench::kernel_bytes` for the shared passes).
-fn resident_bytes() -> Vec<(&'static str, f64)> {
-    let kb: std::collections::HashMap<&str, f64> =
-        crate::bench::kernel_bytes().into_iter().collect();
+fn resident_bytes() -> abut::Result<Vec<(&'static str, f64)>> {
+    let kb = crate::bench::kernel_bytes();
     let per_master = 0.25;
     let nodes = 1.0 + per_master;
-    vec![
-        // positions in (16 B) and grid-local nodes out (16 B) per node; motion as before
-        ("to_local + motion + schedule", 32.0 * nodes + kb["motion"]),
-        ("local_search", kb["local_search"]),
+    let of = |g: &Group| {
+        crate::bench::group_bytes(g, &kb).map_err(|value| abut::Error::BadParameter {
+            name: "bench pass",
+            value,
+            expected: "compulsory bytes for every kernel of the group",
+        })
+    };
+    Ok(vec![
+        (
+            groups::TO_LOCAL_MOTION_SCHEDULE.label,
+            of(&groups::TO_LOCAL_MOTION_SCHEDULE)?,
+        ),
+        (groups::LOCAL.label, of(&groups::LOCAL)?),
         // a local increment: every dispatch of the global search gets zero workgroups
-        ("global search", 0.0),
+        (groups::GLOBAL_SEARCH.label, 0.0),
+        (groups::NORMALS_PENALTY.label, of(&groups::NORMALS_PENALTY)?),
         (
-            "nodal_normals + penalty",
-            kb["nodal_normals"] + kb["penalty"],
+            groups::SCATTER_GATHER_ADD.label,
+            of(&groups::SCATTER_GATHER_ADD)?,
         ),
-        // add_forces: pair node (16 B), its force (16 B), the caller's force read and written
-        // (32 B) and its row (8 B), per pair node
-        (
-            "scatter_forces + gather + add_forces",
-            kb["scatter_forces"] + kb["gather"] + 72.0 * nodes,
-        ),
-        ("pair_stats", 0.0),
+        (groups::STATS_PAIR.label, 0.0),
         // bound_max: pair node and row per pair node
-        ("bound_max + finish_stats", 20.0 * nodes),
+        (groups::STATS_FINISH.label, 20.0 * nodes),
         // integrate: position, velocity and force read and written, mass read, per node
-        ("integrate", 100.0 * nodes),
-    ]
+        (groups::INTEGRATOR.label, 100.0 * nodes),
+    ])
 }
 
 /// One mode's measurements at one size on one device.
@@ -325,7 +329,7 @@ pub fn run(a: &BenchArgs) -> abut::Result<()> {
     } else {
         &[10_000, 100_000, 1_000_000]
     };
-    let bytes: std::collections::HashMap<&str, f64> = resident_bytes().into_iter().collect();
+    let bytes: std::collections::HashMap<&str, f64> = resident_bytes()?.into_iter().collect();
     let mut md = String::new();
     let _ = writeln!(
         md,
@@ -407,7 +411,14 @@ pub fn run(a: &BenchArgs) -> abut::Result<()> {
                     "\n{n} slaves, device-resident, GPU time per pass (timed run) and the share of the copy kernel's bandwidth its compulsory bytes reach:\n\n| pass | GPU time / incr. | compulsory bytes | fraction of copy bandwidth |\n|---|---|---|---|"
                 );
                 for (label, ms) in &r.pass_ms {
-                    let b = bytes.get(label.as_str()).copied().unwrap_or(0.0) * n as f64;
+                    let Some(&b) = bytes.get(label.as_str()) else {
+                        return Err(abut::Error::BadParameter {
+                            name: "bench pass",
+                            value: format!("'{label}' has no compulsory bytes here"),
+                            expected: "a group of abi::groups listed in resident_bytes",
+                        });
+                    };
+                    let b = b * n as f64;
                     let frac = if *ms > 0.0 && b > 0.0 {
                         format!("{:.2}", b / (ms / 1e3) / bandwidth)
                     } else {

@@ -3,10 +3,11 @@
 //! device (`schedule.wgsl`) and carried out through indirect dispatches, nothing read back.
 
 use super::{scan_level, tree_pass, GpuSearch, UNIFORM_STRIDE};
+use crate::abi::groups;
+use crate::abi::passes::{self, Buf};
+use crate::abi::search::*;
 use crate::error::{Error, Result};
-use crate::passes::{self, Buf};
-use crate::search::layout::*;
-use crate::search::Prepared;
+use crate::plan::Prepared;
 use wgpu::BufferUsages as U;
 
 /// The dispatch slots of a search's plan: each names the byte offset of its live indirect
@@ -148,23 +149,8 @@ impl GpuSearch {
     ) -> Result<()> {
         let ctx = self.ctx.clone();
         let d = &ctx.device;
-        let scope = d.push_error_scope(wgpu::ErrorFilter::Validation);
-        let made = (|| -> Result<_> {
-            let module = |stem| super::super::module(d, stem);
-            let (sched, motion) = (module("schedule")?, module("motion")?);
-            let pipe = |m, p| super::super::pipeline(d, m, p, &[]);
-            Ok((
-                pipe(&sched, &passes::SCHEDULE),
-                pipe(&motion, &passes::SET_REFERENCE),
-            ))
-        })();
-        if let Some(e) = pollster::block_on(scope.pop()) {
-            return Err(Error::Gpu {
-                during: "compiling the device-resident pipelines".into(),
-                message: e.to_string(),
-            });
-        }
-        let (schedule, set_reference) = made?;
+        let schedule = ctx.pipeline(&passes::SCHEDULE, &[])?;
+        let set_reference = ctx.pipeline(&passes::SET_REFERENCE, &[])?;
         let params = prep.params;
         let work_levels = ScanLevels::new(params.n_slaves + 1);
         let sized = prep.clone();
@@ -411,7 +397,7 @@ impl GpuSearch {
         let to_local = &g.to_local.as_ref().expect("prepared").1;
         if r.anchored {
             return vec![(
-                "to_local + anchor",
+                &groups::TO_LOCAL_ANCHOR,
                 vec![
                     Direct((&p.to_local, to_local, r.n_nodes, iw)),
                     Direct((&p.anchor, &g.anchor, r.n_slaves, iw)),
@@ -459,7 +445,7 @@ impl GpuSearch {
         ));
         let mut groups = vec![
             (
-                "to_local + motion + schedule",
+                &groups::TO_LOCAL_MOTION_SCHEDULE,
                 vec![
                     Direct((&p.to_local, to_local, r.n_nodes, iw)),
                     Direct((&p.motion, &g.motion, r.n_motion_nodes, iw)),
@@ -467,7 +453,7 @@ impl GpuSearch {
                 ],
             ),
             (
-                "local_search",
+                &groups::LOCAL,
                 vec![Indirect(
                     &p.local_search,
                     &g.local_search,
@@ -477,7 +463,7 @@ impl GpuSearch {
             ),
         ];
         if !local_only {
-            groups.push(("global search", global));
+            groups.push((&groups::GLOBAL_SEARCH, global));
         }
         groups
     }

@@ -20,69 +20,6 @@ pub const NO_FACET: u32 = u32::MAX;
 /// surface (an edge no other facet shares) and the slave is beside it, off the facets — the
 /// master ends there, so this is no contact whatever the gap (WGSL: `HIT_BESIDE_FREE_EDGE`).
 pub const HIT_BESIDE_FREE_EDGE: u32 = 1 << 31;
-/// Status word: the motion since the last global search used up the budget; the local
-/// increment is run again with a global search (WGSL: `STATUS_BUDGET_EXCEEDED`).
-pub const STATUS_BUDGET_EXCEEDED: usize = 2;
-/// Status word: the most local-search iterations any slave took (WGSL: `STATUS_LOCAL_ITERATIONS`).
-pub const STATUS_LOCAL_ITERATIONS: usize = 3;
-/// Status word: bits of the largest motion since the last global search, a positive f32
-/// (WGSL: `STATUS_MOTION`).
-pub const STATUS_MOTION: usize = 8;
-/// Status word: slaves whose local walk hit the iteration cap (WGSL: `STATUS_LOCAL_CAPPED`).
-pub const STATUS_LOCAL_CAPPED: usize = 9;
-/// Status word: self-contact slaves with unconnected facets within the radius
-/// (WGSL: `STATUS_CROWDED`).
-pub const STATUS_CROWDED: usize = 10;
-/// Status word: a master node left the grid's box (positions on the device): the grid is
-/// refitted and the increment run again (WGSL: `STATUS_FRAME_STALE`).
-pub const STATUS_FRAME_STALE: usize = 11;
-/// Status word: bits of the smallest stable increment, a positive f32 (WGSL: `STATUS_DT_STABLE`).
-pub const STATUS_DT_STABLE: usize = 4;
-/// Status word: bits of the smallest approach limit, a positive f32 (WGSL: `STATUS_DT_APPROACH`).
-pub const STATUS_DT_APPROACH: usize = 5;
-/// Status word: slave nodes in contact (WGSL: `STATUS_ACTIVE`).
-pub const STATUS_ACTIVE: usize = 6;
-/// Status word: slave nodes slipping (WGSL: `STATUS_SLIPPING`).
-pub const STATUS_SLIPPING: usize = 7;
-/// Status word: slave nodes whose velocity relative to the master near them carries them
-/// farther than the search radius within the increment (the penalty pass; WGSL:
-/// `STATUS_FAST`).
-pub const STATUS_FAST: usize = 15;
-/// Status word: bits of the largest relative motion over the search radius of those slaves, a
-/// positive f32 (WGSL: `STATUS_FAST_RATIO`).
-pub const STATUS_FAST_RATIO: usize = 27;
-/// Number of status words.
-pub const STATUS_WORDS: usize = 28;
-/// Status word: bits of the largest force component magnitude of a penalty spring in contact
-/// this increment (a non-negative f32): the gather's fixed-point force scale
-/// (WGSL: `STATUS_FORCE_SCALE`).
-pub const STATUS_FORCE_SCALE: usize = 16;
-/// Status word: bits of the largest bound share of a penalty spring in contact this increment:
-/// the gather's fixed-point row scale (WGSL: `STATUS_ROW_SCALE`).
-pub const STATUS_ROW_SCALE: usize = 17;
-/// Status word: slaves whose walk of the search tree reached its visit cap (`WALK_VISITS`); the
-/// facets it had not reached were projected in bounded chunks, so the search stayed exact
-/// (WGSL: `STATUS_FALLBACK`).
-pub const STATUS_FALLBACK: usize = 18;
-/// Status word: master facets collapsed at the global search's positions, skipped by the search
-/// (WGSL: `STATUS_COLLAPSED`; counted by tree_refit).
-pub const STATUS_COLLAPSED: usize = 19;
-/// Status words: order-preserving bits (`ordered_bits`) of the box of the master nodes the
-/// increment's positions put the master in, min xyz then max xyz (WGSL: `STATUS_BOX`; raised by
-/// to_local, read by the schedule).
-pub const STATUS_BOX: usize = 20;
-/// Status word: the lowest model node with a NaN or infinite coordinate in the increment's
-/// positions, `u32::MAX` when none (WGSL: `STATUS_NONFINITE`; raised by to_local).
-pub const STATUS_NONFINITE: usize = 26;
-/// Status word: bits of the largest overclosure (−gap ≥ 0, a non-negative f32) of the penalty
-/// springs carrying force this increment (WGSL: `STATUS_MAX_OVERCLOSURE`).
-pub const STATUS_MAX_OVERCLOSURE: usize = 14;
-/// Status word: small sliding, slave nodes that slid more than an element length from their
-/// anchor (WGSL: `STATUS_SLID_TOO_FAR`).
-pub const STATUS_SLID_TOO_FAR: usize = 12;
-/// Status word: small sliding, anchors whose tangent plane is more than 10° off the deformed
-/// facet (WGSL: `STATUS_PLANE_OFF`).
-pub const STATUS_PLANE_OFF: usize = 13;
 
 /// Uniform parameters of the search kernels. WGSL twin: `SearchParams` in common.wgsl.
 ///
@@ -406,62 +343,18 @@ pub fn from_ordered_bits(u: u32) -> f32 {
     })
 }
 
-/// What a device-resident increment leaves in its statistics buffer (64 bytes, WGSL twin: the
-/// `STAT_*` words of stats.wgsl). A host integrator running on the device can bind the buffer
-/// and read `stable_dt` there; the host reads it a few increments late without waiting.
-#[repr(C)]
-#[derive(Clone, Copy, Debug, PartialEq, Pod, Zeroable)]
-pub struct IncrementStats {
-    /// The largest increment the penalty springs allow (s), as `StepReport::stable_dt`;
-    /// `NO_LIMIT` (f32::MAX) when no spring limits it.
-    pub stable_dt: f32,
-    /// The approach limit (s), as `StepReport::approach_dt`; `NO_LIMIT` when none.
-    pub approach_dt: f32,
-    /// The largest overclosure of a spring carrying force (model length units, ≥ 0).
-    pub max_overclosure: f32,
-    /// The node-wise bound on the springs' ω² (1/s²).
-    pub omega2: f32,
-    /// Slave nodes in contact.
-    pub active: u32,
-    /// Of which slipping.
-    pub slipping: u32,
-    /// Searches that ran globally this increment.
-    pub global_searches: u32,
-    /// Of which because the motion budget was used up.
-    pub budget_searches: u32,
-    /// Slaves whose walk of the search tree reached its visit cap and was finished by the
-    /// bounded chunks (the search stayed exact; many mean the tree fits the surface badly).
-    pub fallbacks: u32,
-    /// Master facets collapsed at a global search's positions (skipped by the search).
-    pub collapsed: u32,
-    /// The lowest model node with a NaN or infinite coordinate, `u32::MAX` when none.
-    pub nonfinite_node: u32,
-    /// Local walks stopped at the iteration cap.
-    pub local_capped: u32,
-    /// The largest motion since a global search (model length units).
-    pub motion: f32,
-    /// Grids that could not be fitted, since the start (the last grid was kept).
-    pub fit_failed: u32,
-    /// Slave nodes whose velocity relative to the master near them (its velocity at their
-    /// contact point, or the pair's reference master node's for a slave with no facet within
-    /// the radius) carries them farther than their pair's search radius within this increment:
-    /// the search cannot follow them and they may pass through the master unseen (tunnelling).
-    pub fast_nodes: u32,
-    /// The largest such relative motion over its pair's search radius (> 1 when `fast_nodes`
-    /// is not 0; 0 when none).
-    pub fast_ratio: f32,
-    /// The largest contact damping ratio of the penalty pairs (constant).
-    pub damping: f32,
-    /// Increments completed since the start (this one included).
-    pub increment: u32,
+/// Packed boxes (`[u32; 4]`, `abi::boxes`) of a tree of `levels` levels: one per heap
+/// node, nodes 0..2^(levels+1) (node 0 unused).
+pub fn box_words(levels: u32) -> usize {
+    2usize << levels
 }
-const _: () = assert!(std::mem::size_of::<IncrementStats>() == 72);
 
-/// Bytes of [`IncrementStats`].
-pub const STATS_BYTES: u64 = std::mem::size_of::<IncrementStats>() as u64;
+/// Words of a slave's `best` record (WGSL: `BEST_WORDS`): distance² bits, the chunks' facet at
+/// it, unused, candidates, the walk's facet, the first leaf slot left to the chunks, the walk's
+/// distance² bits, unused.
+pub const BEST_WORDS: usize = 8;
 
-/// Words of [`IncrementStats`].
-pub const STATS_WORDS: usize = std::mem::size_of::<IncrementStats>() / 4;
-
-/// Words of [`IncrementStats`] reset at the start of every increment (the last two persist).
-pub const STATS_RESET_WORDS: usize = 16;
+/// The SearchParams words of a plan.
+pub fn plan_params(plan: &[u32]) -> SearchParams {
+    bytemuck::pod_read_unaligned(bytemuck::cast_slice(&plan[PLAN_PARAMS..PLAN_PARAMS + 24]))
+}

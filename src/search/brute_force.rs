@@ -1,9 +1,9 @@
 //! Brute-force f64 oracle of the global search: every slave node against every active facet,
 //! in model coordinates. Independent of the grid; used by tests and benchmarks.
 
+use super::ContactPoint;
 use crate::geometry::{closest_on_facet, V3};
 use crate::model::MasterSurface;
-use crate::search::ContactPoint;
 
 /// The oracle's answer for one slave node.
 #[derive(Clone, Copy, Debug, PartialEq)]

@@ -168,3 +168,7 @@ pub struct PairNode {
     /// End of its adjacent active facets.
     pub adj_end: u32,
 }
+
+/// Words of the fixed-point accumulator per pair node: fx, fy, fz and the bound row, each as a
+/// (low, high) pair (WGSL: `acc`).
+pub const ACC_WORDS_PER_NODE: usize = 8;

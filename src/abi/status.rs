@@ -1,10 +1,72 @@
 //! The status words the kernels raise, in one table: each word's index, what it holds, which
 //! passes own it (and so reset it at the start of their part of an increment) and the value they
 //! reset it to; and [`Status`], the words read back after an increment with typed readers. The
-//! indices are the `STATUS_*` constants of [`crate::search::layout`] (WGSL twins in
+//! indices are the `STATUS_*` constants above (WGSL twins in
 //! `shaders/common.wgsl`).
 
-use crate::search::layout::*;
+/// Status word: the motion since the last global search used up the budget; the local
+/// increment is run again with a global search (WGSL: `STATUS_BUDGET_EXCEEDED`).
+pub const STATUS_BUDGET_EXCEEDED: usize = 2;
+/// Status word: the most local-search iterations any slave took (WGSL: `STATUS_LOCAL_ITERATIONS`).
+pub const STATUS_LOCAL_ITERATIONS: usize = 3;
+/// Status word: bits of the smallest stable increment, a positive f32 (WGSL: `STATUS_DT_STABLE`).
+pub const STATUS_DT_STABLE: usize = 4;
+/// Status word: bits of the smallest approach limit, a positive f32 (WGSL: `STATUS_DT_APPROACH`).
+pub const STATUS_DT_APPROACH: usize = 5;
+/// Status word: slave nodes in contact (WGSL: `STATUS_ACTIVE`).
+pub const STATUS_ACTIVE: usize = 6;
+/// Status word: slave nodes slipping (WGSL: `STATUS_SLIPPING`).
+pub const STATUS_SLIPPING: usize = 7;
+/// Status word: bits of the largest motion since the last global search, a positive f32
+/// (WGSL: `STATUS_MOTION`).
+pub const STATUS_MOTION: usize = 8;
+/// Status word: slaves whose local walk hit the iteration cap (WGSL: `STATUS_LOCAL_CAPPED`).
+pub const STATUS_LOCAL_CAPPED: usize = 9;
+/// Status word: self-contact slaves with unconnected facets within the radius
+/// (WGSL: `STATUS_CROWDED`).
+pub const STATUS_CROWDED: usize = 10;
+/// Status word: a master node left the grid's box (positions on the device): the grid is
+/// refitted and the increment run again (WGSL: `STATUS_FRAME_STALE`).
+pub const STATUS_FRAME_STALE: usize = 11;
+/// Status word: small sliding, slave nodes that slid more than an element length from their
+/// anchor (WGSL: `STATUS_SLID_TOO_FAR`).
+pub const STATUS_SLID_TOO_FAR: usize = 12;
+/// Status word: small sliding, anchors whose tangent plane is more than 10° off the deformed
+/// facet (WGSL: `STATUS_PLANE_OFF`).
+pub const STATUS_PLANE_OFF: usize = 13;
+/// Status word: bits of the largest overclosure (−gap ≥ 0, a non-negative f32) of the penalty
+/// springs carrying force this increment (WGSL: `STATUS_MAX_OVERCLOSURE`).
+pub const STATUS_MAX_OVERCLOSURE: usize = 14;
+/// Status word: slave nodes whose velocity relative to the master near them carries them
+/// farther than the search radius within the increment (the penalty pass; WGSL:
+/// `STATUS_FAST`).
+pub const STATUS_FAST: usize = 15;
+/// Status word: bits of the largest force component magnitude of a penalty spring in contact
+/// this increment (a non-negative f32): the gather's fixed-point force scale
+/// (WGSL: `STATUS_FORCE_SCALE`).
+pub const STATUS_FORCE_SCALE: usize = 16;
+/// Status word: bits of the largest bound share of a penalty spring in contact this increment:
+/// the gather's fixed-point row scale (WGSL: `STATUS_ROW_SCALE`).
+pub const STATUS_ROW_SCALE: usize = 17;
+/// Status word: slaves whose walk of the search tree reached its visit cap (`WALK_VISITS`); the
+/// facets it had not reached were projected in bounded chunks, so the search stayed exact
+/// (WGSL: `STATUS_FALLBACK`).
+pub const STATUS_FALLBACK: usize = 18;
+/// Status word: master facets collapsed at the global search's positions, skipped by the search
+/// (WGSL: `STATUS_COLLAPSED`; counted by tree_refit).
+pub const STATUS_COLLAPSED: usize = 19;
+/// Status words: order-preserving bits (`ordered_bits`) of the box of the master nodes the
+/// increment's positions put the master in, min xyz then max xyz (WGSL: `STATUS_BOX`; raised by
+/// to_local, read by the schedule).
+pub const STATUS_BOX: usize = 20;
+/// Status word: the lowest model node with a NaN or infinite coordinate in the increment's
+/// positions, `u32::MAX` when none (WGSL: `STATUS_NONFINITE`; raised by to_local).
+pub const STATUS_NONFINITE: usize = 26;
+/// Status word: bits of the largest relative motion over the search radius of those slaves, a
+/// positive f32 (WGSL: `STATUS_FAST_RATIO`).
+pub const STATUS_FAST_RATIO: usize = 27;
+/// Number of status words.
+pub const STATUS_WORDS: usize = 28;
 
 /// Which part of an increment resets a status word.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -297,11 +359,11 @@ mod tests {
         for (i, w) in STATUS_TABLE.iter().enumerate() {
             assert_eq!(w.index, i, "{}", w.name);
         }
-        assert_eq!(NO_LIMIT_BITS, crate::penalty::layout::NO_LIMIT.to_bits());
+        assert_eq!(NO_LIMIT_BITS, crate::abi::penalty::NO_LIMIT.to_bits());
         assert_eq!(owned_runs(Owner::Penalty), vec![(4, 4), (14, 4), (27, 1)]);
         let mut s = [7u32; STATUS_WORDS];
         reset(&mut s, Owner::Penalty);
-        assert_eq!(Status(s).dt_stable(), crate::penalty::layout::NO_LIMIT);
+        assert_eq!(Status(s).dt_stable(), crate::abi::penalty::NO_LIMIT);
         assert_eq!(s[STATUS_FALLBACK], 7, "the search's words are left alone");
         reset(&mut s, Owner::Search);
         assert_eq!(s[STATUS_FALLBACK], 0);

@@ -11,6 +11,10 @@ use std::sync::{Arc, Mutex};
 
 use crate::error::{Error, Result};
 
+mod pipelines;
+mod profiler;
+pub(crate) use profiler::{submit, Profiler};
+
 /// A wgpu device with the adapter facts abut reports. Shared by every search on it.
 pub struct GpuContext {
     /// The device.
@@ -27,7 +31,9 @@ pub struct GpuContext {
     pub traffic: Arc<Mutex<Traffic>>,
     /// GPU timestamps around each compute pass, when switched on
     /// ([`Device::enable_timestamps`]) on an adapter with `TIMESTAMP_QUERY`.
-    pub(crate) profiler: Mutex<Option<crate::gpu::Profiler>>,
+    pub(crate) profiler: Mutex<Option<profiler::Profiler>>,
+    /// The compute pipelines compiled on this device, by pass and constants.
+    pub(crate) pipelines: Mutex<pipelines::PipelineCache>,
 }
 
 /// Running totals of what the GPU executors did on one device: compute passes and their
@@ -54,6 +60,11 @@ pub struct Traffic {
     /// GPU time per compute pass, by label, in nanoseconds (timestamp queries; empty unless
     /// [`Device::enable_timestamps`] succeeded).
     pub pass_ns: std::collections::BTreeMap<String, f64>,
+    /// Shader modules compiled (each kernel file at most once per device).
+    pub shader_modules_compiled: u64,
+    /// Compute pipelines compiled (each pass and constants at most once per device, however
+    /// many pairs, contacts and searches use it).
+    pub pipelines_compiled: u64,
 }
 
 /// The entries of `now` that grew since `then`, by how much.
@@ -82,6 +93,8 @@ impl Traffic {
             waits: self.waits - earlier.waits,
             lagged_read_bytes: self.lagged_read_bytes - earlier.lagged_read_bytes,
             pass_ns: map_since(&self.pass_ns, &earlier.pass_ns),
+            shader_modules_compiled: self.shader_modules_compiled - earlier.shader_modules_compiled,
+            pipelines_compiled: self.pipelines_compiled - earlier.pipelines_compiled,
         }
     }
 
@@ -228,6 +241,7 @@ impl Device {
             uncaptured,
             traffic: Arc::default(),
             profiler: Mutex::new(None),
+            pipelines: Mutex::default(),
         }))
     }
 
@@ -273,7 +287,7 @@ impl Device {
             return false;
         }
         if p.is_none() {
-            *p = Some(crate::gpu::Profiler::new(&c.device));
+            *p = Some(Profiler::new(&c.device));
         }
         true
     }
@@ -294,7 +308,7 @@ impl Device {
     pub fn submit(&self, encoder: wgpu::CommandEncoder) -> Result<()> {
         match &self.kind {
             DeviceKind::Gpu(ctx) => {
-                crate::gpu::submit(ctx, encoder);
+                submit(ctx, encoder);
                 Ok(())
             }
             DeviceKind::Cpu => Err(Error::BadParameter {
@@ -480,6 +494,7 @@ impl GpuContext {
             uncaptured,
             traffic: Arc::default(),
             profiler: Mutex::new(None),
+            pipelines: Mutex::default(),
         })
     }
 

@@ -4,7 +4,7 @@
 //! one against naga's reflection of its WGSL (binding numbers, address spaces, access, workgroup
 //! size), so a binding cannot be changed in one place and not in the other.
 
-use crate::search::layout::{ITEM_WORKGROUP, SCAN_BLOCK};
+use crate::abi::search::{ITEM_WORKGROUP, SCAN_BLOCK};
 
 /// A buffer a pass binds, named by what it holds (one of each per search or penalty pair).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
@@ -136,7 +136,7 @@ pub enum Items {
 /// A compute pass: one entry point of one shader file.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct Pass {
-    /// The shader file's stem (`shaders/<stem>.wgsl`, preludes per `gpu::shaders`).
+    /// The shader file's stem (`shaders/<stem>.wgsl`, preludes per `abi::shaders`).
     pub stem: &'static str,
     /// The entry point, also the pass's name in counters and benchmarks.
     pub entry: &'static str,
@@ -170,7 +170,7 @@ pub const TREE_REFIT: Pass = Pass {
         b(6, Status, RW),
     ],
     items: Items::TreeNodes,
-    per_workgroup: crate::search::layout::TREE_WORKGROUP,
+    per_workgroup: crate::abi::search::TREE_WORKGROUP,
 };
 
 const SCAN_BINDINGS: &[Binding] = &[b(0, ScanParams, U), b(1, ScanData, RW)];

@@ -1,0 +1,171 @@
+//! The compute passes of an increment as the executors record them: each [`Group`] is a few
+//! kernel entry points ([`Pass`]es) dispatched together under one label — the key of
+//! `Traffic::dispatches`, the name of a GPU timestamp, and the row of a benchmark. The executors
+//! take their labels from here (never a string of their own), and the benchmarks name the groups
+//! they report by these constants, so a label cannot drift from what an increment records.
+
+use super::passes::*;
+
+/// Dispatches recorded under one label.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Group {
+    /// The label: the key of `Traffic::dispatches` and of the GPU timestamps.
+    pub label: &'static str,
+    /// The passes it may dispatch, in order.
+    pub passes: &'static [&'static Pass],
+}
+
+// ---- the device-resident increment (the plan every increment runs) ----
+
+/// Small sliding: positions into the frame, then each slave's anchor evaluated.
+pub const TO_LOCAL_ANCHOR: Group = Group {
+    label: "to_local + anchor",
+    passes: &[&TO_LOCAL, &ANCHOR],
+};
+/// Positions into the frame, the motion budget, and the schedule's choice of search.
+pub const TO_LOCAL_MOTION_SCHEDULE: Group = Group {
+    label: "to_local + motion + schedule",
+    passes: &[&TO_LOCAL, &MOTION, &SCHEDULE],
+};
+/// The local search (indirect: no workgroups when the schedule chose a global search).
+pub const LOCAL: Group = Group {
+    label: "local_search",
+    passes: &[&LOCAL_SEARCH],
+};
+/// The global search (indirect: no workgroups in a local increment).
+pub const GLOBAL_SEARCH: Group = Group {
+    label: "global search",
+    passes: &[
+        &TREE_REFIT,
+        &WALK_START,
+        &NEAREST_WALK,
+        &SCAN_BLOCKS,
+        &SCAN_ADD,
+        &NEAREST_ARGS,
+        &NEAREST_CHUNKS,
+        &NEAREST_TIES,
+        &NEAREST_CROWDED,
+        &NEAREST_FACET,
+        &SET_REFERENCE,
+    ],
+};
+/// Nodal normals of the master, then the penalty springs.
+pub const NORMALS_PENALTY: Group = Group {
+    label: "nodal_normals + penalty",
+    passes: &[&NODAL_NORMALS, &PENALTY],
+};
+/// The forces summed per pair node in fixed point and added into the caller's buffer.
+pub const SCATTER_GATHER_ADD: Group = Group {
+    label: "scatter_forces + gather + add_forces",
+    passes: &[&SCATTER_FORCES, &GATHER, &ADD_FORCES],
+};
+/// A pair's status words into the increment's statistics.
+pub const STATS_PAIR: Group = Group {
+    label: "pair_stats",
+    passes: &[&PAIR_STATS],
+};
+/// The bound's largest row and the stable increment.
+pub const STATS_FINISH: Group = Group {
+    label: "bound_max + finish_stats",
+    passes: &[&BOUND_MAX, &FINISH_STATS],
+};
+/// A host program's central-difference integrator on the device.
+pub const INTEGRATOR: Group = Group {
+    label: "integrate",
+    passes: &[&INTEGRATE],
+};
+
+// ---- the direct-submit search (`GlobalSearch::step` and the searches that read back) ----
+
+/// Positions from the caller's device buffer into the frame.
+pub const DIRECT_TO_LOCAL: Group = Group {
+    label: "to_local",
+    passes: &[&TO_LOCAL],
+};
+/// Small sliding's anchors evaluated.
+pub const DIRECT_ANCHOR: Group = Group {
+    label: "anchor",
+    passes: &[&ANCHOR],
+};
+/// The motion budget and the local search.
+pub const DIRECT_LOCAL: Group = Group {
+    label: "motion + local_search",
+    passes: &[&MOTION, &LOCAL_SEARCH],
+};
+/// The search tree's boxes refitted.
+pub const DIRECT_TREE_REFIT: Group = Group {
+    label: "tree_refit",
+    passes: &[&TREE_REFIT],
+};
+/// The tree walks and the scan of what they left to the chunks.
+pub const DIRECT_WALK_SCAN: Group = Group {
+    label: "nearest_facet: walk + scan",
+    passes: &[
+        &WALK_START,
+        &NEAREST_WALK,
+        &SCAN_BLOCKS,
+        &SCAN_ADD,
+        &NEAREST_ARGS,
+    ],
+};
+/// The bounded chunks and their ties (indirect).
+pub const DIRECT_CHUNKS: Group = Group {
+    label: "nearest_facet: chunks",
+    passes: &[&NEAREST_CHUNKS, &NEAREST_TIES],
+};
+/// Self-contact's crowding and each slave's hit written.
+pub const DIRECT_NEAREST: Group = Group {
+    label: "nearest_facet",
+    passes: &[&NEAREST_CROWDED, &NEAREST_FACET],
+};
+
+/// Every group, each label once.
+pub const GROUPS: [Group; 16] = [
+    TO_LOCAL_ANCHOR,
+    TO_LOCAL_MOTION_SCHEDULE,
+    LOCAL,
+    GLOBAL_SEARCH,
+    NORMALS_PENALTY,
+    SCATTER_GATHER_ADD,
+    STATS_PAIR,
+    STATS_FINISH,
+    INTEGRATOR,
+    DIRECT_TO_LOCAL,
+    DIRECT_ANCHOR,
+    DIRECT_LOCAL,
+    DIRECT_TREE_REFIT,
+    DIRECT_WALK_SCAN,
+    DIRECT_CHUNKS,
+    DIRECT_NEAREST,
+];
+
+/// The group labelled `label`, if one is declared.
+pub fn by_label(label: &str) -> Option<&'static Group> {
+    GROUPS.iter().find(|g| g.label == label)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn labels_are_unique_and_every_pass_is_in_a_group() {
+        for (i, g) in GROUPS.iter().enumerate() {
+            assert!(
+                GROUPS[..i].iter().all(|h| h.label != g.label),
+                "label '{}' twice",
+                g.label
+            );
+            for p in g.passes {
+                assert!(PASSES.contains(p), "{}: {} undeclared", g.label, p.entry);
+            }
+        }
+        for p in &PASSES {
+            assert!(
+                GROUPS.iter().any(|g| g.passes.contains(&p)),
+                "{} is in no group",
+                p.entry
+            );
+        }
+    }
+}
