@@ -13,7 +13,7 @@ use std::fmt::Write as _;
 use std::time::{Duration, Instant};
 
 use abut::mesh::{plate_triangles, point_cloud};
-use abut::search::brute_force::brute_force;
+use abut::testing::brute_force::brute_force;
 use abut::{Device, GlobalSearch, Model, Pair, PairId, SearchResult, Surface};
 use parry3d::math::Vector as PVec;
 use parry3d::query::PointQuery;

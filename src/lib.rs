@@ -1,11 +1,11 @@
 #![doc = include_str!("../README.md")]
 #![warn(missing_docs)]
 
-pub mod abi;
+pub(crate) mod abi;
 #[cfg(feature = "capi")]
 pub mod capi;
 pub mod contact;
-pub mod cpu;
+pub(crate) mod cpu;
 pub mod device;
 #[cfg(feature = "mpi")]
 pub mod distributed;
@@ -13,20 +13,23 @@ pub mod error;
 #[cfg(feature = "solver")]
 pub mod explicit;
 pub mod geometry;
-pub mod gpu;
+pub(crate) mod gpu;
 #[cfg(feature = "solver")]
 pub mod io;
 pub mod kinematic;
 pub mod mesh;
 pub mod model;
 pub mod partition;
-pub mod penalty;
-pub mod plan;
+pub(crate) mod penalty;
+pub(crate) mod plan;
 pub mod query;
 #[cfg(feature = "solver")]
 pub mod scene;
 pub mod search;
+#[doc(hidden)]
+pub mod testing;
 
+pub use abi::penalty::SlaveState;
 pub use abi::stats::IncrementStats;
 pub use contact::{
     combined_increment, Anchoring, Contact, ContactStatus, FastNode, KinematicReport,
@@ -34,6 +37,7 @@ pub use contact::{
 };
 pub use device::{Backend, Device, Traffic};
 pub use error::{Error, ErrorKind, Result};
+pub use gpu::CentralDifference;
 pub use kinematic::BodyState;
 pub use model::{
     Analytical, BodyId, Enforce, Facet, Friction, Kinematic, Model, NodeRange, NodeSetId, Pair,

@@ -125,7 +125,7 @@ fn searched_like_the_oracle(
     radius: f64,
     name: &str,
 ) -> SearchResult {
-    use abut::search::brute_force::brute_force;
+    use abut::testing::brute_force::brute_force;
     use common::{assert_same_search, tolerance};
     let r = m.add_nodes(slaves, &vec![1.0; slaves.len()]).unwrap();
     let set = m.add_node_set(&r.to_vec()).unwrap();
@@ -211,7 +211,7 @@ fn hundred_thousand_facets_within_the_radius() {
         let per_slave = |r: &SearchResult| -> Vec<u32> {
             r.raw
                 .iter()
-                .map(|h| h.candidates & !abut::abi::search::HIT_BESIDE_FREE_EDGE)
+                .map(|h| h.candidates & !abut::testing::abi::search::HIT_BESIDE_FREE_EDGE)
                 .collect()
         };
         let mut counts = per_slave(&wide);
@@ -303,7 +303,7 @@ fn hundred_thousand_facets_at_one_distance() {
 /// `fold_dispatch` on the host and copied by the schedule, must be valid by construction.
 #[test]
 fn folded_dispatches_stay_within_the_limits() {
-    use abut::abi::search::fold_dispatch;
+    use abut::testing::abi::search::fold_dispatch;
     use proptest::prelude::*;
     let check = |items: u32, per: u32, max: u32| {
         let (x, y) = fold_dispatch(items, per, max);

@@ -6,7 +6,7 @@ mod common;
 
 use abut::mesh::{plate_quads, plate_triangles, point_cloud, polyline};
 use abut::query::{Feature, PointQuery};
-use abut::search::brute_force::brute_force;
+use abut::testing::brute_force::brute_force;
 use abut::{Model, Surface};
 use common::devices;
 

@@ -10,9 +10,9 @@
 
 mod common;
 
-use abut::abi::stats::IncrementStats;
 use abut::explicit::Solver;
 use abut::mesh::plate_quads;
+use abut::IncrementStats;
 use abut::*;
 use common::{devices, node_buffers, read_buffer, vec4};
 

@@ -5,9 +5,9 @@
 
 mod common;
 
-use abut::abi::stats::STATS_BYTES;
 use abut::mesh::plate_quads;
 use abut::model::Schedule;
+use abut::testing::abi::stats::STATS_BYTES;
 use abut::{
     Contact, Device, Enforce, Friction, IncrementStats, Model, Pair, Penalty, ResidentIo,
     Stiffness, Surface,
@@ -375,8 +375,8 @@ fn bounce_scene(n: usize) -> (Model, std::ops::Range<u32>, f64) {
 /// bounce as on the CPU path's mirror of the same program.
 #[test]
 fn resident_increments_neither_read_back_nor_wait() {
-    use abut::abi::integrate::IntegrateParams;
-    use abut::gpu::CentralDifference;
+    use abut::testing::abi::integrate::IntegrateParams;
+    use abut::CentralDifference;
     let (model, range, dt) = bounce_scene(300);
     let n = model.positions().len();
     let steps = 1000;
@@ -409,7 +409,7 @@ fn resident_increments_neither_read_back_nor_wait() {
                 dt,
             )
             .unwrap();
-            abut::cpu::integrate::integrate(&ip, &mut x, &mut v, &mut f, &m32);
+            abut::testing::cpu::integrate::integrate(&ip, &mut x, &mut v, &mut f, &m32);
             active += c.collect_stats().unwrap()[0].active as u64;
         }
         (x, v, active)
@@ -659,16 +659,16 @@ fn pipelines_are_compiled_once_per_device() {
         let once = device.traffic().unwrap().since(&before);
         assert!(
             once.pipelines_compiled > 0
-                && once.pipelines_compiled <= abut::abi::passes::PASSES.len() as u64,
+                && once.pipelines_compiled <= abut::testing::abi::passes::PASSES.len() as u64,
             "{device}: {} pipelines for {} passes",
             once.pipelines_compiled,
-            abut::abi::passes::PASSES.len()
+            abut::testing::abi::passes::PASSES.len()
         );
         assert!(
-            once.shader_modules_compiled <= abut::abi::shaders::KERNELS.len() as u64,
+            once.shader_modules_compiled <= abut::testing::abi::shaders::KERNELS.len() as u64,
             "{device}: {} shader modules for {} kernel files",
             once.shader_modules_compiled,
-            abut::abi::shaders::KERNELS.len()
+            abut::testing::abi::shaders::KERNELS.len()
         );
         let mid = device.traffic().unwrap();
         let mut second = Contact::new(&device, &s.model).unwrap();
@@ -685,7 +685,7 @@ fn pipelines_are_compiled_once_per_device() {
         // every pass the increments recorded is a declared group (the benchmarks' rows)
         for label in device.traffic().unwrap().dispatches.keys() {
             assert!(
-                abut::abi::groups::by_label(label).is_some(),
+                abut::testing::abi::groups::by_label(label).is_some(),
                 "{device}: pass '{label}' is declared by no group"
             );
         }

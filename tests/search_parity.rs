@@ -4,8 +4,8 @@
 
 mod common;
 
-use abut::abi::boxes;
 use abut::mesh::{plate_quads, plate_triangles, point_cloud, polyline, sphere_triangles};
+use abut::testing::abi::boxes;
 use abut::{Device, Error, Facet, GlobalSearch, Model, PairId, Surface};
 use common::*;
 
@@ -203,7 +203,7 @@ fn ties_on_shared_edges_and_vertices() {
         let nodes: Vec<u32> = (0..slaves.len() as u32)
             .map(|i| i + positions.len() as u32)
             .collect();
-        let oracle = abut::search::brute_force::brute_force(master, m.positions(), &nodes, 0.3);
+        let oracle = abut::testing::brute_force::brute_force(master, m.positions(), &nodes, 0.3);
         let mut devices = vec![Device::cpu()];
         devices.extend(gpus().iter().cloned());
         for d in &devices {

@@ -259,7 +259,7 @@ fn facet_sizes_varying_a_hundredfold() {
             let mut counts: Vec<u32> = r
                 .raw
                 .iter()
-                .map(|h| h.candidates & !abut::abi::search::HIT_BESIDE_FREE_EDGE)
+                .map(|h| h.candidates & !abut::testing::abi::search::HIT_BESIDE_FREE_EDGE)
                 .collect();
             counts.sort_unstable();
             medians.push(counts[counts.len() / 2]);
@@ -280,9 +280,9 @@ fn facet_sizes_varying_a_hundredfold() {
 /// CPU path and every adapter, the adapters bit for bit with the CPU mirror.
 #[test]
 fn box_bounds_beyond_the_box_grid_act_as_infinite() {
-    use abut::cpu::CpuSearch;
     use abut::device::DeviceKind;
-    use abut::gpu::GpuSearch;
+    use abut::testing::cpu::CpuSearch;
+    use abut::testing::gpu::GpuSearch;
     let facet = 1.0 / 8.0;
     let (m, p) = plate_scene(facet, [0.0; 3]);
     let search = GlobalSearch::new(&Device::cpu(), &m, p).unwrap();
@@ -291,7 +291,7 @@ fn box_bounds_beyond_the_box_grid_act_as_infinite() {
     tiny.params.box_margin *= 2f32.powi(-24);
     let reference = CpuSearch::default().run(&fitted).unwrap();
     let cpu = CpuSearch::default().run(&tiny).unwrap();
-    let same = |a: &abut::abi::search::GpuHit, b: &abut::abi::search::GpuHit| {
+    let same = |a: &abut::testing::abi::search::GpuHit, b: &abut::testing::abi::search::GpuHit| {
         a.facet == b.facet
             && a.node == b.node
             && a.point_gap.map(f32::to_bits) == b.point_gap.map(f32::to_bits)
@@ -300,7 +300,7 @@ fn box_bounds_beyond_the_box_grid_act_as_infinite() {
     };
     let found = reference.iter().filter(|h| h.facet != u32::MAX).count();
     assert!(found > 100, "too few contacts to be a test: {found}");
-    let candidates = |h: &[abut::abi::search::GpuHit]| -> u64 {
+    let candidates = |h: &[abut::testing::abi::search::GpuHit]| -> u64 {
         h.iter().map(|h| (h.candidates & 0x7fff_ffff) as u64).sum()
     };
     assert!(

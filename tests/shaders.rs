@@ -2,12 +2,12 @@
 //! has its CPU mirror, and agrees with its Rust twins on constants and struct sizes. Runs
 //! without an adapter, so a shader error fails CI on any machine.
 
-use abut::abi::search::{
+use abut::testing::abi::search::{
     GpuHit, ScanParams, SearchParams, TreeParams, EMPTY_LO, ITEM_WORKGROUP, NO_FACET, SCAN_BLOCK,
     TREE_WORKGROUP,
 };
-use abut::abi::shaders::{source, COMMON, KERNELS};
-use abut::abi::status::{STATUS_COLLAPSED, STATUS_FALLBACK};
+use abut::testing::abi::shaders::{source, COMMON, KERNELS};
+use abut::testing::abi::status::{STATUS_COLLAPSED, STATUS_FALLBACK};
 
 fn parse(stem: &str) -> naga::Module {
     parse_with_info(stem).0
@@ -131,17 +131,17 @@ fn wgsl_twins_match_rust() {
     assert_eq!(constant_u32(&m, "NO_FACET"), NO_FACET);
     assert_eq!(
         constant_u32(&m, "HIT_BESIDE_FREE_EDGE"),
-        abut::abi::search::HIT_BESIDE_FREE_EDGE
+        abut::testing::abi::search::HIT_BESIDE_FREE_EDGE
     );
     assert_eq!(constant_u32(&m, "NO_NODE"), abut::model::NO_NODE);
     // the free-edge extension zone and the penalty's heavy-share cut, f32 twins
     assert_eq!(
         constant_f32(&m, "EXTENSION_ZONE"),
-        abut::cpu::common::EXTENSION_ZONE
+        abut::testing::cpu::common::EXTENSION_ZONE
     );
     assert_eq!(
         constant_f32(&parse("penalty"), "HEAVY_SHARE"),
-        abut::abi::penalty::HEAVY_SHARE
+        abut::testing::abi::penalty::HEAVY_SHARE
     );
     assert_eq!(
         constant_u32(&m, "QUAD_ITERATIONS"),
@@ -153,28 +153,34 @@ fn wgsl_twins_match_rust() {
     );
     assert_eq!(
         constant_u32(&m, "CANDIDATE_CHUNK"),
-        abut::cpu::nearest_facet::CANDIDATE_CHUNK
+        abut::testing::cpu::nearest_facet::CANDIDATE_CHUNK
     );
     assert_eq!(
         constant_u32(&m, "WALK_VISITS"),
-        abut::cpu::nearest_facet::WALK_VISITS
+        abut::testing::cpu::nearest_facet::WALK_VISITS
     );
     assert_eq!(
         constant_u32(&m, "BEST_WORDS") as usize,
-        abut::abi::search::BEST_WORDS
+        abut::testing::abi::search::BEST_WORDS
     );
     assert!(source("nearest_facet").unwrap().contains(&format!(
         "PRUNE_SLACK: f32 = {:?}",
-        abut::cpu::nearest_facet::PRUNE_SLACK
+        abut::testing::cpu::nearest_facet::PRUNE_SLACK
     )));
     let t = parse("tree");
     assert_eq!(constant_u32(&t, "TREE_WORKGROUP"), TREE_WORKGROUP);
     // the packed boxes' codes and the walks' groups
-    assert_eq!(constant_u32(&t, "BOX_TOP"), abut::abi::boxes::BOX_TOP);
-    assert_eq!(constant_f32(&t, "BOX_BIAS"), abut::abi::boxes::BOX_BIAS);
+    assert_eq!(
+        constant_u32(&t, "BOX_TOP"),
+        abut::testing::abi::boxes::BOX_TOP
+    );
+    assert_eq!(
+        constant_f32(&t, "BOX_BIAS"),
+        abut::testing::abi::boxes::BOX_BIAS
+    );
     assert_eq!(
         constant_u32(&parse("nearest_facet"), "WALK_GROUP"),
-        abut::abi::search::WALK_GROUP
+        abut::testing::abi::search::WALK_GROUP
     );
     assert_eq!(
         constant_u32(&t, "STATUS_COLLAPSED") as usize,
@@ -187,12 +193,18 @@ fn wgsl_twins_match_rust() {
     assert!(COMMON.contains(&format!("EMPTY_LO: f32 = {EMPTY_LO:.1e}")));
     assert_eq!(
         constant_u32(&m, "STATUS_CROWDED") as usize,
-        abut::abi::status::STATUS_CROWDED
+        abut::testing::abi::status::STATUS_CROWDED
     );
     let g = parse("gather");
     for (name, word) in [
-        ("STATUS_FORCE_SCALE", abut::abi::status::STATUS_FORCE_SCALE),
-        ("STATUS_ROW_SCALE", abut::abi::status::STATUS_ROW_SCALE),
+        (
+            "STATUS_FORCE_SCALE",
+            abut::testing::abi::status::STATUS_FORCE_SCALE,
+        ),
+        (
+            "STATUS_ROW_SCALE",
+            abut::testing::abi::status::STATUS_ROW_SCALE,
+        ),
     ] {
         assert_eq!(constant_u32(&g, name) as usize, word, "{name}");
     }
@@ -203,7 +215,7 @@ fn wgsl_twins_match_rust() {
         .expect("FIXED_BITS in gather.wgsl");
     assert!(matches!(
         g.global_expressions[bits.init],
-        naga::Expression::Literal(naga::Literal::I32(v)) if v == abut::cpu::gather::FIXED_BITS
+        naga::Expression::Literal(naga::Literal::I32(v)) if v == abut::testing::cpu::gather::FIXED_BITS
     ));
     assert_eq!(
         struct_size(&m, "SearchParams") as usize,
@@ -230,7 +242,7 @@ fn wgsl_twins_match_rust() {
 /// integrator's parameters; and the plan's params sit where a uniform binding may start.
 #[test]
 fn resident_twins_match_rust() {
-    use abut::abi::search as l;
+    use abut::testing::abi::search as l;
     let m = parse("schedule");
     for (name, v) in [
         ("PLAN_SINCE_GLOBAL", l::PLAN_SINCE_GLOBAL),
@@ -246,15 +258,24 @@ fn resident_twins_match_rust() {
         ("PLAN_SLOTS", l::PLAN_SLOTS),
         ("PLAN_SLOT_WORDS", l::PLAN_SLOT_WORDS),
         ("MAX_PLAN_SLOTS", l::MAX_PLAN_SLOTS),
-        ("STATUS_BOX", abut::abi::status::STATUS_BOX),
-        ("STATUS_NONFINITE", abut::abi::status::STATUS_NONFINITE),
-        ("STATUS_FALLBACK", abut::abi::status::STATUS_FALLBACK),
+        ("STATUS_BOX", abut::testing::abi::status::STATUS_BOX),
+        (
+            "STATUS_NONFINITE",
+            abut::testing::abi::status::STATUS_NONFINITE,
+        ),
+        (
+            "STATUS_FALLBACK",
+            abut::testing::abi::status::STATUS_FALLBACK,
+        ),
         (
             "STATUS_BUDGET_EXCEEDED",
-            abut::abi::status::STATUS_BUDGET_EXCEEDED,
+            abut::testing::abi::status::STATUS_BUDGET_EXCEEDED,
         ),
-        ("STATUS_FAST", abut::abi::status::STATUS_FAST),
-        ("STATUS_FAST_RATIO", abut::abi::status::STATUS_FAST_RATIO),
+        ("STATUS_FAST", abut::testing::abi::status::STATUS_FAST),
+        (
+            "STATUS_FAST_RATIO",
+            abut::testing::abi::status::STATUS_FAST_RATIO,
+        ),
     ] {
         assert_eq!(constant_u32(&m, name) as usize, v, "{name}");
     }
@@ -276,22 +297,22 @@ fn resident_twins_match_rust() {
     let st = parse("stats");
     assert_eq!(
         constant_u32(&st, "STAT_INCREMENT") as usize,
-        abut::abi::stats::STATS_WORDS - 1
+        abut::testing::abi::stats::STATS_WORDS - 1
     );
     assert_eq!(
-        std::mem::size_of::<abut::abi::stats::IncrementStats>(),
-        abut::abi::stats::STATS_WORDS * 4
+        std::mem::size_of::<abut::IncrementStats>(),
+        abut::testing::abi::stats::STATS_WORDS * 4
     );
     assert_eq!(constant_u32(&st, "STAT_FAST") as usize, 14);
     assert_eq!(constant_u32(&st, "STAT_FAST_RATIO") as usize, 15);
     assert_eq!(
         constant_u32(&st, "STAT_DAMPING") as usize,
-        abut::abi::stats::STATS_RESET_WORDS
+        abut::testing::abi::stats::STATS_RESET_WORDS
     );
     let i = parse("integrate");
     assert_eq!(
         struct_size(&i, "IntegrateParams") as usize,
-        std::mem::size_of::<abut::abi::integrate::IntegrateParams>()
+        std::mem::size_of::<abut::testing::abi::integrate::IntegrateParams>()
     );
     // ordered bits order as the floats, and invert
     let xs = [-1e30f32, -2.5, -0.0, 0.0, 1e-30, 3.0, f32::MAX];
@@ -308,7 +329,7 @@ fn resident_twins_match_rust() {
 
 #[test]
 fn penalty_twins_match_rust() {
-    use abut::abi::penalty::*;
+    use abut::testing::abi::penalty::*;
     let m = parse("penalty");
     assert_eq!(
         struct_size(&m, "PenaltyParams") as usize,
@@ -335,14 +356,20 @@ fn penalty_twins_match_rust() {
         ("STIFFNESS_ABSOLUTE", STIFFNESS_ABSOLUTE),
         (
             "STATUS_DT_STABLE",
-            abut::abi::status::STATUS_DT_STABLE as u32,
+            abut::testing::abi::status::STATUS_DT_STABLE as u32,
         ),
         (
             "STATUS_DT_APPROACH",
-            abut::abi::status::STATUS_DT_APPROACH as u32,
+            abut::testing::abi::status::STATUS_DT_APPROACH as u32,
         ),
-        ("STATUS_ACTIVE", abut::abi::status::STATUS_ACTIVE as u32),
-        ("STATUS_SLIPPING", abut::abi::status::STATUS_SLIPPING as u32),
+        (
+            "STATUS_ACTIVE",
+            abut::testing::abi::status::STATUS_ACTIVE as u32,
+        ),
+        (
+            "STATUS_SLIPPING",
+            abut::testing::abi::status::STATUS_SLIPPING as u32,
+        ),
     ] {
         assert_eq!(constant_u32(&m, name), v, "{name}");
     }
@@ -364,12 +391,12 @@ fn penalty_twins_match_rust() {
     );
 }
 
-/// Every declared pass (`abut::abi::passes`) matches its WGSL entry point as naga reflects it: the same
+/// Every declared pass (`abut::testing::abi::passes`) matches its WGSL entry point as naga reflects it: the same
 /// bindings (numbers, uniform or storage, read or read-write) and nothing else used, and a
 /// workgroup covering the declared items; and every entry point of every kernel is declared.
 #[test]
 fn pass_declarations_match_the_shaders() {
-    use abut::abi::passes::{Access, Items, PASSES};
+    use abut::testing::abi::passes::{Access, Items, PASSES};
     for pass in &PASSES {
         let what = format!("{}::{}", pass.stem, pass.entry);
         let (m, info) = parse_with_info(pass.stem);
@@ -419,7 +446,7 @@ fn pass_declarations_match_the_shaders() {
         for ep in &m.entry_points {
             assert!(
                 PASSES.iter().any(|p| p.stem == stem && p.entry == ep.name),
-                "{stem}::{} is not declared in abut::abi::passes",
+                "{stem}::{} is not declared in abut::testing::abi::passes",
                 ep.name
             );
         }

@@ -448,7 +448,7 @@ fn local_search_parity_and_determinism() {
         x
     };
     for schedule in [schedule(100), wide(100)] {
-        let run = |d: &Device| -> Vec<Vec<abut::abi::search::GpuHit>> {
+        let run = |d: &Device| -> Vec<Vec<abut::testing::abi::search::GpuHit>> {
             let mut s = GlobalSearch::new(d, &m, p).unwrap();
             s.set_schedule(schedule).unwrap();
             (0..60)

@@ -552,8 +552,3 @@ pub const PASSES: [Pass; 25] = [
     FINISH_STATS,
     INTEGRATE,
 ];
-
-/// The pass whose entry point is `entry`, if declared.
-pub fn by_entry(entry: &str) -> Option<&'static Pass> {
-    PASSES.iter().find(|p| p.entry == entry)
-}

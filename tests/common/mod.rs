@@ -8,7 +8,7 @@ pub mod capi;
 
 use abut::geometry::{closest_on_facet, V3};
 use abut::model::MasterSurface;
-use abut::search::brute_force::{brute_force, OracleHit};
+use abut::testing::brute_force::{brute_force, OracleHit};
 use abut::{Device, GlobalSearch, Model, Pair, PairId, SearchResult};
 
 /// The CPU path and every GPU adapter ([`gpus`]): the devices a test runs on.

@@ -156,7 +156,7 @@ fn run(
 fn the_reported_increment_is_exact_at_nodes_edges_and_facet_centres() {
     let devices: Vec<Device> = [Device::cpu()]
         .into_iter()
-        .chain(super::gpus().iter().cloned())
+        .chain(crate::common::gpus().iter().cloned())
         .collect();
     // plate nodes: (i, j) at 4·j + i; a node, an edge midpoint and a facet centre, all off
     // the plate's centre (so that the rigid plate turns)

@@ -9,7 +9,7 @@ mod common;
 
 use abut::mesh::plate_quads;
 use abut::*;
-use common::{devices, gpus};
+use common::devices;
 
 /// A rigid-like plate of 4 × 2 quads on [-1, 1]² (z = 0), slave point masses at `slaves`, one
 /// pair with search radius `radius` enforced by `enforce`, with Coulomb `mu` (0: none).

@@ -126,7 +126,7 @@ fn a_rigid_sled_slides_to_a_stop_on_inclines_at_default_settings() {
     let cases = [(0.0, 1.0), (10.0, 1.0), (20.0, 1.0), (25.0, 1.0)]
         .map(|(t, v)| (Device::cpu(), t, v))
         .into_iter()
-        .chain(super::gpus().iter().map(|g| (g.clone(), 0.0, 0.5)));
+        .chain(crate::common::gpus().iter().map(|g| (g.clone(), 0.0, 0.5)));
     for (d, theta, v0) in cases {
         let s = slide(&d, theta, 0.5, v0, None);
         assert!(

@@ -1,4 +1,3 @@
-
 use abut::scene::{run, Scene};
 use abut::{Device, Error};
 
@@ -235,7 +234,7 @@ fn default_penalty_follows_bar_impacts_within_two_increments_and_two_percent() {
     ];
     for d in [Device::cpu()]
         .into_iter()
-        .chain(super::gpus().iter().cloned())
+        .chain(crate::common::gpus().iter().cloned())
     {
         for &(n, l, a, e, rho, v, gap, two) in &cases {
             let sc = scene(&bars(n, l, a, e, rho, v, gap, two));
@@ -585,7 +584,7 @@ fn slaves_at_and_around_free_edges_and_corners_gain_no_energy() {
     let offsets = [0.0, 1e-6, 0.03, 0.095, 0.099, 0.101, 0.11, 0.2];
     let devices: Vec<Device> = [Device::cpu()]
         .into_iter()
-        .chain(super::gpus().iter().cloned())
+        .chain(crate::common::gpus().iter().cloned())
         .collect();
     for (d, enforce) in devices
         .iter()

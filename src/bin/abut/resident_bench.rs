@@ -10,8 +10,8 @@
 use std::fmt::Write as _;
 use std::time::Instant;
 
-use abut::abi::groups::{self, Group};
-use abut::gpu::CentralDifference;
+use abut::testing::abi::groups::{self, Group};
+use abut::CentralDifference;
 use abut::{Contact, Device, ResidentIo};
 
 use crate::bench::{copy_bandwidth, io_err, machine, scene, BenchArgs, Config};

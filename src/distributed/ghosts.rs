@@ -1,0 +1,204 @@
+//! The ghosts of a rank: the motion budget of its slave region, the master nodes of other ranks
+//! inside it (chosen at each distributed global search), and the rank's local model and contact
+//! rebuilt from its own and its ghost nodes.
+
+use super::*;
+
+impl DistributedContact {
+    /// The motion budget: how far any node may move between distributed global searches (half
+    /// the smallest search radius).
+    pub(super) fn budget(&self) -> f64 {
+        0.5 * self
+            .pairs
+            .iter()
+            .map(|p| p.radius)
+            .fold(f64::INFINITY, f64::min)
+    }
+
+    /// The longest edge of this rank's local facets (at own positions `x` and the last
+    /// increment's ghost positions) and of the facets all of whose nodes it owns. A facet cut
+    /// between ranks and near no rank's slaves is not measured: one that stretches beyond twice
+    /// the margin before it comes near a slave can still be missed.
+    pub(super) fn longest_local_edge(&self, x: &[[f64; 3]]) -> f64 {
+        let n_own = x.len();
+        let at = |i: u32| -> Option<[f64; 3]> {
+            let i = i as usize;
+            if i < n_own {
+                Some(x[i])
+            } else {
+                self.ghost_x.get(i - n_own).copied()
+            }
+        };
+        let mut longest = 0.0f64;
+        for f in self.local_facets.iter().chain(&self.own_facets) {
+            let m = if f[3] == u32::MAX { 3 } else { 4 };
+            for j in 0..m {
+                if let (Some(a), Some(b)) = (at(f[j]), at(f[(j + 1) % m])) {
+                    let d = (0..3).map(|c| (a[c] - b[c]).powi(2)).sum::<f64>().sqrt();
+                    longest = longest.max(d);
+                }
+            }
+        }
+        longest
+    }
+
+    /// New ghosts for own positions `x`: the send lists, the ghosts' ids and masses. Returns
+    /// the ghosts' global ids (by source rank, then in the order sent) and the bytes sent.
+    pub(super) fn choose_ghosts(&mut self, x: &[[f64; 3]]) -> (Vec<u64>, usize) {
+        let size = self.comm.size() as usize;
+        let grow = self.pairs.iter().map(|p| p.radius).fold(0.0f64, f64::max)
+            + 2.0 * self.budget()
+            + 2.0 * self.h_max;
+        // this rank's slave region (none: an inverted box, which contains nothing)
+        let mut region = [
+            f64::INFINITY,
+            f64::INFINITY,
+            f64::INFINITY,
+            f64::NEG_INFINITY,
+            f64::NEG_INFINITY,
+            f64::NEG_INFINITY,
+        ];
+        for p in &self.pairs {
+            for &s in &p.slaves {
+                for a in 0..3 {
+                    region[a] = region[a].min(x[s][a] - grow);
+                    region[3 + a] = region[3 + a].max(x[s][a] + grow);
+                }
+            }
+        }
+        let (regions, _) = all_gather(&self.comm, &region);
+        let me = self.comm.rank() as usize;
+        self.send = vec![Vec::new(); size];
+        for r in (0..size).filter(|&r| r != me) {
+            let b = &regions[6 * r..6 * r + 6];
+            for &i in &self.master_nodes {
+                if (0..3).all(|a| x[i][a] >= b[a] && x[i][a] <= b[3 + a]) {
+                    self.send[r].push(i);
+                }
+            }
+        }
+        let ids_out: Vec<Vec<u64>> = self
+            .send
+            .iter()
+            .map(|l| l.iter().map(|&i| self.ids[i]).collect())
+            .collect();
+        let mass_out: Vec<Vec<f64>> = self
+            .send
+            .iter()
+            .map(|l| l.iter().map(|&i| self.masses[i]).collect())
+            .collect();
+        let ids_in = exchange(&self.comm, &ids_out);
+        let mass_in = exchange(&self.comm, &mass_out);
+        self.recv = ids_in.iter().map(Vec::len).collect();
+        self.ghost_masses = mass_in.into_iter().flatten().collect();
+        let sent: usize = self.send.iter().map(Vec::len).sum();
+        (ids_in.into_iter().flatten().collect(), 16 * sent + 48)
+    }
+
+    /// The local model of own nodes at `x` and ghosts at `gx` (global ids `ghost_ids`), and its
+    /// contact (none when this rank has no slave near any facet).
+    pub(super) fn build_local(
+        &mut self,
+        x: &[[f64; 3]],
+        gx: &[[f64; 3]],
+        ghost_ids: &[u64],
+    ) -> Result<()> {
+        let n_own = self.ids.len();
+        let mut local_of: HashMap<u64, u32> = HashMap::with_capacity(n_own + ghost_ids.len());
+        for (&g, &i) in &self.index {
+            local_of.insert(g, i as u32);
+        }
+        for (k, &g) in ghost_ids.iter().enumerate() {
+            local_of.insert(g, (n_own + k) as u32);
+        }
+        let mut model = Model::new_3d();
+        let positions: Vec<[f64; 3]> = x.iter().chain(gx).copied().collect();
+        let masses: Vec<f64> = self
+            .masses
+            .iter()
+            .chain(&self.ghost_masses)
+            .copied()
+            .collect();
+        model.add_nodes(&positions, &masses)?;
+        // the friction each slave carries, from the contact being replaced (same slaves, same
+        // order: a slave never changes rank)
+        let mut carried = Vec::with_capacity(self.pairs.len());
+        for p in &self.pairs {
+            carried.push(match (self.contact.as_ref(), p.local) {
+                (Some(c), Some(id)) => Some(c.penalty_states(id)?),
+                _ => None,
+            });
+        }
+        let mut any = false;
+        let mut local_facets = Vec::new();
+        for p in self.pairs.iter_mut() {
+            p.local = None;
+            if p.slaves.is_empty() {
+                continue;
+            }
+            let facets: Vec<Facet> = p
+                .facets
+                .iter()
+                .filter_map(|f| {
+                    let m = if f[3] == NO_GLOBAL_NODE { 3 } else { 4 };
+                    let mut l = [0u32; 4];
+                    for j in 0..m {
+                        l[j] = *local_of.get(&f[j])?;
+                    }
+                    Some(if m == 3 {
+                        Facet::Triangle([l[0], l[1], l[2]])
+                    } else {
+                        Facet::Quad(l)
+                    })
+                })
+                .collect();
+            if facets.is_empty() {
+                continue;
+            }
+            local_facets.extend(facets.iter().map(|f| {
+                let n = f.nodes();
+                [n[0], n[1], n[2], n.get(3).copied().unwrap_or(u32::MAX)]
+            }));
+            let surf = model.add_surface(Surface::from_facets(facets.clone()))?;
+            let slaves: Vec<u32> = p.slaves.iter().map(|&s| s as u32).collect();
+            let set = model.add_node_set_with_areas(&slaves, &p.areas)?;
+            // the single process's schedule: its interval, the defaults otherwise
+            let on_surface: std::collections::HashSet<u32> =
+                facets.iter().flat_map(|f| f.nodes().to_vec()).collect();
+            let self_contact = slaves.iter().any(|s| on_surface.contains(s));
+            let schedule = Schedule {
+                interval: p.interval,
+                ..Schedule::default_for(self_contact)
+            };
+            p.local = Some(
+                model.add_pair(
+                    Pair::new(set, surf)
+                        .schedule(schedule)
+                        .search_radius(p.radius)
+                        .enforce(Enforce::Penalty(p.penalty.clone()))
+                        .friction(p.friction.clone())
+                        .pass_weight(p.weight),
+                )?,
+            );
+            any = true;
+        }
+        self.contact = if any {
+            let mut c = Contact::new(&self.device, &model)?;
+            c.request_outputs(self.outputs);
+            if let Some(dt) = self.dt_ref {
+                c.set_reference_increment(dt)?;
+            }
+            for (p, states) in self.pairs.iter().zip(carried) {
+                if let (Some(id), Some(s)) = (p.local, states) {
+                    c.set_penalty_states(id, &s)?;
+                }
+            }
+            Some(c)
+        } else {
+            None
+        };
+        self.anchor = positions;
+        self.local_facets = local_facets;
+        Ok(())
+    }
+}

@@ -1,0 +1,208 @@
+//! One distributed increment: ghosts' positions and velocities to their holders, each rank's
+//! contact on its own device, the ghosts' forces back to their owners added in rank order, and the
+//! agreement over ranks (faults, stable increment, counts).
+
+use super::*;
+
+impl DistributedContact {
+    /// One increment: own nodes at `x` moving at `v` (in [`RankModel::ids`] order), increment
+    /// `dt`. Collective: every rank calls it in the same increment with the same `dt`.
+    pub fn step(&mut self, x: &[[f64; 3]], v: &[[f64; 3]], dt: f64) -> Result<&DistributedStep> {
+        let n_own = self.ids.len();
+        // faults are agreed on, never returned by one rank alone (the others would wait in the
+        // next exchange for ever)
+        let mut fault = None;
+        if x.len() != n_own || v.len() != n_own {
+            fault = Some(Error::LengthMismatch {
+                what: "positions and velocities of the owned nodes",
+                expected: n_own,
+                got: x.len().min(v.len()),
+            });
+        } else if let Some((node, axis, value)) = (0..n_own)
+            .flat_map(|i| (0..3).map(move |a| (i, a)))
+            .map(|(i, a)| {
+                (
+                    i,
+                    a,
+                    if x[i][a].is_finite() {
+                        v[i][a]
+                    } else {
+                        x[i][a]
+                    },
+                )
+            })
+            .find(|t| !t.2.is_finite())
+        {
+            fault = Some(Error::NonFiniteCoordinate { node, axis, value });
+        }
+        agree(&self.comm, fault)?;
+        let mut fault = None;
+        if self.dt_ref.is_none() {
+            // the automatic stiffness' reference: the first increment, on every rank
+            self.dt_ref = Some(all_min(&self.comm, dt));
+        }
+        // a distributed global search: first, at the interval, or when any node has used up
+        // the motion budget (agreed: the largest motion over all ranks)
+        let moved = if self.started {
+            x.iter()
+                .zip(&self.anchor)
+                .map(|(p, q)| (0..3).map(|a| (p[a] - q[a]).powi(2)).sum::<f64>().sqrt())
+                .fold(0.0f64, f64::max)
+        } else {
+            0.0
+        };
+        let interval = self
+            .pairs
+            .iter()
+            .map(|p| p.interval)
+            .min()
+            .unwrap_or(u32::MAX);
+        let global = !self.started
+            || self.since_search >= interval
+            || all_max(&self.comm, moved) > self.budget();
+        let mut bytes = 0;
+        let mut ghost_ids = Vec::new();
+        if global {
+            // facets that stretched since the start widen the ghost margin (never narrowed)
+            let longest = all_max(&self.comm, self.longest_local_edge(x));
+            self.h_max = self.h_max.max(longest);
+            let (ids, b) = self.choose_ghosts(x);
+            ghost_ids = ids;
+            bytes += b;
+            self.since_search = 0;
+            self.searches += 1;
+        }
+        self.since_search += 1;
+        // the ghosts' state from their owners
+        let state_out: Vec<Vec<f64>> = self
+            .send
+            .iter()
+            .map(|l| {
+                l.iter()
+                    .flat_map(|&i| [x[i][0], x[i][1], x[i][2], v[i][0], v[i][1], v[i][2]])
+                    .collect()
+            })
+            .collect();
+        bytes += 8 * state_out.iter().map(Vec::len).sum::<usize>();
+        let state_in: Vec<f64> = exchange(&self.comm, &state_out)
+            .into_iter()
+            .flatten()
+            .collect();
+        let gx: Vec<[f64; 3]> = state_in
+            .chunks_exact(6)
+            .map(|c| [c[0], c[1], c[2]])
+            .collect();
+        let gv: Vec<[f64; 3]> = state_in
+            .chunks_exact(6)
+            .map(|c| [c[3], c[4], c[5]])
+            .collect();
+        self.ghost_x.clone_from(&gx);
+        if global {
+            if self.started && ghost_ids == self.ghost_ids {
+                // the same ghosts, so the same local model: the local contact goes on (its
+                // search state, grid frame and friction untouched)
+                self.anchor = x.to_vec();
+            } else {
+                if let Err(e) = self.build_local(x, &gx, &ghost_ids) {
+                    self.contact = None;
+                    fault = Some(e);
+                }
+                self.ghost_ids = ghost_ids;
+                self.rebuilds += 1;
+            }
+            // the anchor of the motion budget: own positions now
+            self.anchor.truncate(n_own);
+            self.started = true;
+        }
+        let mut forces = vec![[0.0; 3]; n_own];
+        let (mut stable, mut over, mut active) = (f64::INFINITY, 0.0f64, 0usize);
+        let mut ghost_forces = vec![[0.0; 3]; gx.len()];
+        // the fastest pair node here: (distance / radius, global id, pair, distance, radius)
+        let mut fast = (0usize, [-1.0, 0.0, 0.0, 0.0, 0.0]);
+        if let Some(c) = self.contact.as_mut() {
+            let lx: Vec<[f64; 3]> = x.iter().chain(&gx).copied().collect();
+            let lv: Vec<[f64; 3]> = v.iter().chain(&gv).copied().collect();
+            match c.penalty_step(&lx, &lv, dt) {
+                Ok(r) => {
+                    forces.copy_from_slice(&r.forces[..n_own]);
+                    ghost_forces.copy_from_slice(&r.forces[n_own..]);
+                    stable = r.stable_dt;
+                    over = r.max_overclosure;
+                    active = r.active;
+                    let rep = c.report();
+                    if let Some(f) = rep.fastest {
+                        let node = if f.node < n_own {
+                            self.ids[f.node]
+                        } else {
+                            self.ghost_ids[f.node - n_own]
+                        };
+                        let pair = self
+                            .pairs
+                            .iter()
+                            .find(|p| p.local == Some(f.pair))
+                            .map_or(0, |p| p.of.0);
+                        fast = (
+                            rep.fast_nodes,
+                            [
+                                f.distance / f.radius,
+                                node as f64,
+                                pair as f64,
+                                f.distance,
+                                f.radius,
+                            ],
+                        );
+                    }
+                }
+                Err(e) => fault = Some(e),
+            }
+        }
+        // ghosts' forces back to their owners, added there in rank order
+        let mut back: Vec<Vec<f64>> = Vec::with_capacity(self.recv.len());
+        let mut at = 0;
+        for &count in &self.recv {
+            back.push(
+                ghost_forces[at..at + count]
+                    .iter()
+                    .flat_map(|f| f.iter().copied())
+                    .collect(),
+            );
+            at += count;
+        }
+        bytes += 8 * back.iter().map(Vec::len).sum::<usize>();
+        let came = exchange(&self.comm, &back);
+        for (q, list) in self.send.iter().enumerate() {
+            for (k, &i) in list.iter().enumerate() {
+                for a in 0..3 {
+                    forces[i][a] += came[q][3 * k + a];
+                }
+            }
+        }
+        agree(&self.comm, fault)?;
+        let (all_fast, _) = all_gather(&self.comm, &fast.1);
+        let fastest = all_fast
+            .chunks_exact(5)
+            .filter(|f| f[0] > 1.0)
+            .fold(None::<&[f64]>, |best, f| match best {
+                Some(b) if b[0] >= f[0] => Some(b),
+                _ => Some(f),
+            })
+            .map(|f| FastGlobalNode {
+                node: f[1] as u64,
+                pair: f[2] as usize,
+                distance: f[3],
+                radius: f[4],
+            });
+        self.last = DistributedStep {
+            forces,
+            stable_dt: all_min(&self.comm, stable),
+            max_overclosure: all_max(&self.comm, over),
+            active: all_sum(&self.comm, active as u64) as usize,
+            global_search: global,
+            bytes_sent: bytes,
+            ghosts: gx.len(),
+            fast_nodes: all_sum(&self.comm, fast.0 as u64) as usize,
+            fastest,
+        };
+        Ok(&self.last)
+    }
+}

@@ -1,0 +1,114 @@
+//! What the solver says when a run goes wrong: the blow-up hint naming the node, the increment and
+//! the contact overclosure behind it, the increment hint, and the divergence check.
+
+use super::*;
+
+impl Solver {
+    /// What to look at when the solution runs away: the largest overclosure contact resolved
+    /// so far and when (an initial one resolved within one increment strains the elements
+    /// under it), and the elements' stable increment.
+    pub fn blow_up_hint(&self) -> String {
+        let (h, at) = self.worst_overclosure;
+        let increment = self.increment_hint();
+        if h > 0.0 {
+            format!(
+                "; contact resolved an overclosure of {h:e} at increment {at}: an overclosure \
+                 resolved within one increment strains the elements under it (an initial one: \
+                 remove it from the mesh, or move the slave nodes onto the master strain-free \
+                 first: `adjust_overclosure = true` in a scene's [run], \
+                 Contact::adjust_initial_overclosure in code); else {increment}"
+            )
+        } else {
+            format!(
+                "; no contact overclosure was resolved: {increment}, the loads and the material"
+            )
+        }
+    }
+
+    /// What to check of the time increment: the one in force at the last step against the
+    /// limits there were — the elements' stable increment, the penalty contact's — or why
+    /// there was none.
+    pub(super) fn increment_hint(&self) -> String {
+        let (dt, contact) = self.last_increment;
+        if dt == 0.0 {
+            return "no increment has been taken yet".into();
+        }
+        let elements = if self.elements.is_empty() {
+            "no elements limit it (the model has none)".to_string()
+        } else {
+            format!(
+                "the elements' stable increment is {:e}",
+                self.stable_increment()
+            )
+        };
+        let contact = if contact.is_nan() {
+            String::new()
+        } else if contact.is_finite() {
+            format!(
+                ", the penalty contact's {contact:e} (take at most about half of it for \
+                 contact that persists)"
+            )
+        } else {
+            ", no penalty spring within reach limited it".to_string()
+        };
+        format!("check the increment in force, {dt:e}: {elements}{contact}")
+    }
+
+    /// Remembers the largest overclosure contact has resolved, and when.
+    pub(super) fn note_overclosure(&mut self, h: f64) {
+        if h > self.worst_overclosure.0 {
+            self.worst_overclosure = (h, self.increments);
+        }
+    }
+
+    /// An error naming the first node whose position or velocity is not finite or beyond
+    /// single precision (the contact search's range): the solution has blown up.
+    pub(super) fn check_diverged(&self) -> Result<()> {
+        let limit = f32::MAX as f64;
+        let bad = |v: &[f64; 3]| (0..3).find(|&a| !(v[a].abs() <= limit));
+        let found = (0..self.x.len()).find_map(|i| {
+            bad(&self.x[i])
+                .map(|a| {
+                    (
+                        i,
+                        format!("position ({})", ["x", "y", "z"][a]),
+                        self.x[i][a],
+                    )
+                })
+                .or_else(|| {
+                    bad(&self.v[i]).map(|a| {
+                        (
+                            i,
+                            format!("velocity ({})", ["x", "y", "z"][a]),
+                            self.v[i][a],
+                        )
+                    })
+                })
+        });
+        let Some((node, what, value)) = found else {
+            return Ok(());
+        };
+        let cause = self.blow_up_hint();
+        Err(Error::Diverged {
+            increment: self.increments,
+            time: self.time,
+            node,
+            what,
+            value,
+            cause,
+        })
+    }
+
+    /// The energy balance error: the change of [`Energy::balance`] since the first increment,
+    /// relative to the largest of the kinetic, internal, external, contact and dissipated
+    /// energies now.
+    pub fn balance_error(&self) -> f64 {
+        self.energy_drift() / self.energy_scale().max(1e-300)
+    }
+
+    /// The change of [`Energy::balance`] since the first increment (energy units): what
+    /// [`Solver::balance_error`] divides by [`Solver::energy_scale`].
+    pub fn energy_drift(&self) -> f64 {
+        (self.energy.balance() - self.balance0.unwrap_or(0.0)).abs()
+    }
+}

@@ -1,0 +1,364 @@
+//! The material, section, interaction, contact and step keywords: `*MATERIAL`, `*DENSITY`,
+//! `*ELASTIC`, `*SOLID SECTION`, `*SURFACE INTERACTION`, `*FRICTION`, `*SURFACE BEHAVIOR`,
+//! `*CONTACT PAIR`, `*CONTACT CONTROLS`, `*STEP`, `*DYNAMIC`, `*END STEP`.
+
+use super::super::*;
+
+impl Parser {
+    /// `*MATERIAL` at line `l` with its options and data lines.
+    pub(in crate::io::inp) fn on_material(
+        &mut self,
+        l: &Line,
+        kw: &str,
+        opts: &BTreeMap<String, String>,
+        _data: &[Line],
+    ) -> Result<()> {
+        only(l, kw, opts, &["NAME"])?;
+        let Some(name) = opts.get("NAME") else {
+            return Err(err(l, "*MATERIAL needs NAME="));
+        };
+        self.current_material = Some(name.to_uppercase());
+        Ok(())
+    }
+
+    /// `*DENSITY | *ELASTIC` at line `l` with its options and data lines.
+    pub(in crate::io::inp) fn on_density(
+        &mut self,
+        l: &Line,
+        kw: &str,
+        opts: &BTreeMap<String, String>,
+        data: &[Line],
+    ) -> Result<()> {
+        only(l, kw, opts, &[])?;
+        let Some(m) = self.current_material.clone() else {
+            return Err(err(l, format!("*{kw} outside a *MATERIAL")));
+        };
+        let Some(d) = data.first() else {
+            return Err(err(l, format!("*{kw} needs a data line")));
+        };
+        let f = fields(d);
+        let v: f64 = num(d, f.first().copied().unwrap_or(""), &kw.to_lowercase())?;
+        if !(v.is_finite() && v > 0.0) {
+            return Err(err(d, format!("*{kw}: {v} must be positive")));
+        }
+        if kw == "DENSITY" {
+            self.densities.insert(m, v);
+        }
+        Ok(())
+    }
+
+    /// `*SOLID SECTION` at line `l` with its options and data lines.
+    pub(in crate::io::inp) fn on_solid_section(
+        &mut self,
+        l: &Line,
+        kw: &str,
+        opts: &BTreeMap<String, String>,
+        data: &[Line],
+    ) -> Result<()> {
+        only(l, kw, opts, &["ELSET", "MATERIAL"])?;
+        let (Some(e), Some(m)) = (opts.get("ELSET"), opts.get("MATERIAL")) else {
+            return Err(err(l, "*SOLID SECTION needs ELSET= and MATERIAL="));
+        };
+        let t = match data
+            .first()
+            .and_then(|d| fields(d).first().map(|s| (d, s.to_string())))
+        {
+            Some((d, s)) => num(d, &s, "thickness")?,
+            None => 1.0,
+        };
+        self.sections
+            .push((e.to_uppercase(), m.to_uppercase(), t, l.clone()));
+        Ok(())
+    }
+
+    /// `*SURFACE INTERACTION` at line `l` with its options and data lines.
+    pub(in crate::io::inp) fn on_surface_interaction(
+        &mut self,
+        l: &Line,
+        kw: &str,
+        opts: &BTreeMap<String, String>,
+        _data: &[Line],
+    ) -> Result<()> {
+        only(l, kw, opts, &["NAME"])?;
+        let Some(name) = opts.get("NAME") else {
+            return Err(err(l, "*SURFACE INTERACTION needs NAME="));
+        };
+        let name = name.to_uppercase();
+        self.deck.interactions.insert(
+            name.clone(),
+            Interaction {
+                friction: 0.0,
+                behavior: Behavior::Hard,
+            },
+        );
+        self.current_interaction = Some(name);
+        Ok(())
+    }
+
+    /// `*FRICTION` at line `l` with its options and data lines.
+    pub(in crate::io::inp) fn on_friction(
+        &mut self,
+        l: &Line,
+        kw: &str,
+        opts: &BTreeMap<String, String>,
+        data: &[Line],
+    ) -> Result<()> {
+        only(l, kw, opts, &[])?;
+        let Some(name) = self.current_interaction.clone() else {
+            return Err(err(l, "*FRICTION outside a *SURFACE INTERACTION"));
+        };
+        let Some(d) = data.first() else {
+            return Err(err(l, "*FRICTION needs the friction coefficient"));
+        };
+        let mu: f64 = num(
+            d,
+            fields(d).first().copied().unwrap_or(""),
+            "friction coefficient",
+        )?;
+        if !(mu.is_finite() && mu >= 0.0) {
+            return Err(err(
+                d,
+                format!("friction coefficient {mu} must not be negative"),
+            ));
+        }
+        self.deck
+            .interactions
+            .get_mut(&name)
+            .expect("inserted")
+            .friction = mu;
+        Ok(())
+    }
+
+    /// `*SURFACE BEHAVIOR` at line `l` with its options and data lines.
+    pub(in crate::io::inp) fn on_surface_behavior(
+        &mut self,
+        l: &Line,
+        kw: &str,
+        opts: &BTreeMap<String, String>,
+        data: &[Line],
+    ) -> Result<()> {
+        only(l, kw, opts, &["PRESSURE-OVERCLOSURE"])?;
+        let Some(name) = self.current_interaction.clone() else {
+            return Err(err(l, "*SURFACE BEHAVIOR outside a *SURFACE INTERACTION"));
+        };
+        let po = opts
+            .get("PRESSURE-OVERCLOSURE")
+            .map_or("HARD".to_string(), |s| s.to_uppercase());
+        let values: Vec<f64> = data
+            .iter()
+            .flat_map(|d| fields(d).into_iter().map(move |s| (d, s)))
+            .map(|(d, s)| num(d, s, "pressure-overclosure value"))
+            .collect::<Result<_>>()?;
+        let at = data.first().unwrap_or(l);
+        let behavior = match po.as_str() {
+            "HARD" => Behavior::Hard,
+            "LINEAR" if values.len() == 1 => Behavior::Linear(values[0]),
+            // Abaqus' data line: clearance c0 at zero pressure, pressure p0 at contact
+            "EXPONENTIAL" if values.len() == 2 => Behavior::Exponential {
+                clearance: values[0],
+                pressure: values[1],
+            },
+            "TABULAR" if values.len() >= 4 && values.len().is_multiple_of(2) => {
+                Behavior::Tabular(values.chunks(2).map(|c| (c[0], c[1])).collect())
+            }
+            "LINEAR" | "EXPONENTIAL" | "TABULAR" => {
+                return Err(err(at, format!("PRESSURE-OVERCLOSURE={po}: wrong number of values ({}): LINEAR takes the slope, EXPONENTIAL pressure and clearance, TABULAR pressure, overclosure pairs", values.len())))
+            }
+            other => {
+                return Err(err(l, format!("PRESSURE-OVERCLOSURE={other} is not supported by abut (HARD, LINEAR, EXPONENTIAL, TABULAR)")))
+            }
+        };
+        self.deck
+            .interactions
+            .get_mut(&name)
+            .expect("inserted")
+            .behavior = behavior;
+        Ok(())
+    }
+
+    /// `*CONTACT PAIR` at line `l` with its options and data lines.
+    pub(in crate::io::inp) fn on_contact_pair(
+        &mut self,
+        l: &Line,
+        kw: &str,
+        opts: &BTreeMap<String, String>,
+        data: &[Line],
+    ) -> Result<()> {
+        only(
+            l,
+            kw,
+            opts,
+            &[
+                "INTERACTION",
+                "SMALL SLIDING",
+                "MECHANICAL CONSTRAINT",
+                "WEIGHT",
+                "CPSET",
+            ],
+        )?;
+        let Some(inter) = opts.get("INTERACTION") else {
+            return Err(err(l, "*CONTACT PAIR needs INTERACTION="));
+        };
+        let penalty = match opts.get("MECHANICAL CONSTRAINT").map(|s| s.to_uppercase()) {
+            None => false,
+            Some(s) if s == "KINEMATIC" => false,
+            Some(s) if s == "PENALTY" => true,
+            Some(other) => {
+                return Err(err(
+                    l,
+                    format!(
+                    "MECHANICAL CONSTRAINT={other} is not supported by abut (KINEMATIC, PENALTY)"
+                ),
+                ))
+            }
+        };
+        let weight = match opts.get("WEIGHT") {
+            Some(w) => {
+                let w: f64 = num(l, w, "WEIGHT")?;
+                if !(0.0..=1.0).contains(&w) {
+                    return Err(err(l, format!("WEIGHT={w} must lie in [0, 1]")));
+                }
+                Some(w)
+            }
+            None => None,
+        };
+        if data.is_empty() {
+            return Err(err(
+                l,
+                "*CONTACT PAIR needs a data line: slave surface, master surface",
+            ));
+        }
+        for d in data {
+            let f = fields(d);
+            if f.len() != 2 {
+                return Err(err(
+                    d,
+                    "*CONTACT PAIR: expected slave surface, master surface",
+                ));
+            }
+            self.deck.pairs.push(ContactPairDef {
+                slave: f[0].to_uppercase(),
+                master: f[1].to_uppercase(),
+                interaction: inter.to_uppercase(),
+                small_sliding: opts.contains_key("SMALL SLIDING"),
+                penalty,
+                weight,
+                cpset: opts.get("CPSET").map(|s| s.to_uppercase()),
+                line: d.number,
+            });
+        }
+        Ok(())
+    }
+
+    /// `*CONTACT CONTROLS` at line `l` with its options and data lines.
+    pub(in crate::io::inp) fn on_contact_controls(
+        &mut self,
+        l: &Line,
+        kw: &str,
+        opts: &BTreeMap<String, String>,
+        data: &[Line],
+    ) -> Result<()> {
+        only(
+            l,
+            kw,
+            opts,
+            &["CPSET", "GLOBTRKINC", "FASTLOCALTRK", "SCALE PENALTY"],
+        )?;
+        let mut c = Controls {
+            cpset: opts.get("CPSET").map(|s| s.to_uppercase()),
+            ..Default::default()
+        };
+        if let Some(v) = opts.get("GLOBTRKINC") {
+            let n: u32 = num(l, v, "GLOBTRKINC")?;
+            if n == 0 {
+                return Err(err(l, "GLOBTRKINC must be positive"));
+            }
+            c.global_interval = Some(n);
+        }
+        if let Some(v) = opts.get("FASTLOCALTRK") {
+            c.wide_local = match v.to_uppercase().as_str() {
+                "NO" => true,
+                "YES" => false,
+                other => return Err(err(l, format!("FASTLOCALTRK={other}: expected YES or NO"))),
+            };
+        }
+        if let Some(v) = opts.get("SCALE PENALTY") {
+            let s: f64 = num(l, v, "SCALE PENALTY")?;
+            if !(s.is_finite() && s > 0.0) {
+                return Err(err(l, format!("SCALE PENALTY={s} must be positive")));
+            }
+            c.penalty_scale = Some(s);
+        }
+        if !data.is_empty() {
+            return Err(err(
+                &data[0],
+                "*CONTACT CONTROLS takes no data lines in abut",
+            ));
+        }
+        self.deck.controls.push(c);
+        Ok(())
+    }
+
+    /// `*STEP` at line `l` with its options and data lines.
+    pub(in crate::io::inp) fn on_step(
+        &mut self,
+        l: &Line,
+        kw: &str,
+        opts: &BTreeMap<String, String>,
+        _data: &[Line],
+    ) -> Result<()> {
+        only(l, kw, opts, &["NLGEOM", "NAME"])?;
+        if self.in_step {
+            return Err(err(l, "*STEP inside a step (missing *END STEP)"));
+        }
+        self.in_step = true;
+        self.deck.nlgeom = match opts.get("NLGEOM").map(|s| s.to_uppercase()) {
+            None => true,
+            Some(s) if s == "YES" => true,
+            Some(s) if s == "NO" => false,
+            Some(other) => return Err(err(l, format!("NLGEOM={other}: expected YES or NO"))),
+        };
+        Ok(())
+    }
+
+    /// `*DYNAMIC` at line `l` with its options and data lines.
+    pub(in crate::io::inp) fn on_dynamic(
+        &mut self,
+        l: &Line,
+        kw: &str,
+        opts: &BTreeMap<String, String>,
+        data: &[Line],
+    ) -> Result<()> {
+        only(l, kw, opts, &["EXPLICIT"])?;
+        if !opts.contains_key("EXPLICIT") {
+            return Err(err(
+                l,
+                "*DYNAMIC: abut reads explicit steps only (*DYNAMIC, EXPLICIT)",
+            ));
+        }
+        // positional data: initial increment (may be empty), time period
+        if let Some(d) = data.first() {
+            let f: Vec<&str> = d.text.split(',').map(str::trim).collect();
+            if let Some(t) = f.get(1).filter(|s| !s.is_empty()) {
+                self.deck.time_period = Some(num(d, t, "time period")?);
+            }
+        }
+        Ok(())
+    }
+
+    /// `*END STEP` at line `l` with its options and data lines.
+    pub(in crate::io::inp) fn on_end_step(
+        &mut self,
+        l: &Line,
+        kw: &str,
+        opts: &BTreeMap<String, String>,
+        _data: &[Line],
+    ) -> Result<()> {
+        only(l, kw, opts, &[])?;
+        if !self.in_step {
+            return Err(err(l, "*END STEP without *STEP"));
+        }
+        self.in_step = false;
+        Ok(())
+    }
+}

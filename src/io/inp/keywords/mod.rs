@@ -1,0 +1,5 @@
+//! The keywords of an Abaqus deck, one method of the parser each: what a keyword's options
+//! and data lines add to the deck, and the errors that name the line.
+
+mod interaction;
+mod mesh;

@@ -1,0 +1,155 @@
+//! A parsed deck to abut's `Model`: its nodes, masses, surfaces and contact pairs with their
+//! interactions and controls.
+
+use super::*;
+
+/// What [`Deck::to_model`] built: the model and, per `*CONTACT PAIR`, its pair.
+#[derive(Clone, Debug)]
+pub struct DeckModel {
+    /// The contact model (every deck node, in deck order).
+    pub model: Model,
+    /// The pair of each `*CONTACT PAIR` data line, in deck order.
+    pub pairs: Vec<PairId>,
+    /// Each surface's id, when it was used as a master or balanced slave surface.
+    pub surfaces: BTreeMap<String, SurfaceId>,
+    /// Each slave node set.
+    pub slave_sets: BTreeMap<String, NodeSetId>,
+}
+
+impl Deck {
+    /// The model with every contact pair: nodes with the sections' lumped masses (`default_mass`
+    /// where no section gives one, e.g. rigid surfaces), 2D when every element is planar.
+    /// Penalty pairs take `LINEAR` slopes as stiffness per area, `EXPONENTIAL` and `TABULAR`
+    /// as laws (hard: the automatic stiffness, scaled by `SCALE PENALTY`); kinematic pairs take
+    /// non-hard behaviours as softened contact. `SMALL SLIDING` is small sliding with NLGEOM
+    /// and infinitesimal without. `GLOBTRKINC` and `FASTLOCALTRK` set the pair's schedule.
+    pub fn to_model(&self, default_mass: f64) -> Result<DeckModel> {
+        let planar = !self.mesh.elements.is_empty()
+            && self
+                .mesh
+                .elements
+                .iter()
+                .all(|e| e.kind.is_planar() || e.kind == ElementKind::Line2);
+        let mut model = if planar {
+            Model::new_2d()
+        } else {
+            Model::new_3d()
+        };
+        let masses: Vec<f64> = self
+            .masses
+            .iter()
+            .map(|&m| if m > 0.0 { m } else { default_mass })
+            .collect();
+        model.add_nodes(&self.mesh.positions, &masses)?;
+        let mut out = DeckModel {
+            model,
+            pairs: Vec::new(),
+            surfaces: BTreeMap::new(),
+            slave_sets: BTreeMap::new(),
+        };
+        for pair in &self.pairs {
+            let controls = self
+                .controls
+                .iter()
+                .filter(|c| c.cpset.is_none() || c.cpset == pair.cpset)
+                .fold(Controls::default(), |a, c| Controls {
+                    cpset: None,
+                    global_interval: c.global_interval.or(a.global_interval),
+                    wide_local: c.wide_local || a.wide_local,
+                    penalty_scale: c.penalty_scale.or(a.penalty_scale),
+                });
+            let inter = &self.interactions[&pair.interaction];
+            let slave = match &self.surfaces[&pair.slave] {
+                SurfaceDef::Nodes(n, a) => out.model.add_node_set_with_areas(n, a)?,
+                SurfaceDef::Faces(f) => {
+                    // an axisymmetric deck's areas are per radian
+                    let (nodes, areas) = if self.mesh.is_axisymmetric() {
+                        crate::io::face_nodes_and_areas_per_radian(f, &self.mesh.positions)
+                    } else {
+                        crate::io::face_nodes_and_areas(f, &self.mesh.positions)
+                    };
+                    out.model.add_node_set_with_areas(&nodes, &areas)?
+                }
+            };
+            out.slave_sets.insert(pair.slave.clone(), slave);
+            let SurfaceDef::Faces(master_faces) = &self.surfaces[&pair.master] else {
+                return Err(Error::BadParameter {
+                    name: "*CONTACT PAIR master surface",
+                    value: pair.master.clone(),
+                    expected: "an element-based surface (a node-based surface can only be a slave)",
+                });
+            };
+            let master = out
+                .model
+                .add_surface(Surface::from_facets(master_faces.clone()))?;
+            out.surfaces.insert(pair.master.clone(), master);
+            let law = |b: &Behavior| match b {
+                Behavior::Hard | Behavior::Linear(_) => PressureOverclosure::Linear,
+                Behavior::Exponential {
+                    pressure,
+                    clearance,
+                } => PressureOverclosure::Exponential {
+                    clearance: *clearance,
+                    pressure: *pressure,
+                },
+                Behavior::Tabular(t) => {
+                    PressureOverclosure::Tabular(t.iter().map(|&(p, h)| (h, p)).collect())
+                }
+            };
+            let enforce = if pair.penalty {
+                Enforce::Penalty(Penalty {
+                    stiffness: match inter.behavior {
+                        Behavior::Linear(k) => Stiffness::PerArea(k),
+                        _ => Stiffness::Auto {
+                            scale: controls.penalty_scale.unwrap_or(1.0),
+                        },
+                    },
+                    law: law(&inter.behavior),
+                    ..Default::default()
+                })
+            } else {
+                Enforce::Kinematic(Kinematic {
+                    softened: match &inter.behavior {
+                        Behavior::Hard => None,
+                        Behavior::Linear(k) => Some(PressureOverclosure::linear(*k)),
+                        b => Some(law(b)),
+                    },
+                })
+            };
+            let mut p = Pair::new(slave, master)
+                .enforce(enforce)
+                .friction(if inter.friction > 0.0 {
+                    Friction::coulomb(inter.friction)
+                } else {
+                    Friction::Frictionless
+                })
+                .sliding(match (pair.small_sliding, self.nlgeom) {
+                    (false, _) => Sliding::Finite,
+                    (true, true) => Sliding::Small,
+                    (true, false) => Sliding::Infinitesimal,
+                });
+            if controls.global_interval.is_some() || controls.wide_local {
+                let d = Schedule::default_for(pair.slave == pair.master);
+                p = p.schedule(Schedule {
+                    interval: controls.global_interval.unwrap_or(d.interval),
+                    wide_local: controls.wide_local,
+                    ..d
+                });
+            }
+            if let Some(w) = pair.weight {
+                let SurfaceDef::Faces(f) = &self.surfaces[&pair.slave] else {
+                    return Err(Error::BadParameter {
+                        name: "*CONTACT PAIR, WEIGHT",
+                        value: pair.slave.clone(),
+                        expected: "a balanced pair needs an element-based slave surface",
+                    });
+                };
+                let s = out.model.add_surface(Surface::from_facets(f.clone()))?;
+                out.surfaces.insert(pair.slave.clone(), s);
+                p = p.balanced(s, w);
+            }
+            out.pairs.push(out.model.add_pair(p)?);
+        }
+        Ok(out)
+    }
+}

@@ -1,0 +1,147 @@
+//! The search's side of a device-resident increment: made resident once, its frame moved when
+//! the master travels far, and its result read from the increment's hits and words.
+
+use super::*;
+
+impl GlobalSearch {
+    /// Readies this search for device-resident increments at `positions` (the frame's box is
+    /// fitted on the device at every global search, within `Grid::cell_budget` cells). The kernels work relative to the origin of the grid the host
+    /// fits at `positions` (near the master, snapped to a power of two: [`GlobalSearch::
+    /// resident_frame`]): the positions the increments read are in the model frame when
+    /// `caller_frame` (the caller's f32 buffers; the kernels subtract the origin in f32), or
+    /// already relative to the origin (host arrays, subtracted in f64 by the host). Small
+    /// sliding anchors its slaves here, by a global search at `positions`, as its first
+    /// increment would.
+    pub(crate) fn make_resident(
+        &mut self,
+        positions: &[[f64; 3]],
+        caller_frame: bool,
+    ) -> Result<()> {
+        let anchored = self.sliding != crate::model::Sliding::Finite;
+        if anchored && self.anchors.is_none() {
+            self.step(positions)?;
+        }
+        let mut prep = self.prepare(positions)?;
+        prep.params.cell_capacity = Grid::cell_budget(self.facets.len());
+        let origin = prep.grid.frame;
+        let frame = if caller_frame {
+            origin.map(|o| o as f32)
+        } else {
+            [0.0; 3]
+        };
+        let interval = self.schedule.interval;
+        self.resident_origin = Some(origin);
+        self.resident_span = self.master_span(positions);
+        match &mut self.executor {
+            Executor::Gpu(g) => g.make_resident(&prep, interval, anchored, frame),
+            Executor::Cpu(c) => {
+                c.make_resident(&prep, interval, anchored, frame);
+                Ok(())
+            }
+        }
+    }
+
+    /// Where the master nodes start in the watched nodes: after the slaves, unless the slaves
+    /// are master nodes themselves (self-contact), when every watched node is one.
+    pub(super) fn master_start(&self) -> usize {
+        if self.self_contact {
+            0
+        } else {
+            self.slave_ids.len()
+        }
+    }
+
+    /// The largest extent of the master's nodes along an axis at `positions` (model length
+    /// units; the search radius for a master of no extent): what the frame's reach is measured
+    /// in — the master's own size, never the radius, so that a large radius does not let the
+    /// master travel far from the frame's origin.
+    pub(super) fn master_span(&self, positions: &[[f64; 3]]) -> f64 {
+        let mut lo = [f64::INFINITY; 3];
+        let mut hi = [f64::NEG_INFINITY; 3];
+        for &n in &self.motion_nodes[self.master_start()..] {
+            let x = positions[n as usize];
+            for a in 0..3 {
+                lo[a] = lo[a].min(x[a]);
+                hi[a] = hi[a].max(x[a]);
+            }
+        }
+        let span = (0..self.dim as usize)
+            .map(|a| hi[a] - lo[a])
+            .fold(0.0, f64::max);
+        if span > 0.0 && span.is_finite() {
+            span
+        } else {
+            self.radius
+        }
+    }
+
+    /// Host arrays: when a node of the master has travelled more than 16 times the master's own
+    /// extent ([`Self::master_span`], not the search radius) from the frame's origin (f32 would
+    /// lose precision there, and contact is only ever near the master), the frame moves to the
+    /// grid the host fits at `positions` and the next increment searches globally, which resets
+    /// everything that was relative to the old origin. Returns whether it moved.
+    pub(crate) fn rebase_if_far(&mut self, positions: &[[f64; 3]]) -> Result<bool> {
+        let o = self.resident_frame();
+        let reach = 16.0 * self.resident_span;
+        let masters = &self.motion_nodes[self.master_start()..];
+        let far = masters.iter().any(|&n| {
+            let x = positions[n as usize];
+            (0..3).any(|a| (x[a] - o[a]).abs() > reach)
+        });
+        if !far {
+            return Ok(false);
+        }
+        let prep = self.prepare(positions)?;
+        if prep.grid.frame == o {
+            return Ok(false);
+        }
+        self.resident_origin = Some(prep.grid.frame);
+        self.resident_span = self.master_span(positions);
+        match &mut self.executor {
+            Executor::Gpu(g) => g.request_global(),
+            Executor::Cpu(c) => c.request_global(),
+        }
+        Ok(true)
+    }
+
+    /// The search result of a device-resident increment from its hits (grid-local, relative to
+    /// the resident origin), status words, params and trigger code.
+    pub(crate) fn resident_result(
+        &self,
+        raw: Vec<GpuHit>,
+        status: &[u32; STATUS_WORDS],
+        params: &SearchParams,
+        trigger: u32,
+        first: bool,
+    ) -> SearchResult {
+        let origin = self.resident_origin.unwrap_or([0.0; 3]);
+        let grid = Grid {
+            frame: origin,
+            origin: [0, 1, 2].map(|a| origin[a] + params.grid_lo[a] as f64),
+            cell_size: params.cell_size as f64,
+            dims: [params.dims_x, params.dims_y, params.dims_z],
+        };
+        let trigger = if self.sliding != crate::model::Sliding::Finite {
+            if first {
+                Trigger::First
+            } else {
+                Trigger::Anchored
+            }
+        } else {
+            match trigger {
+                layout::TRIGGER_FIRST => Trigger::First,
+                layout::TRIGGER_INTERVAL => Trigger::Interval,
+                layout::TRIGGER_BUDGET => Trigger::Budget,
+                layout::TRIGGER_CROWDED => Trigger::Crowded,
+                layout::TRIGGER_REQUESTED => Trigger::Requested,
+                _ => Trigger::Local,
+            }
+        };
+        self.finish(origin, grid, Arc::new(raw), trigger, status)
+    }
+
+    /// The origin of the device-resident frame (model units).
+    pub(crate) fn resident_frame(&self) -> [f64; 3] {
+        self.resident_origin.unwrap_or([0.0; 3])
+    }
+}

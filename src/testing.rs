@@ -1,0 +1,38 @@
+//! abut's internals for its own twin tests, benchmarks and command line: the WGSL twins, both
+//! executors' kernels, the prepared inputs and the brute-force oracle. Hidden from the
+//! documentation and not part of the API: nothing here is promised to stay.
+
+/// The Rust twins of the WGSL (`crate::abi`).
+pub mod abi {
+    pub use crate::abi::*;
+}
+
+/// The CPU mirror of each kernel (`crate::cpu`).
+pub mod cpu {
+    pub use crate::cpu::*;
+}
+
+/// The GPU executors (`crate::gpu`).
+pub mod gpu {
+    pub use crate::gpu::*;
+}
+
+/// What a stage hands an executor (`crate::plan`).
+pub mod plan {
+    pub use crate::plan::*;
+}
+
+/// Per-pair penalty setup and parameters (`crate::penalty`).
+pub mod penalty {
+    pub use crate::penalty::*;
+}
+
+/// The f64 brute-force oracle of the global search.
+pub mod brute_force {
+    pub use crate::search::brute_force::*;
+}
+
+/// The search tree's leaf slots.
+pub mod tree {
+    pub use crate::search::tree::*;
+}
