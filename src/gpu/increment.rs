@@ -174,7 +174,7 @@ impl GpuIncrement {
     }
 
     /// Pair `k`'s statistics (after its passes).
-    pub(crate) fn pair_dispatch(&self, k: usize) -> super::Group<'_> {
+    pub(crate) fn pair_dispatch(&self, k: usize) -> super::GroupWork<'_> {
         let g = &self.pairs[k];
         (
             &groups::STATS_PAIR,
@@ -188,7 +188,7 @@ impl GpuIncrement {
     }
 
     /// The end of an increment: the bound's largest row and the stable increment.
-    pub(crate) fn finish_dispatch(&self) -> super::Group<'_> {
+    pub(crate) fn finish_dispatch(&self) -> super::GroupWork<'_> {
         let mut work: Vec<super::Dispatch<'_>> = self
             .pairs
             .iter()

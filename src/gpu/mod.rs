@@ -83,8 +83,8 @@ pub(crate) enum Dispatch<'a> {
     ),
 }
 
-/// Dispatches under one label (a kernel or a few that belong together).
-pub(crate) type Group<'a> = (&'static crate::abi::groups::Group, Vec<Dispatch<'a>>);
+/// A declared group (`abi::groups`) and the dispatches recorded under its label.
+pub(crate) type GroupWork<'a> = (&'static crate::abi::groups::Group, Vec<Dispatch<'a>>);
 
 /// Records `groups` in order: all in one compute pass (WebGPU's usage scopes are per dispatch,
 /// so a dispatch may read as its indirect arguments or uniform what an earlier one wrote), or,
@@ -93,7 +93,7 @@ pub(crate) fn record_groups(
     ctx: &crate::device::GpuContext,
     enc: &mut wgpu::CommandEncoder,
     label: &str,
-    groups: &[Group<'_>],
+    groups: &[GroupWork<'_>],
     max_dim: u32,
 ) {
     if let Ok(mut t) = ctx.traffic.lock() {

@@ -266,7 +266,7 @@ impl GpuPenalty {
     /// The dispatches of the penalty part of one device-resident increment (after its search's):
     /// normals, penalty, the fixed-point gather, and each pair node's force added into the
     /// caller's buffer and its bound row into the rows.
-    pub(crate) fn resident_dispatches(&self) -> Vec<super::Group<'_>> {
+    pub(crate) fn resident_dispatches(&self) -> Vec<super::GroupWork<'_>> {
         use super::Dispatch::Direct;
         let r = self.resident.as_ref().expect("prepared");
         let (g, p) = (&r.groups, &self.pipelines);

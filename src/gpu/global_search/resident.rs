@@ -388,7 +388,7 @@ impl GpuSearch {
     /// the caller knows the schedule will choose the local search (host arrays, whose host
     /// checks the same rules with margin), so the global search's dispatches, which would get
     /// zero workgroups, are not recorded at all.
-    pub(crate) fn resident_dispatches(&self, local_only: bool) -> Vec<super::super::Group<'_>> {
+    pub(crate) fn resident_dispatches(&self, local_only: bool) -> Vec<super::super::GroupWork<'_>> {
         use super::super::Dispatch::{Direct, Indirect};
         let r = self.resident.as_ref().expect("resident");
         let g = r.groups.as_ref().expect("prepared");
