@@ -395,7 +395,7 @@ pub fn bench(a: &BenchArgs) -> abut::Result<()> {
     let kb = kernel_bytes();
     let total: f64 = kb.iter().map(|k| k.1).sum();
     let largest = *sizes.last().unwrap_or(&1);
-    let _ = writeln!(md, "Bytes a steady penalty increment (local search) moves per slave node, by kernel: the compulsory traffic of its bindings (see `kernel_bytes` in src/bin/abut/bench.rs). The bound is that traffic at the bandwidth of a copy kernel measured on the same adapter in this run (a host memory copy for the CPU path); the fraction is the bound over the measured time, per pass from the GPU timestamps where there are some, and for the whole increment from the wall clock — base configuration, {largest} slaves.\n");
+    let _ = writeln!(md, "Bytes a steady penalty increment (local search) moves per slave node, by kernel: the compulsory traffic of its bindings (see `kernel_bytes` in src/bin/abut/bench/bandwidth.rs), per pass as the increment records its passes (`abi::groups`). The bound is that traffic at the bandwidth of a copy kernel measured on the same adapter in this run (a host memory copy for the CPU path); the fraction is the bound over the measured time, per pass from the GPU timestamps where there are some, and for the whole increment from the wall clock — base configuration, {largest} slaves.\n");
     let _ = writeln!(
         md,
         "| kernel | bytes/slave | share of the increment's bytes |"
