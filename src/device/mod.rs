@@ -233,16 +233,9 @@ impl Device {
         // the caller's uncaptured-error handler is left alone: abut's own operations run in
         // error scopes and report through them
         let uncaptured = Arc::new(Mutex::new(Vec::new()));
-        Ok(Self::from_context(GpuContext {
-            device,
-            queue,
-            info,
-            limits,
-            uncaptured,
-            traffic: Arc::default(),
-            profiler: Mutex::new(None),
-            pipelines: Mutex::default(),
-        }))
+        Ok(Self::from_context(GpuContext::assemble(
+            device, queue, info, limits, uncaptured,
+        )))
     }
 
     /// The wgpu device and queue of a GPU device (to make buffers on it), `None` on the CPU path.
@@ -486,7 +479,18 @@ impl GpuContext {
                 v.push(e.to_string());
             }
         }));
-        Ok(Self {
+        Ok(Self::assemble(device, queue, info, limits, uncaptured))
+    }
+
+    /// A context on `device` with nothing dispatched, compiled or timed yet.
+    fn assemble(
+        device: wgpu::Device,
+        queue: wgpu::Queue,
+        info: wgpu::AdapterInfo,
+        limits: wgpu::Limits,
+        uncaptured: Arc<Mutex<Vec<String>>>,
+    ) -> Self {
+        Self {
             device,
             queue,
             info,
@@ -495,7 +499,7 @@ impl GpuContext {
             traffic: Arc::default(),
             profiler: Mutex::new(None),
             pipelines: Mutex::default(),
-        })
+        }
     }
 
     /// Takes the errors wgpu raised outside error scopes since the last call, as one error.

@@ -142,7 +142,8 @@ pub struct GpuSearch {
 }
 
 impl GpuSearch {
-    /// Compiles the pipelines and creates the (small) initial workspace on `ctx`.
+    /// Takes the search pipelines from the device's cache (compiled on first use) and creates the
+    /// (small) initial workspace on `ctx`.
     pub fn new(ctx: Arc<GpuContext>) -> Result<Self> {
         let ctx_limit = ctx.limits.max_compute_workgroups_per_dimension;
         let device = &ctx.device;

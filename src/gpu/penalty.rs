@@ -106,7 +106,8 @@ impl GpuPenalty {
         super::upload(&self.ctx, &self.state, 0, bytemuck::cast_slice(state));
     }
 
-    /// Compiles the pipelines (friction compiled in or out) and creates the pair's buffers.
+    /// Takes the penalty pipelines from the device's cache (friction compiled in or out, each
+    /// variant once per device) and creates the pair's buffers.
     pub fn new(ctx: Arc<GpuContext>, setup: &PenaltySetup, n_nodes: usize) -> Result<Self> {
         let d = &ctx.device;
         let limits = &ctx.limits;
