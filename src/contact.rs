@@ -3,11 +3,9 @@
 use crate::abi::penalty::{
     ContactOut, SlaveState, CSTATUS_MASK, CSTATUS_OPEN, CSTATUS_SLIP, CSTATUS_STICK,
 };
-use crate::cpu::CpuPenalty;
-use crate::device::{Device, DeviceKind};
+use crate::device::Device;
 use crate::error::{Error, Result};
 use crate::geometry::{closest_on_facet, V3};
-use crate::gpu::GpuPenalty;
 use crate::kinematic::{
     anchored_pass, facets_from, friction_pass, meshed_pass, rigid_pass, BodyState,
     FrictionCorrection, SlaveCorrection, PASSES,
@@ -15,8 +13,9 @@ use crate::kinematic::{
 use crate::model::{validate_positions, Model, PairId};
 use crate::model::{BodyId, Enforce, MasterSurface, PressureOverclosure, RigidBody, RigidPairId};
 use crate::penalty::PenaltySetup;
-use crate::search::{GlobalSearch, SearchResult};
+use crate::search::{GlobalSearch, SearchResult, SearchStage};
 
+mod exec;
 mod kinematic_step;
 mod overclosure;
 mod report;
@@ -30,17 +29,12 @@ pub use report::{
 };
 pub use resident::ResidentIo;
 
-/// The penalty executor of one pair, on the same device as its search.
-pub(crate) enum PenaltyExec {
-    Gpu(Box<GpuPenalty>),
-    Cpu(CpuPenalty),
-}
-
+/// One penalty pass of a pair (a balanced pair has two): its search's stage and its penalty
+/// setup; their device work is the `Contact`'s executor's (pair run k is its pair k).
 struct PairRun {
     id: PairId,
-    search: GlobalSearch,
+    search: SearchStage,
     setup: PenaltySetup,
-    exec: PenaltyExec,
     output: PairOutput,
     /// Host-array increments: what the host knows of the device's schedule.
     schedule: resident::HostSchedule,
@@ -92,8 +86,9 @@ pub struct Contact {
     report: StepReport,
     /// The model's positions (the frame and anchors of device-resident increments).
     initial_positions: Vec<[f64; 3]>,
-    /// Device-resident increments: rows, statistics and their ring.
-    resident: Option<resident::Resident>,
+    /// Every penalty pass's device work: searches, penalty, statistics, abut's own arrays;
+    /// chosen once, from the device, in `new`.
+    exec: Box<dyn exec::IncrementExec>,
     /// Global searches of the penalty pairs since the start (host-array increments).
     global_total: u64,
     /// Which kind of penalty increment this Contact runs (set by the first).
@@ -118,33 +113,23 @@ impl Contact {
         let n_nodes = model.positions().len();
         let mut pairs = Vec::new();
         let mut kinematic = Vec::new();
+        let mut exec = exec::for_device(device, n_nodes);
         for k in 0..model.pairs().len() {
             let id = PairId(k);
             let pair = model.pair(id)?;
-            let search = GlobalSearch::new(device, model, id)?;
+            let search = SearchStage::new(model, id)?;
             let slaves = model.node_set(pair.slave)?.to_vec();
             match &pair.enforce {
                 Enforce::Penalty(_) => {
-                    let make_exec = |setup: &PenaltySetup| -> Result<PenaltyExec> {
-                        Ok(match device.kind() {
-                            DeviceKind::Gpu(ctx) => PenaltyExec::Gpu(Box::new(GpuPenalty::new(
-                                ctx.clone(),
-                                setup,
-                                n_nodes,
-                            )?)),
-                            DeviceKind::Cpu => PenaltyExec::Cpu(CpuPenalty::new(setup, n_nodes)),
-                        })
-                    };
                     let setup = PenaltySetup::new(model, id, search.master(), &slaves)?
                         .with_search(search.radius(), search.reference_node());
-                    let exec = make_exec(&setup)?;
+                    exec.add_pair(&setup)?;
                     let back = match pair.balanced {
                         // balanced: the master surface's nodes against the slave surface too
                         Some((surface, _)) => {
                             let slave_surface = model.surface(surface)?.clone();
                             let nodes = search.master().nodes();
-                            let rsearch = GlobalSearch::from_parts(
-                                device,
+                            let rsearch = SearchStage::from_parts(
                                 model,
                                 slave_surface.clone(),
                                 nodes.clone(),
@@ -158,12 +143,10 @@ impl Contact {
                                 &nodes,
                             )?
                             .with_search(rsearch.radius(), rsearch.reference_node());
-                            let rexec = make_exec(&reverse)?;
                             Some(PairRun {
                                 id,
                                 search: rsearch,
                                 setup: reverse,
-                                exec: rexec,
                                 output: PairOutput {
                                     slaves: nodes,
                                     ..Default::default()
@@ -177,14 +160,16 @@ impl Contact {
                         id,
                         search,
                         setup,
-                        exec,
                         output: PairOutput {
                             slaves,
                             ..Default::default()
                         },
                         schedule: Default::default(),
                     });
-                    pairs.extend(back);
+                    if let Some(b) = back {
+                        exec.add_pair(&b.setup)?;
+                        pairs.push(b);
+                    }
                 }
                 Enforce::Kinematic(kin) => {
                     let master = search.master().clone();
@@ -223,7 +208,7 @@ impl Contact {
                     };
                     kinematic.push(KinematicRun {
                         id,
-                        search,
+                        search: GlobalSearch::from_stage(device, search)?,
                         friction,
                         dissipated: 0.0,
                         behind,
@@ -272,7 +257,7 @@ impl Contact {
             want_outputs: false,
             report: StepReport::default(),
             initial_positions: model.positions().to_vec(),
-            resident: None,
+            exec,
             mode: None,
             global_total: 0,
             host_increments: 0,
@@ -295,11 +280,8 @@ impl Contact {
     /// distributed run). Reads back from the device on a GPU.
     pub fn penalty_states(&self, pair: PairId) -> Result<Vec<Vec<SlaveState>>> {
         let mut out = Vec::new();
-        for p in self.pairs.iter().filter(|p| p.id == pair) {
-            out.push(match &p.exec {
-                PenaltyExec::Cpu(c) => c.state.clone(),
-                PenaltyExec::Gpu(g) => g.read_state()?,
-            });
+        for (k, _) in self.pairs.iter().enumerate().filter(|(_, p)| p.id == pair) {
+            out.push(self.exec.penalty_state(k)?);
         }
         if out.is_empty() {
             return Err(Error::UnknownId {
@@ -340,10 +322,7 @@ impl Contact {
             }
         }
         for (&k, s) in runs.iter().zip(states) {
-            match &mut self.pairs[k].exec {
-                PenaltyExec::Cpu(c) => c.state.copy_from_slice(s),
-                PenaltyExec::Gpu(g) => g.write_state(s),
-            }
+            self.exec.set_penalty_state(k, s);
         }
         Ok(())
     }
@@ -367,7 +346,7 @@ impl Contact {
         dt: f64,
     ) -> Result<&StepReport> {
         positive_dt(dt)?;
-        if matches!(self.mode, Some(resident::Mode::Device)) {
+        if self.mode == Some(resident::Mode::Device) {
             return Err(Error::BadParameter {
                 name: "penalty_step",
                 value: "a Contact running device-resident increments".into(),
@@ -413,7 +392,7 @@ impl Contact {
     pub fn anchoring(&self) -> Vec<Anchoring> {
         let penalty = self.pairs.iter().map(|p| (p.id, &p.search));
         let kinematic = self.kinematic.iter().flat_map(|k| {
-            std::iter::once((k.id, &k.search)).chain(k.back.iter().map(|b| (k.id, &b.0)))
+            std::iter::once((k.id, &*k.search)).chain(k.back.iter().map(|b| (k.id, &*b.0)))
         });
         penalty
             .chain(kinematic)

@@ -24,18 +24,26 @@ impl Contact {
         }
         validate_positions(x, 0, 3)?;
         let mut rep = OverclosureReport::default();
-        let mut searches: Vec<&mut GlobalSearch> =
-            self.pairs.iter_mut().map(|p| &mut p.search).collect();
-        searches.extend(self.kinematic.iter_mut().map(|k| &mut k.search));
+        let mut found = Vec::new();
+        for (k, pr) in self.pairs.iter_mut().enumerate() {
+            let result = pr.search.run_on(self.exec.search(k), x)?;
+            found.push(result);
+        }
+        for kr in &mut self.kinematic {
+            found.push(kr.search.run(x)?);
+        }
+        let np = self.pairs.len();
         let masses = &self.masses;
         let record = |rep: &mut OverclosureReport, node: u32, h: f64| {
             rep.moved.push((node, h));
             rep.max_distance = rep.max_distance.max(h);
             rep.energy_avoided += 0.5 * masses[node as usize] * (h / dt) * (h / dt);
         };
-        for search in searches {
-            let result = search.run(x)?;
-            let master = search.master();
+        for (i, result) in found.iter().enumerate() {
+            let master = match i.checked_sub(np) {
+                None => self.pairs[i].search.master(),
+                Some(j) => self.kinematic[j].search.master(),
+            };
             for (&s, c) in result.slaves.iter().zip(result.contacts()) {
                 let Some(c) = c else { continue };
                 let nodes = master.facets[c.facet as usize].nodes();

@@ -199,7 +199,7 @@ pub struct OverclosureReport {
 /// (`STATUS_FAST`); this is its f64 twin, for kinematic pairs and to name the fastest slave.
 pub(super) fn fast_slaves(
     pair: PairId,
-    search: &GlobalSearch,
+    search: &SearchStage,
     hits: &[crate::abi::search::GpuHit],
     velocities: &[[f64; 3]],
     dt: f64,

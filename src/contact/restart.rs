@@ -29,11 +29,8 @@ impl Contact {
         out.extend_from_slice(MAGIC);
         out.extend_from_slice(&self.dt_ref.unwrap_or(f64::NAN).to_le_bytes());
         out.extend_from_slice(&(self.pairs.len() as u64).to_le_bytes());
-        for p in &self.pairs {
-            let states = match &p.exec {
-                super::PenaltyExec::Cpu(c) => c.state.clone(),
-                super::PenaltyExec::Gpu(g) => g.read_state()?,
-            };
+        for (k, p) in self.pairs.iter().enumerate() {
+            let states = self.exec.penalty_state(k)?;
             out.extend_from_slice(&(p.id.0 as u64).to_le_bytes());
             out.extend_from_slice(&(states.len() as u64).to_le_bytes());
             for s in &states {
@@ -98,11 +95,8 @@ impl Contact {
         if !(dt_ref.is_nan() || dt_ref.is_finite() && dt_ref > 0.0) {
             return Err(bad("has a reference increment that is not positive"));
         }
-        for (p, s) in self.pairs.iter_mut().zip(all) {
-            match &mut p.exec {
-                super::PenaltyExec::Cpu(c) => c.state.copy_from_slice(&s),
-                super::PenaltyExec::Gpu(g) => g.write_state(&s),
-            }
+        for (k, s) in all.iter().enumerate().take(self.pairs.len()) {
+            self.exec.set_penalty_state(k, s);
         }
         self.dt_ref = (!dt_ref.is_nan()).then_some(dt_ref);
         Ok(())

@@ -317,6 +317,14 @@ impl Device {
         &self.kind
     }
 
+    /// The GPU context of a GPU device (`None` on the CPU path), for what only a GPU does.
+    pub(crate) fn gpu_context(&self) -> Option<&Arc<GpuContext>> {
+        match &self.kind {
+            DeviceKind::Gpu(ctx) => Some(ctx),
+            DeviceKind::Cpu => None,
+        }
+    }
+
     /// True for a GPU adapter.
     pub fn is_gpu(&self) -> bool {
         matches!(self.kind, DeviceKind::Gpu(_))

@@ -226,11 +226,6 @@ impl GpuIncrement {
         }
     }
 
-    /// The device.
-    pub(crate) fn context(&self) -> &GpuContext {
-        &self.ctx
-    }
-
     /// The statistics of increments whose staging buffers the device has finished with, in
     /// increment order, without waiting: staging copied by increments submitted since the last
     /// call is asked to map (so call this only after submitting what was encoded), and the

@@ -10,7 +10,7 @@ use crate::abi::groups;
 use crate::abi::integrate::IntegrateParams;
 use crate::abi::passes::{self, Buf};
 use crate::abi::search::ITEM_WORKGROUP;
-use crate::device::{Device, DeviceKind, GpuContext};
+use crate::device::{Device, GpuContext};
 use crate::error::{Error, Result};
 
 /// The central-difference integrator of a range of point masses on one GPU device.
@@ -28,7 +28,7 @@ impl CentralDifference {
     /// An integrator on `device` (a GPU) for nodes with masses `masses` (one per model node;
     /// zero holds a node in place).
     pub fn new(device: &Device, masses: &[f64]) -> Result<Self> {
-        let DeviceKind::Gpu(ctx) = device.kind() else {
+        let Some(ctx) = device.gpu_context() else {
             return Err(Error::BadParameter {
                 name: "device",
                 value: "CPU path".into(),

@@ -212,11 +212,6 @@ impl GpuPenalty {
         &self.out
     }
 
-    /// The device this pair runs on.
-    pub(crate) fn context(&self) -> Arc<GpuContext> {
-        self.ctx.clone()
-    }
-
     /// The pair nodes (node, slave index, adjacency start, end), for the increment's statistics.
     pub(crate) fn pair_nodes_buffer(&self) -> &wgpu::Buffer {
         &self.pair_nodes

@@ -4,7 +4,7 @@
 
 use super::*;
 
-impl GlobalSearch {
+impl SearchStage {
     /// Sets the sliding formulation (before the first increment).
     pub fn set_sliding(&mut self, sliding: crate::model::Sliding) {
         self.sliding = sliding;

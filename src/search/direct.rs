@@ -5,7 +5,7 @@
 
 use super::*;
 
-impl GlobalSearch {
+impl SearchStage {
     /// The schedule's choice for the next increment: `Some(trigger)` for a global search,
     /// `None` for the local search.
     pub(super) fn decide(&self) -> Option<Trigger> {
@@ -29,8 +29,9 @@ impl GlobalSearch {
 
     /// Runs one increment, global (`Some(trigger)`) or local (`None`); a local increment whose
     /// motion budget is used up is run again globally.
-    pub(super) fn execute(
+    pub(crate) fn execute(
         &mut self,
+        exec: &mut dyn SearchExec,
         positions: &[[f64; 3]],
         mut global: Option<Trigger>,
     ) -> Result<(SearchResult, [u32; STATUS_WORDS])> {
@@ -51,10 +52,7 @@ impl GlobalSearch {
                 None => self.prepare_local(positions)?,
             };
             let local = global.is_none();
-            let (raw, status) = match &mut self.executor {
-                Executor::Gpu(g) => g.run_mode(&prepared, local, true)?,
-                Executor::Cpu(c) => c.run_mode(&prepared, local)?,
-            };
+            let (raw, status) = exec.run_mode(&prepared, local)?;
             if local && Status(status).budget_exceeded() {
                 global = Some(Trigger::Budget);
                 continue;
@@ -79,10 +77,7 @@ impl GlobalSearch {
             };
             if anchoring {
                 let anchors = self.build_anchors(positions, &raw);
-                match &mut self.executor {
-                    Executor::Gpu(g) => g.set_anchors(&anchors)?,
-                    Executor::Cpu(c) => c.set_anchors(&anchors),
-                }
+                exec.set_anchors(&anchors)?;
                 self.anchors = Some(anchors);
                 global = None;
                 anchored_first = true;
@@ -94,7 +89,9 @@ impl GlobalSearch {
             ));
         }
     }
+}
 
+impl GlobalSearch {
     /// One increment like [`GlobalSearch::step`], with the positions read from the caller's own
     /// buffer on this search's GPU (one `vec4<f32>` per model node, model frame; usage
     /// STORAGE, and COPY_SRC for the rare refit below): nothing is uploaded, and the hits are
@@ -109,6 +106,31 @@ impl GlobalSearch {
         positions: &wgpu::Buffer,
         read_hits: bool,
     ) -> Result<SearchResult> {
+        let (stage, exec) = self.parts();
+        stage.step_device(exec, positions, read_hits)
+    }
+
+    /// Runs `STEPS[..first_gpu_step]` on the CPU mirror and the rest on this search's GPU,
+    /// handing the intermediate buffers over: when GPU and CPU disagree, the first split that
+    /// reproduces the CPU result names the step that diverges. On the CPU path it is `run`.
+    pub fn run_split(
+        &mut self,
+        positions: &[[f64; 3]],
+        first_gpu_step: usize,
+    ) -> Result<SearchResult> {
+        let (stage, exec) = self.parts();
+        stage.run_split(exec, positions, first_gpu_step)
+    }
+}
+
+impl SearchStage {
+    /// [`GlobalSearch::step_device`] on `exec`.
+    fn step_device(
+        &mut self,
+        exec: &mut dyn SearchExec,
+        positions: &wgpu::Buffer,
+        read_hits: bool,
+    ) -> Result<SearchResult> {
         if self.frame.is_none() {
             return Err(Error::BadParameter {
                 name: "step_device",
@@ -120,20 +142,10 @@ impl GlobalSearch {
         loop {
             let prepared = self.prepare_device(global.is_none())?;
             let local = global.is_none();
-            let Executor::Gpu(g) = &mut self.executor else {
-                return Err(Error::BadParameter {
-                    name: "step_device",
-                    value: "CPU path".into(),
-                    expected: "a GPU device",
-                });
-            };
-            g.set_device_positions(Some(positions.clone()));
-            let run = g.run_mode(&prepared, local, read_hits);
-            g.set_device_positions(None);
-            let (raw, status) = run?;
+            let (raw, status) = exec.run_on_buffer(&prepared, local, positions, read_hits)?;
             if Status(status).frame_stale() {
-                let host = g.read_positions(positions, prepared.n_nodes)?;
-                return Ok(self.execute(&host, Some(Trigger::Frame))?.0);
+                let host = exec.read_positions(positions, prepared.n_nodes)?;
+                return Ok(self.execute(exec, &host, Some(Trigger::Frame))?.0);
             }
             if local && Status(status).budget_exceeded() {
                 global = Some(Trigger::Budget);
@@ -156,24 +168,15 @@ impl GlobalSearch {
         }
     }
 
-    /// Runs `STEPS[..first_gpu_step]` on the CPU mirror and the rest on this search's GPU,
-    /// handing the intermediate buffers over: when GPU and CPU disagree, the first split that
-    /// reproduces the CPU result names the step that diverges. On the CPU path it is `run`.
-    pub fn run_split(
+    /// [`GlobalSearch::run_split`] on `exec`.
+    fn run_split(
         &mut self,
+        exec: &mut dyn SearchExec,
         positions: &[[f64; 3]],
         first_gpu_step: usize,
     ) -> Result<SearchResult> {
         let prepared = self.prepare(positions)?;
-        let first = first_gpu_step.min(STEPS.len());
-        let (raw, status) = match &mut self.executor {
-            Executor::Gpu(g) => {
-                let mut cpu = CpuSearch::default();
-                let ws = cpu.run_prefix(&prepared, first)?;
-                g.run_split(&prepared, first, ws)?
-            }
-            Executor::Cpu(c) => c.run_mode(&prepared, false)?,
-        };
+        let (raw, status) = exec.run_split(&prepared, first_gpu_step)?;
         self.frame = Some((prepared.grid, prepared.params));
         self.since_global = 0;
         Ok(self.finish(

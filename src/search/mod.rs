@@ -13,6 +13,7 @@
 mod anchors;
 pub(crate) mod brute_force;
 mod direct;
+mod exec;
 mod prepare;
 mod resident;
 pub(crate) mod tree;
@@ -22,13 +23,12 @@ pub use crate::plan::{grid, Prepared, Step, STEPS};
 use crate::abi::search as layout;
 use crate::abi::status::Status;
 use crate::abi::status::STATUS_WORDS;
-use crate::cpu::CpuSearch;
-use crate::device::{Device, DeviceKind};
+use crate::device::Device;
 use crate::error::{Error, Result};
-use crate::gpu::GpuSearch;
 use crate::model::Schedule;
 use crate::model::{validate_positions, MasterSurface, Model, PairId};
 use crate::plan::grid::Grid;
+pub(crate) use exec::SearchExec;
 use layout::{GpuHit, SearchParams, NO_FACET};
 use std::sync::Arc;
 
@@ -197,9 +197,19 @@ pub enum Trigger {
     Anchored,
 }
 
-/// A global search bound to one contact pair and one device; reusable every increment.
+/// A global search bound to one contact pair and one device; reusable every increment: its
+/// stage (the host's data and schedule, [`SearchStage`], whose methods it has through `Deref`)
+/// and the executor chosen once from the device.
 pub struct GlobalSearch {
-    executor: Executor,
+    stage: SearchStage,
+    exec: Box<dyn SearchExec>,
+}
+
+/// The host side of a search: the master and slaves in the kernels' layouts, the schedule, the
+/// frame, small sliding's anchors, and the decoding of hits into [`ContactPoint`]s. The device
+/// work is its executor's (a [`GlobalSearch`] holds one; a `Contact` holds its pairs' in one
+/// increment executor).
+pub struct SearchStage {
     master: MasterSurface,
     radius: f64,
     dim: u32,
@@ -237,21 +247,96 @@ pub struct GlobalSearch {
     resident_span: f64,
 }
 
-#[allow(clippy::large_enum_variant)] // one per search: its size does not matter
-enum Executor {
-    Gpu(Box<GpuSearch>),
-    Cpu(CpuSearch),
+impl std::ops::Deref for GlobalSearch {
+    type Target = SearchStage;
+    fn deref(&self) -> &SearchStage {
+        &self.stage
+    }
+}
+
+impl std::ops::DerefMut for GlobalSearch {
+    fn deref_mut(&mut self) -> &mut SearchStage {
+        &mut self.stage
+    }
 }
 
 impl GlobalSearch {
     /// Prepares the search of contact pair `pair` of `model` on `device` (pipelines compiled,
     /// nothing searched yet).
     pub fn new(device: &Device, model: &Model, pair: PairId) -> Result<Self> {
+        let stage = SearchStage::new(model, pair)?;
+        Ok(Self {
+            stage,
+            exec: exec::for_device(device)?,
+        })
+    }
+
+    /// A search of the nodes `slaves` against `master` (a surface of `model`) within `radius`
+    /// (e.g. the master-on-slave pass of a balanced pair).
+    pub fn from_parts(
+        device: &Device,
+        model: &Model,
+        master: MasterSurface,
+        slaves: Vec<u32>,
+        radius: f64,
+    ) -> Result<Self> {
+        let stage = SearchStage::from_parts(model, master, slaves, radius)?;
+        Ok(Self {
+            stage,
+            exec: exec::for_device(device)?,
+        })
+    }
+
+    /// Folds GPU dispatches into 2D beyond `groups` workgroups per dimension (no effect on the
+    /// CPU path). Meant for tests of the folding, which otherwise needs millions of items.
+    pub fn set_max_workgroups_per_dim(&mut self, groups: u32) {
+        self.exec.set_max_workgroups_per_dim(groups);
+    }
+
+    /// Runs a global search at node positions `positions` (one per model node, model units),
+    /// whatever the schedule (it resets the schedule's count).
+    pub fn run(&mut self, positions: &[[f64; 3]]) -> Result<SearchResult> {
+        self.stage.run_on(&mut *self.exec, positions)
+    }
+
+    /// One increment of finite-sliding tracking: a global search when the schedule calls for
+    /// one (the first increment, every `interval` increments, a used-up motion budget, crowded
+    /// self-contact), the local search otherwise. `stats.trigger` says which ran and why.
+    pub fn step(&mut self, positions: &[[f64; 3]]) -> Result<SearchResult> {
+        self.stage.step(&mut *self.exec, positions)
+    }
+
+    /// The search tree's packed boxes after the last global search (one per heap node, node 0
+    /// unused; local frame, decoded by `abi::boxes::unpack` with the step of
+    /// [`layout::SearchParams::box_margin`]; read back from the GPU on a GPU device): for tests
+    /// of the refit and for debugging.
+    pub fn tree_boxes(&self) -> Result<Vec<[u32; 4]>> {
+        self.exec.tree_boxes()
+    }
+
+    /// A search of `stage` on `device`.
+    pub(crate) fn from_stage(device: &Device, stage: SearchStage) -> Result<Self> {
+        Ok(Self {
+            stage,
+            exec: exec::for_device(device)?,
+        })
+    }
+
+    /// The stage and the executor, borrowed apart.
+    pub(crate) fn parts(&mut self) -> (&mut SearchStage, &mut dyn SearchExec) {
+        (&mut self.stage, &mut *self.exec)
+    }
+}
+
+impl SearchStage {
+    /// The stage of the search of contact pair `pair` of `model`: its radius, anchoring reach,
+    /// schedule and sliding from the pair.
+    pub(crate) fn new(model: &Model, pair: PairId) -> Result<Self> {
         let p = model.pair(pair)?;
         let master = model.surface(p.master)?.clone();
         let slaves = model.node_set(p.slave)?.to_vec();
         let radius = p.search_radius.unwrap_or_else(|| master.mean_facet_size());
-        let mut search = Self::from_parts(device, model, master, slaves, radius)?;
+        let mut search = Self::from_parts(model, master, slaves, radius)?;
         search.set_anchor_reach(p.search_radius);
         if let Some(schedule) = p.schedule {
             search.set_schedule(schedule)?;
@@ -260,10 +345,8 @@ impl GlobalSearch {
         Ok(search)
     }
 
-    /// A search of the nodes `slaves` against `master` (a surface of `model`) within `radius`
-    /// (e.g. the master-on-slave pass of a balanced pair).
-    pub fn from_parts(
-        device: &Device,
+    /// The stage of a search of the nodes `slaves` against `master` within `radius`.
+    pub(crate) fn from_parts(
         model: &Model,
         master: MasterSurface,
         slaves: Vec<u32>,
@@ -284,10 +367,6 @@ impl GlobalSearch {
                 len: model.positions().len(),
             });
         }
-        let executor = match device.kind() {
-            DeviceKind::Gpu(ctx) => Executor::Gpu(Box::new(GpuSearch::new(ctx.clone())?)),
-            DeviceKind::Cpu => Executor::Cpu(CpuSearch::default()),
-        };
         let n_nodes = model.positions().len();
         let mut active_index = vec![u32::MAX; master.facets.len()];
         for (k, &f) in master.active.iter().enumerate() {
@@ -343,7 +422,6 @@ impl GlobalSearch {
             .collect();
         let walk_order = tree::morton_order(&slave_points, model.dim()).into();
         Ok(Self {
-            executor,
             active: master.active.as_slice().into(),
             master,
             facets,
@@ -397,26 +475,23 @@ impl GlobalSearch {
         self.radius
     }
 
-    /// Folds GPU dispatches into 2D beyond `groups` workgroups per dimension (no effect on the
-    /// CPU path). Meant for tests of the folding, which otherwise needs millions of items.
-    pub fn set_max_workgroups_per_dim(&mut self, groups: u32) {
-        if let Executor::Gpu(g) = &mut self.executor {
-            g.set_max_workgroups_per_dim(groups);
-        }
+    /// A global search on `exec` whatever the schedule (see [`GlobalSearch::run`]).
+    pub(crate) fn run_on(
+        &mut self,
+        exec: &mut dyn SearchExec,
+        positions: &[[f64; 3]],
+    ) -> Result<SearchResult> {
+        Ok(self.execute(exec, positions, Some(Trigger::Requested))?.0)
     }
 
-    /// Runs a global search at node positions `positions` (one per model node, model units),
-    /// whatever the schedule (it resets the schedule's count).
-    pub fn run(&mut self, positions: &[[f64; 3]]) -> Result<SearchResult> {
-        Ok(self.execute(positions, Some(Trigger::Requested))?.0)
-    }
-
-    /// One increment of finite-sliding tracking: a global search when the schedule calls for
-    /// one (the first increment, every `interval` increments, a used-up motion budget, crowded
-    /// self-contact), the local search otherwise. `stats.trigger` says which ran and why.
-    pub fn step(&mut self, positions: &[[f64; 3]]) -> Result<SearchResult> {
+    /// One increment of tracking on `exec` (see [`GlobalSearch::step`]).
+    pub(crate) fn step(
+        &mut self,
+        exec: &mut dyn SearchExec,
+        positions: &[[f64; 3]],
+    ) -> Result<SearchResult> {
         let trigger = self.decide();
-        Ok(self.execute(positions, trigger)?.0)
+        Ok(self.execute(exec, positions, trigger)?.0)
     }
 
     /// The active facets in the kernels' layout (padded node ids; a raw hit's `facet` indexes
@@ -445,38 +520,6 @@ impl GlobalSearch {
         self.sliding != crate::model::Sliding::Finite
     }
 
-    /// The GPU executor, if this search runs on one.
-    pub(crate) fn gpu_mut(&mut self) -> Option<&mut GpuSearch> {
-        match &mut self.executor {
-            Executor::Gpu(g) => Some(g),
-            Executor::Cpu(_) => None,
-        }
-    }
-
-    /// The GPU executor, if this search runs on one.
-    pub(crate) fn gpu(&self) -> Option<&GpuSearch> {
-        match &self.executor {
-            Executor::Gpu(g) => Some(g),
-            Executor::Cpu(_) => None,
-        }
-    }
-
-    /// The CPU executor, if this search runs on the CPU path.
-    pub(crate) fn cpu(&self) -> Option<&CpuSearch> {
-        match &self.executor {
-            Executor::Gpu(_) => None,
-            Executor::Cpu(c) => Some(c),
-        }
-    }
-
-    /// The CPU executor, if this search runs on the CPU path.
-    pub(crate) fn cpu_mut(&mut self) -> Option<&mut CpuSearch> {
-        match &mut self.executor {
-            Executor::Gpu(_) => None,
-            Executor::Cpu(c) => Some(c),
-        }
-    }
-
     /// The slave nodes searched, in order.
     pub fn slaves(&self) -> &[u32] {
         &self.slave_ids
@@ -485,17 +528,6 @@ impl GlobalSearch {
     /// The master surface searched.
     pub fn master(&self) -> &MasterSurface {
         &self.master
-    }
-
-    /// The search tree's packed boxes after the last global search (one per heap node, node 0
-    /// unused; local frame, decoded by [`crate::abi::boxes::unpack`] with the step
-    /// [`crate::abi::boxes::box_step`] of [`layout::SearchParams::box_margin`]; read back from the
-    /// GPU on a GPU device): for tests of the refit and for debugging.
-    pub fn tree_boxes(&self) -> Result<Vec<[u32; 4]>> {
-        match &self.executor {
-            Executor::Gpu(g) => g.tree_boxes(),
-            Executor::Cpu(c) => Ok(c.tree_boxes().to_vec()),
-        }
     }
 
     /// The search tree's leaf slots: the active facet of each, `NO_FACET` when empty.

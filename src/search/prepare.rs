@@ -3,7 +3,7 @@
 
 use super::*;
 
-impl GlobalSearch {
+impl SearchStage {
     /// Builds the kernels' input: validates positions, fits the grid, converts to local f32.
     pub fn prepare(&self, positions: &[[f64; 3]]) -> Result<Prepared> {
         if positions.len() != self.masses.len() {

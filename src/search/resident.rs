@@ -3,7 +3,7 @@
 
 use super::*;
 
-impl GlobalSearch {
+impl SearchStage {
     /// Readies this search for device-resident increments at `positions` (the frame's box is
     /// fitted on the device at every global search, within `Grid::cell_budget` cells). The kernels work relative to the origin of the grid the host
     /// fits at `positions` (near the master, snapped to a power of two: [`GlobalSearch::
@@ -14,12 +14,13 @@ impl GlobalSearch {
     /// increment would.
     pub(crate) fn make_resident(
         &mut self,
+        exec: &mut dyn SearchExec,
         positions: &[[f64; 3]],
         caller_frame: bool,
     ) -> Result<()> {
         let anchored = self.sliding != crate::model::Sliding::Finite;
         if anchored && self.anchors.is_none() {
-            self.step(positions)?;
+            self.step(exec, positions)?;
         }
         let mut prep = self.prepare(positions)?;
         prep.params.cell_capacity = Grid::cell_budget(self.facets.len());
@@ -32,13 +33,7 @@ impl GlobalSearch {
         let interval = self.schedule.interval;
         self.resident_origin = Some(origin);
         self.resident_span = self.master_span(positions);
-        match &mut self.executor {
-            Executor::Gpu(g) => g.make_resident(&prep, interval, anchored, frame),
-            Executor::Cpu(c) => {
-                c.make_resident(&prep, interval, anchored, frame);
-                Ok(())
-            }
-        }
+        exec.make_resident(&prep, interval, anchored, frame)
     }
 
     /// Where the master nodes start in the watched nodes: after the slaves, unless the slaves
@@ -80,7 +75,11 @@ impl GlobalSearch {
     /// lose precision there, and contact is only ever near the master), the frame moves to the
     /// grid the host fits at `positions` and the next increment searches globally, which resets
     /// everything that was relative to the old origin. Returns whether it moved.
-    pub(crate) fn rebase_if_far(&mut self, positions: &[[f64; 3]]) -> Result<bool> {
+    pub(crate) fn rebase_if_far(
+        &mut self,
+        exec: &mut dyn SearchExec,
+        positions: &[[f64; 3]],
+    ) -> Result<bool> {
         let o = self.resident_frame();
         let reach = 16.0 * self.resident_span;
         let masters = &self.motion_nodes[self.master_start()..];
@@ -97,10 +96,7 @@ impl GlobalSearch {
         }
         self.resident_origin = Some(prep.grid.frame);
         self.resident_span = self.master_span(positions);
-        match &mut self.executor {
-            Executor::Gpu(g) => g.request_global(),
-            Executor::Cpu(c) => c.request_global(),
-        }
+        exec.request_global();
         Ok(true)
     }
 

@@ -6,24 +6,6 @@
 
 use super::*;
 
-/// abut's own arrays of host-array increments run through the device-resident plan.
-pub(crate) enum HostArrays {
-    /// On a GPU: positions (one buffer per pair, relative to its search's frame), velocities,
-    /// forces, and the staging buffer everything read back goes through.
-    Gpu {
-        x: Vec<wgpu::Buffer>,
-        v: wgpu::Buffer,
-        f: wgpu::Buffer,
-        staging: wgpu::Buffer,
-    },
-    /// On the CPU path: the same as host arrays.
-    Cpu {
-        x: Vec<Vec<[f32; 4]>>,
-        v: Vec<[f32; 4]>,
-        f: Vec<[f32; 4]>,
-    },
-}
-
 /// What the host knows of a pair's schedule in host-array increments (its plan's words, read
 /// back with every increment's forces): enough to tell when the device's schedule will surely
 /// choose the local search, so that the global search's dispatches — which would get zero
@@ -52,7 +34,7 @@ impl HostSchedule {
     /// watched node (tracked slaves included, which the device does not count) has moved less
     /// than half the budget relative to the reference master node since the last global
     /// search — the device's measure (motion.wgsl) — with a margin for f32 round-off.
-    fn surely_local(&self, search: &GlobalSearch, positions: &[[f64; 3]]) -> bool {
+    fn surely_local(&self, search: &SearchStage, positions: &[[f64; 3]]) -> bool {
         let sched = search.schedule();
         if !self.searched
             || self.forced
@@ -77,7 +59,7 @@ impl HostSchedule {
     }
 
     /// Takes in the plan's words after an increment at `positions`.
-    fn update(&mut self, plan: &[u32], search: &GlobalSearch, positions: &[[f64; 3]]) {
+    fn update(&mut self, plan: &[u32], search: &SearchStage, positions: &[[f64; 3]]) {
         self.since_global = plan[PLAN_SINCE_GLOBAL];
         self.searched = plan[PLAN_SEARCHED] != 0;
         self.crowded = plan[PLAN_CROWDED] != 0;
@@ -93,26 +75,6 @@ impl HostSchedule {
     }
 }
 
-/// What one pair's increment left, read back for its output variables.
-struct PairRaw {
-    status: [u32; STATUS_WORDS],
-    /// The plan's words up to the end of its params.
-    plan: Vec<u32>,
-    hits: Vec<GpuHit>,
-    out: Vec<ContactOut>,
-}
-
-/// What a host-array increment reads back: the forces, the statistics, each pair's raw results
-/// (with outputs) and each pair's schedule words.
-type HostResults = (Vec<[f32; 4]>, IncrementStats, Vec<PairRaw>, Vec<Vec<u32>>);
-
-/// Bytes of a pair's output readback: status, plan words up to its slots, hits, outputs.
-fn pair_raw_bytes(n_slaves: usize) -> u64 {
-    (STATUS_WORDS * 4 + PLAN_SLOTS * 4) as u64
-        + n_slaves as u64
-            * (std::mem::size_of::<GpuHit>() + std::mem::size_of::<ContactOut>()) as u64
-}
-
 impl Contact {
     /// The host-array increment (`penalty_step`, inputs validated) through the device-resident
     /// plan on abut's own arrays: positions uploaded relative to the frame's origin (subtracted
@@ -126,52 +88,13 @@ impl Contact {
     ) -> Result<()> {
         if self.mode.is_none() {
             self.make_resident(positions, false)?;
-            let n = self.n_nodes;
-            let arrays = match self.pairs.first().map(|p| &p.exec) {
-                Some(PenaltyExec::Gpu(p)) => {
-                    let ctx = p.context();
-                    let buffer = |label, size: u64, usage| {
-                        ctx.device.create_buffer(&wgpu::BufferDescriptor {
-                            label: Some(label),
-                            size: size.max(16).next_multiple_of(16),
-                            usage,
-                            mapped_at_creation: false,
-                        })
-                    };
-                    let state = wgpu::BufferUsages::STORAGE
-                        | wgpu::BufferUsages::COPY_DST
-                        | wgpu::BufferUsages::COPY_SRC;
-                    let outputs: u64 = self
-                        .pairs
-                        .iter()
-                        .map(|p| pair_raw_bytes(p.setup.areas.len()))
-                        .sum();
-                    HostArrays::Gpu {
-                        x: (0..self.pairs.len())
-                            .map(|_| buffer("positions", n as u64 * 16, state))
-                            .collect(),
-                        v: buffer("velocities", n as u64 * 16, state),
-                        f: buffer("forces", n as u64 * 16, state),
-                        staging: buffer(
-                            "increment readback",
-                            n as u64 * 16 + STATS_BYTES + 64 * self.pairs.len() as u64 + outputs,
-                            wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
-                        ),
-                    }
-                }
-                _ => HostArrays::Cpu {
-                    x: vec![vec![[0.0; 4]; n]; self.pairs.len()],
-                    v: vec![[0.0; 4]; n],
-                    f: vec![[0.0; 4]; n],
-                },
-            };
-            self.mode = Some(Mode::Host(Box::new(arrays)));
+            self.mode = Some(Mode::Host);
         }
         // each pair's positions relative to its search's frame (a pair whose nodes travelled
         // far from it gets a new one, and a global search)
         let mut xs = Vec::with_capacity(self.pairs.len());
-        for pr in &mut self.pairs {
-            if pr.search.rebase_if_far(positions)? {
+        for (k, pr) in self.pairs.iter_mut().enumerate() {
+            if pr.search.rebase_if_far(self.exec.search(k), positions)? {
                 pr.schedule.forced = true;
             }
             let o = pr.search.resident_frame();
@@ -203,10 +126,13 @@ impl Contact {
         for p in &mut self.parts {
             p.update(positions);
         }
-        let mut mode = self.mode.take();
-        let done = self.host_arrays_increment(&mut mode, &xs, &v, &local_only, dt, outputs);
-        self.mode = mode;
-        let (forces, st, raws, plans) = done?;
+        let params = self.pair_params(dt);
+        let inc = Increment {
+            pairs: &self.pairs,
+            params: &params,
+            local_only: &local_only,
+        };
+        let (forces, st, raws, plans) = self.exec.host_increment(&inc, &xs, &v, outputs)?;
         for (pr, plan) in self.pairs.iter_mut().zip(&plans) {
             pr.schedule.update(plan, &pr.search, positions);
         }
@@ -242,7 +168,9 @@ impl Contact {
             for k in 0..self.pairs.len() {
                 let hits = match raws.get(k) {
                     Some(raw) => raw.hits.clone(),
-                    None => self.last_hits(k)?,
+                    None => self
+                        .exec
+                        .last_hits(k, self.pairs[k].search.slaves().len())?,
                 };
                 let pr = &self.pairs[k];
                 let (_, top) = fast_slaves(pr.id, &pr.search, &hits, velocities, dt);
@@ -301,217 +229,5 @@ impl Contact {
             fill_output(&mut pr.output, &raw.out, &pr.setup.areas, result);
         }
         Ok(())
-    }
-
-    /// The raw hits of pair run `k` after the last host-array increment (read back from the
-    /// GPU when it has them).
-    fn last_hits(&self, k: usize) -> Result<Vec<GpuHit>> {
-        let pr = &self.pairs[k];
-        let ns = pr.search.slaves().len();
-        match (&pr.exec, pr.search.gpu()) {
-            (PenaltyExec::Gpu(p), Some(g)) => {
-                let bytes = (ns * std::mem::size_of::<GpuHit>()) as u64;
-                if bytes == 0 {
-                    return Ok(Vec::new());
-                }
-                let ctx = p.context();
-                let staging = ctx.device.create_buffer(&wgpu::BufferDescriptor {
-                    label: Some("hits readback"),
-                    size: bytes,
-                    usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
-                    mapped_at_creation: false,
-                });
-                let mut enc = ctx
-                    .device
-                    .create_command_encoder(&wgpu::CommandEncoderDescriptor {
-                        label: Some("hits readback"),
-                    });
-                enc.copy_buffer_to_buffer(g.resident_outputs().2, 0, &staging, 0, bytes);
-                crate::device::submit(&ctx, enc);
-                let raw = crate::gpu::buffers::read_back(&ctx, &staging, bytes, "hits readback")?;
-                Ok(bytemuck::pod_collect_to_vec(&raw))
-            }
-            _ => {
-                let c = pr.search.cpu().ok_or_else(mixed)?;
-                Ok(c.resident_outputs().2[..ns].to_vec())
-            }
-        }
-    }
-
-    /// Runs one increment on abut's own arrays `mode` (positions `x`, per pair relative to its
-    /// search's frame, velocities `v`); returns the forces, the statistics and, with `outputs`,
-    /// each pair's raw results.
-    fn host_arrays_increment(
-        &mut self,
-        mode: &mut Option<Mode>,
-        x: &[Vec<[f32; 4]>],
-        v: &[[f32; 4]],
-        local_only: &[bool],
-        dt: f64,
-        outputs: bool,
-    ) -> Result<HostResults> {
-        let Some(Mode::Host(arrays)) = mode else {
-            return Err(mixed());
-        };
-        let n = self.n_nodes;
-        match arrays.as_mut() {
-            HostArrays::Gpu {
-                x: xb,
-                v: vb,
-                f: fb,
-                staging,
-            } => {
-                let ctx = match self.pairs.first().map(|p| &p.exec) {
-                    Some(PenaltyExec::Gpu(p)) => p.context(),
-                    _ => return Err(mixed()),
-                };
-                for (b, xk) in xb.iter().zip(x) {
-                    crate::gpu::upload(&ctx, b, 0, bytemuck::cast_slice(xk));
-                }
-                crate::gpu::upload(&ctx, vb, 0, bytemuck::cast_slice(v));
-                let mut enc = ctx
-                    .device
-                    .create_command_encoder(&wgpu::CommandEncoderDescriptor {
-                        label: Some("penalty increment"),
-                    });
-                enc.clear_buffer(fb, 0, None);
-                self.record(
-                    ResidentIo::Gpu {
-                        encoder: &mut enc,
-                        positions: &xb[0],
-                        velocities: vb,
-                        forces: fb,
-                    },
-                    PairPositions::Gpu(xb),
-                    local_only,
-                    dt,
-                    false,
-                )?;
-                let forces_bytes = n as u64 * 16;
-                enc.copy_buffer_to_buffer(fb, 0, staging, 0, forces_bytes);
-                let Some(Resident::Gpu(inc)) = &self.resident else {
-                    return Err(mixed());
-                };
-                enc.copy_buffer_to_buffer(inc.stats(), 0, staging, forces_bytes, STATS_BYTES);
-                let mut offset = forces_bytes + STATS_BYTES;
-                // every pair's schedule words
-                let heads = offset;
-                for pr in &self.pairs {
-                    let g = pr.search.gpu().ok_or_else(mixed)?;
-                    enc.copy_buffer_to_buffer(g.resident_outputs().1, 0, staging, offset, 64);
-                    offset += 64;
-                }
-                let mut layout = Vec::new();
-                if outputs {
-                    for pr in &self.pairs {
-                        let g = pr.search.gpu().ok_or_else(mixed)?;
-                        let PenaltyExec::Gpu(p) = &pr.exec else {
-                            return Err(mixed());
-                        };
-                        let ns = pr.setup.areas.len() as u64;
-                        let (status, plan, hits) = g.resident_outputs();
-                        let start = offset;
-                        for (src, bytes) in [
-                            (status, (STATUS_WORDS * 4) as u64),
-                            (plan, (PLAN_SLOTS * 4) as u64),
-                            (hits, ns * 64),
-                            (p.out_buffer(), ns * 64),
-                        ] {
-                            if bytes > 0 {
-                                enc.copy_buffer_to_buffer(src, 0, staging, offset, bytes);
-                            }
-                            offset += bytes;
-                        }
-                        layout.push((start, ns as usize));
-                    }
-                }
-                crate::device::submit(&ctx, enc);
-                let bytes =
-                    crate::gpu::buffers::read_back(&ctx, staging, offset, "penalty increment")?;
-                ctx.take_uncaptured("penalty increment")?;
-                let forces: Vec<[f32; 4]> =
-                    bytemuck::pod_collect_to_vec(&bytes[..forces_bytes as usize]);
-                let st: IncrementStats = bytemuck::pod_read_unaligned(
-                    &bytes[forces_bytes as usize..(forces_bytes + STATS_BYTES) as usize],
-                );
-                let plans: Vec<Vec<u32>> = (0..self.pairs.len())
-                    .map(|k| {
-                        let o = heads as usize + 64 * k;
-                        bytemuck::pod_collect_to_vec(&bytes[o..o + 64])
-                    })
-                    .collect();
-                let raws = layout
-                    .into_iter()
-                    .map(|(start, ns)| {
-                        let mut o = start as usize;
-                        let mut take = |len: usize| {
-                            let s = &bytes[o..o + len];
-                            o += len;
-                            s
-                        };
-                        let status: [u32; STATUS_WORDS] =
-                            bytemuck::pod_read_unaligned(take(STATUS_WORDS * 4));
-                        let plan: Vec<u32> = bytemuck::pod_collect_to_vec(take(PLAN_SLOTS * 4));
-                        let hits: Vec<GpuHit> = bytemuck::pod_collect_to_vec(take(ns * 64));
-                        let out: Vec<ContactOut> = bytemuck::pod_collect_to_vec(take(ns * 64));
-                        PairRaw {
-                            status,
-                            plan,
-                            hits,
-                            out,
-                        }
-                    })
-                    .collect();
-                Ok((forces, st, raws, plans))
-            }
-            HostArrays::Cpu {
-                x: xa,
-                v: va,
-                f: fa,
-            } => {
-                for (a, xk) in xa.iter_mut().zip(x) {
-                    a.copy_from_slice(xk);
-                }
-                va.copy_from_slice(v);
-                fa.iter_mut().for_each(|f| *f = [0.0; 4]);
-                self.record(
-                    ResidentIo::Cpu {
-                        positions: &xa[0],
-                        velocities: va,
-                        forces: fa,
-                    },
-                    PairPositions::Cpu(xa),
-                    local_only,
-                    dt,
-                    false,
-                )?;
-                let Some(Resident::Cpu { stats: words, .. }) = &self.resident else {
-                    return Err(mixed());
-                };
-                let st: IncrementStats = bytemuck::cast(*words);
-                let mut plans = Vec::new();
-                for pr in &mut self.pairs {
-                    let c = pr.search.cpu_mut().ok_or_else(mixed)?;
-                    plans.push(c.resident_outputs().1[..16].to_vec());
-                }
-                let mut raws = Vec::new();
-                if outputs {
-                    for pr in &mut self.pairs {
-                        let c = pr.search.cpu_mut().ok_or_else(mixed)?;
-                        let (status, plan, hits) = c.resident_outputs();
-                        let PenaltyExec::Cpu(p) = &pr.exec else {
-                            return Err(mixed());
-                        };
-                        raws.push(PairRaw {
-                            status,
-                            plan: plan[..PLAN_SLOTS].to_vec(),
-                            hits: hits.to_vec(),
-                            out: p.out.clone(),
-                        });
-                    }
-                }
-                Ok((fa.clone(), st, raws, plans))
-            }
-        }
     }
 }

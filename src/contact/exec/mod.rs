@@ -1,0 +1,98 @@
+//! The executor of a `Contact`'s penalty increments, chosen once when the `Contact` is made
+//! ([`for_device`]): on a GPU, each pair's search and penalty kernels with the increment's
+//! statistics passes (`gpu.rs`); on the CPU path, their mirrors over host arrays (`cpu.rs`).
+//! It owns every pair's device resources — the search's, the penalty's, the statistics and
+//! abut's own arrays for host-array increments — so that `Contact` drives one increment
+//! through one trait and never asks which executor it has.
+
+mod cpu;
+mod gpu;
+
+use super::{PairRun, ResidentIo};
+use crate::abi::penalty::{ContactOut, PenaltyParams, SlaveState};
+use crate::abi::search::GpuHit;
+use crate::abi::stats::IncrementStats;
+use crate::abi::status::STATUS_WORDS;
+use crate::device::{Device, DeviceKind, GpuContext};
+use crate::error::Result;
+use crate::penalty::PenaltySetup;
+use crate::search::SearchExec;
+use std::sync::Arc;
+
+/// What one pair's increment left, read back for its output variables.
+pub(crate) struct PairRaw {
+    /// The pair's status words.
+    pub status: [u32; STATUS_WORDS],
+    /// The plan's words up to the end of its params.
+    pub plan: Vec<u32>,
+    /// One hit per slave.
+    pub hits: Vec<GpuHit>,
+    /// One penalty result per slave.
+    pub out: Vec<ContactOut>,
+}
+
+/// What a host-array increment reads back: the forces (one `[f32; 4]` per model node), the
+/// statistics, each pair's raw results (with outputs only) and each pair's schedule words.
+pub(crate) type HostResults = (Vec<[f32; 4]>, IncrementStats, Vec<PairRaw>, Vec<Vec<u32>>);
+
+/// One increment's inputs beside the caller's arrays: the pairs (their stages and setups, in
+/// the executor's pair order), their penalty parameters this increment, and which pairs the
+/// host has proved will search locally (their global search is not recorded; empty: none).
+pub(crate) struct Increment<'a> {
+    /// The pairs of the `Contact`.
+    pub pairs: &'a [PairRun],
+    /// Each pair's penalty parameters.
+    pub params: &'a [PenaltyParams],
+    /// Per pair: the schedule surely chooses the local search.
+    pub local_only: &'a [bool],
+}
+
+/// The device work of a `Contact`'s penalty increments. Pair `k` is the `Contact`'s k-th
+/// penalty pass (a balanced pair has two).
+pub(crate) trait IncrementExec: Send {
+    /// Adds the executors of the next pair (its search's and its penalty's, for `setup`).
+    fn add_pair(&mut self, setup: &PenaltySetup) -> Result<()>;
+    /// Pair `k`'s search executor (for its stage to drive).
+    fn search(&mut self, k: usize) -> &mut dyn SearchExec;
+    /// Pair `k`'s per-slave penalty state (read back on a GPU).
+    fn penalty_state(&self, k: usize) -> Result<Vec<SlaveState>>;
+    /// Replaces pair `k`'s per-slave penalty state (as long as its slaves).
+    fn set_penalty_state(&mut self, k: usize, state: &[SlaveState]);
+    /// Readies the increment's statistics once every pair's search is resident (`damping`: the
+    /// largest penalty damping, for the stable increment).
+    fn make_resident(&mut self, pairs: &[PairRun], damping: f32) -> Result<()>;
+    /// Records (GPU) or runs (CPU path) one device-resident increment on the caller's arrays
+    /// `io`, its statistics copied into the lagged ring.
+    fn record(&mut self, io: ResidentIo<'_>, inc: &Increment<'_>) -> Result<()>;
+    /// One host-array increment on abut's own arrays: positions `x` (per pair, relative to its
+    /// search's frame), velocities `v`; the forces, statistics, schedule words and (with
+    /// `outputs`) each pair's raw results come back in one readback.
+    fn host_increment(
+        &mut self,
+        inc: &Increment<'_>,
+        x: &[Vec<[f32; 4]>],
+        v: &[[f32; 4]],
+        outputs: bool,
+    ) -> Result<HostResults>;
+    /// Pair `k`'s hits of the last increment (`n_slaves` of them).
+    fn last_hits(&self, k: usize, n_slaves: usize) -> Result<Vec<GpuHit>>;
+    /// Asks pair `k`'s next increment to search globally.
+    fn request_global(&mut self, k: usize);
+    /// The GPU this executor records on (`None` on the CPU path).
+    fn context(&self) -> Option<Arc<GpuContext>>;
+    /// The device buffer of the last device-resident increment's statistics.
+    fn stats_buffer(&self) -> Option<&wgpu::Buffer>;
+    /// The statistics of the increments finished since the last call, oldest first.
+    fn collect_stats(&mut self) -> Result<Vec<IncrementStats>>;
+    /// Increments whose statistics found the ring (or queue) full.
+    fn dropped_stats(&self) -> u64;
+}
+
+/// The increment executor of `device` for a model of `n_nodes` nodes: the one place a
+/// `Contact` chooses between GPU and CPU.
+pub(crate) fn for_device(device: &Device, n_nodes: usize) -> Box<dyn IncrementExec> {
+    match device.kind() {
+        DeviceKind::Gpu(ctx) => Box::new(gpu::GpuExec::new(ctx.clone(), n_nodes)),
+        DeviceKind::Cpu => Box::new(cpu::CpuExec::new(n_nodes)),
+    }
+}
