@@ -353,6 +353,9 @@ pub fn box_words(levels: u32) -> usize {
 /// it, unused, candidates, the walk's facet, the first leaf slot left to the chunks, the walk's
 /// distance² bits, unused.
 pub const BEST_WORDS: usize = 8;
+/// Most workgroups per dimension of the chunks' indirect dispatch (WebGPU's default limit;
+/// WGSL: `MAX_GROUPS_PER_DIM` in nearest_facet.wgsl).
+pub const MAX_GROUPS_PER_DIM: u32 = 65_535;
 
 /// The SearchParams words of a plan.
 pub fn plan_params(plan: &[u32]) -> SearchParams {

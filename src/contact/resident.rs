@@ -90,7 +90,7 @@ impl Contact {
                 .make_resident(self.exec.search(k), positions, caller_frame)?;
             damping = damping.max(pr.setup.params.damping);
         }
-        self.exec.make_resident(&self.pairs, damping)
+        self.exec.make_resident(damping)
     }
 
     /// Records one device-resident penalty increment of increment `dt` (seconds; the penalty
@@ -106,6 +106,48 @@ impl Contact {
     /// Slaves moving farther than the search radius relative to the master near them are
     /// counted in the statistics ([`crate::IncrementStats::fast_nodes`]).
     pub fn encode_increment(&mut self, io: ResidentIo<'_>, dt: f64) -> Result<()> {
+        self.begin_device_increment(dt)?;
+        let params = self.pair_params(dt);
+        let inc = Increment {
+            pairs: &self.pairs,
+            params: &params,
+            local_only: &[],
+        };
+        self.exec.record(io, &inc)
+    }
+
+    /// The GPU against its CPU mirror, entry by entry: one device-resident increment (as
+    /// [`Contact::encode_increment`], on abut's own encoder, submitted and waited for) whose
+    /// first `first_gpu` entries — kernels of one pair, in the order the increment runs them —
+    /// run on the CPU mirrors and the rest on this GPU, every buffer the increment writes
+    /// (each pair's search, penalty and statistics arrays and the caller's forces) read back
+    /// before and written back after. Returns how many entries the increment has (`first_gpu`
+    /// at or beyond it runs all of them on the CPU). When the two executors disagree, the
+    /// smallest split that reproduces the CPU's result names the first kernel that diverges.
+    /// The caller's buffers need COPY_SRC (and COPY_DST for the forces). Errors on the CPU path.
+    pub fn run_split(
+        &mut self,
+        positions: &wgpu::Buffer,
+        velocities: &wgpu::Buffer,
+        forces: &wgpu::Buffer,
+        dt: f64,
+        first_gpu: usize,
+    ) -> Result<usize> {
+        self.begin_device_increment(dt)?;
+        let mut twin =
+            super::exec::cpu::CpuExec::twin(&self.pairs, self.n_nodes, &self.initial_positions)?;
+        let params = self.pair_params(dt);
+        let inc = Increment {
+            pairs: &self.pairs,
+            params: &params,
+            local_only: &[],
+        };
+        self.exec
+            .run_split(positions, velocities, forces, &inc, first_gpu, &mut twin)
+    }
+
+    /// The checks before a device-resident increment of `dt`; the first readies the pairs.
+    fn begin_device_increment(&mut self, dt: f64) -> Result<()> {
         positive_dt(dt)?;
         if let Some(pr) = self
             .pairs
@@ -133,13 +175,7 @@ impl Contact {
                 })
             }
         }
-        let params = self.pair_params(dt);
-        let inc = Increment {
-            pairs: &self.pairs,
-            params: &params,
-            local_only: &[],
-        };
-        self.exec.record(io, &inc)
+        Ok(())
     }
 
     /// Each pair's penalty parameters for an increment of `dt` (the first fixes the reference

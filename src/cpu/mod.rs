@@ -12,6 +12,7 @@
 pub mod anchor;
 pub mod common;
 pub mod gather;
+pub(crate) mod increment;
 pub mod integrate;
 pub mod local_search;
 pub mod motion;
@@ -361,58 +362,26 @@ impl CpuPenalty {
         }
     }
 
-    /// Runs nodal_normals, penalty and gather (scatter_forces, gather).
-    pub fn run(
+    /// The bytes of the array holding role `buf` (`None` for a role it does not hold), sized
+    /// for `setup` as the GPU's buffers are: what a split increment hands over.
+    pub(crate) fn role_bytes(
         &mut self,
+        buf: crate::abi::passes::Buf,
         setup: &crate::penalty::PenaltySetup,
-        pp: &crate::abi::penalty::PenaltyParams,
-        prep: &Prepared,
-        vel: &[[f32; 4]],
-        hits: &[GpuHit],
-        status: &mut [u32; STATUS_WORDS],
-    ) {
-        crate::abi::status::reset(status, crate::abi::status::Owner::Penalty);
-        let n_slaves = pp.n_slaves as usize;
-        nodal_normals::nodal_normals(
-            pp,
-            &prep.nodes,
-            &prep.facets,
-            &setup.pair_nodes,
-            &setup.adjacency,
-            &mut self.normals,
-        );
-        self.out.resize(n_slaves, bytemuck::Zeroable::zeroed());
-        penalty::penalty(
-            pp,
-            setup.friction,
-            &prep.nodes,
-            vel,
-            &prep.facets,
-            hits,
-            &self.normals,
-            &mut self.state,
-            &mut self.out,
-            status,
-        );
-        self.acc.clear();
+    ) -> Option<&mut [u8]> {
+        use crate::abi::passes::Buf;
+        self.out
+            .resize(setup.areas.len(), bytemuck::Zeroable::zeroed());
         self.acc
             .resize(setup.pair_nodes.len() * ACC_WORDS_PER_NODE, 0);
-        gather::scatter_forces(
-            pp,
-            &setup.facet_nodes,
-            hits,
-            &self.out,
-            status,
-            &mut self.acc,
-        );
         self.forces.resize(setup.pair_nodes.len(), [0.0; 4]);
-        gather::gather(
-            pp,
-            &setup.pair_nodes,
-            &self.out,
-            status,
-            &mut self.acc,
-            &mut self.forces,
-        );
+        Some(match buf {
+            Buf::Normals => bytemuck::cast_slice_mut(&mut self.normals),
+            Buf::State => bytemuck::cast_slice_mut(&mut self.state),
+            Buf::Out => bytemuck::cast_slice_mut(&mut self.out),
+            Buf::Acc => bytemuck::cast_slice_mut(&mut self.acc),
+            Buf::Forces => bytemuck::cast_slice_mut(&mut self.forces),
+            _ => return None,
+        })
     }
 }

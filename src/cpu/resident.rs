@@ -2,11 +2,13 @@
 //! (`gpu::global_search::resident`), pass for pass through the mirrors, on f32 host arrays laid
 //! out as the caller's device buffers would be.
 
-use super::{anchor, local_search, motion, run_step, schedule, to_local, CpuSearch};
+use super::{CpuSearch, CpuWorkspace};
+use crate::abi::passes::Buf;
 use crate::abi::search::*;
 use crate::abi::status::STATUS_WORDS;
-use crate::error::{Error, Result};
-use crate::plan::{Prepared, STEPS};
+use crate::error::Result;
+use crate::plan::increment::{initial_plan, PairShape, Slots};
+use crate::plan::Prepared;
 
 /// What a CPU search keeps for its device-resident increments.
 #[derive(Clone, Debug)]
@@ -19,18 +21,43 @@ pub(crate) struct CpuResident {
     /// The nearest-facet chunk dispatch (x, y, z).
     args: [u32; 3],
     anchored: bool,
+    /// The plan's dispatch slots.
+    slots: Slots,
+}
+
+/// A resident search's arrays, borrowed for one kernel (`cpu::increment`).
+pub(crate) struct SearchArrays<'a> {
+    /// The pair's constants and its grid-local nodes (updated in place).
+    pub prep: &'a mut Prepared,
+    /// The frame the caller's positions are relative to.
+    pub frame: &'a FrameParams,
+    /// The plan words.
+    pub plan: &'a mut [u32],
+    /// The chunk dispatch.
+    pub args: &'a mut [u32; 3],
+    /// Small sliding's anchors (empty otherwise).
+    pub anchors: &'a [Anchor],
+    /// Everything else the kernels write.
+    pub ws: &'a mut CpuWorkspace,
 }
 
 impl CpuSearch {
-    /// Readies this search for device-resident increments (see `GpuSearch::make_resident`).
+    /// Readies this search for device-resident increments (see `GpuSearch::make_resident`);
+    /// the plan's slots folded beyond `max_dim` workgroups, as a GPU with that limit folds them.
     pub(crate) fn make_resident(
         &mut self,
         prep: &Prepared,
         interval: u32,
         anchored: bool,
         frame_origin: [f32; 3],
-    ) {
-        let plan = fresh_plan(&prep.params, interval);
+        max_dim: u32,
+    ) -> Result<()> {
+        let (plan, slots) = initial_plan(
+            &prep.params,
+            interval,
+            prep.motion_nodes.len() as u32,
+            max_dim,
+        )?;
         self.ws.boxes.resize(
             crate::abi::search::box_words(prep.params.tree_levels),
             [0; 4],
@@ -51,7 +78,37 @@ impl CpuSearch {
             plan,
             args: [0; 3],
             anchored,
+            slots,
         }));
+        Ok(())
+    }
+
+    /// The shape of this search's part of an increment (`None` before `make_resident`).
+    pub(crate) fn pair_shape(&self, n_pair_nodes: u32, local_only: bool) -> Option<PairShape> {
+        let r = self.resident.as_ref()?;
+        Some(PairShape {
+            anchored: r.anchored,
+            self_contact: r.prep.params.flags & FLAG_SELF_CONTACT != 0,
+            local_only,
+            n_nodes: r.prep.n_nodes as u32,
+            n_motion_nodes: r.prep.motion_nodes.len() as u32,
+            n_slaves: r.prep.slaves.len() as u32,
+            n_pair_nodes,
+            slots: r.slots.clone(),
+        })
+    }
+
+    /// The arrays of a resident search (`None` before `make_resident`).
+    pub(crate) fn arrays(&mut self) -> Option<SearchArrays<'_>> {
+        let r = self.resident.as_deref_mut()?;
+        Some(SearchArrays {
+            prep: &mut r.prep,
+            frame: &r.frame,
+            plan: &mut r.plan,
+            args: &mut r.args,
+            anchors: self.anchors.as_deref().unwrap_or(&[]),
+            ws: &mut self.ws,
+        })
     }
 
     /// The status words, plan and hits of the last device-resident increment.
@@ -63,9 +120,30 @@ impl CpuSearch {
         (self.ws.status, plan, &self.ws.hits)
     }
 
-    /// The plan words of the device-resident increments (the statistics read them).
-    pub(crate) fn resident_plan_mut(&mut self) -> Option<&mut [u32]> {
-        self.resident.as_mut().map(|r| r.plan.as_mut_slice())
+    /// The bytes of the array holding role `buf` of a resident search (`None` for a role it
+    /// does not write, or before `make_resident`), every array sized as the GPU's buffer of
+    /// the same role is used: the arrays a split increment hands over.
+    pub(crate) fn role_bytes(&mut self, buf: Buf) -> Option<&mut [u8]> {
+        let r = self.resident.as_deref_mut()?;
+        let ws = &mut self.ws;
+        let n = r.prep.slaves.len();
+        ws.work
+            .resize(ScanLevels::new(n as u32 + 1).words as usize, 0);
+        ws.best.resize(n * BEST_WORDS, 0);
+        ws.walk_points.resize(n, [0; 4]);
+        Some(match buf {
+            Buf::Nodes => bytemuck::cast_slice_mut(&mut r.prep.nodes),
+            Buf::Status => bytemuck::cast_slice_mut(&mut ws.status),
+            Buf::Hits => bytemuck::cast_slice_mut(super::hits_mut(&mut ws.hits)),
+            Buf::Reference => bytemuck::cast_slice_mut(&mut ws.reference),
+            Buf::Plan => bytemuck::cast_slice_mut(&mut r.plan),
+            Buf::Args => bytemuck::cast_slice_mut(&mut r.args),
+            Buf::Boxes => bytemuck::cast_slice_mut(&mut ws.boxes),
+            Buf::Work => bytemuck::cast_slice_mut(&mut ws.work),
+            Buf::Best => bytemuck::cast_slice_mut(&mut ws.best),
+            Buf::WalkPoints => bytemuck::cast_slice_mut(&mut ws.walk_points),
+            _ => return None,
+        })
     }
 
     /// Asks the next device-resident increment to search globally.
@@ -73,94 +151,5 @@ impl CpuSearch {
         if let Some(r) = self.resident.as_mut() {
             r.plan[PLAN_FORCE] = 1;
         }
-    }
-
-    /// One device-resident increment's search on the CPU: `positions` as the caller's device
-    /// buffer would hold them (`[f32; 4]` per model node, model frame). Returns the status words
-    /// and the grid-local nodes and hits the penalty passes read; `plan` words are updated as
-    /// the GPU's are.
-    pub(crate) fn step_resident(
-        &mut self,
-        positions: &[[f32; 4]],
-    ) -> Result<([u32; STATUS_WORDS], &Prepared, &[GpuHit])> {
-        let Some(r) = self.resident.as_mut() else {
-            return Err(Error::BadParameter {
-                name: "device-resident increment",
-                value: "a search not made resident".into(),
-                expected: "make_resident first",
-            });
-        };
-        if positions.len() < r.prep.n_nodes {
-            return Err(Error::LengthMismatch {
-                what: "device positions (one vec4 per model node)",
-                expected: r.prep.n_nodes,
-                got: positions.len(),
-            });
-        }
-        let mut status = self.ws.status;
-        crate::abi::status::reset(&mut status, crate::abi::status::Owner::Search);
-        let mut params: SearchParams = bytemuck::pod_read_unaligned(bytemuck::cast_slice(
-            &r.plan[PLAN_PARAMS..PLAN_PARAMS + 24],
-        ));
-        let prep = &mut r.prep;
-        to_local::to_local(
-            &params,
-            &r.frame,
-            positions,
-            &mut prep.nodes,
-            &prep.adjacency,
-            &mut status,
-        );
-        if r.anchored {
-            let anchors = self.anchors.as_deref().unwrap_or(&[]);
-            anchor::anchor(
-                &params,
-                &prep.nodes,
-                &prep.facets,
-                &prep.slaves,
-                anchors,
-                &mut status,
-                super::hits_mut(&mut self.ws.hits),
-                &prep.adjacency,
-            );
-            self.ws.status = status;
-            return Ok((status, &r.prep, &self.ws.hits));
-        }
-        motion::motion(
-            &params,
-            &prep.nodes,
-            &self.ws.reference,
-            &prep.motion_nodes,
-            &mut status,
-            &self.ws.hits,
-        );
-        schedule::schedule(&mut r.plan, &mut status, &mut r.args);
-        params = plan_params(&r.plan);
-        if r.plan[PLAN_GLOBAL] == 0 {
-            local_search::local_search(
-                &params,
-                &prep.nodes,
-                &prep.facets,
-                &prep.slaves,
-                &prep.adjacency,
-                &mut status,
-                super::hits_mut(&mut self.ws.hits),
-            );
-        } else {
-            prep.params = params;
-            self.ws.status = status;
-            for step in STEPS {
-                run_step(step, &params, prep, &mut self.ws);
-            }
-            status = self.ws.status;
-            motion::set_reference(
-                &params,
-                &prep.nodes,
-                &mut self.ws.reference,
-                &prep.motion_nodes,
-            );
-        }
-        self.ws.status = status;
-        Ok((status, &r.prep, &self.ws.hits))
     }
 }

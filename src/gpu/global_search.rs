@@ -187,7 +187,7 @@ impl GpuSearch {
             nodes: GrowBuffer::new(device, "nodes", 0, storage | U::COPY_SRC),
             facets: GrowBuffer::new(device, "facets", 0, storage),
             slaves: GrowBuffer::new(device, "slaves", 0, storage),
-            walk_points: GrowBuffer::new(device, "walk points", 0, storage),
+            walk_points: GrowBuffer::new(device, "walk points", 0, storage | U::COPY_SRC),
             order: GrowBuffer::new(device, "tree order", 0, storage),
             boxes: GrowBuffer::new(device, "tree boxes", 0, storage | U::COPY_SRC),
             status: device.create_buffer(&wgpu::BufferDescriptor {
@@ -202,24 +202,24 @@ impl GpuSearch {
                 usage: U::COPY_SRC | U::COPY_DST,
                 mapped_at_creation: false,
             }),
-            hits: GrowBuffer::new(device, "hits", 0, U::STORAGE | U::COPY_SRC),
+            hits: GrowBuffer::new(device, "hits", 0, storage | U::COPY_SRC),
             readback: GrowBuffer::new(device, "readback", 0, U::MAP_READ | U::COPY_DST),
-            reference: GrowBuffer::new(device, "reference positions", 0, storage),
+            reference: GrowBuffer::new(device, "reference positions", 0, storage | U::COPY_SRC),
             adjacency: GrowBuffer::new(device, "node facets", 0, storage),
             motion_nodes: GrowBuffer::new(device, "motion nodes", 0, storage),
             anchors: GrowBuffer::new(device, "anchors", 0, storage),
-            work: GrowBuffer::new(device, "nearest-facet work items", 0, storage),
+            work: GrowBuffer::new(device, "nearest-facet work items", 0, storage | U::COPY_SRC),
             work_scan_params: GrowBuffer::new(
                 device,
                 "work scan params",
                 4 * UNIFORM_STRIDE,
                 U::UNIFORM | U::COPY_DST,
             ),
-            best: GrowBuffer::new(device, "nearest-facet records", 0, storage),
+            best: GrowBuffer::new(device, "nearest-facet records", 0, storage | U::COPY_SRC),
             args: device.create_buffer(&wgpu::BufferDescriptor {
                 label: Some("nearest-facet dispatch"),
                 size: 16,
-                usage: U::STORAGE | U::INDIRECT,
+                usage: U::STORAGE | U::INDIRECT | U::COPY_SRC | U::COPY_DST,
                 mapped_at_creation: false,
             }),
             plan: device.create_buffer(&wgpu::BufferDescriptor {
@@ -337,6 +337,25 @@ impl GpuSearch {
     }
 
     /// The buffer this search holds for each role a pass binds (the scan's are per level).
+    /// The buffer of role `buf` that a device-resident increment writes (`None` for a role
+    /// it only reads): what a split increment hands over.
+    pub(crate) fn role_buffer(&self, buf: Buf) -> Option<&wgpu::Buffer> {
+        let b = &self.buffers;
+        Some(match buf {
+            Buf::Nodes => &b.nodes.buffer,
+            Buf::Status => &b.status,
+            Buf::Hits => &b.hits.buffer,
+            Buf::Reference => &b.reference.buffer,
+            Buf::Plan => &b.plan,
+            Buf::Args => &b.args,
+            Buf::Boxes => &b.boxes.buffer,
+            Buf::Work => &b.work.buffer,
+            Buf::Best => &b.best.buffer,
+            Buf::WalkPoints => &b.walk_points.buffer,
+            _ => return None,
+        })
+    }
+
     fn resource(&self, buf: Buf) -> Option<wgpu::BindingResource<'_>> {
         let b = &self.buffers;
         Some(match buf {

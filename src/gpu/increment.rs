@@ -6,12 +6,11 @@
 use std::sync::atomic::{AtomicU8, Ordering};
 use std::sync::Arc;
 
-use crate::abi::groups;
 use crate::abi::passes::{self, Buf};
-use crate::abi::search::ITEM_WORKGROUP;
 use crate::abi::stats::{IncrementStats, STATS_BYTES, STATS_RESET_WORDS};
 use crate::device::GpuContext;
 use crate::error::{Error, Result};
+use crate::plan::increment::{Entry, Kernel};
 use wgpu::BufferUsages as U;
 
 /// Staging buffers in the statistics ring: how many increments the host may fall behind before
@@ -34,7 +33,6 @@ struct Slot {
 struct PairGroups {
     pair_stats: wgpu::BindGroup,
     bound_max: wgpu::BindGroup,
-    n_pair_nodes: u32,
 }
 
 /// Rows, statistics and their ring for the device-resident increments of one `Contact`.
@@ -63,7 +61,7 @@ impl GpuIncrement {
         ctx: Arc<GpuContext>,
         n_nodes: usize,
         damping: f32,
-        pairs: &[(&wgpu::Buffer, &wgpu::Buffer, &wgpu::Buffer, u32)],
+        pairs: &[(&wgpu::Buffer, &wgpu::Buffer, &wgpu::Buffer)],
     ) -> Result<Self> {
         let d = &ctx.device;
         let scope = d.push_error_scope(wgpu::ErrorFilter::Validation);
@@ -81,7 +79,11 @@ impl GpuIncrement {
                     mapped_at_creation: false,
                 })
             };
-            let rows = buffer("bound rows", n_nodes as u64 * 4, U::STORAGE | U::COPY_DST);
+            let rows = buffer(
+                "bound rows",
+                n_nodes as u64 * 4,
+                U::STORAGE | U::COPY_DST | U::COPY_SRC,
+            );
             let stats = buffer(
                 "increment statistics",
                 STATS_BYTES,
@@ -100,7 +102,7 @@ impl GpuIncrement {
                 _ => None,
             })?;
             let mut groups = Vec::new();
-            for &(status, plan, pair_nodes, n_pair_nodes) in pairs {
+            for &(status, plan, pair_nodes) in pairs {
                 let resource = |b| {
                     Some(match b {
                         Buf::Status => status.as_entire_binding(),
@@ -114,7 +116,6 @@ impl GpuIncrement {
                 groups.push(PairGroups {
                     pair_stats: super::bind(d, &pair_stats, &passes::PAIR_STATS, resource)?,
                     bound_max: super::bind(d, &bound_max, &passes::BOUND_MAX, resource)?,
-                    n_pair_nodes,
                 });
             }
             let ring = (0..STATS_RING)
@@ -173,41 +174,25 @@ impl GpuIncrement {
         );
     }
 
-    /// Pair `k`'s statistics (after its passes).
-    pub(crate) fn pair_dispatch(&self, k: usize) -> super::GroupWork<'_> {
-        let g = &self.pairs[k];
-        (
-            &groups::STATS_PAIR,
-            vec![super::Dispatch::Direct((
-                &self.pair_stats,
-                &g.pair_stats,
-                1,
-                1,
-            ))],
-        )
+    /// The buffer of role `buf` that the statistics passes write (`None` otherwise).
+    pub(crate) fn role_buffer(&self, buf: Buf) -> Option<&wgpu::Buffer> {
+        match buf {
+            Buf::Rows => Some(&self.rows),
+            Buf::Stats => Some(&self.stats),
+            _ => None,
+        }
     }
 
-    /// The end of an increment: the bound's largest row and the stable increment.
-    pub(crate) fn finish_dispatch(&self) -> super::GroupWork<'_> {
-        let mut work: Vec<super::Dispatch<'_>> = self
-            .pairs
-            .iter()
-            .map(|g| {
-                super::Dispatch::Direct((
-                    &self.bound_max,
-                    &g.bound_max,
-                    g.n_pair_nodes,
-                    ITEM_WORKGROUP,
-                ))
-            })
-            .collect();
-        work.push(super::Dispatch::Direct((
-            &self.finish_stats,
-            &self.finish_group,
-            1,
-            1,
-        )));
-        (&groups::STATS_FINISH, work)
+    /// The dispatch of entry `e` if it is a statistics kernel: a pair's status words into the
+    /// statistics (after its passes), a pair's largest bound row, the stable increment.
+    pub(crate) fn dispatch(&self, e: &Entry) -> Option<super::Dispatch<'_>> {
+        let (pipe, group) = match e.kernel {
+            Kernel::PairStats => (&self.pair_stats, &self.pairs.get(e.pair)?.pair_stats),
+            Kernel::BoundMax => (&self.bound_max, &self.pairs.get(e.pair)?.bound_max),
+            Kernel::FinishStats => (&self.finish_stats, &self.finish_group),
+            _ => return None,
+        };
+        super::direct_dispatch(pipe, group, e.size)
     }
 
     /// Encodes, after the increment's compute pass, a copy of the statistics into a free staging

@@ -83,6 +83,39 @@ pub(crate) enum Dispatch<'a> {
     ),
 }
 
+/// The dispatch of a plan entry of `size` with `pipe` and `group`: direct for items known when
+/// recording, indirect from the search's `plan` words or chunk `args` for what the device
+/// decides.
+pub(crate) fn entry_dispatch<'a>(
+    pipe: &'a wgpu::ComputePipeline,
+    group: &'a wgpu::BindGroup,
+    size: crate::plan::increment::Size,
+    plan: &'a wgpu::Buffer,
+    args: &'a wgpu::Buffer,
+) -> Dispatch<'a> {
+    use crate::plan::increment::Size;
+    match size {
+        Size::Items(n, per) => Dispatch::Direct((pipe, group, n, per)),
+        Size::Slot(offset) => Dispatch::Indirect(pipe, group, plan, offset),
+        Size::Chunks => Dispatch::Indirect(pipe, group, args, 0),
+    }
+}
+
+/// The dispatch of a plan entry of `size` that is known when recording (`None` for a size the
+/// device decides: only a search's kernels have those).
+pub(crate) fn direct_dispatch<'a>(
+    pipe: &'a wgpu::ComputePipeline,
+    group: &'a wgpu::BindGroup,
+    size: crate::plan::increment::Size,
+) -> Option<Dispatch<'a>> {
+    match size {
+        crate::plan::increment::Size::Items(n, per) => {
+            Some(Dispatch::Direct((pipe, group, n, per)))
+        }
+        _ => None,
+    }
+}
+
 /// A declared group (`abi::groups`) and the dispatches recorded under its label.
 pub(crate) type GroupWork<'a> = (&'static crate::abi::groups::Group, Vec<Dispatch<'a>>);
 

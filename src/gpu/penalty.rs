@@ -5,14 +5,13 @@ use std::sync::Arc;
 
 use super::buffers::GrowBuffer;
 use super::global_search::SharedBuffers;
-use crate::abi::groups;
 use crate::abi::passes::{self, Buf};
 use crate::abi::penalty::ACC_WORDS_PER_NODE;
 use crate::abi::penalty::{PenaltyParams, SlaveState};
-use crate::abi::search::ITEM_WORKGROUP;
 use crate::device::GpuContext;
 use crate::error::{Error, Result};
 use crate::penalty::PenaltySetup;
+use crate::plan::increment::{Entry, Kernel};
 use wgpu::BufferUsages as U;
 
 struct Pipelines {
@@ -44,7 +43,6 @@ pub struct GpuPenalty {
     acc: wgpu::Buffer,
     forces: wgpu::Buffer,
     n_slaves: u32,
-    n_pair_nodes: u32,
     /// Device-resident increments: the bind groups on the caller's buffers, keyed by the
     /// search's generation and the (velocities, forces, rows) buffers.
     resident: Option<ResidentGroups>,
@@ -189,18 +187,17 @@ impl GpuPenalty {
                 d,
                 "nodal normals",
                 n_nodes as u64 * 16,
-                U::STORAGE | U::COPY_DST,
+                U::STORAGE | U::COPY_DST | U::COPY_SRC,
             ),
             pair_nodes,
             adjacency,
             state,
             out: storage(d, "contact outputs", out_bytes, U::COPY_SRC),
             facet_nodes,
-            acc: storage(d, "fixed-point force sums", acc_bytes, U::empty()),
+            acc: storage(d, "fixed-point force sums", acc_bytes, U::COPY_SRC),
             forces: storage(d, "pair forces", n_pair_nodes as u64 * 16, U::COPY_SRC),
             pipelines,
             n_slaves,
-            n_pair_nodes,
             resident: None,
             resident_params: None,
             ctx,
@@ -259,31 +256,34 @@ impl GpuPenalty {
         Ok(())
     }
 
-    /// The dispatches of the penalty part of one device-resident increment (after its search's):
-    /// normals, penalty, the fixed-point gather, and each pair node's force added into the
-    /// caller's buffer and its bound row into the rows.
-    pub(crate) fn resident_dispatches(&self) -> Vec<super::GroupWork<'_>> {
-        use super::Dispatch::Direct;
-        let r = self.resident.as_ref().expect("prepared");
+    /// The buffer of role `buf` that the penalty passes write (`None` otherwise): what a split
+    /// increment hands over.
+    pub(crate) fn role_buffer(&self, buf: Buf) -> Option<&wgpu::Buffer> {
+        Some(match buf {
+            Buf::Normals => &self.normals.buffer,
+            Buf::State => &self.state,
+            Buf::Out => &self.out,
+            Buf::Acc => &self.acc,
+            Buf::Forces => &self.forces,
+            _ => return None,
+        })
+    }
+
+    /// The dispatch of entry `e` if it is a penalty kernel (after `prepare_resident`): normals,
+    /// penalty, the fixed-point gather, and each pair node's force added into the caller's buffer
+    /// and its bound row into the rows.
+    pub(crate) fn dispatch(&self, e: &Entry) -> Option<super::Dispatch<'_>> {
+        let r = self.resident.as_ref()?;
         let (g, p) = (&r.groups, &self.pipelines);
-        let iw = ITEM_WORKGROUP;
-        vec![
-            (
-                &groups::NORMALS_PENALTY,
-                vec![
-                    Direct((&p.nodal_normals, &g.nodal_normals, self.n_pair_nodes, iw)),
-                    Direct((&p.penalty, &g.penalty, self.n_slaves, iw)),
-                ],
-            ),
-            (
-                &groups::SCATTER_GATHER_ADD,
-                vec![
-                    Direct((&p.scatter, &g.scatter, self.n_slaves, iw)),
-                    Direct((&p.gather, &g.gather, self.n_pair_nodes, iw)),
-                    Direct((&p.add_forces, &r.add_forces, self.n_pair_nodes, iw)),
-                ],
-            ),
-        ]
+        let (pipe, group) = match e.kernel {
+            Kernel::NodalNormals => (&p.nodal_normals, &g.nodal_normals),
+            Kernel::Penalty => (&p.penalty, &g.penalty),
+            Kernel::ScatterForces => (&p.scatter, &g.scatter),
+            Kernel::Gather => (&p.gather, &g.gather),
+            Kernel::AddForces => (&p.add_forces, &r.add_forces),
+            _ => return None,
+        };
+        super::direct_dispatch(pipe, group, e.size)
     }
 
     fn build_resident_groups(

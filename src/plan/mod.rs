@@ -4,6 +4,7 @@
 //! neither executor depends on a stage.
 
 pub mod grid;
+pub(crate) mod increment;
 
 use std::sync::Arc;
 

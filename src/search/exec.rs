@@ -148,8 +148,8 @@ impl SearchExec for CpuSearch {
         anchored: bool,
         frame: [f32; 3],
     ) -> Result<()> {
-        CpuSearch::make_resident(self, prep, interval, anchored, frame);
-        Ok(())
+        // the plan's slots as a GPU with WebGPU's default limit folds them
+        CpuSearch::make_resident(self, prep, interval, anchored, frame, 65_535)
     }
 
     fn request_global(&mut self) {

@@ -36,6 +36,28 @@ impl SearchStage {
         exec.make_resident(&prep, interval, anchored, frame)
     }
 
+    /// Readies a second executor (`exec`, the CPU twin of a split increment) as this search's
+    /// was made resident: the same preparation, frame, schedule and anchors (the arrays the
+    /// increments write are the twin's to take from the first).
+    pub(crate) fn make_twin_resident(
+        &self,
+        exec: &mut dyn SearchExec,
+        positions: &[[f64; 3]],
+        caller_frame: bool,
+    ) -> Result<()> {
+        let mut prep = self.prepare(positions)?;
+        prep.params.cell_capacity = Grid::cell_budget(self.facets.len());
+        let frame = if caller_frame {
+            self.resident_frame().map(|o| o as f32)
+        } else {
+            [0.0; 3]
+        };
+        if let Some(anchors) = &self.anchors {
+            exec.set_anchors(anchors)?;
+        }
+        exec.make_resident(&prep, self.schedule.interval, self.is_anchored(), frame)
+    }
+
     /// Where the master nodes start in the watched nodes: after the slaves, unless the slaves
     /// are master nodes themselves (self-contact), when every watched node is one.
     pub(super) fn master_start(&self) -> usize {

@@ -3,15 +3,18 @@
 //! GPU's increment pass for pass on f32 host arrays laid out as its buffers are.
 
 use super::{HostResults, Increment, IncrementExec, PairRaw};
+use crate::abi::passes::Buf;
 use crate::abi::penalty::SlaveState;
 use crate::abi::search::{GpuHit, PLAN_SLOTS};
 use crate::abi::stats::{IncrementStats, STATS_RESET_WORDS, STATS_WORDS};
 use crate::contact::ResidentIo;
-use crate::cpu::{gather, stats, CpuPenalty, CpuSearch};
+use crate::cpu::increment::{run_entry, IncrementArrays, PairArrays};
+use crate::cpu::{CpuPenalty, CpuSearch};
 use crate::device::GpuContext;
 use crate::error::{Error, Result};
 use crate::gpu::STATS_RING;
 use crate::penalty::PenaltySetup;
+use crate::plan::increment::Entry;
 use crate::search::SearchExec;
 use std::sync::Arc;
 
@@ -89,34 +92,10 @@ impl CpuExec {
                 });
             }
         }
+        let entries = self.entries(inc)?;
+        self.reset()?;
+        self.run_entries(&entries, positions, velocities, forces, inc)?;
         let r = self.resident.as_mut().ok_or_else(not_resident)?;
-        r.rows.iter_mut().for_each(|x| *x = 0.0);
-        r.stats[..STATS_RESET_WORDS].copy_from_slice(&crate::abi::stats::reset_image());
-        for (k, ((pair, pr), pp)) in self
-            .pairs
-            .iter_mut()
-            .zip(inc.pairs)
-            .zip(inc.params)
-            .enumerate()
-        {
-            let x = positions.get(k).unwrap_or(&positions[0]);
-            let (mut status, prep, hits) = pair.search.step_resident(x)?;
-            pair.penalty
-                .run(&pr.setup, pp, prep, velocities, hits, &mut status);
-            gather::add_forces(
-                pp,
-                &pr.setup.pair_nodes,
-                &pair.penalty.forces,
-                forces,
-                &mut r.rows,
-            );
-            let plan = pair.search.resident_plan_mut().ok_or_else(not_resident)?;
-            stats::pair_stats(&status, plan, &mut r.stats);
-        }
-        for pr in inc.pairs {
-            stats::bound_max(&pr.setup.pair_nodes, &r.rows, &mut r.stats);
-        }
-        stats::finish_stats(&mut r.stats);
         if ring {
             if r.queue.len() < STATS_RING {
                 r.queue.push(bytemuck::cast(r.stats));
@@ -125,6 +104,118 @@ impl CpuExec {
             }
         }
         Ok(())
+    }
+}
+
+impl CpuExec {
+    /// The CPU twin of `pairs`' executor for a split increment: the same pairs made resident
+    /// at `positions` (the model's) in the caller's frame, their arrays to be read back from
+    /// the other executor.
+    pub(crate) fn twin(
+        pairs: &[crate::contact::PairRun],
+        n_nodes: usize,
+        positions: &[[f64; 3]],
+    ) -> Result<Self> {
+        let mut twin = Self::new(n_nodes);
+        for (k, pr) in pairs.iter().enumerate() {
+            twin.add_pair(&pr.setup)?;
+            pr.search
+                .make_twin_resident(twin.search(k), positions, true)?;
+        }
+        twin.make_resident(0.0)?;
+        Ok(twin)
+    }
+
+    /// The increment's entries for `inc`'s pairs (`plan::increment`).
+    pub(super) fn entries(&self, inc: &Increment<'_>) -> Result<Vec<Entry>> {
+        let shapes = self
+            .pairs
+            .iter()
+            .zip(inc.pairs)
+            .enumerate()
+            .map(|(k, (p, pr))| {
+                let local_only = inc.local_only.get(k).copied().unwrap_or(false);
+                p.search
+                    .pair_shape(pr.setup.pair_nodes.len() as u32, local_only)
+            })
+            .collect::<Option<Vec<_>>>()
+            .ok_or_else(not_resident)?;
+        Ok(crate::plan::increment::increment(&shapes))
+    }
+
+    /// What the GPU's copies do before its compute pass: every status word, the rows and the
+    /// statistics reset.
+    pub(super) fn reset(&mut self) -> Result<()> {
+        for p in &mut self.pairs {
+            p.search.arrays().ok_or_else(not_resident)?.ws.status =
+                crate::abi::status::reset_image();
+        }
+        let r = self.resident.as_mut().ok_or_else(not_resident)?;
+        r.rows.iter_mut().for_each(|x| *x = 0.0);
+        r.stats[..STATS_RESET_WORDS].copy_from_slice(&crate::abi::stats::reset_image());
+        Ok(())
+    }
+
+    /// Runs `entries` in order, each through its kernel's mirror (`cpu::increment`), on the
+    /// positions of each pair's search (one array for all, or one per pair).
+    pub(super) fn run_entries(
+        &mut self,
+        entries: &[Entry],
+        positions: &[&[[f32; 4]]],
+        velocities: &[[f32; 4]],
+        forces: &mut [[f32; 4]],
+        inc: &Increment<'_>,
+    ) -> Result<()> {
+        let r = self.resident.as_mut().ok_or_else(not_resident)?;
+        for e in entries {
+            let k = e.pair;
+            let pair = &mut self.pairs[k];
+            let search = pair.search.arrays().ok_or_else(not_resident)?;
+            run_entry(
+                e,
+                PairArrays {
+                    search,
+                    penalty: &mut pair.penalty,
+                    setup: &inc.pairs[k].setup,
+                    params: &inc.params[k],
+                },
+                IncrementArrays {
+                    positions: positions.get(k).unwrap_or(&positions[0]),
+                    velocities,
+                    forces,
+                    rows: &mut r.rows,
+                    stats: &mut r.stats,
+                },
+            );
+        }
+        Ok(())
+    }
+
+    /// The bytes of role `buf` of pair `pair` (`None`: the increment's own), sized as the GPU's
+    /// buffer of that role is used (`setup`: the pair's).
+    pub(super) fn role_bytes(
+        &mut self,
+        pair: Option<usize>,
+        buf: Buf,
+        setup: &PenaltySetup,
+    ) -> Option<&mut [u8]> {
+        match pair {
+            Some(k) => {
+                let p = self.pairs.get_mut(k)?;
+                match p.search.role_bytes(buf) {
+                    Some(b) => Some(b),
+                    None => p.penalty.role_bytes(buf, setup),
+                }
+            }
+            None => {
+                let r = self.resident.as_mut()?;
+                match buf {
+                    Buf::Rows => Some(bytemuck::cast_slice_mut(&mut r.rows)),
+                    Buf::Stats => Some(bytemuck::cast_slice_mut(&mut r.stats)),
+                    _ => None,
+                }
+            }
+        }
     }
 }
 
@@ -149,7 +240,7 @@ impl IncrementExec for CpuExec {
         self.pairs[k].penalty.state.copy_from_slice(state)
     }
 
-    fn make_resident(&mut self, _: &[crate::contact::PairRun], damping: f32) -> Result<()> {
+    fn make_resident(&mut self, damping: f32) -> Result<()> {
         self.resident = Some(Resident {
             rows: vec![0.0; self.n_nodes],
             stats: crate::abi::stats::first_image(damping),
@@ -218,6 +309,22 @@ impl IncrementExec for CpuExec {
             }
         }
         Ok((forces, st, raws, plans))
+    }
+
+    fn run_split(
+        &mut self,
+        _: &wgpu::Buffer,
+        _: &wgpu::Buffer,
+        _: &wgpu::Buffer,
+        _: &Increment<'_>,
+        _: usize,
+        _: &mut CpuExec,
+    ) -> Result<usize> {
+        Err(Error::BadParameter {
+            name: "run_split",
+            value: "CPU path".into(),
+            expected: "a GPU device (a split runs part of an increment on each executor)",
+        })
     }
 
     fn last_hits(&self, k: usize, n_slaves: usize) -> Result<Vec<GpuHit>> {

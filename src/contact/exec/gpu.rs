@@ -3,6 +3,7 @@
 //! list of dispatch groups recorded into one compute pass.
 
 use super::{HostResults, Increment, IncrementExec, PairRaw};
+use crate::abi::passes::Buf;
 use crate::abi::penalty::{ContactOut, SlaveState};
 use crate::abi::search::{GpuHit, PLAN_SLOTS};
 use crate::abi::stats::{IncrementStats, STATS_BYTES};
@@ -10,8 +11,9 @@ use crate::abi::status::STATUS_WORDS;
 use crate::contact::ResidentIo;
 use crate::device::GpuContext;
 use crate::error::{Error, Result};
-use crate::gpu::{GpuIncrement, GpuPenalty, GpuSearch};
+use crate::gpu::{GpuIncrement, GpuPenalty, GpuSearch, GroupWork};
 use crate::penalty::PenaltySetup;
+use crate::plan::increment::Entry;
 use crate::search::SearchExec;
 use std::sync::Arc;
 
@@ -83,6 +85,29 @@ impl GpuExec {
         inc: &Increment<'_>,
         ring: bool,
     ) -> Result<()> {
+        let max_dim = self.prepare(positions, velocities, forces, inc)?;
+        let entries = self.entries(inc)?;
+        self.inc()?.begin(encoder);
+        for pair in &self.pairs {
+            pair.search.resident_copies(encoder);
+        }
+        self.record_entries(encoder, &entries, max_dim)?;
+        let stats = self.inc()?;
+        if ring {
+            stats.end(encoder);
+        }
+        stats.take_uncaptured()
+    }
+
+    /// What may allocate or upload before an increment is recorded: the caller's buffers
+    /// checked, bind groups on them, the penalty parameters. Returns the folding limit.
+    fn prepare(
+        &mut self,
+        positions: Positions<'_>,
+        velocities: &wgpu::Buffer,
+        forces: &wgpu::Buffer,
+        inc: &Increment<'_>,
+    ) -> Result<u32> {
         for (what, b) in [("device velocities", velocities), ("device forces", forces)] {
             if b.size() < self.n_nodes as u64 * 16
                 || !b.usage().contains(wgpu::BufferUsages::STORAGE)
@@ -95,9 +120,7 @@ impl GpuExec {
             }
         }
         let stats = self.inc.as_deref_mut().ok_or_else(not_resident)?;
-        stats.begin(encoder);
         let mut max_dim = u32::MAX;
-        // what may allocate or upload first: bind groups on the caller's buffers, params
         for (k, (pair, params)) in self.pairs.iter_mut().zip(inc.params).enumerate() {
             pair.search.prepare_resident(match positions {
                 Positions::PerPair(b) => &b[k],
@@ -114,16 +137,56 @@ impl GpuExec {
                 stats.rows(),
             )?;
         }
-        // then the copies (resets) and one compute pass for every pair's dispatches
-        let mut groups = Vec::new();
-        for (k, pair) in self.pairs.iter().enumerate() {
-            pair.search.resident_copies(encoder);
-            let local_only = inc.local_only.get(k).copied().unwrap_or(false);
-            groups.extend(pair.search.resident_dispatches(local_only));
-            groups.extend(pair.penalty.resident_dispatches());
-            groups.push(stats.pair_dispatch(k));
+        Ok(max_dim)
+    }
+
+    /// The increment's entries for `inc`'s pairs (`plan::increment`).
+    fn entries(&self, inc: &Increment<'_>) -> Result<Vec<Entry>> {
+        let shapes = self
+            .pairs
+            .iter()
+            .zip(inc.pairs)
+            .enumerate()
+            .map(|(k, (p, pr))| {
+                let local_only = inc.local_only.get(k).copied().unwrap_or(false);
+                p.search
+                    .pair_shape(pr.setup.pair_nodes.len() as u32, local_only)
+            })
+            .collect::<Option<Vec<_>>>()
+            .ok_or_else(not_resident)?;
+        Ok(crate::plan::increment::increment(&shapes))
+    }
+
+    /// Records `entries` into one compute pass: each entry's dispatch from the search, penalty
+    /// or statistics kernels of its pair, under its group's label.
+    fn record_entries(
+        &self,
+        encoder: &mut wgpu::CommandEncoder,
+        entries: &[Entry],
+        max_dim: u32,
+    ) -> Result<()> {
+        let stats = self.inc.as_deref().ok_or_else(not_resident)?;
+        let mut groups: Vec<GroupWork<'_>> = Vec::new();
+        for e in entries {
+            let pair = &self.pairs[e.pair];
+            let work = pair
+                .search
+                .dispatch(e)
+                .or_else(|| pair.penalty.dispatch(e))
+                .or_else(|| stats.dispatch(e))
+                .ok_or_else(|| Error::Gpu {
+                    during: "recording a device-resident increment".into(),
+                    message: format!(
+                        "no dispatch for {} of pair {}",
+                        e.kernel.pass().entry,
+                        e.pair
+                    ),
+                })?;
+            match groups.last_mut() {
+                Some((g, w)) if std::ptr::eq(*g, e.group) => w.push(work),
+                _ => groups.push((e.group, vec![work])),
+            }
         }
-        groups.push(stats.finish_dispatch());
         crate::gpu::record_groups(
             &self.ctx,
             encoder,
@@ -131,11 +194,27 @@ impl GpuExec {
             &groups,
             max_dim,
         );
-        drop(groups);
-        if ring {
-            stats.end(encoder);
+        Ok(())
+    }
+
+    /// The GPU buffer of role `buf` of pair `pair` (`None`: the increment's own, or the
+    /// caller's forces).
+    fn role_buffer<'a>(
+        &'a self,
+        pair: Option<usize>,
+        buf: Buf,
+        forces: &'a wgpu::Buffer,
+    ) -> Option<&'a wgpu::Buffer> {
+        match pair {
+            Some(k) => {
+                let p = self.pairs.get(k)?;
+                p.search
+                    .role_buffer(buf)
+                    .or_else(|| p.penalty.role_buffer(buf))
+            }
+            None if buf == Buf::HostForces => Some(forces),
+            None => self.inc.as_deref()?.role_buffer(buf),
         }
-        stats.take_uncaptured()
     }
 
     /// abut's own buffers for host-array increments of `inc`'s pairs.
@@ -290,19 +369,13 @@ impl IncrementExec for GpuExec {
         self.pairs[k].penalty.write_state(state)
     }
 
-    fn make_resident(&mut self, pairs: &[crate::contact::PairRun], damping: f32) -> Result<()> {
+    fn make_resident(&mut self, damping: f32) -> Result<()> {
         let parts: Vec<_> = self
             .pairs
             .iter()
-            .zip(pairs)
-            .map(|(p, pr)| {
+            .map(|p| {
                 let (status, plan, _) = p.search.resident_outputs();
-                (
-                    status,
-                    plan,
-                    p.penalty.pair_nodes_buffer(),
-                    pr.setup.pair_nodes.len() as u32,
-                )
+                (status, plan, p.penalty.pair_nodes_buffer())
             })
             .collect();
         self.inc = Some(Box::new(GpuIncrement::new(
@@ -348,6 +421,123 @@ impl IncrementExec for GpuExec {
         let done = self.host_increment_on(&host, inc, x, v, outputs);
         self.host = Some(host);
         done
+    }
+
+    fn run_split(
+        &mut self,
+        positions: &wgpu::Buffer,
+        velocities: &wgpu::Buffer,
+        forces: &wgpu::Buffer,
+        inc: &Increment<'_>,
+        first_gpu: usize,
+        twin: &mut super::cpu::CpuExec,
+    ) -> Result<usize> {
+        for (what, b, usage) in [
+            ("device positions", positions, wgpu::BufferUsages::COPY_SRC),
+            (
+                "device velocities",
+                velocities,
+                wgpu::BufferUsages::COPY_SRC,
+            ),
+            (
+                "device forces",
+                forces,
+                wgpu::BufferUsages::COPY_SRC | wgpu::BufferUsages::COPY_DST,
+            ),
+        ] {
+            if !b.usage().contains(usage) {
+                return Err(Error::BadParameter {
+                    name: what,
+                    value: format!("usage {:?}", b.usage()),
+                    expected: "COPY_SRC (and COPY_DST for forces): a split increment reads the \
+                               caller's buffers back and writes the forces",
+                });
+            }
+        }
+        let max_dim = self.prepare(Positions::Shared(positions), velocities, forces, inc)?;
+        let entries = self.entries(inc)?;
+        let k = first_gpu.min(entries.len());
+        let ctx = self.ctx.clone();
+        // every role the increment writes, read back into the twin, with the caller's arrays
+        let n4 = self.n_nodes * 16;
+        let mut roles: Vec<(Option<usize>, Buf)> = Vec::new();
+        for &(buf, per_pair) in &super::HANDED_OVER {
+            if per_pair {
+                roles.extend((0..self.pairs.len()).map(|p| (Some(p), buf)));
+            } else if buf != Buf::HostForces {
+                roles.push((None, buf));
+            }
+        }
+        let mut sources: Vec<(&wgpu::Buffer, usize)> = vec![(positions, n4), (velocities, n4)];
+        sources.push((forces, n4));
+        for &(pair, buf) in &roles {
+            let setup = &inc.pairs[pair.unwrap_or(0)].setup;
+            let len = twin.role_bytes(pair, buf, setup).map_or(0, |b| b.len());
+            let gpu = self
+                .role_buffer(pair, buf, forces)
+                .ok_or_else(|| missing_role(buf))?;
+            sources.push((gpu, len));
+        }
+        let total: usize = sources.iter().map(|s| s.1).sum();
+        let staging = ctx.device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("split increment readback"),
+            size: (total as u64).max(16),
+            usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
+            mapped_at_creation: false,
+        });
+        let mut enc = ctx
+            .device
+            .create_command_encoder(&wgpu::CommandEncoderDescriptor {
+                label: Some("split increment readback"),
+            });
+        let mut offset = 0u64;
+        for &(b, len) in &sources {
+            if len > 0 {
+                enc.copy_buffer_to_buffer(b, 0, &staging, offset, len as u64);
+            }
+            offset += len as u64;
+        }
+        crate::device::submit(&ctx, enc);
+        let bytes =
+            crate::gpu::buffers::read_back(&ctx, &staging, total as u64, "split increment")?;
+        let mut host: Vec<Vec<[f32; 4]>> = (0..3)
+            .map(|i| bytemuck::pod_collect_to_vec(&bytes[i * n4..(i + 1) * n4]))
+            .collect();
+        let mut at = 3 * n4;
+        for &(pair, buf) in &roles {
+            let setup = &inc.pairs[pair.unwrap_or(0)].setup;
+            if let Some(dst) = twin.role_bytes(pair, buf, setup) {
+                dst.copy_from_slice(&bytes[at..at + dst.len()]);
+                at += dst.len();
+            }
+        }
+        // the twin: the resets the GPU's copies do, then the entries before the split
+        let mut f = host.pop().unwrap_or_default();
+        twin.reset()?;
+        twin.run_entries(&entries[..k], &[&host[0]], &host[1], &mut f, inc)?;
+        // everything written back, and the rest of the increment here
+        for &(pair, buf) in &roles {
+            let setup = &inc.pairs[pair.unwrap_or(0)].setup;
+            let gpu = self
+                .role_buffer(pair, buf, forces)
+                .ok_or_else(|| missing_role(buf))?;
+            if let Some(src) = twin.role_bytes(pair, buf, setup) {
+                if !src.is_empty() {
+                    crate::gpu::upload(&ctx, gpu, 0, src);
+                }
+            }
+        }
+        crate::gpu::upload(&ctx, forces, 0, bytemuck::cast_slice(&f));
+        let mut enc = ctx
+            .device
+            .create_command_encoder(&wgpu::CommandEncoderDescriptor {
+                label: Some("split increment"),
+            });
+        self.record_entries(&mut enc, &entries[k..], max_dim)?;
+        self.inc()?.end(&mut enc);
+        crate::device::submit(&ctx, enc);
+        self.inc()?.take_uncaptured()?;
+        Ok(entries.len())
     }
 
     fn last_hits(&self, k: usize, n_slaves: usize) -> Result<Vec<GpuHit>> {
@@ -404,6 +594,15 @@ fn not_resident() -> Error {
         name: "device-resident increment",
         value: "pairs not made resident".into(),
         expected: "the first increment readies them",
+    }
+}
+
+/// The error of a role no executor buffer holds (a bug: `HANDED_OVER` and the executors
+/// disagree).
+fn missing_role(buf: Buf) -> Error {
+    Error::Gpu {
+        during: "a split increment".into(),
+        message: format!("no buffer holds {buf:?}"),
     }
 }
 

@@ -5,10 +5,11 @@
 //! abut's own arrays for host-array increments — so that `Contact` drives one increment
 //! through one trait and never asks which executor it has.
 
-mod cpu;
+pub(crate) mod cpu;
 mod gpu;
 
 use super::{PairRun, ResidentIo};
+use crate::abi::passes::Buf;
 use crate::abi::penalty::{ContactOut, PenaltyParams, SlaveState};
 use crate::abi::search::GpuHit;
 use crate::abi::stats::IncrementStats;
@@ -60,7 +61,7 @@ pub(crate) trait IncrementExec: Send {
     fn set_penalty_state(&mut self, k: usize, state: &[SlaveState]);
     /// Readies the increment's statistics once every pair's search is resident (`damping`: the
     /// largest penalty damping, for the stable increment).
-    fn make_resident(&mut self, pairs: &[PairRun], damping: f32) -> Result<()>;
+    fn make_resident(&mut self, damping: f32) -> Result<()>;
     /// Records (GPU) or runs (CPU path) one device-resident increment on the caller's arrays
     /// `io`, its statistics copied into the lagged ring.
     fn record(&mut self, io: ResidentIo<'_>, inc: &Increment<'_>) -> Result<()>;
@@ -74,6 +75,21 @@ pub(crate) trait IncrementExec: Send {
         v: &[[f32; 4]],
         outputs: bool,
     ) -> Result<HostResults>;
+    /// One device-resident increment on the caller's GPU buffers, its entries `..first_gpu`
+    /// run by `twin` (a CPU executor whose pairs were made resident as these) and the rest
+    /// here, every role the increment writes ([`HANDED_OVER`]) read back into the twin
+    /// before and written back after; submitted and waited for. Returns the number of entries.
+    /// The CPU path refuses it.
+    #[allow(clippy::too_many_arguments)]
+    fn run_split(
+        &mut self,
+        positions: &wgpu::Buffer,
+        velocities: &wgpu::Buffer,
+        forces: &wgpu::Buffer,
+        inc: &Increment<'_>,
+        first_gpu: usize,
+        twin: &mut cpu::CpuExec,
+    ) -> Result<usize>;
     /// Pair `k`'s hits of the last increment (`n_slaves` of them).
     fn last_hits(&self, k: usize, n_slaves: usize) -> Result<Vec<GpuHit>>;
     /// Asks pair `k`'s next increment to search globally.
@@ -88,11 +104,92 @@ pub(crate) trait IncrementExec: Send {
     fn dropped_stats(&self) -> u64;
 }
 
+/// Every role a device-resident increment writes, per pair (`true`) or once (`false`): what a
+/// split increment hands from one executor to the other. `tests` check it against the passes'
+/// declared access.
+pub(crate) const HANDED_OVER: [(Buf, bool); 18] = [
+    (Buf::Nodes, true),
+    (Buf::Status, true),
+    (Buf::Hits, true),
+    (Buf::Reference, true),
+    (Buf::Plan, true),
+    (Buf::Args, true),
+    (Buf::Boxes, true),
+    (Buf::Work, true),
+    (Buf::Best, true),
+    (Buf::WalkPoints, true),
+    (Buf::Normals, true),
+    (Buf::State, true),
+    (Buf::Out, true),
+    (Buf::Acc, true),
+    (Buf::Forces, true),
+    (Buf::Rows, false),
+    (Buf::Stats, false),
+    (Buf::HostForces, false),
+];
+
 /// The increment executor of `device` for a model of `n_nodes` nodes: the one place a
 /// `Contact` chooses between GPU and CPU.
 pub(crate) fn for_device(device: &Device, n_nodes: usize) -> Box<dyn IncrementExec> {
     match device.kind() {
         DeviceKind::Gpu(ctx) => Box::new(gpu::GpuExec::new(ctx.clone(), n_nodes)),
         DeviceKind::Cpu => Box::new(cpu::CpuExec::new(n_nodes)),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::abi::passes::Access;
+    use crate::plan::increment::Kernel;
+
+    /// Every buffer an increment's kernel may write is handed over by a split increment, so
+    /// that a split at any entry leaves each executor what the other wrote.
+    #[test]
+    fn a_split_hands_over_every_role_the_increment_writes() {
+        use Kernel::*;
+        let kernels = [
+            ToLocal,
+            Anchor,
+            Motion,
+            Schedule,
+            LocalSearch,
+            TreeRefit,
+            WalkStart,
+            NearestWalk,
+            ScanBlocks,
+            ScanAdd,
+            NearestArgs,
+            NearestChunks,
+            NearestTies,
+            NearestCrowded,
+            NearestFacet,
+            SetReference,
+            NodalNormals,
+            Penalty,
+            ScatterForces,
+            Gather,
+            AddForces,
+            PairStats,
+            BoundMax,
+            FinishStats,
+        ];
+        for k in kernels {
+            for b in k.pass().bindings {
+                let buf = match b.buf {
+                    // the scan's data is the work items
+                    Buf::ScanData => Buf::Work,
+                    other => other,
+                };
+                if b.access == Access::ReadWrite {
+                    assert!(
+                        HANDED_OVER.iter().any(|(h, _)| *h == buf),
+                        "{} writes {:?}, which a split does not hand over",
+                        k.pass().entry,
+                        b.buf
+                    );
+                }
+            }
+        }
     }
 }

@@ -3,32 +3,12 @@
 //! device (`schedule.wgsl`) and carried out through indirect dispatches, nothing read back.
 
 use super::{scan_level, tree_pass, GpuSearch, UNIFORM_STRIDE};
-use crate::abi::groups;
 use crate::abi::passes::{self, Buf};
 use crate::abi::search::*;
 use crate::error::{Error, Result};
+use crate::plan::increment::{initial_plan, Entry, Kernel, PairShape, Slots};
 use crate::plan::Prepared;
 use wgpu::BufferUsages as U;
-
-/// The dispatch slots of a search's plan: each names the byte offset of its live indirect
-/// arguments in the plan buffer.
-#[derive(Clone, Debug, Default)]
-struct Slots {
-    /// Local increments: one invocation per slave (local_search).
-    local_slaves: u64,
-    /// Global: one per node of each refit pass's bottom level (tree_refit).
-    tree_passes: Vec<u64>,
-    /// Global: one per block of each level of the work-item scan.
-    work_levels: Vec<u64>,
-    /// Global: one per slave (nearest_walk, nearest_crowded, nearest_facet).
-    slaves: u64,
-    /// Global: one per group of `WALK_GROUP` slaves (walk_start).
-    slave_groups: u64,
-    /// Global: one invocation (nearest_args).
-    one: u64,
-    /// Global: one per watched node (set_reference).
-    motion_nodes: u64,
-}
 
 /// What a search keeps for its device-resident increments.
 pub(crate) struct ResidentSearch {
@@ -71,66 +51,6 @@ struct Groups {
     work_scan_add: Vec<wgpu::BindGroup>,
     /// to_local on the caller's positions buffer.
     to_local: Option<(wgpu::Buffer, wgpu::BindGroup)>,
-}
-
-/// Appends a slot of `items` items, `per` per workgroup, of `kind` to the plan words; returns
-/// the byte offset of its live arguments.
-fn add_slot(plan: &mut [u32], items: u32, per: u32, kind: u32, max_dim: u32) -> Result<u64> {
-    let k = plan[PLAN_N_SLOTS] as usize;
-    if k >= MAX_PLAN_SLOTS {
-        return Err(Error::Gpu {
-            during: "planning a device-resident increment".into(),
-            message: format!("more than {MAX_PLAN_SLOTS} dispatch slots"),
-        });
-    }
-    let (x, y) = fold_dispatch(items, per, max_dim);
-    let s = PLAN_SLOTS + k * PLAN_SLOT_WORDS;
-    plan[s..s + 8].copy_from_slice(&[0, 0, 0, 0, x, y, 1, kind]);
-    plan[PLAN_N_SLOTS] += 1;
-    Ok(4 * s as u64)
-}
-
-/// The words of a fresh plan for `params` (the device's grid, flags and capacities) and a
-/// schedule interval, with its dispatch slots.
-fn initial_plan(
-    params: &SearchParams,
-    interval: u32,
-    work_levels: &ScanLevels,
-    n_nodes_watched: u32,
-    max_dim: u32,
-) -> Result<(Vec<u32>, Slots)> {
-    let mut plan = fresh_plan(params, interval);
-    let (g, l) = (SLOT_GLOBAL, SLOT_LOCAL);
-    let iw = ITEM_WORKGROUP;
-    let mut slots = Slots {
-        local_slaves: add_slot(&mut plan, params.n_slaves, iw, l, max_dim)?,
-        ..Default::default()
-    };
-    for tp in tree_passes(params.tree_levels) {
-        slots.tree_passes.push(add_slot(
-            &mut plan,
-            1 << tp.bottom,
-            TREE_WORKGROUP,
-            g,
-            max_dim,
-        )?);
-    }
-    for level in &work_levels.levels {
-        slots
-            .work_levels
-            .push(add_slot(&mut plan, level.1, SCAN_BLOCK, g, max_dim)?);
-    }
-    slots.slaves = add_slot(&mut plan, params.n_slaves, iw, g, max_dim)?;
-    slots.slave_groups = add_slot(
-        &mut plan,
-        params.n_slaves.div_ceil(WALK_GROUP),
-        iw,
-        g,
-        max_dim,
-    )?;
-    slots.one = add_slot(&mut plan, 1, 1, g, max_dim)?;
-    slots.motion_nodes = add_slot(&mut plan, n_nodes_watched, iw, g, max_dim)?;
-    Ok((plan, slots))
 }
 
 impl GpuSearch {
@@ -197,7 +117,6 @@ impl GpuSearch {
         let (plan, slots) = initial_plan(
             &params,
             interval,
-            &work_levels,
             prep.motion_nodes.len() as u32,
             self.max_workgroups_per_dim,
         )?;
@@ -381,114 +300,53 @@ impl GpuSearch {
         enc.copy_buffer_to_buffer(&b.status_reset, 0, &b.status, 0, b.status.size());
     }
 
-    /// The dispatches of the search part of one device-resident increment (after
-    /// `prepare_resident` and `resident_copies`): the positions into the local frame, then
-    /// (finite sliding) the motion budget, the schedule and the local or the global search
-    /// through the plan's indirect dispatches, or (small sliding) the anchors. `local_only`:
-    /// the caller knows the schedule will choose the local search (host arrays, whose host
-    /// checks the same rules with margin), so the global search's dispatches, which would get
-    /// zero workgroups, are not recorded at all.
-    pub(crate) fn resident_dispatches(&self, local_only: bool) -> Vec<super::super::GroupWork<'_>> {
-        use super::super::Dispatch::{Direct, Indirect};
-        let r = self.resident.as_ref().expect("resident");
-        let g = r.groups.as_ref().expect("prepared");
-        let (p, b) = (&self.pipelines, &self.buffers);
-        let iw = ITEM_WORKGROUP;
-        let to_local = &g.to_local.as_ref().expect("prepared").1;
-        if r.anchored {
-            return vec![(
-                &groups::TO_LOCAL_ANCHOR,
-                vec![
-                    Direct((&p.to_local, to_local, r.n_nodes, iw)),
-                    Direct((&p.anchor, &g.anchor, r.n_slaves, iw)),
-                ],
-            )];
-        }
-        let s = &r.slots;
-        let plan = &b.plan;
-        let mut global: Vec<_> = s
-            .tree_passes
-            .iter()
-            .zip(&g.tree_refit)
-            .map(|(&slot, group)| Indirect(&p.tree_refit, group, plan, slot))
-            .collect();
-        global.push(Indirect(&p.walk_start, &g.walk_start, plan, s.slave_groups));
-        global.push(Indirect(&p.nearest_walk, &g.nearest_walk, plan, s.slaves));
-        for (i, &slot) in s.work_levels.iter().enumerate() {
-            global.push(Indirect(&p.scan_blocks, &g.work_scan_blocks[i], plan, slot));
-        }
-        for i in (0..s.work_levels.len().saturating_sub(1)).rev() {
-            global.push(Indirect(
-                &p.scan_add,
-                &g.work_scan_add[i],
-                plan,
-                s.work_levels[i],
-            ));
-        }
-        global.push(Indirect(&p.nearest_args, &g.nearest_args, plan, s.one));
-        global.push(Indirect(&p.nearest_chunks, &g.nearest_chunks, &b.args, 0));
-        global.push(Indirect(&p.nearest_ties, &g.nearest_ties, &b.args, 0));
-        if r.self_contact {
-            global.push(Indirect(
-                &p.nearest_crowded,
-                &g.nearest_crowded,
-                plan,
-                s.slaves,
-            ));
-        }
-        global.push(Indirect(&p.nearest_facet, &g.nearest_facet, plan, s.slaves));
-        global.push(Indirect(
-            &r.set_reference,
-            &g.set_reference,
-            plan,
-            s.motion_nodes,
-        ));
-        let mut groups = vec![
-            (
-                &groups::TO_LOCAL_MOTION_SCHEDULE,
-                vec![
-                    Direct((&p.to_local, to_local, r.n_nodes, iw)),
-                    Direct((&p.motion, &g.motion, r.n_motion_nodes, iw)),
-                    Direct((&r.schedule, &g.schedule, 1, 1)),
-                ],
-            ),
-            (
-                &groups::LOCAL,
-                vec![Indirect(
-                    &p.local_search,
-                    &g.local_search,
-                    plan,
-                    s.local_slaves,
-                )],
-            ),
-        ];
-        if !local_only {
-            groups.push((&groups::GLOBAL_SEARCH, global));
-        }
-        groups
+    /// The shape of this search's part of an increment (`None` before `make_resident`).
+    pub(crate) fn pair_shape(&self, n_pair_nodes: u32, local_only: bool) -> Option<PairShape> {
+        let r = self.resident.as_ref()?;
+        Some(PairShape {
+            anchored: r.anchored,
+            self_contact: r.self_contact,
+            local_only,
+            n_nodes: r.n_nodes,
+            n_motion_nodes: r.n_motion_nodes,
+            n_slaves: r.n_slaves,
+            n_pair_nodes,
+            slots: r.slots.clone(),
+        })
     }
-}
 
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    /// The plan's slots hold the largest search there can be: a tree of 32 levels (one refit
-    /// pass per level, 33) and the most slaves a u32 counts (four scan levels); with one level
-    /// fewer per pass this was where 16 slots ran out.
-    #[test]
-    fn the_largest_search_fits_the_plan() {
-        for (levels, slaves) in [(0, 1), (17, 1_000_000), (32, u32::MAX - 1)] {
-            let params = SearchParams {
-                tree_levels: levels,
-                n_slaves: slaves,
-                ..bytemuck::Zeroable::zeroed()
-            };
-            let work = ScanLevels::new(slaves + 1);
-            let (plan, slots) = initial_plan(&params, 100, &work, slaves, 65_535)
-                .unwrap_or_else(|e| panic!("{levels} levels, {slaves} slaves: {e}"));
-            assert_eq!(slots.tree_passes.len(), levels as usize + 1);
-            assert!(plan[PLAN_N_SLOTS] as usize <= MAX_PLAN_SLOTS);
-        }
+    /// The dispatch of entry `e` if it is a search kernel (after `prepare_resident` and
+    /// `resident_copies`): the pipeline and bind group of its kernel and level, sized by the
+    /// entry — indirect from the plan's slot or the chunk arguments for what the device decides.
+    pub(crate) fn dispatch(&self, e: &Entry) -> Option<super::super::Dispatch<'_>> {
+        let r = self.resident.as_ref()?;
+        let g = r.groups.as_ref()?;
+        let p = &self.pipelines;
+        let (pipe, group) = match e.kernel {
+            Kernel::ToLocal => (&p.to_local, &g.to_local.as_ref()?.1),
+            Kernel::Anchor => (&p.anchor, &g.anchor),
+            Kernel::Motion => (&p.motion, &g.motion),
+            Kernel::Schedule => (&r.schedule, &g.schedule),
+            Kernel::LocalSearch => (&p.local_search, &g.local_search),
+            Kernel::TreeRefit => (&p.tree_refit, g.tree_refit.get(e.level)?),
+            Kernel::WalkStart => (&p.walk_start, &g.walk_start),
+            Kernel::NearestWalk => (&p.nearest_walk, &g.nearest_walk),
+            Kernel::ScanBlocks => (&p.scan_blocks, g.work_scan_blocks.get(e.level)?),
+            Kernel::ScanAdd => (&p.scan_add, g.work_scan_add.get(e.level)?),
+            Kernel::NearestArgs => (&p.nearest_args, &g.nearest_args),
+            Kernel::NearestChunks => (&p.nearest_chunks, &g.nearest_chunks),
+            Kernel::NearestTies => (&p.nearest_ties, &g.nearest_ties),
+            Kernel::NearestCrowded => (&p.nearest_crowded, &g.nearest_crowded),
+            Kernel::NearestFacet => (&p.nearest_facet, &g.nearest_facet),
+            Kernel::SetReference => (&r.set_reference, &g.set_reference),
+            _ => return None,
+        };
+        Some(super::super::entry_dispatch(
+            pipe,
+            group,
+            e.size,
+            &self.buffers.plan,
+            &self.buffers.args,
+        ))
     }
 }

@@ -1,0 +1,379 @@
+//! The device-resident increment as a value: the ordered list of [`Entry`]s — each one kernel
+//! of `abi::passes` for one pair, with its size (items known when recording, or a dispatch the
+//! device decides) — written once here, from each pair's [`PairShape`], and run by either
+//! executor: the GPU records one dispatch per entry, the CPU path calls the entry's mirror.
+//! Because both run the same list, an increment can be split at any entry (`run_split`).
+
+use crate::abi::groups::{self, Group};
+use crate::abi::passes::{self, Pass};
+use crate::abi::search::{
+    fold_dispatch, fresh_plan, ScanLevels, SearchParams, ITEM_WORKGROUP, MAX_PLAN_SLOTS,
+    PLAN_N_SLOTS, PLAN_SLOTS, PLAN_SLOT_WORDS, SLOT_GLOBAL, SLOT_LOCAL, TREE_WORKGROUP, WALK_GROUP,
+};
+use crate::abi::search::{tree_passes, SCAN_BLOCK};
+use crate::error::{Error, Result};
+
+/// A kernel an increment runs: one entry point of `abi::passes`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub(crate) enum Kernel {
+    /// Positions into the search's frame.
+    ToLocal,
+    /// Small sliding: each slave's anchor evaluated.
+    Anchor,
+    /// The motion budget.
+    Motion,
+    /// The schedule's choice of search (and the dispatch slots for it).
+    Schedule,
+    /// The local search.
+    LocalSearch,
+    /// One refit pass of the search tree (`Entry::level`: which).
+    TreeRefit,
+    /// The tree walks' start: walk points and work counts.
+    WalkStart,
+    /// The tree walks.
+    NearestWalk,
+    /// One level of the work items' scan, up (`Entry::level`).
+    ScanBlocks,
+    /// One level of the work items' scan, down (`Entry::level`).
+    ScanAdd,
+    /// The chunks' dispatch.
+    NearestArgs,
+    /// The bounded chunks.
+    NearestChunks,
+    /// The chunks' ties.
+    NearestTies,
+    /// Self-contact's crowding.
+    NearestCrowded,
+    /// Each slave's hit.
+    NearestFacet,
+    /// The motion budget's reference positions.
+    SetReference,
+    /// The master's nodal normals.
+    NodalNormals,
+    /// The penalty springs.
+    Penalty,
+    /// Forces into the fixed-point sums.
+    ScatterForces,
+    /// The sums per pair node.
+    Gather,
+    /// The pair's forces added into the caller's array, and its bound rows.
+    AddForces,
+    /// The pair's status words into the statistics.
+    PairStats,
+    /// A pair's largest bound row (`Entry::pair`).
+    BoundMax,
+    /// The stable increment and the statistics' last words.
+    FinishStats,
+}
+
+impl Kernel {
+    /// The pass it is (shader, entry point, bindings).
+    pub(crate) fn pass(self) -> &'static Pass {
+        match self {
+            Kernel::ToLocal => &passes::TO_LOCAL,
+            Kernel::Anchor => &passes::ANCHOR,
+            Kernel::Motion => &passes::MOTION,
+            Kernel::Schedule => &passes::SCHEDULE,
+            Kernel::LocalSearch => &passes::LOCAL_SEARCH,
+            Kernel::TreeRefit => &passes::TREE_REFIT,
+            Kernel::WalkStart => &passes::WALK_START,
+            Kernel::NearestWalk => &passes::NEAREST_WALK,
+            Kernel::ScanBlocks => &passes::SCAN_BLOCKS,
+            Kernel::ScanAdd => &passes::SCAN_ADD,
+            Kernel::NearestArgs => &passes::NEAREST_ARGS,
+            Kernel::NearestChunks => &passes::NEAREST_CHUNKS,
+            Kernel::NearestTies => &passes::NEAREST_TIES,
+            Kernel::NearestCrowded => &passes::NEAREST_CROWDED,
+            Kernel::NearestFacet => &passes::NEAREST_FACET,
+            Kernel::SetReference => &passes::SET_REFERENCE,
+            Kernel::NodalNormals => &passes::NODAL_NORMALS,
+            Kernel::Penalty => &passes::PENALTY,
+            Kernel::ScatterForces => &passes::SCATTER_FORCES,
+            Kernel::Gather => &passes::GATHER,
+            Kernel::AddForces => &passes::ADD_FORCES,
+            Kernel::PairStats => &passes::PAIR_STATS,
+            Kernel::BoundMax => &passes::BOUND_MAX,
+            Kernel::FinishStats => &passes::FINISH_STATS,
+        }
+    }
+}
+
+/// How many invocations an entry runs.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(crate) enum Size {
+    /// Known when recording: `items`, `per` to a workgroup.
+    Items(u32, u32),
+    /// Decided on the device: the live (x, y, z) at this byte offset of the pair's plan words
+    /// (zero workgroups when the schedule chose the other search).
+    Slot(u64),
+    /// Decided on the device: the pair's nearest-facet chunk dispatch (its args words).
+    Chunks,
+}
+
+/// One kernel of an increment for one pair.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(crate) struct Entry {
+    /// The group it is recorded (and timed, and counted) under.
+    pub group: &'static Group,
+    /// The kernel.
+    pub kernel: Kernel,
+    /// The pair (index in the increment's pairs; the finishing entries name pair 0).
+    pub pair: usize,
+    /// Which tree refit pass or scan level (0 otherwise).
+    pub level: usize,
+    /// Its size.
+    pub size: Size,
+}
+
+/// The dispatch slots of a search's plan: each names the byte offset of its live indirect
+/// arguments in the plan words.
+#[derive(Clone, Debug, Default, PartialEq, Eq)]
+pub(crate) struct Slots {
+    /// Local increments: one invocation per slave (local_search).
+    pub local_slaves: u64,
+    /// Global: one per node of each refit pass's bottom level (tree_refit).
+    pub tree_passes: Vec<u64>,
+    /// Global: one per block of each level of the work-item scan.
+    pub work_levels: Vec<u64>,
+    /// Global: one per slave (nearest_walk, nearest_crowded, nearest_facet).
+    pub slaves: u64,
+    /// Global: one per group of `WALK_GROUP` slaves (walk_start).
+    pub slave_groups: u64,
+    /// Global: one invocation (nearest_args).
+    pub one: u64,
+    /// Global: one per watched node (set_reference).
+    pub motion_nodes: u64,
+}
+
+/// Appends a slot of `items` items, `per` per workgroup, of `kind` to the plan words; returns
+/// the byte offset of its live arguments.
+fn add_slot(plan: &mut [u32], items: u32, per: u32, kind: u32, max_dim: u32) -> Result<u64> {
+    let k = plan[PLAN_N_SLOTS] as usize;
+    if k >= MAX_PLAN_SLOTS {
+        return Err(Error::Gpu {
+            during: "planning a device-resident increment".into(),
+            message: format!("more than {MAX_PLAN_SLOTS} dispatch slots"),
+        });
+    }
+    let (x, y) = fold_dispatch(items, per, max_dim);
+    let s = PLAN_SLOTS + k * PLAN_SLOT_WORDS;
+    plan[s..s + 8].copy_from_slice(&[0, 0, 0, 0, x, y, 1, kind]);
+    plan[PLAN_N_SLOTS] += 1;
+    Ok(4 * s as u64)
+}
+
+/// The words of a fresh plan for `params` (the device's grid, flags and capacities) and a
+/// schedule interval, with its dispatch slots (folded beyond `max_dim` workgroups).
+pub(crate) fn initial_plan(
+    params: &SearchParams,
+    interval: u32,
+    n_nodes_watched: u32,
+    max_dim: u32,
+) -> Result<(Vec<u32>, Slots)> {
+    let work_levels = ScanLevels::new(params.n_slaves + 1);
+    let mut plan = fresh_plan(params, interval);
+    let (g, l) = (SLOT_GLOBAL, SLOT_LOCAL);
+    let iw = ITEM_WORKGROUP;
+    let mut slots = Slots {
+        local_slaves: add_slot(&mut plan, params.n_slaves, iw, l, max_dim)?,
+        ..Default::default()
+    };
+    for tp in tree_passes(params.tree_levels) {
+        slots.tree_passes.push(add_slot(
+            &mut plan,
+            1 << tp.bottom,
+            TREE_WORKGROUP,
+            g,
+            max_dim,
+        )?);
+    }
+    for level in &work_levels.levels {
+        slots
+            .work_levels
+            .push(add_slot(&mut plan, level.1, SCAN_BLOCK, g, max_dim)?);
+    }
+    slots.slaves = add_slot(&mut plan, params.n_slaves, iw, g, max_dim)?;
+    slots.slave_groups = add_slot(
+        &mut plan,
+        params.n_slaves.div_ceil(WALK_GROUP),
+        iw,
+        g,
+        max_dim,
+    )?;
+    slots.one = add_slot(&mut plan, 1, 1, g, max_dim)?;
+    slots.motion_nodes = add_slot(&mut plan, n_nodes_watched, iw, g, max_dim)?;
+    Ok((plan, slots))
+}
+
+/// What the entries of one pair depend on.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub(crate) struct PairShape {
+    /// Small sliding: the anchors are evaluated, nothing searched.
+    pub anchored: bool,
+    /// Self-contact: the crowding pass runs.
+    pub self_contact: bool,
+    /// The host proved the schedule will choose the local search: the global search's
+    /// entries (which would get zero workgroups) are left out.
+    pub local_only: bool,
+    /// Model nodes.
+    pub n_nodes: u32,
+    /// Nodes the motion budget watches.
+    pub n_motion_nodes: u32,
+    /// Slave nodes.
+    pub n_slaves: u32,
+    /// Nodes of the penalty pair (slaves and master nodes).
+    pub n_pair_nodes: u32,
+    /// The search plan's dispatch slots.
+    pub slots: Slots,
+}
+
+/// The entries of one device-resident increment of `pairs`, in the order they run: each
+/// pair's search, penalty and statistics, then every pair's largest bound row and the stable
+/// increment.
+pub(crate) fn increment(pairs: &[PairShape]) -> Vec<Entry> {
+    let mut out = Vec::new();
+    let iw = ITEM_WORKGROUP;
+    for (k, p) in pairs.iter().enumerate() {
+        let mut push = |group: &'static Group, kernel: Kernel, level: usize, size: Size| {
+            out.push(Entry {
+                group,
+                kernel,
+                pair: k,
+                level,
+                size,
+            })
+        };
+        let s = &p.slots;
+        if p.anchored {
+            let g = &groups::TO_LOCAL_ANCHOR;
+            push(g, Kernel::ToLocal, 0, Size::Items(p.n_nodes, iw));
+            push(g, Kernel::Anchor, 0, Size::Items(p.n_slaves, iw));
+        } else {
+            let g = &groups::TO_LOCAL_MOTION_SCHEDULE;
+            push(g, Kernel::ToLocal, 0, Size::Items(p.n_nodes, iw));
+            push(g, Kernel::Motion, 0, Size::Items(p.n_motion_nodes, iw));
+            push(g, Kernel::Schedule, 0, Size::Items(1, 1));
+            let g = &groups::LOCAL;
+            push(g, Kernel::LocalSearch, 0, Size::Slot(s.local_slaves));
+            if !p.local_only {
+                let g = &groups::GLOBAL_SEARCH;
+                for (i, &slot) in s.tree_passes.iter().enumerate() {
+                    push(g, Kernel::TreeRefit, i, Size::Slot(slot));
+                }
+                push(g, Kernel::WalkStart, 0, Size::Slot(s.slave_groups));
+                push(g, Kernel::NearestWalk, 0, Size::Slot(s.slaves));
+                for (i, &slot) in s.work_levels.iter().enumerate() {
+                    push(g, Kernel::ScanBlocks, i, Size::Slot(slot));
+                }
+                for i in (0..s.work_levels.len().saturating_sub(1)).rev() {
+                    push(g, Kernel::ScanAdd, i, Size::Slot(s.work_levels[i]));
+                }
+                push(g, Kernel::NearestArgs, 0, Size::Slot(s.one));
+                push(g, Kernel::NearestChunks, 0, Size::Chunks);
+                push(g, Kernel::NearestTies, 0, Size::Chunks);
+                if p.self_contact {
+                    push(g, Kernel::NearestCrowded, 0, Size::Slot(s.slaves));
+                }
+                push(g, Kernel::NearestFacet, 0, Size::Slot(s.slaves));
+                push(g, Kernel::SetReference, 0, Size::Slot(s.motion_nodes));
+            }
+        }
+        let g = &groups::NORMALS_PENALTY;
+        push(g, Kernel::NodalNormals, 0, Size::Items(p.n_pair_nodes, iw));
+        push(g, Kernel::Penalty, 0, Size::Items(p.n_slaves, iw));
+        let g = &groups::SCATTER_GATHER_ADD;
+        push(g, Kernel::ScatterForces, 0, Size::Items(p.n_slaves, iw));
+        push(g, Kernel::Gather, 0, Size::Items(p.n_pair_nodes, iw));
+        push(g, Kernel::AddForces, 0, Size::Items(p.n_pair_nodes, iw));
+        push(&groups::STATS_PAIR, Kernel::PairStats, 0, Size::Items(1, 1));
+    }
+    let g = &groups::STATS_FINISH;
+    for (k, p) in pairs.iter().enumerate() {
+        out.push(Entry {
+            group: g,
+            kernel: Kernel::BoundMax,
+            pair: k,
+            level: 0,
+            size: Size::Items(p.n_pair_nodes, iw),
+        });
+    }
+    out.push(Entry {
+        group: g,
+        kernel: Kernel::FinishStats,
+        pair: 0,
+        level: 0,
+        size: Size::Items(1, 1),
+    });
+    out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The plan's slots hold the largest search there can be: a tree of 32 levels (one refit
+    /// pass per level, 33) and the most slaves a u32 counts (four scan levels); with one level
+    /// fewer per pass this was where 16 slots ran out.
+    #[test]
+    fn the_largest_search_fits_the_plan() {
+        for (levels, slaves) in [(0, 1), (17, 1_000_000), (32, u32::MAX - 1)] {
+            let params = SearchParams {
+                tree_levels: levels,
+                n_slaves: slaves,
+                ..bytemuck::Zeroable::zeroed()
+            };
+            let (plan, slots) = initial_plan(&params, 100, slaves, 65_535)
+                .unwrap_or_else(|e| panic!("{levels} levels, {slaves} slaves: {e}"));
+            assert_eq!(slots.tree_passes.len(), levels as usize + 1);
+            assert!(plan[PLAN_N_SLOTS] as usize <= MAX_PLAN_SLOTS);
+        }
+    }
+
+    /// Every entry's kernel is a pass of the group it is recorded under, so the benchmarks'
+    /// rows and the timestamps name what ran.
+    #[test]
+    fn entries_belong_to_their_groups() {
+        let (_, slots) = initial_plan(
+            &SearchParams {
+                tree_levels: 5,
+                n_slaves: 1000,
+                ..bytemuck::Zeroable::zeroed()
+            },
+            100,
+            1200,
+            65_535,
+        )
+        .unwrap();
+        for (anchored, self_contact, local_only) in [
+            (false, false, false),
+            (false, true, false),
+            (true, false, false),
+            (false, false, true),
+        ] {
+            let shape = PairShape {
+                anchored,
+                self_contact,
+                local_only,
+                n_nodes: 2000,
+                n_motion_nodes: 1200,
+                n_slaves: 1000,
+                n_pair_nodes: 1200,
+                slots: slots.clone(),
+            };
+            let entries = increment(&[shape.clone(), shape]);
+            for e in &entries {
+                assert!(
+                    e.group.passes.iter().any(|p| *p == e.kernel.pass()),
+                    "{:?} under {}",
+                    e.kernel,
+                    e.group.label
+                );
+            }
+            let globals = entries
+                .iter()
+                .filter(|e| e.kernel == Kernel::TreeRefit)
+                .count();
+            assert_eq!(globals, if anchored || local_only { 0 } else { 2 * 6 });
+        }
+    }
+}
