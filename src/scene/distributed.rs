@@ -27,12 +27,12 @@ use std::time::Instant;
 use mpi::topology::SimpleCommunicator;
 use mpi::traits::*;
 
+use super::account::{Account, Ends};
 use super::{
-    built_list, clean_run, finish_outputs, force_stats, governing_limit, increments_for,
-    open_history, output_error, over_increment_warning, stress6, ContactNode, PartSummary,
-    Progress, RankSummary, Scene, Summary,
+    built_list, clean_run, finish_outputs, open_history, output_error, stress6, ContactNode,
+    PartSummary, Progress, RankSummary, Scene, Summary,
 };
-use crate::device::{Device, Traffic};
+use crate::device::Device;
 use crate::distributed::{
     agree, all_gather, all_max, all_min, exchange, DistributedContact, RankBalance, RankModel,
     RankPair, NO_GLOBAL_NODE,
@@ -343,46 +343,18 @@ fn run_into(
     }
     agree(comm, fault)?;
 
-    let element_dt = all_min(comm, solver.stable_increment());
-    let mut dt = scene.run.dt.unwrap_or(element_dt);
-    if !dt.is_finite() {
-        return Err(Error::BadParameter {
-            name: "run.dt",
-            value: "none".into(),
-            expected: "a scene without elements needs a fixed increment",
-        });
-    }
-    let (mut pen, mut contact_dt) = (0.0f64, f64::INFINITY);
-    let (mut drift, mut scale) = (0.0f64, 0.0f64);
+    let mut account = Account::new(&scene.run, all_min(comm, solver.stable_increment()))?;
     let mut balance0: Option<f64> = None;
     let mut energy = [0.0f64; 5];
-    let mut forces: Vec<(f64, f64)> = Vec::new();
-    let mut curve = Vec::new();
-    let mut final_force = [0.0; 3];
-    let mut peak = 0.0f64;
-    let mut first_seconds = 0.0;
-    let mut traffic0: Option<Traffic> = None;
-    let mut t_steady = Instant::now();
-    let mut k = 0usize;
-    let (mut lowest_ratio, mut lowered_from) = (1.0f64, f64::NAN);
-    let (mut over_ratio, mut over_from) = (1.0f64, f64::NAN);
-    let every = scene.run.output_every.max(1);
     let (mut halo_bytes, mut contact_bytes) = (0usize, 0usize);
-    while solver.time < scene.run.end_time * (1.0 - 1e-12) {
-        let step = dt.min(scene.run.end_time - solver.time);
-        if scene.run.dt.is_none() && dt < element_dt * (1.0 - 1e-12) {
-            lowest_ratio = lowest_ratio.min(dt / element_dt);
-            if lowered_from.is_nan() && dt < 0.999 * element_dt {
-                lowered_from = solver.time;
-            }
-        }
+    while account.running(solver.time) {
+        let step = account.step(solver.time);
         let t_step = Instant::now();
         let t_start = solver.time;
         let mut f = vec![[0.0; 3]; nodes.len()];
         let mut reported = None;
         if let Some(c) = contact.as_mut() {
-            let last = solver.time + step >= scene.run.end_time * (1.0 - 1e-12);
-            c.request_outputs(last);
+            c.request_outputs(account.is_last(solver.time, step));
             let ox: Vec<[f64; 3]> = own.iter().map(|&l| solver.x[l]).collect();
             let ov: Vec<[f64; 3]> = own.iter().map(|&l| solver.v[l]).collect();
             let r = c.step(&ox, &ov, step)?;
@@ -394,7 +366,7 @@ fn run_into(
             // the same on every rank: every rank returns it
             if let Some(f) = r.fastest {
                 return Err(Error::Tunnelling {
-                    increment: k as u64 + 1,
+                    increment: account.k as u64 + 1,
                     time: t_start,
                     node: f.node as usize,
                     pair: f.pair,
@@ -428,36 +400,12 @@ fn run_into(
             solver.x[l] = [s[0], s[1], s[2]];
             solver.v[l] = [s[3], s[4], s[5]];
         }
-        k += 1;
-        progress(&Progress {
-            increment: k as u64,
-            estimated: (k as u64)
-                .saturating_add(increments_for(scene.run.end_time - solver.time, dt)),
-            time: solver.time,
-            end_time: scene.run.end_time,
-        });
-        if k == 1 {
-            first_seconds = all_max(comm, t_step.elapsed().as_secs_f64());
-            traffic0 = device.traffic();
-            t_steady = Instant::now();
+        account.counted(solver.time, t_step, device, progress);
+        if account.k == 1 {
+            account.first_seconds = all_max(comm, account.first_seconds);
         }
         if let Some((stable, over)) = reported {
-            contact_dt = contact_dt.min(stable);
-            if scene.run.dt.is_some() && step > stable * (1.0 + 1e-9) {
-                if over_from.is_nan() {
-                    over_from = t_start;
-                }
-                over_ratio = over_ratio.max(step / stable);
-            }
-            if scene.run.dt.is_none() {
-                dt = crate::combined_increment(
-                    element_dt,
-                    stable,
-                    scene.run.safety,
-                    scene.run.contact_safety,
-                );
-            }
-            pen = pen.max(over);
+            account.penalty_limit(stable, over, step, t_start);
         }
         // the ranks' shares, added in rank order: contact force on the slaves, energies, and
         // the parts' motion on output rows
@@ -475,35 +423,20 @@ fn run_into(
             e.contact_work,
             e.damping,
         ]);
-        let row = k.is_multiple_of(every);
+        let row = account.row();
         if row {
             mine.extend(part_sums(&solver));
         }
         let sums = sum_over_ranks(comm, &mine);
-        final_force = [sums[0], sums[1], sums[2]];
-        let force = (0..3).map(|a| sums[a] * sums[a]).sum::<f64>().sqrt();
+        let (force, _) = account.force(solver.time, step, [sums[0], sums[1], sums[2]]);
         energy.copy_from_slice(&sums[3..8]);
         let [kinetic, internal, external, contact_work, damping] = energy;
         let balance = kinetic + internal - external - contact_work + damping;
         let b0 = *balance0.get_or_insert(balance);
-        drift = drift.max((balance - b0).abs());
         let scale_now = energy.iter().fold(0.0f64, |m, x| m.max(x.abs()));
-        scale = scale.max(scale_now);
-        if !balance.is_finite() {
-            return Err(Error::BadParameter {
-                name: "run",
-                value: format!("energy not finite at t = {}", solver.time),
-                expected: "a stable run (reduce run.dt or the penalty scale)",
-            });
-        }
-        peak = peak.max(force);
-        forces.push((solver.time - 0.5 * step, force));
+        account.energy((balance - b0).abs(), scale_now, balance, solver.time)?;
         if row {
-            curve.push(super::CurveSample {
-                time: solver.time,
-                force: final_force,
-                body_displacement: Vec::new(),
-            });
+            account.sample(solver.time, Vec::new());
             let mut fault = None;
             if let Some(f) = history.as_mut() {
                 let mut line = format!(
@@ -521,8 +454,8 @@ fn run_into(
             agree(comm, fault)?;
         }
     }
-    let steady = k.saturating_sub(1).max(1) as f64;
-    let my_seconds = t_steady.elapsed().as_secs_f64() / steady;
+    let k = account.k;
+    let my_seconds = account.seconds_per_increment();
     let seconds = all_max(comm, my_seconds);
     let per_increment = |b: usize| b as f64 / k.max(1) as f64;
     let mine = [
@@ -551,11 +484,6 @@ fn run_into(
             contact_rebuilds: r[8] as u64,
         })
         .collect();
-    let traffic = match (device.traffic(), traffic0) {
-        (Some(now), Some(then)) => now.since(&then),
-        _ => Traffic::default(),
-    };
-    let stats = force_stats(&forces, dt);
     // the parts: motion summed over the ranks, stress extremes over each rank's own elements
     let motion = sum_over_ranks(comm, &part_sums(&solver));
     let mut parts = Vec::new();
@@ -630,23 +558,7 @@ fn run_into(
         })
         .collect();
     let friction = sum_over_ranks(comm, &[dissipated])[0];
-    let (governing, increment_note) = governing_limit(
-        scene.run.dt.is_some(),
-        contact_dt.is_finite(),
-        lowest_ratio,
-        lowered_from,
-        stats.start,
-        scene.run.contact_safety,
-    );
-    let mut warnings = scene.notes();
-    if over_ratio > 1.0 {
-        warnings.push(over_increment_warning(
-            scene.run.dt.unwrap_or(f64::NAN),
-            over_ratio,
-            over_from,
-            scene.run.contact_safety,
-        ));
-    }
+    let mut warnings = Vec::new();
     if scene.run.vtk_every > 0 && has_contact {
         warnings.push(
             "run.vtk_every: a distributed run writes no VTK frames (run the scene in one \
@@ -655,54 +567,23 @@ fn run_into(
         );
     }
     let [kinetic, internal, external_work, contact_work, _] = energy;
-    let summary = Summary {
-        title: scene.title.clone(),
-        reference: scene.reference.clone(),
+    let ends = Ends {
         device: format!("{device} (rank 0 of {size})"),
         built: built_list,
-        increments: k,
         end_time: solver.time,
-        first_increment_seconds: first_seconds,
         seconds_per_increment: seconds,
-        element_increment: element_dt,
-        contact_increment: contact_dt,
-        governing_limit: governing,
-        contact_lowered_increment: 1.0 - lowest_ratio,
-        contact_limit_from: lowered_from,
-        increment_note,
-        anchored_slaves: 0,
-        unanchored_slaves: Vec::new(),
-        warnings,
-        contact_start: stats.start,
-        contact_end: stats.end,
-        impact_time: stats.impact,
-        release_time: stats.release,
-        peak_force: peak,
-        plateau_force: stats.plateau,
-        mean_force: stats.mean,
-        impulse: stats.impulse,
-        final_contact_force: final_force,
-        max_penetration: pen,
-        energy_balance_error: if scale > 0.0 { drift / scale } else { 0.0 },
-        kinetic,
-        internal,
-        external_work,
-        contact_work,
+        energies: [kinetic, internal, external_work, contact_work],
         frictional_dissipation: friction,
         parts,
         bodies: Vec::new(),
         contact_nodes,
-        curve,
-        dispatches_per_increment: traffic
-            .dispatches
-            .iter()
-            .map(|(k, v)| (k.clone(), *v as f64 / steady))
-            .collect(),
-        uploaded_bytes_per_increment: traffic.uploaded_bytes as f64 / steady,
-        read_back_bytes_per_increment: traffic.read_back_bytes as f64 / steady,
+        anchored_slaves: 0,
+        unanchored_slaves: Vec::new(),
+        warnings,
         global_searches: contact.as_ref().map_or(0, |c| c.global_searches()),
         ranks,
     };
+    let summary = account.summary(scene, device, ends);
     let mut fault = None;
     if let (Some(dir), Some(f)) = (output, history) {
         fault = finish_outputs(dir, f, &summary).err().map(io);

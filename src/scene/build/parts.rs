@@ -1,0 +1,376 @@
+//! The parts of a scene meshed: generated blocks, rectangles, bars, plates, lines, arcs,
+//! spheres, points and mesh files, in the order of the `[[part]]` tables, with their masses,
+//! velocities and held directions; and the rigid parts that move, as bodies carrying their nodes.
+
+use super::*;
+
+/// What the parts give the solver: positions, elements, point masses, velocities, held
+/// directions (per node), each part's node range, and the rigid parts that move (part index,
+/// first node, node count).
+pub(super) struct Meshed {
+    pub x: Vec<[f64; 3]>,
+    pub elements: Vec<Element>,
+    pub point: Vec<f64>,
+    pub velocity: Vec<[f64; 3]>,
+    pub fixed: Vec<[bool; 3]>,
+    pub parts: Vec<PartNodes>,
+    pub moving_parts: Vec<(usize, usize, usize)>,
+}
+
+/// A rigid part that moves: its name and body, and (free ones, also rigid parts of the contact
+/// model) its nodes, mass and inertia.
+type Moving = (
+    Vec<(String, SolverBody)>,
+    Vec<(Vec<u32>, f64, [[f64; 3]; 3])>,
+);
+
+impl Scene {
+    /// Meshes every `[[part]]` in order.
+    pub(super) fn mesh_parts(&self) -> Result<Meshed> {
+        let two_d = self.is_2d();
+        let mut x: Vec<[f64; 3]> = Vec::new();
+        let mut elements = Vec::new();
+        let mut point = Vec::new();
+        let mut velocity = Vec::new();
+        let mut fixed = Vec::new();
+        let mut parts = Vec::new();
+        let mut moving_parts = Vec::new();
+        for p in &self.part {
+            let base = x.len();
+            let n_el = elements.len();
+            let mut rigid = false;
+            let grid = match p.shape.as_str() {
+                "block" => {
+                    let mat = material(self, p);
+                    let mesh = block_tets_on([coords(p, 0), coords(p, 1), coords(p, 2)]);
+                    x.extend(&mesh.positions);
+                    for t in &mesh.facets {
+                        let tet = t.map(|n| n + base as u32);
+                        elements.push(Element::tet4(tet, &x, mat).ok_or_else(|| {
+                            Error::BadParameter {
+                                name: "part",
+                                value: p.name.clone(),
+                                expected: "a block with positive volumes",
+                            }
+                        })?);
+                    }
+                    Grid::Block([p.divisions[0], p.divisions[1], p.divisions[2]])
+                }
+                "rect" => {
+                    let mat = material(self, p);
+                    let mesh = rect_triangles_on(&coords(p, 0), &coords(p, 1));
+                    x.extend(mesh.positions.iter().map(|q| [q[0], q[1], 0.0]));
+                    for t in &mesh.facets {
+                        let tri = t.map(|n| n + base as u32);
+                        let el = if p.axisymmetric {
+                            Element::axi3(tri, &x, mat)
+                        } else {
+                            Element::tri3(tri, &x, p.thickness, mat)
+                        };
+                        elements.push(el.ok_or_else(|| Error::BadParameter {
+                            name: "part",
+                            value: p.name.clone(),
+                            expected:
+                                "a rectangle with positive areas (and x ≥ 0 when axisymmetric)",
+                        })?);
+                    }
+                    let t = if p.axisymmetric {
+                        f64::NAN
+                    } else {
+                        p.thickness
+                    };
+                    Grid::Rect([p.divisions[0], p.divisions[1]], t)
+                }
+                "bar" => {
+                    let mat = material(self, p);
+                    let axis = (0..3).find(|&a| p.size[a] != 0.0).expect("checked");
+                    let (u, v) = ((axis + 1) % 3, (axis + 2) % 3);
+                    let half = 0.5 * p.area.sqrt();
+                    let ts = graded(0.0, 1.0, p.divisions[0], p.grading[0]);
+                    for t in &ts {
+                        for (su, sv) in [(-1.0, -1.0), (1.0, -1.0), (1.0, 1.0), (-1.0, 1.0)] {
+                            let mut q = [0, 1, 2].map(|a| p.origin[a] + t * p.size[a]);
+                            q[u] += su * half;
+                            q[v] += sv * half;
+                            x.push(q);
+                        }
+                    }
+                    for k in 0..p.divisions[0] as u32 {
+                        for c in 0..4 {
+                            let nodes = [base as u32 + 4 * k + c, base as u32 + 4 * (k + 1) + c];
+                            elements.push(Element::bar(nodes, &x, 0.25 * p.area, mat).ok_or_else(
+                                || Error::BadParameter {
+                                    name: "part",
+                                    value: p.name.clone(),
+                                    expected: "a bar with positive element lengths",
+                                },
+                            )?);
+                        }
+                    }
+                    Grid::Bar(axis)
+                }
+                "plate" => {
+                    rigid = true;
+                    let mesh = plate_quads(
+                        p.divisions[0],
+                        p.divisions[1],
+                        p.size[0],
+                        p.size[1],
+                        0.0,
+                        0,
+                        &|_, _| 0.0,
+                    );
+                    x.extend(
+                        mesh.positions
+                            .iter()
+                            .map(|q| [q[0] + p.origin[0], q[1] + p.origin[1], p.origin[2]]),
+                    );
+                    Grid::Plate([p.divisions[0], p.divisions[1]])
+                }
+                "line" => {
+                    rigid = true;
+                    let mesh = polyline(p.divisions[0], p.size[0], 0.0, 0, &|_| 0.0);
+                    x.extend(
+                        mesh.positions
+                            .iter()
+                            .map(|q| [q[0] + p.origin[0], q[1] + p.origin[1], 0.0]),
+                    );
+                    Grid::Facets(
+                        mesh.facets.iter().map(|&s| Facet::Segment(s)).collect(),
+                        "y+",
+                    )
+                }
+                "arc" => {
+                    rigid = true;
+                    let mesh = arc_segments(
+                        p.origin,
+                        p.radius,
+                        p.angles[0].to_radians(),
+                        p.angles[1].to_radians(),
+                        p.divisions[0],
+                        p.grading[0],
+                    );
+                    x.extend(&mesh.positions);
+                    Grid::Facets(
+                        mesh.facets.iter().map(|&s| Facet::Segment(s)).collect(),
+                        "out",
+                    )
+                }
+                "sphere" => {
+                    rigid = true;
+                    let mesh = sphere_triangles(p.divisions[0], p.divisions[1], p.radius, p.origin);
+                    x.extend(&mesh.positions);
+                    Grid::Facets(
+                        mesh.facets.iter().map(|&t| Facet::Triangle(t)).collect(),
+                        "out",
+                    )
+                }
+                "mesh" => {
+                    rigid = p.rigid;
+                    let file = p.file.as_deref().expect("checked");
+                    let path = match &self.base_dir {
+                        Some(d) if std::path::Path::new(file).is_relative() => d.join(file),
+                        _ => std::path::PathBuf::from(file),
+                    };
+                    let dim = p.dimension.unwrap_or(if two_d { 2 } else { 3 });
+                    let (mesh, surfaces) = if file.ends_with(".msh") {
+                        (crate::io::gmsh::read(&path, dim)?, BTreeMap::new())
+                    } else {
+                        let d = crate::io::inp::read(&path)?;
+                        (d.mesh, d.surfaces)
+                    };
+                    x.extend(
+                        mesh.positions
+                            .iter()
+                            .map(|q| [0, 1, 2].map(|a| q[a] + p.origin[a])),
+                    );
+                    let axisymmetric = p.axisymmetric || mesh.is_axisymmetric();
+                    if axisymmetric && !two_d {
+                        return Err(Error::BadParameter {
+                            name: "part.file",
+                            value: format!("{file} (part {})", p.name),
+                            expected: "axisymmetric elements (CAX3, CAX4(R)) in a 2D scene: set dimension = 2 or axisymmetric = true on the part",
+                        });
+                    }
+                    if !rigid {
+                        let mat = material(self, p);
+                        let bad_el = |k: usize| Error::BadParameter {
+                            name: "part.file",
+                            value: format!(
+                                "element {} of {} (part {})",
+                                mesh.elements[k].label, file, p.name
+                            ),
+                            expected: "elements with positive volume or area",
+                        };
+                        let bad_axi = |k: usize| {
+                            Error::BadParameter {
+                            name: "part.file",
+                            value: format!(
+                                "element {} of {} (part {})",
+                                mesh.elements[k].label, file, p.name
+                            ),
+                            expected: "axisymmetric elements with positive area and every node at x ≥ 0 (x is the radius, after the part's origin)",
+                        }
+                        };
+                        for (k, e) in mesh.elements.iter().enumerate() {
+                            let n: Vec<u32> = e.nodes.iter().map(|&i| i + base as u32).collect();
+                            match e.kind {
+                                ElementKind::Tet4 => {
+                                    let t = [n[0], n[1], n[2], n[3]];
+                                    let el = Element::tet4(t, &x, mat)
+                                        .or_else(|| Element::tet4([t[0], t[2], t[1], t[3]], &x, mat))
+                                        .ok_or_else(|| bad_el(k))?;
+                                    elements.push(el);
+                                }
+                                ElementKind::Tri3In2d | ElementKind::Quad4In2d => {
+                                    let tris: Vec<[u32; 3]> = if n.len() == 3 {
+                                        vec![[n[0], n[1], n[2]]]
+                                    } else {
+                                        vec![[n[0], n[1], n[2]], [n[0], n[2], n[3]]]
+                                    };
+                                    for t in tris {
+                                        let el = if axisymmetric {
+                                            // x is the radius: no node left of the axis
+                                            Element::axi3(t, &x, mat)
+                                                .or_else(|| Element::axi3([t[0], t[2], t[1]], &x, mat))
+                                                .ok_or_else(|| bad_axi(k))?
+                                        } else {
+                                            Element::tri3(t, &x, p.thickness, mat)
+                                                .or_else(|| Element::tri3([t[0], t[2], t[1]], &x, p.thickness, mat))
+                                                .ok_or_else(|| bad_el(k))?
+                                        };
+                                        elements.push(el);
+                                    }
+                                }
+                                ElementKind::Hex8 => {
+                                    return Err(Error::BadParameter {
+                                        name: "part.file",
+                                        value: format!("{file} (part {}) has hexahedra", p.name),
+                                        expected: "tetrahedra for a deformable mesh part (the solver's 3D element); hexahedra can be rigid or give surfaces",
+                                    })
+                                }
+                                _ => {} // boundary facets and lines: surfaces only
+                            }
+                        }
+                        if elements.len() == n_el {
+                            return Err(Error::BadParameter {
+                                name: "part.file",
+                                value: format!("{file} (part {})", p.name),
+                                expected: "a deformable mesh part needs tetrahedra (3D) or plane triangles or quadrilaterals (2D)",
+                            });
+                        }
+                    }
+                    let t = if axisymmetric { f64::NAN } else { p.thickness };
+                    Grid::Mesh(Box::new((mesh, surfaces, t)))
+                }
+                _ => {
+                    x.extend(&p.points);
+                    Grid::Points(p.area)
+                }
+            };
+            let count = x.len() - base;
+            let moving = rigid && p.motion.as_deref().is_some_and(|m| m != "fixed");
+            if moving {
+                moving_parts.push((parts.len(), base, count));
+            }
+            point.extend(std::iter::repeat_n(
+                if moving {
+                    // the body's mass on every node: the effective mass contact sees
+                    p.mass
+                } else if rigid {
+                    IMMOVABLE_MASS
+                } else if p.shape == "points" {
+                    p.mass
+                } else {
+                    0.0
+                },
+                count,
+            ));
+            velocity.extend(std::iter::repeat_n(
+                if rigid { [0.0; 3] } else { p.velocity },
+                count,
+            ));
+            let mut free = [!rigid || moving; 3];
+            if two_d {
+                free[2] = false;
+            }
+            if let Grid::Bar(axis) = grid {
+                // bars carry load along their axis only
+                free = [false; 3];
+                free[axis] = true;
+            }
+            fixed.extend(std::iter::repeat_n(free.map(|f| !f), count));
+            parts.push(PartNodes {
+                name: p.name.clone(),
+                base,
+                count,
+                elements: elements.len() - n_el,
+                grid,
+            });
+        }
+        Ok(Meshed {
+            x,
+            elements,
+            point,
+            velocity,
+            fixed,
+            parts,
+            moving_parts,
+        })
+    }
+
+    /// The rigid parts that move (`moving_parts` of [`Meshed`], at positions `x`): bodies
+    /// carrying the part's nodes (after the analytical bodies, whose indices are the contact
+    /// model's), and the free ones as rigid parts of the contact model too (springs on them see
+    /// the body).
+    pub(super) fn moving_bodies(
+        &self,
+        moving_parts: &[(usize, usize, usize)],
+        x: &[[f64; 3]],
+    ) -> Result<Moving> {
+        // rigid parts that move: bodies carrying the part's nodes (after the analytical bodies,
+        // whose indices are the contact model's)
+        let mut meshed_bodies = Vec::new();
+        // free ones are rigid parts of the contact model too: springs on them see the body
+        let mut free_parts = Vec::new();
+        for &(k, base, count) in moving_parts {
+            let p = &self.part[k];
+            let nodes: Vec<u32> = (base as u32..(base + count) as u32).collect();
+            let mut c = [0.0; 3];
+            for &n in &nodes {
+                for a in 0..3 {
+                    c[a] += x[n as usize][a] / count as f64;
+                }
+            }
+            // inertia of the nodes as equal point masses about their centroid
+            let mut inertia = [[0.0; 3]; 3];
+            for &n in &nodes {
+                let r = [0, 1, 2].map(|a| x[n as usize][a] - c[a]);
+                let r2 = r[0] * r[0] + r[1] * r[1] + r[2] * r[2];
+                for a in 0..3 {
+                    for b in 0..3 {
+                        let d = if a == b { r2 } else { 0.0 };
+                        inertia[a][b] += p.mass / count as f64 * (d - r[a] * r[b]);
+                    }
+                }
+            }
+            // a flat part has no inertia about its normal's perpendiculars only in the limit:
+            // keep it positive definite
+            let tr = inertia[0][0] + inertia[1][1] + inertia[2][2];
+            for (a, row) in inertia.iter_mut().enumerate() {
+                row[a] += 1e-6 * tr.max(p.mass * 1e-12);
+            }
+            let motion = match p.motion.as_deref() {
+                Some("velocity") => BodyMotion::Velocity(p.velocity),
+                _ => BodyMotion::Free,
+            };
+            if motion == BodyMotion::Free {
+                free_parts.push((nodes.clone(), p.mass, inertia));
+            }
+            let mut body = SolverBody::new(p.mass, inertia, c, nodes, x, motion)?;
+            body.state.velocity = p.velocity;
+            meshed_bodies.push((p.name.clone(), body));
+        }
+        Ok((meshed_bodies, free_parts))
+    }
+}

@@ -1,0 +1,385 @@
+//! A scene run in one process: the solver and the contact stepped together, the history, VTK
+//! frames and the summary; what it accumulates is the [`Account`] it shares with the run across
+//! MPI ranks.
+
+use std::io::Write as _;
+use std::path::Path;
+use std::time::Instant;
+
+use super::account::{Account, Ends};
+use super::build::PartNodes;
+use super::{
+    built_list, finish_outputs, open_history, output_error, stress6, BodySummary, ContactNode,
+    PartSummary, Progress, Scene, Summary,
+};
+use crate::contact::Contact;
+use crate::device::Device;
+use crate::error::{Error, Result};
+use crate::explicit::Solver;
+
+/// [`super::run`] itself: the outputs written under their partial names, renamed at the end.
+pub(super) fn run_into(
+    scene: &Scene,
+    device: &Device,
+    output: Option<&Path>,
+    progress: &mut dyn FnMut(&Progress),
+) -> Result<Summary> {
+    let built = scene.build()?;
+    let (mut solver, model) = (built.solver, built.model);
+    let x0 = solver.x.clone();
+    let has_contact = !model.pairs().is_empty() || !model.rigid_pairs().is_empty();
+    let mut contact = if has_contact {
+        Some(Contact::new(device, &model)?)
+    } else {
+        None
+    };
+    let mut slaves: Vec<u32> = built.slaves.iter().flatten().copied().collect();
+    slaves.sort_unstable();
+    slaves.dedup();
+    let built_list = built_list(scene, &solver, &built.slaves);
+    let io = output_error;
+    let mut history = match output {
+        Some(dir) => Some(open_history(dir, &built.parts, &built.bodies).map_err(io)?),
+        None => None,
+    };
+    // VTK frames go to a hidden directory renamed only when the run succeeded
+    let mut series = match output {
+        Some(dir) if scene.run.vtk_every > 0 && contact.is_some() => {
+            let partial = dir.join(".vtk.partial");
+            let _ = std::fs::remove_dir_all(&partial);
+            Some(crate::io::vtk::Series::new(&partial, "contact")?)
+        }
+        _ => None,
+    };
+    let mut account = Account::new(&scene.run, solver.stable_increment())?;
+    let bodies0: Vec<[f64; 3]> = solver.bodies.iter().map(|b| b.state.position).collect();
+    let mut at_peak = bodies0.clone();
+    let mut adjusted = None;
+    if let (Some(c), true) = (contact.as_mut(), scene.run.adjust_overclosure) {
+        let bodies = solver.body_states();
+        let first = account.dt.min(scene.run.end_time - solver.time);
+        adjusted = Some(c.adjust_initial_overclosure(&mut solver.x, &bodies, first)?);
+    }
+    while account.running(solver.time) {
+        let step = account.step(solver.time);
+        // the output variables only when a VTK frame or the final pressures need them
+        if let Some(c) = contact.as_mut() {
+            let last = account.is_last(solver.time, step);
+            let frame = series.is_some() && (account.k + 1) % scene.run.vtk_every == 0;
+            c.request_outputs(last || frame);
+        }
+        let t_step = Instant::now();
+        let t_start = solver.time;
+        solver.step(step, contact.as_mut())?;
+        account.counted(solver.time, t_step, device, progress);
+        if let Some(c) = contact.as_ref() {
+            tunnelling(c, &solver, account.k, t_start)?;
+            if c.has_penalty_pairs() {
+                let r = c.report();
+                account.penalty_limit(r.stable_dt, r.max_overclosure, step, t_start);
+            }
+            if c.has_kinematic_pairs() {
+                account.overclosure(c.kinematic_report().max_overclosure);
+            }
+        }
+        let mut f = [0.0; 3];
+        for &s in &slaves {
+            for a in 0..3 {
+                f[a] += solver.contact_force[s as usize][a];
+            }
+        }
+        let (force, peak) = account.force(solver.time, step, f);
+        if peak {
+            at_peak = solver.bodies.iter().map(|b| b.state.position).collect();
+        }
+        if account.row() {
+            let moved = solver
+                .bodies
+                .iter()
+                .zip(&bodies0)
+                .map(|(b, p0)| std::array::from_fn(|a| b.state.position[a] - p0[a]))
+                .collect();
+            account.sample(solver.time, moved);
+        }
+        account.energy(
+            solver.energy_drift(),
+            solver.energy_scale(),
+            solver.energy.balance(),
+            solver.time,
+        )?;
+        if let (Some(s), Some(c)) = (series.as_mut(), contact.as_ref()) {
+            if account.k % scene.run.vtk_every == 0 {
+                s.add(
+                    solver.time,
+                    &crate::io::vtk::Frame::from_contact(&model, c, &solver.x)?,
+                )?;
+            }
+        }
+        if let (Some(f), true) = (history.as_mut(), account.row()) {
+            let line = history_row(&solver, &x0, &bodies0, &built.parts, &built.bodies, force);
+            writeln!(f, "{line}").map_err(io)?;
+        }
+    }
+    let ends = ends(
+        device,
+        built_list,
+        &solver,
+        &x0,
+        &bodies0,
+        &at_peak,
+        &built.parts,
+        &built.bodies,
+        contact.as_ref(),
+        &model,
+        adjusted,
+        account.seconds_per_increment(),
+    );
+    let summary = account.summary(scene, device, ends);
+    if let (Some(dir), Some(f)) = (output, history) {
+        finish_outputs(dir, f, &summary).map_err(io)?;
+        if series.is_some() {
+            let _ = std::fs::remove_dir_all(dir.join("vtk"));
+            std::fs::rename(dir.join(".vtk.partial"), dir.join("vtk")).map_err(io)?;
+        }
+    }
+    Ok(summary)
+}
+
+/// The error of a node that moved past its pair's search radius in the increment `k` from
+/// `t_start` (the contact counted and named it).
+fn tunnelling(c: &Contact, solver: &Solver, k: usize, t_start: f64) -> Result<()> {
+    let (p, q) = (c.report(), c.kinematic_report());
+    let fast = p.fast_nodes + q.fast_nodes;
+    let fastest = [p.fastest, q.fastest]
+        .into_iter()
+        .flatten()
+        .max_by(|a, b| (a.distance / a.radius).total_cmp(&(b.distance / b.radius)));
+    let Some(f) = fastest else { return Ok(()) };
+    Err(Error::Tunnelling {
+        increment: k as u64,
+        time: t_start,
+        node: f.node,
+        pair: f.pair.0,
+        distance: f.distance,
+        radius: f.radius,
+        more: format!(
+            "{}{}",
+            if fast > 1 {
+                format!(" ({} more nodes move that far)", fast - 1)
+            } else {
+                String::new()
+            },
+            // a node launched by a resolved overclosure is a blow-up, not a fast body
+            if k > 1 {
+                solver.blow_up_hint()
+            } else {
+                String::new()
+            }
+        ),
+    })
+}
+
+/// One history row: time, energies, balance error, contact force, then each part's mean
+/// displacement and velocity (mass-weighted) and each rigid body's.
+fn history_row(
+    solver: &Solver,
+    x0: &[[f64; 3]],
+    bodies0: &[[f64; 3]],
+    parts: &[PartNodes],
+    bodies: &[(String, usize)],
+    force: f64,
+) -> String {
+    let e = &solver.energy;
+    let mut row = format!(
+        "{},{},{},{},{},{},{}",
+        solver.time,
+        e.kinetic,
+        e.internal,
+        e.external_work,
+        e.contact_work,
+        solver.balance_error(),
+        force
+    );
+    for p in parts {
+        let (u, v) = part_motion(solver, x0, p.base..p.base + p.count);
+        for c in u.iter().chain(&v) {
+            row.push_str(&format!(",{c}"));
+        }
+    }
+    for (_, k) in bodies {
+        let b = &solver.bodies[*k].state;
+        for a in 0..3 {
+            row.push_str(&format!(",{}", b.position[a] - bodies0[*k][a]));
+        }
+        for a in 0..3 {
+            row.push_str(&format!(",{}", b.velocity[a]));
+        }
+    }
+    row
+}
+
+/// What the run knows at its end beside the account: the parts, bodies and contact nodes, the
+/// energies, small sliding's anchoring and the warnings about it.
+#[allow(clippy::too_many_arguments)]
+fn ends(
+    device: &Device,
+    built: Vec<String>,
+    solver: &Solver,
+    x0: &[[f64; 3]],
+    bodies0: &[[f64; 3]],
+    at_peak: &[[f64; 3]],
+    part_nodes: &[PartNodes],
+    body_names: &[(String, usize)],
+    contact: Option<&Contact>,
+    model: &crate::model::Model,
+    adjusted: Option<crate::contact::OverclosureReport>,
+    seconds_per_increment: f64,
+) -> Ends {
+    let mut parts = Vec::new();
+    let mut el = 0;
+    for p in part_nodes {
+        let nodes = p.base..p.base + p.count;
+        let m: f64 = nodes.clone().map(|n| solver.mass[n]).sum();
+        let mean = |f: &dyn Fn(usize) -> [f64; 3]| {
+            let mut s = [0.0; 3];
+            for n in nodes.clone() {
+                let v = f(n);
+                for a in 0..3 {
+                    s[a] += solver.mass[n] * v[a] / m;
+                }
+            }
+            s
+        };
+        let (mut lo, mut hi) = ([f64::INFINITY; 6], [f64::NEG_INFINITY; 6]);
+        for k in el..el + p.elements {
+            let s = stress6(solver.stress(k));
+            for c in 0..6 {
+                lo[c] = lo[c].min(s[c]);
+                hi[c] = hi[c].max(s[c]);
+            }
+        }
+        el += p.elements;
+        if p.elements == 0 {
+            (lo, hi) = ([0.0; 6], [0.0; 6]);
+        }
+        parts.push(PartSummary {
+            name: p.name.clone(),
+            displacement: mean(&|n| [0, 1, 2].map(|a| solver.x[n][a] - x0[n][a])),
+            velocity: mean(&|n| solver.v[n]),
+            stress_min: lo,
+            stress_max: hi,
+        });
+    }
+    let bodies = body_names
+        .iter()
+        .map(|(name, k)| BodySummary {
+            name: name.clone(),
+            position: solver.bodies[*k].state.position,
+            velocity: solver.bodies[*k].state.velocity,
+            displacement_at_peak_force: [0, 1, 2].map(|a| at_peak[*k][a] - bodies0[*k][a]),
+        })
+        .collect();
+    let mut contact_nodes = Vec::new();
+    let mut friction = 0.0;
+    if let Some(c) = contact {
+        let outs: Vec<(usize, &crate::contact::PairOutput)> = c
+            .outputs()
+            .into_iter()
+            .map(|(id, o)| (id.0, o))
+            .chain(
+                c.rigid_outputs()
+                    .into_iter()
+                    .map(|(id, o)| (model.pairs().len() + id.0, o)),
+            )
+            .collect();
+        for (pair, o) in outs {
+            friction += o.frictional_dissipation;
+            for (i, &n) in o.slaves.iter().enumerate() {
+                let p = o.cpress.get(i).copied().unwrap_or(0.0);
+                if p > 0.0 {
+                    let f = o
+                        .force
+                        .get(i)
+                        .map_or(0.0, |f| (f[0] * f[0] + f[1] * f[1] + f[2] * f[2]).sqrt());
+                    contact_nodes.push(ContactNode {
+                        contact: pair,
+                        node: n,
+                        position: solver.x[n as usize],
+                        pressure: p,
+                        force: f,
+                    });
+                }
+            }
+        }
+    }
+    let anchoring = contact.map(|c| c.anchoring()).unwrap_or_default();
+    let mut warnings = Vec::new();
+    if let Some(a) = adjusted.filter(|a| !a.moved.is_empty()) {
+        warnings.push(format!(
+            "{} slave nodes started overclosed and were moved onto their masters strain-free \
+             (run.adjust_overclosure), by up to {:e}",
+            a.moved.len(),
+            a.max_distance
+        ));
+    }
+    for a in anchoring.iter().filter(|a| !a.unanchored.is_empty()) {
+        let shown: Vec<String> = a.unanchored.iter().take(8).map(|n| n.to_string()).collect();
+        warnings.push(format!(
+            "contact pair {}: {} of {} slave nodes project onto no master facet and are not \
+             constrained (small sliding anchors each slave once, at the start): nodes {}{}",
+            a.pair.0,
+            a.unanchored.len(),
+            a.slaves,
+            shown.join(", "),
+            if a.unanchored.len() > shown.len() {
+                ", …"
+            } else {
+                ""
+            }
+        ));
+    }
+    let e = solver.energy;
+    Ends {
+        device: device.to_string(),
+        built,
+        end_time: solver.time,
+        seconds_per_increment,
+        energies: [e.kinetic, e.internal, e.external_work, e.contact_work],
+        frictional_dissipation: friction,
+        parts,
+        bodies,
+        contact_nodes,
+        anchored_slaves: anchoring.iter().map(|a| a.anchored).sum(),
+        unanchored_slaves: anchoring
+            .iter()
+            .flat_map(|a| a.unanchored.iter().copied())
+            .collect(),
+        warnings,
+        global_searches: contact.map_or(0, |c| c.global_searches()),
+        ranks: Vec::new(),
+    }
+}
+
+/// The mean displacement (from `x0`) and velocity of `nodes`, weighted by their masses (plain
+/// means when the nodes carry no mass).
+fn part_motion(
+    solver: &crate::explicit::Solver,
+    x0: &[[f64; 3]],
+    nodes: std::ops::Range<usize>,
+) -> ([f64; 3], [f64; 3]) {
+    let total: f64 = nodes.clone().map(|n| solver.mass[n]).sum();
+    let count = nodes.len().max(1) as f64;
+    let (mut u, mut v) = ([0.0; 3], [0.0; 3]);
+    for n in nodes {
+        let w = if total > 0.0 {
+            solver.mass[n] / total
+        } else {
+            1.0 / count
+        };
+        for a in 0..3 {
+            u[a] += w * (solver.x[n][a] - x0[n][a]);
+            v[a] += w * solver.v[n][a];
+        }
+    }
+    (u, v)
+}
