@@ -1,6 +1,7 @@
-//! The search part of a device-resident increment on the CPU path: the same plan as the GPU's
-//! (`gpu::global_search::resident`), pass for pass through the mirrors, on f32 host arrays laid
-//! out as the caller's device buffers would be.
+//! A search's resident arrays on the CPU path: the preparation, frame, plan words and chunk
+//! dispatch a device-resident increment's kernels read and write (`cpu::increment` runs them,
+//! entry by entry, as the GPU does `gpu::global_search::resident`), laid out as the GPU's
+//! buffers are, so that a split increment can hand them over role by role.
 
 use super::{CpuSearch, CpuWorkspace};
 use crate::abi::passes::Buf;
