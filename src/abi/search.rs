@@ -71,7 +71,7 @@ pub struct SearchParams {
     pub cell_capacity: u32,
     /// The pair's reference master node (model node id): the motion budget measures every
     /// node's displacement relative to this node's, so that a contact model travelling as a
-    /// whole uses none of it ([`crate::search::GlobalSearch::reference_node`]).
+    /// whole uses none of it ([`crate::search::SearchStage::reference_node`]).
     pub ref_node: u32,
     /// Padding.
     pub _pad: [u32; 2],

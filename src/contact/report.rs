@@ -84,7 +84,7 @@ pub struct StepReport {
     /// radius within this increment: the search cannot follow them, and a slave may pass
     /// through its master unseen (tunnelling). The master near a slave is the master's
     /// velocity at its contact point, or — for a slave with no facet within the radius — the
-    /// velocity of the pair's reference master node ([`GlobalSearch::reference_node`]); so a
+    /// velocity of the pair's reference master node ([`crate::search::SearchStage::reference_node`]); so a
     /// contact model that moves as a whole, or a slave carried along by its master, is never
     /// fast, while a slave crossing a still or opposing master is. Counted by the penalty
     /// kernels on every path (host arrays and device-resident: [`crate::IncrementStats::fast_nodes`]).
@@ -195,7 +195,7 @@ pub struct OverclosureReport {
 /// slaves). The master near a slave is its velocity at the slave's contact point in `hits` (the
 /// kernels' raw hits, one per slave: the facet's nodes weighted by the load-transfer weights),
 /// or, for a slave with no facet within the radius, the pair's reference master node's
-/// ([`GlobalSearch::reference_node`]). The penalty kernels apply the same rule in f32
+/// ([`crate::search::SearchStage::reference_node`]). The penalty kernels apply the same rule in f32
 /// (`STATUS_FAST`); this is its f64 twin, for kinematic pairs and to name the fastest slave.
 pub(super) fn fast_slaves(
     pair: PairId,

@@ -261,7 +261,7 @@ impl Contact {
     }
 
     /// Increments whose statistics found no free staging buffer of the ring, or (CPU path) the
-    /// queue of uncollected ones full: the host fell more than [`STATS_RING`] increments behind
+    /// queue of uncollected ones full: the host fell more than the ring's eight increments behind
     /// ([`Contact::collect_stats`]); on a GPU their statistics were on the device all the same.
     pub fn dropped_stats(&self) -> u64 {
         self.exec.dropped_stats()
