@@ -13,7 +13,6 @@ use crate::abi::search::{
 };
 use crate::abi::status::STATUS_WORDS;
 use crate::abi::status::{owned_runs, Owner};
-use crate::cpu::CpuWorkspace;
 use crate::device::GpuContext;
 use crate::error::{Error, Result};
 use crate::plan::{Prepared, Step, STEPS};

@@ -3,6 +3,7 @@
 //! ([`super::SearchStage`]: preparation, schedule, anchors, decoding) drives either through
 //! this trait and never asks which one it has.
 
+use crate::abi::passes::Buf;
 use crate::abi::search::{Anchor, GpuHit};
 use crate::abi::status::STATUS_WORDS;
 use crate::cpu::CpuSearch;
@@ -89,7 +90,12 @@ impl SearchExec for GpuSearch {
     fn run_split(&mut self, prep: &Prepared, first: usize) -> Result<Ran> {
         let mut cpu = CpuSearch::default();
         let ws = cpu.run_prefix(prep, first.min(STEPS.len()))?;
-        GpuSearch::run_split(self, prep, first.min(STEPS.len()), ws)
+        // what the steps before the split write: the tree's boxes and the status words
+        let preload = [
+            (Buf::Boxes, bytemuck::cast_slice(&ws.boxes)),
+            (Buf::Status, bytemuck::cast_slice(&ws.status[..])),
+        ];
+        GpuSearch::run_split(self, prep, first.min(STEPS.len()), &preload)
     }
 
     fn set_anchors(&mut self, anchors: &[Anchor]) -> Result<()> {

@@ -29,13 +29,14 @@ impl GpuSearch {
     }
 
     /// Runs the steps `STEPS[first..]` on the GPU, starting from the CPU mirror's state after
-    /// `STEPS[..first]` (`preload`, required when `first > 0`): the GPU half of a split run,
+    /// `STEPS[..first]` (`preload`: the bytes of each role those steps wrote, by `Buf`): the
+    /// GPU half of a split run,
     /// which finds the first step where the two executors diverge.
     pub fn run_split(
         &mut self,
         prep: &Prepared,
         first: usize,
-        preload: &CpuWorkspace,
+        preload: &[(Buf, &[u8])],
     ) -> Result<(Arc<Vec<GpuHit>>, [u32; STATUS_WORDS])> {
         self.run_with(prep, first, Some(preload), true, false)
     }
@@ -47,7 +48,7 @@ impl GpuSearch {
         &mut self,
         prep: &Prepared,
         first: usize,
-        preload: Option<&CpuWorkspace>,
+        preload: Option<&[(Buf, &[u8])]>,
         read_hits: bool,
         local: bool,
     ) -> Result<(Arc<Vec<GpuHit>>, [u32; STATUS_WORDS])> {
@@ -99,19 +100,12 @@ impl GpuSearch {
                 bytemuck::bytes_of(&work.params(i)),
             );
         }
-        if let Some(ws) = preload {
-            crate::gpu::upload(
-                &self.ctx,
-                &self.buffers.boxes.buffer,
-                0,
-                bytemuck::cast_slice(&ws.boxes),
-            );
-            crate::gpu::upload(
-                &self.ctx,
-                &self.buffers.status,
-                0,
-                bytemuck::cast_slice(&ws.status),
-            );
+        for &(buf, bytes) in preload.unwrap_or(&[]) {
+            let target = self.role_buffer(buf).ok_or_else(|| Error::Gpu {
+                during: "a split search".into(),
+                message: format!("no buffer holds {buf:?}"),
+            })?;
+            crate::gpu::upload(&self.ctx, target, 0, bytes);
         }
         if self.bind_groups.is_none() {
             self.bind_groups = Some(self.bind_groups(prep)?);
