@@ -67,6 +67,36 @@ pub(crate) enum Kernel {
 }
 
 impl Kernel {
+    /// Every kernel, in the order `abi::passes::PASSES` declares their passes (for the tests
+    /// that go over them all).
+    #[cfg(test)]
+    pub(crate) const ALL: [Kernel; 24] = [
+        Kernel::ToLocal,
+        Kernel::Anchor,
+        Kernel::Motion,
+        Kernel::Schedule,
+        Kernel::LocalSearch,
+        Kernel::TreeRefit,
+        Kernel::ScanBlocks,
+        Kernel::ScanAdd,
+        Kernel::WalkStart,
+        Kernel::NearestWalk,
+        Kernel::NearestArgs,
+        Kernel::NearestChunks,
+        Kernel::NearestTies,
+        Kernel::NearestCrowded,
+        Kernel::NearestFacet,
+        Kernel::NodalNormals,
+        Kernel::Penalty,
+        Kernel::ScatterForces,
+        Kernel::Gather,
+        Kernel::SetReference,
+        Kernel::AddForces,
+        Kernel::PairStats,
+        Kernel::BoundMax,
+        Kernel::FinishStats,
+    ];
+
     /// The pass it is (shader, entry point, bindings).
     pub(crate) fn pass(self) -> &'static Pass {
         match self {
@@ -327,6 +357,18 @@ mod tests {
             assert_eq!(slots.tree_passes.len(), levels as usize + 1);
             assert!(plan[PLAN_N_SLOTS] as usize <= MAX_PLAN_SLOTS);
         }
+    }
+
+    /// `Kernel::ALL` is every pass of `abi::passes::PASSES` but the host integrator's, in
+    /// order, and each kernel is its pass once.
+    #[test]
+    fn every_pass_but_the_integrator_is_a_kernel() {
+        let passes: Vec<&Pass> = passes::PASSES
+            .iter()
+            .filter(|p| p.entry != "integrate")
+            .collect();
+        let kernels: Vec<&Pass> = Kernel::ALL.iter().map(|k| k.pass()).collect();
+        assert_eq!(kernels, passes);
     }
 
     /// Every entry's kernel is a pass of the group it is recorded under, so the benchmarks'

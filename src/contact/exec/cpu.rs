@@ -2,7 +2,7 @@
 //! statistics words and their queue, and abut's own arrays for host-array increments — the
 //! GPU's increment pass for pass on f32 host arrays laid out as its buffers are.
 
-use super::{HostResults, Increment, IncrementExec, PairRaw};
+use super::{not_resident, HostResults, Increment, IncrementExec, PairRaw};
 use crate::abi::passes::Buf;
 use crate::abi::penalty::SlaveState;
 use crate::abi::search::{GpuHit, PLAN_SLOTS};
@@ -128,19 +128,12 @@ impl CpuExec {
 
     /// The increment's entries for `inc`'s pairs (`plan::increment`).
     pub(super) fn entries(&self, inc: &Increment<'_>) -> Result<Vec<Entry>> {
-        let shapes = self
-            .pairs
-            .iter()
-            .zip(inc.pairs)
-            .enumerate()
-            .map(|(k, (p, pr))| {
-                let local_only = inc.local_only.get(k).copied().unwrap_or(false);
-                p.search
-                    .pair_shape(pr.setup.pair_nodes.len() as u32, local_only)
-            })
-            .collect::<Option<Vec<_>>>()
-            .ok_or_else(not_resident)?;
-        Ok(crate::plan::increment::increment(&shapes))
+        inc.entries(|k, n_pair_nodes, local_only| {
+            self.pairs
+                .get(k)?
+                .search
+                .pair_shape(n_pair_nodes, local_only)
+        })
     }
 
     /// What the GPU's copies do before its compute pass: every status word, the rows and the
@@ -353,14 +346,5 @@ impl IncrementExec for CpuExec {
 
     fn dropped_stats(&self) -> u64 {
         self.resident.as_ref().map_or(0, |r| r.dropped)
-    }
-}
-
-/// The error of an increment before the pairs were made resident.
-fn not_resident() -> Error {
-    Error::BadParameter {
-        name: "device-resident increment",
-        value: "pairs not made resident".into(),
-        expected: "the first increment readies them",
     }
 }

@@ -2,7 +2,7 @@
 //! statistics (`GpuIncrement`), and the buffers of host-array increments. One increment is one
 //! list of dispatch groups recorded into one compute pass.
 
-use super::{HostResults, Increment, IncrementExec, PairRaw};
+use super::{not_resident, HostResults, Increment, IncrementExec, PairRaw};
 use crate::abi::passes::Buf;
 use crate::abi::penalty::{ContactOut, SlaveState};
 use crate::abi::search::{GpuHit, PLAN_SLOTS};
@@ -144,19 +144,12 @@ impl GpuExec {
 
     /// The increment's entries for `inc`'s pairs (`plan::increment`).
     fn entries(&self, inc: &Increment<'_>) -> Result<Vec<Entry>> {
-        let shapes = self
-            .pairs
-            .iter()
-            .zip(inc.pairs)
-            .enumerate()
-            .map(|(k, (p, pr))| {
-                let local_only = inc.local_only.get(k).copied().unwrap_or(false);
-                p.search
-                    .pair_shape(pr.setup.pair_nodes.len() as u32, local_only)
-            })
-            .collect::<Option<Vec<_>>>()
-            .ok_or_else(not_resident)?;
-        Ok(crate::plan::increment::increment(&shapes))
+        inc.entries(|k, n_pair_nodes, local_only| {
+            self.pairs
+                .get(k)?
+                .search
+                .pair_shape(n_pair_nodes, local_only)
+        })
     }
 
     /// Records `entries` into one compute pass: each entry's dispatch from the search, penalty
@@ -462,15 +455,6 @@ impl IncrementExec for GpuExec {
 
     fn dropped_stats(&self) -> u64 {
         self.inc.as_ref().map_or(0, |i| i.dropped)
-    }
-}
-
-/// The error of an increment before the pairs were made resident.
-fn not_resident() -> Error {
-    Error::BadParameter {
-        name: "device-resident increment",
-        value: "pairs not made resident".into(),
-        expected: "the first increment readies them",
     }
 }
 

@@ -15,8 +15,9 @@ use crate::abi::search::GpuHit;
 use crate::abi::stats::IncrementStats;
 use crate::abi::status::STATUS_WORDS;
 use crate::device::{Device, DeviceKind, GpuContext};
-use crate::error::Result;
+use crate::error::{Error, Result};
 use crate::penalty::PenaltySetup;
+use crate::plan::increment::{Entry, PairShape};
 use crate::search::SearchExec;
 use std::sync::Arc;
 
@@ -46,6 +47,36 @@ pub(crate) struct Increment<'a> {
     pub params: &'a [PenaltyParams],
     /// Per pair: the schedule surely chooses the local search.
     pub local_only: &'a [bool],
+}
+
+impl Increment<'_> {
+    /// The increment's entries (`plan::increment`), each pair's search shape from
+    /// `shape(k, n_pair_nodes, local_only)` (`None`: pair `k` is not resident).
+    pub(crate) fn entries(
+        &self,
+        shape: impl Fn(usize, u32, bool) -> Option<PairShape>,
+    ) -> Result<Vec<Entry>> {
+        let shapes = self
+            .pairs
+            .iter()
+            .enumerate()
+            .map(|(k, pr)| {
+                let local_only = self.local_only.get(k).copied().unwrap_or(false);
+                shape(k, pr.setup.pair_nodes.len() as u32, local_only)
+            })
+            .collect::<Option<Vec<_>>>()
+            .ok_or_else(not_resident)?;
+        Ok(crate::plan::increment::increment(&shapes))
+    }
+}
+
+/// The error of an increment before the pairs were made resident.
+pub(crate) fn not_resident() -> Error {
+    Error::BadParameter {
+        name: "device-resident increment",
+        value: "pairs not made resident".into(),
+        expected: "the first increment readies them",
+    }
 }
 
 /// The device work of a `Contact`'s penalty increments. Pair `k` is the `Contact`'s k-th
@@ -147,34 +178,7 @@ mod tests {
     /// that a split at any entry leaves each executor what the other wrote.
     #[test]
     fn a_split_hands_over_every_role_the_increment_writes() {
-        use Kernel::*;
-        let kernels = [
-            ToLocal,
-            Anchor,
-            Motion,
-            Schedule,
-            LocalSearch,
-            TreeRefit,
-            WalkStart,
-            NearestWalk,
-            ScanBlocks,
-            ScanAdd,
-            NearestArgs,
-            NearestChunks,
-            NearestTies,
-            NearestCrowded,
-            NearestFacet,
-            SetReference,
-            NodalNormals,
-            Penalty,
-            ScatterForces,
-            Gather,
-            AddForces,
-            PairStats,
-            BoundMax,
-            FinishStats,
-        ];
-        for k in kernels {
+        for k in Kernel::ALL {
             for b in k.pass().bindings {
                 let buf = match b.buf {
                     // the scan's data is the work items
