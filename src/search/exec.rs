@@ -19,8 +19,9 @@ pub(crate) type Ran = (Arc<Vec<GpuHit>>, [u32; STATUS_WORDS]);
 
 /// The device work of one search: each method is one kernel sequence on the executor's own
 /// buffers. Capabilities only one executor has (positions in a GPU buffer) are methods that the
-/// other refuses with an error naming why.
-pub(crate) trait SearchExec: Send {
+/// other refuses with an error naming why. `Send` on native targets (so a `GlobalSearch` is), not
+/// in a browser, whose WebGPU objects are not (`wgpu::WasmNotSend`).
+pub(crate) trait SearchExec: wgpu::WasmNotSend {
     /// Runs a global search (`local` false) or the motion budget and the local search (or, with
     /// anchors installed, their evaluation) on `prep`, reading the hits back.
     fn run_mode(&mut self, prep: &Prepared, local: bool) -> Result<Ran>;

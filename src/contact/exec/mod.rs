@@ -80,8 +80,8 @@ pub(crate) fn not_resident() -> Error {
 }
 
 /// The device work of a `Contact`'s penalty increments. Pair `k` is the `Contact`'s k-th
-/// penalty pass (a balanced pair has two).
-pub(crate) trait IncrementExec: Send {
+/// penalty pass (a balanced pair has two). `Send` where [`SearchExec`] is.
+pub(crate) trait IncrementExec: wgpu::WasmNotSend {
     /// Adds the executors of the next pair (its search's and its penalty's, for `setup`).
     fn add_pair(&mut self, setup: &PenaltySetup) -> Result<()>;
     /// Pair `k`'s search executor (for its stage to drive).
@@ -173,6 +173,16 @@ mod tests {
     use super::*;
     use crate::abi::passes::Access;
     use crate::plan::increment::Kernel;
+
+    /// A `Contact` and a `GlobalSearch` can move to another thread on native targets (the
+    /// executors' traits ask for `WasmNotSend`: `Send` there, nothing in a browser, whose
+    /// WebGPU objects are not `Send`).
+    #[test]
+    fn contacts_and_searches_are_send_on_native_targets() {
+        fn send<T: Send>() {}
+        send::<crate::Contact>();
+        send::<crate::GlobalSearch>();
+    }
 
     /// Every buffer an increment's kernel may write is handed over by a split increment, so
     /// that a split at any entry leaves each executor what the other wrote.
