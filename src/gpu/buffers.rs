@@ -81,6 +81,39 @@ fn create(
     })
 }
 
+/// Reads the first `len` bytes of each of `sources` back, in order, concatenated: one staging
+/// buffer, one encoder of copies, one submit, one wait.
+pub(crate) fn copy_back(
+    ctx: &crate::device::GpuContext,
+    sources: &[(&wgpu::Buffer, u64)],
+    during: &str,
+) -> Result<Vec<u8>> {
+    let total: u64 = sources.iter().map(|s| s.1).sum();
+    if total == 0 {
+        return Ok(Vec::new());
+    }
+    let staging = ctx.device.create_buffer(&wgpu::BufferDescriptor {
+        label: Some(during),
+        size: total,
+        usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
+        mapped_at_creation: false,
+    });
+    let mut enc = ctx
+        .device
+        .create_command_encoder(&wgpu::CommandEncoderDescriptor {
+            label: Some(during),
+        });
+    let mut offset = 0;
+    for &(b, len) in sources {
+        if len > 0 {
+            enc.copy_buffer_to_buffer(b, 0, &staging, offset, len);
+        }
+        offset += len;
+    }
+    crate::device::submit(ctx, enc);
+    read_back(ctx, &staging, total, during)
+}
+
 /// Maps `buffer` (MAP_READ) for `bytes`, waits, copies the bytes out and unmaps.
 pub fn read_back(
     ctx: &crate::device::GpuContext,

@@ -1,6 +1,6 @@
-//! The CPU increment executor: each pair's search and penalty mirrors, the increment's
-//! statistics words and their queue, and abut's own arrays for host-array increments — the
-//! GPU's increment pass for pass on f32 host arrays laid out as its buffers are.
+//! The CPU increment executor: each pair's search and penalty mirrors and the increment's
+//! statistics words and their queue — the GPU's increment entry by entry on f32 host arrays laid
+//! out as its buffers are (host-array increments run on the host's own f32 copies).
 
 use super::{not_resident, HostResults, Increment, IncrementExec, PairRaw};
 use crate::abi::passes::Buf;
@@ -36,19 +36,11 @@ struct Resident {
     dropped: u64,
 }
 
-/// abut's own arrays of host-array increments: positions per pair, velocities, forces.
-struct HostArrays {
-    x: Vec<Vec<[f32; 4]>>,
-    v: Vec<[f32; 4]>,
-    f: Vec<[f32; 4]>,
-}
-
 /// The CPU executor of a `Contact`'s penalty increments.
 pub(crate) struct CpuExec {
     n_nodes: usize,
     pairs: Vec<CpuPair>,
     resident: Option<Resident>,
-    host: Option<HostArrays>,
 }
 
 impl CpuExec {
@@ -58,7 +50,6 @@ impl CpuExec {
             n_nodes,
             pairs: Vec::new(),
             resident: None,
-            host: None,
         }
     }
 
@@ -266,22 +257,11 @@ impl IncrementExec for CpuExec {
         v: &[[f32; 4]],
         outputs: bool,
     ) -> Result<HostResults> {
-        let n = self.n_nodes;
-        let mut host = self.host.take().unwrap_or_else(|| HostArrays {
-            x: vec![vec![[0.0; 4]; n]; inc.pairs.len()],
-            v: vec![[0.0; 4]; n],
-            f: vec![[0.0; 4]; n],
-        });
-        for (a, xk) in host.x.iter_mut().zip(x) {
-            a.copy_from_slice(xk);
-        }
-        host.v.copy_from_slice(v);
-        host.f.iter_mut().for_each(|f| *f = [0.0; 4]);
-        let xs: Vec<&[[f32; 4]]> = host.x.iter().map(|x| x.as_slice()).collect();
-        let ran = self.run(&xs, &host.v, &mut host.f, inc, false);
-        let forces = host.f.clone();
-        self.host = Some(host);
-        ran?;
+        // the host's arrays are the CPU path's own: the increment runs on them, summing into
+        // fresh forces that are handed back
+        let mut forces = vec![[0.0f32; 4]; self.n_nodes];
+        let xs: Vec<&[[f32; 4]]> = x.iter().map(|x| x.as_slice()).collect();
+        self.run(&xs, v, &mut forces, inc, false)?;
         let r = self.resident.as_ref().ok_or_else(not_resident)?;
         let st: IncrementStats = bytemuck::cast(r.stats);
         let plans = self

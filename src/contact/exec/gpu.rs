@@ -412,25 +412,8 @@ impl IncrementExec for GpuExec {
 
     fn last_hits(&self, k: usize, n_slaves: usize) -> Result<Vec<GpuHit>> {
         let bytes = (n_slaves * std::mem::size_of::<GpuHit>()) as u64;
-        if bytes == 0 {
-            return Ok(Vec::new());
-        }
-        let ctx = &self.ctx;
-        let staging = ctx.device.create_buffer(&wgpu::BufferDescriptor {
-            label: Some("hits readback"),
-            size: bytes,
-            usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
-            mapped_at_creation: false,
-        });
-        let mut enc = ctx
-            .device
-            .create_command_encoder(&wgpu::CommandEncoderDescriptor {
-                label: Some("hits readback"),
-            });
         let hits = self.pairs[k].search.resident_outputs().2;
-        enc.copy_buffer_to_buffer(hits, 0, &staging, 0, bytes);
-        crate::device::submit(ctx, enc);
-        let raw = crate::gpu::buffers::read_back(ctx, &staging, bytes, "hits readback")?;
+        let raw = crate::gpu::buffers::copy_back(&self.ctx, &[(hits, bytes)], "hits readback")?;
         Ok(bytemuck::pod_collect_to_vec(&raw))
     }
 

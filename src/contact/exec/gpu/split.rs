@@ -52,38 +52,17 @@ impl GpuExec {
                 roles.push((None, buf));
             }
         }
-        let mut sources: Vec<(&wgpu::Buffer, usize)> = vec![(positions, n4), (velocities, n4)];
-        sources.push((forces, n4));
+        let mut sources: Vec<(&wgpu::Buffer, u64)> = vec![(positions, n4 as u64)];
+        sources.extend([(velocities, n4 as u64), (forces, n4 as u64)]);
         for &(pair, buf) in &roles {
             let setup = &inc.pairs[pair.unwrap_or(0)].setup;
             let len = twin.role_bytes(pair, buf, setup).map_or(0, |b| b.len());
             let gpu = self
                 .role_buffer(pair, buf, forces)
                 .ok_or_else(|| missing_role(buf))?;
-            sources.push((gpu, len));
+            sources.push((gpu, len as u64));
         }
-        let total: usize = sources.iter().map(|s| s.1).sum();
-        let staging = ctx.device.create_buffer(&wgpu::BufferDescriptor {
-            label: Some("split increment readback"),
-            size: (total as u64).max(16),
-            usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
-            mapped_at_creation: false,
-        });
-        let mut enc = ctx
-            .device
-            .create_command_encoder(&wgpu::CommandEncoderDescriptor {
-                label: Some("split increment readback"),
-            });
-        let mut offset = 0u64;
-        for &(b, len) in &sources {
-            if len > 0 {
-                enc.copy_buffer_to_buffer(b, 0, &staging, offset, len as u64);
-            }
-            offset += len as u64;
-        }
-        crate::device::submit(&ctx, enc);
-        let bytes =
-            crate::gpu::buffers::read_back(&ctx, &staging, total as u64, "split increment")?;
+        let bytes = crate::gpu::buffers::copy_back(&ctx, &sources, "split increment readback")?;
         let mut host: Vec<Vec<[f32; 4]>> = (0..3)
             .map(|i| bytemuck::pod_collect_to_vec(&bytes[i * n4..(i + 1) * n4]))
             .collect();
