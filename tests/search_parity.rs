@@ -376,11 +376,12 @@ fn bad_positions_at_run_time_are_errors() {
 }
 
 /// The tree's refit gives the same bits on every executor (min and max are exact), its boxes
-/// hold what they must (each leaf its facet's nodes, each inner node its children), and a split
-/// run — the CPU mirror up to step k, the GPU from there — gives the CPU's result for every k:
-/// each kernel is checked on its own against its mirror.
+/// hold what they must (each leaf its facet's nodes, each inner node its children), and the
+/// search on each adapter gives the CPU's result, the first search and a requested one after
+/// it. (Each kernel on its own against its mirror: `tests/split_increment.rs`, which splits an
+/// increment, search included, at every entry.)
 #[test]
-fn each_step_matches_its_mirror_in_split_runs() {
+fn the_tree_and_the_search_match_the_mirror() {
     let plate = plate_triangles(30, 30, 1.0, 1.0, 0.3, 61, &|x, y| {
         0.05 * (5.0 * x + y).sin()
     });
@@ -470,8 +471,8 @@ fn each_step_matches_its_mirror_in_split_runs() {
             search.tree_boxes().unwrap()[2..] == cpu_boxes[2..],
             "{gpu}: tree boxes differ from the CPU mirror's"
         );
-        for k in 0..=abut::search::STEPS.len() {
-            let r = search.run_split(m.positions(), k).unwrap();
+        for k in 0..2 {
+            let r = search.run(m.positions()).unwrap();
             assert_same_search(
                 &r,
                 &cpu,
@@ -479,11 +480,11 @@ fn each_step_matches_its_mirror_in_split_runs() {
                 m.positions(),
                 0.05,
                 tol,
-                &format!("{gpu}: CPU steps before {k}, GPU after"),
+                &format!("{gpu}: search {k}"),
             );
             assert!(
                 search.tree_boxes().unwrap()[2..] == cpu_boxes[2..],
-                "{gpu}: split at {k}: tree boxes differ"
+                "{gpu}: search {k}: tree boxes differ"
             );
         }
     }

@@ -289,8 +289,8 @@ fn box_bounds_beyond_the_box_grid_act_as_infinite() {
     let fitted = search.prepare(m.positions()).unwrap();
     let mut tiny = fitted.clone();
     tiny.params.box_margin *= 2f32.powi(-24);
-    let reference = CpuSearch::default().run(&fitted).unwrap();
-    let cpu = CpuSearch::default().run(&tiny).unwrap();
+    let reference = CpuSearch::default().run_prepared(&fitted).unwrap();
+    let cpu = CpuSearch::default().run_prepared(&tiny).unwrap();
     let same = |a: &abut::testing::abi::search::GpuHit, b: &abut::testing::abi::search::GpuHit| {
         a.facet == b.facet
             && a.node == b.node
@@ -317,8 +317,8 @@ fn box_bounds_beyond_the_box_grid_act_as_infinite() {
             continue;
         };
         let mut g = GpuSearch::new(ctx.clone()).unwrap();
-        let on_fitted: Vec<_> = g.run(&fitted).unwrap().to_vec();
-        let hits = g.run(&tiny).unwrap();
+        let on_fitted: Vec<_> = g.run_prepared(&fitted).unwrap().to_vec();
+        let hits = g.run_prepared(&tiny).unwrap();
         assert_eq!(hits.len(), cpu.len());
         for (i, ((a, b), c)) in on_fitted
             .iter()

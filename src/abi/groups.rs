@@ -75,52 +75,8 @@ pub const INTEGRATOR: Group = Group {
     passes: &[&INTEGRATE],
 };
 
-// ---- the direct-submit search (`GlobalSearch::step` and the searches that read back) ----
-
-/// Positions from the caller's device buffer into the frame.
-pub const DIRECT_TO_LOCAL: Group = Group {
-    label: "to_local",
-    passes: &[&TO_LOCAL],
-};
-/// Small sliding's anchors evaluated.
-pub const DIRECT_ANCHOR: Group = Group {
-    label: "anchor",
-    passes: &[&ANCHOR],
-};
-/// The motion budget and the local search.
-pub const DIRECT_LOCAL: Group = Group {
-    label: "motion + local_search",
-    passes: &[&MOTION, &LOCAL_SEARCH],
-};
-/// The search tree's boxes refitted.
-pub const DIRECT_TREE_REFIT: Group = Group {
-    label: "tree_refit",
-    passes: &[&TREE_REFIT],
-};
-/// The tree walks and the scan of what they left to the chunks.
-pub const DIRECT_WALK_SCAN: Group = Group {
-    label: "nearest_facet: walk + scan",
-    passes: &[
-        &WALK_START,
-        &NEAREST_WALK,
-        &SCAN_BLOCKS,
-        &SCAN_ADD,
-        &NEAREST_ARGS,
-    ],
-};
-/// The bounded chunks and their ties (indirect).
-pub const DIRECT_CHUNKS: Group = Group {
-    label: "nearest_facet: chunks",
-    passes: &[&NEAREST_CHUNKS, &NEAREST_TIES],
-};
-/// Self-contact's crowding and each slave's hit written.
-pub const DIRECT_NEAREST: Group = Group {
-    label: "nearest_facet",
-    passes: &[&NEAREST_CROWDED, &NEAREST_FACET],
-};
-
 /// Every group, each label once.
-pub const GROUPS: [Group; 16] = [
+pub const GROUPS: [Group; 9] = [
     TO_LOCAL_ANCHOR,
     TO_LOCAL_MOTION_SCHEDULE,
     LOCAL,
@@ -130,13 +86,6 @@ pub const GROUPS: [Group; 16] = [
     STATS_PAIR,
     STATS_FINISH,
     INTEGRATOR,
-    DIRECT_TO_LOCAL,
-    DIRECT_ANCHOR,
-    DIRECT_LOCAL,
-    DIRECT_TREE_REFIT,
-    DIRECT_WALK_SCAN,
-    DIRECT_CHUNKS,
-    DIRECT_NEAREST,
 ];
 
 /// The group labelled `label`, if one is declared.

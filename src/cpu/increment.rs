@@ -14,27 +14,21 @@ use crate::abi::search::{
     MAX_GROUPS_PER_DIM,
 };
 use crate::abi::stats::STATS_WORDS;
+use crate::error::{Error, Result};
 use crate::penalty::PenaltySetup;
 use crate::plan::increment::{Entry, Kernel, Size};
 use crate::plan::Prepared;
 
-/// One pair's arrays for an entry of it.
-pub(crate) struct PairArrays<'a> {
-    /// The search's resident arrays.
-    pub search: SearchArrays<'a>,
+/// What the penalty and statistics kernels of an entry read and write beside the search's
+/// arrays: the pair's penalty arrays and constants, and the increment's (the caller's
+/// velocities and forces, the bound rows, the statistics). A search alone has none.
+pub(crate) struct PenaltyArrays<'a> {
     /// The penalty's arrays.
     pub penalty: &'a mut CpuPenalty,
     /// The pair's constants.
     pub setup: &'a PenaltySetup,
     /// Its penalty parameters this increment.
     pub params: &'a PenaltyParams,
-}
-
-/// The increment's arrays: the caller's (positions of this pair's search, velocities, forces
-/// summed into) and the increment's own (bound rows, statistics).
-pub(crate) struct IncrementArrays<'a> {
-    /// Positions, one `[f32; 4]` per model node.
-    pub positions: &'a [[f32; 4]],
     /// Velocities, one `[f32; 4]` per model node.
     pub velocities: &'a [[f32; 4]],
     /// Forces, one `[f32; 4]` per model node, xyz summed into.
@@ -79,17 +73,24 @@ fn candidates<'a>(
     }
 }
 
-/// Runs entry `e` of pair `p` on the CPU.
-pub(crate) fn run_entry(e: &Entry, p: PairArrays<'_>, io: IncrementArrays<'_>) {
-    let PairArrays {
-        search: s,
-        penalty: pen,
-        setup,
-        params: pp,
-    } = p;
+/// Runs entry `e` on the CPU: a search kernel on the search's resident arrays `s` and the
+/// positions `positions` (one `[f32; 4]` per model node) it reads; a penalty or statistics
+/// kernel also on `pen`, which an increment has and a search alone does not (an error names
+/// the kernel if it is missing).
+pub(crate) fn run_entry(
+    e: &Entry,
+    positions: &[[f32; 4]],
+    s: SearchArrays<'_>,
+    pen: Option<PenaltyArrays<'_>>,
+) -> Result<()> {
     if !dispatched(e.size, s.plan, s.args) {
-        return;
+        return Ok(());
     }
+    let missing = || Error::BadParameter {
+        name: "increment entry",
+        value: format!("{} without penalty arrays", e.kernel.pass().entry),
+        expected: "a search kernel, or an increment's penalty arrays",
+    };
     // every search kernel reads the params words of the plan (the schedule's grid)
     let params = plan_params(s.plan);
     let prep = &mut *s.prep;
@@ -99,7 +100,7 @@ pub(crate) fn run_entry(e: &Entry, p: PairArrays<'_>, io: IncrementArrays<'_>) {
         Kernel::ToLocal => to_local::to_local(
             &params,
             s.frame,
-            io.positions,
+            positions,
             &mut prep.nodes,
             &prep.adjacency,
             status,
@@ -201,59 +202,78 @@ pub(crate) fn run_entry(e: &Entry, p: PairArrays<'_>, io: IncrementArrays<'_>) {
         Kernel::SetReference => {
             motion::set_reference(&params, &prep.nodes, &mut ws.reference, &prep.motion_nodes)
         }
-        Kernel::NodalNormals => nodal_normals::nodal_normals(
-            pp,
-            &prep.nodes,
-            &prep.facets,
-            &setup.pair_nodes,
-            &setup.adjacency,
-            &mut pen.normals,
-        ),
-        Kernel::Penalty => {
-            pen.out
-                .resize(pp.n_slaves as usize, bytemuck::Zeroable::zeroed());
-            penalty::penalty(
-                pp,
-                setup.friction,
+        Kernel::NodalNormals => {
+            let p = pen.ok_or_else(missing)?;
+            nodal_normals::nodal_normals(
+                p.params,
                 &prep.nodes,
-                io.velocities,
+                &prep.facets,
+                &p.setup.pair_nodes,
+                &p.setup.adjacency,
+                &mut p.penalty.normals,
+            )
+        }
+        Kernel::Penalty => {
+            let p = pen.ok_or_else(missing)?;
+            p.penalty
+                .out
+                .resize(p.params.n_slaves as usize, bytemuck::Zeroable::zeroed());
+            penalty::penalty(
+                p.params,
+                p.setup.friction,
+                &prep.nodes,
+                p.velocities,
                 &prep.facets,
                 &ws.hits,
-                &pen.normals,
-                &mut pen.state,
-                &mut pen.out,
+                &p.penalty.normals,
+                &mut p.penalty.state,
+                &mut p.penalty.out,
                 status,
             );
         }
         Kernel::ScatterForces => {
-            pen.acc.clear();
-            pen.acc
-                .resize(setup.pair_nodes.len() * ACC_WORDS_PER_NODE, 0);
+            let p = pen.ok_or_else(missing)?;
+            let acc = &mut p.penalty.acc;
+            acc.clear();
+            acc.resize(p.setup.pair_nodes.len() * ACC_WORDS_PER_NODE, 0);
             gather::scatter_forces(
-                pp,
-                &setup.facet_nodes,
+                p.params,
+                &p.setup.facet_nodes,
                 &ws.hits,
-                &pen.out,
+                &p.penalty.out,
                 status,
-                &mut pen.acc,
+                acc,
             );
         }
         Kernel::Gather => {
-            pen.forces.resize(setup.pair_nodes.len(), [0.0; 4]);
+            let p = pen.ok_or_else(missing)?;
+            let pn = &mut *p.penalty;
+            pn.forces.resize(p.setup.pair_nodes.len(), [0.0; 4]);
             gather::gather(
-                pp,
-                &setup.pair_nodes,
-                &pen.out,
+                p.params,
+                &p.setup.pair_nodes,
+                &pn.out,
                 status,
-                &mut pen.acc,
-                &mut pen.forces,
+                &mut pn.acc,
+                &mut pn.forces,
             );
         }
         Kernel::AddForces => {
-            gather::add_forces(pp, &setup.pair_nodes, &pen.forces, io.forces, io.rows)
+            let p = pen.ok_or_else(missing)?;
+            gather::add_forces(
+                p.params,
+                &p.setup.pair_nodes,
+                &p.penalty.forces,
+                p.forces,
+                p.rows,
+            )
         }
-        Kernel::PairStats => stats::pair_stats(status, s.plan, io.stats),
-        Kernel::BoundMax => stats::bound_max(&setup.pair_nodes, io.rows, io.stats),
-        Kernel::FinishStats => stats::finish_stats(io.stats),
+        Kernel::PairStats => stats::pair_stats(status, s.plan, pen.ok_or_else(missing)?.stats),
+        Kernel::BoundMax => {
+            let p = pen.ok_or_else(missing)?;
+            stats::bound_max(&p.setup.pair_nodes, p.rows, p.stats)
+        }
+        Kernel::FinishStats => stats::finish_stats(pen.ok_or_else(missing)?.stats),
     }
+    Ok(())
 }

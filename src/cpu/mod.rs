@@ -30,11 +30,8 @@ use std::sync::atomic::AtomicU32;
 use std::sync::Arc;
 
 use crate::abi::penalty::ACC_WORDS_PER_NODE;
-use crate::abi::search::{box_words, BEST_WORDS};
-use crate::abi::search::{tree_passes, GpuHit, ScanLevels};
+use crate::abi::search::GpuHit;
 use crate::abi::status::STATUS_WORDS;
-use crate::error::Result;
-use crate::plan::{Prepared, Step, STEPS};
 
 /// Fewest invocations a thread of the CPU path takes at once (below it, splitting costs more
 /// than it gains).
@@ -170,168 +167,15 @@ pub struct CpuSearch {
 }
 
 impl CpuSearch {
-    /// Runs a global search (`local` false) or the motion check and the local search from
-    /// the tracked nodes of the previous increment. Returns the hits and the status words.
-    pub fn run_mode(
-        &mut self,
-        prep: &Prepared,
-        local: bool,
-    ) -> Result<(Arc<Vec<GpuHit>>, [u32; STATUS_WORDS])> {
-        if !local {
-            let hits = self.run(prep)?;
-            self.ws.reference.clear();
-            self.ws.reference.extend_from_slice(&prep.nodes);
-            return Ok((hits, self.ws.status));
-        }
-        if self.ws.hits.len() != prep.slaves.len() || self.ws.reference.len() != prep.nodes.len() {
-            return Err(crate::error::Error::BadParameter {
-                name: "local search",
-                value: "before any global search".into(),
-                expected: "a global search first",
-            });
-        }
-        let mut status = crate::abi::status::reset_image();
-        if let Some(anchors) = &self.anchors {
-            anchor::anchor(
-                &prep.params,
-                &prep.nodes,
-                &prep.facets,
-                &prep.slaves,
-                anchors,
-                &mut status,
-                hits_mut(&mut self.ws.hits),
-                &prep.adjacency,
-            );
-            self.ws.status = status;
-            return Ok((self.ws.hits.clone(), status));
-        }
-        motion::motion(
-            &prep.params,
-            &prep.nodes,
-            &self.ws.reference,
-            &prep.motion_nodes,
-            &mut status,
-            &self.ws.hits,
-        );
-        local_search::local_search(
-            &prep.params,
-            &prep.nodes,
-            &prep.facets,
-            &prep.slaves,
-            &prep.adjacency,
-            &mut status,
-            hits_mut(&mut self.ws.hits),
-        );
-        self.ws.status = status;
-        Ok((self.ws.hits.clone(), status))
-    }
-
     /// Small sliding: installs the slaves' anchors.
     pub fn set_anchors(&mut self, anchors: &[crate::abi::search::Anchor]) {
         self.anchors = Some(anchors.to_vec());
-    }
-
-    /// Runs only `STEPS[..first]` and returns the workspace as those steps leave it: the CPU
-    /// half of a split run.
-    pub fn run_prefix(&mut self, prep: &Prepared, first: usize) -> Result<&CpuWorkspace> {
-        self.reset(prep);
-        for step in &STEPS[..first] {
-            run_step(*step, &prep.params, prep, &mut self.ws);
-        }
-        Ok(&self.ws)
     }
 
     /// The search tree's packed boxes after the last global search (one per heap node,
     /// `abi::boxes`).
     pub fn tree_boxes(&self) -> &[[u32; 4]] {
         &self.ws.boxes
-    }
-
-    /// Sizes and resets the workspace for a global search of `prep`.
-    fn reset(&mut self, prep: &Prepared) {
-        crate::abi::status::reset(&mut self.ws.status, crate::abi::status::Owner::Search);
-        self.ws
-            .boxes
-            .resize(box_words(prep.params.tree_levels), [0; 4]);
-        self.ws
-            .corners
-            .resize(box_words(prep.params.tree_levels), [[0.0; 4]; 2]);
-        hits_mut(&mut self.ws.hits).resize(prep.slaves.len(), GpuHit::miss(0, 0));
-    }
-
-    /// Runs all steps of a global search. Returns the hits.
-    pub fn run(&mut self, prep: &Prepared) -> Result<Arc<Vec<GpuHit>>> {
-        self.reset(prep);
-        for step in STEPS {
-            run_step(step, &prep.params, prep, &mut self.ws);
-        }
-        Ok(self.ws.hits.clone())
-    }
-}
-
-/// Runs one step of the search on the CPU workspace (the CPU half of a split run).
-pub fn run_step(
-    step: Step,
-    params: &crate::abi::search::SearchParams,
-    prep: &Prepared,
-    ws: &mut CpuWorkspace,
-) {
-    match step {
-        Step::TreeRefit => {
-            for tp in tree_passes(params.tree_levels) {
-                tree::tree_refit(
-                    params,
-                    &tp,
-                    &prep.nodes,
-                    &prep.facets,
-                    &prep.order,
-                    &mut ws.boxes,
-                    &mut ws.corners,
-                    &mut ws.status,
-                );
-            }
-        }
-        Step::NearestFacet => {
-            let n = params.n_slaves as usize;
-            let work_levels = ScanLevels::new(params.n_slaves + 1);
-            ws.work.clear();
-            ws.work.resize(work_levels.words as usize, 0);
-            ws.best.clear();
-            ws.best.resize(n * BEST_WORDS, 0);
-            ws.walk_points.resize(n, [0; 4]);
-            nearest_facet::walk_start(
-                params,
-                &ws.corners,
-                &prep.nodes,
-                &prep.slaves,
-                &prep.walk_order,
-                &mut ws.walk_points,
-                &mut ws.work,
-            );
-
-            let c = nearest_facet::Candidates {
-                params,
-                nodes: &prep.nodes,
-                facets: &prep.facets,
-                slaves: &prep.slaves,
-                walk_order: &prep.walk_order,
-                walk_points: &ws.walk_points,
-                order: &prep.order,
-                boxes: &ws.boxes,
-                corners: &ws.corners,
-                adjacency: &prep.adjacency,
-            };
-            nearest_facet::nearest_walk(&c, &mut ws.work, &mut ws.best);
-
-            scan::scan(&work_levels, &mut ws.work);
-            nearest_facet::nearest_chunks(&c, &ws.work, &mut ws.best);
-
-            nearest_facet::nearest_ties(&c, &ws.work, &mut ws.best);
-
-            nearest_facet::nearest_crowded(&c, &mut ws.best);
-
-            nearest_facet::nearest_facet(&c, &mut ws.status, hits_mut(&mut ws.hits), &ws.best);
-        }
     }
 }
 

@@ -7,9 +7,9 @@ use super::{CpuSearch, CpuWorkspace};
 use crate::abi::passes::Buf;
 use crate::abi::search::*;
 use crate::abi::status::STATUS_WORDS;
-use crate::error::Result;
+use crate::error::{Error, Result};
 use crate::plan::increment::{initial_plan, PairShape, Slots};
-use crate::plan::Prepared;
+use crate::plan::{PlanRan, Prepared};
 
 /// What a CPU search keeps for its device-resident increments.
 #[derive(Clone, Debug)]
@@ -147,10 +147,62 @@ impl CpuSearch {
         })
     }
 
+    /// Runs the search's entries of one increment (`plan::increment::search`) on `positions`
+    /// (one `[f32; 4]` per model node, relative to the frame), each through its kernel's mirror
+    /// (`cpu::increment`), as `GpuSearch::run_plan` does on a GPU.
+    pub(crate) fn run_plan(&mut self, positions: &[[f32; 4]], read_hits: bool) -> Result<PlanRan> {
+        let shape = self.pair_shape(0, false).ok_or_else(not_resident)?;
+        if positions.len() != shape.n_nodes as usize {
+            return Err(Error::LengthMismatch {
+                what: "search positions (one per model node)",
+                expected: shape.n_nodes as usize,
+                got: positions.len(),
+            });
+        }
+        self.ws.status = crate::abi::status::reset_image();
+        for e in crate::plan::increment::search(0, &shape) {
+            let arrays = self.arrays().ok_or_else(not_resident)?;
+            super::increment::run_entry(&e, positions, arrays, None)?;
+        }
+        let r = self.resident.as_ref().ok_or_else(not_resident)?;
+        Ok(PlanRan {
+            status: self.ws.status,
+            plan: r.plan[..PLAN_SLOTS].to_vec(),
+            hits: if read_hits {
+                self.ws.hits.clone()
+            } else {
+                Default::default()
+            },
+        })
+    }
+
+    /// One global search of `prep` as it is (its params and its nodes, already in the frame),
+    /// as `GpuSearch::run_prepared` runs it: the host-sized global entries
+    /// (`plan::increment::prepared_global`). For tests of the kernels on inputs they prepared.
+    #[doc(hidden)]
+    pub fn run_prepared(&mut self, prep: &Prepared) -> Result<std::sync::Arc<Vec<GpuHit>>> {
+        self.make_resident(prep, 1, false, [0.0; 3], 65_535)?;
+        self.ws.status = crate::abi::status::reset_image();
+        for e in crate::plan::increment::prepared_global(&prep.params) {
+            let arrays = self.arrays().ok_or_else(not_resident)?;
+            super::increment::run_entry(&e, &[], arrays, None)?;
+        }
+        Ok(self.ws.hits.clone())
+    }
+
     /// Asks the next device-resident increment to search globally.
     pub(crate) fn request_global(&mut self) {
         if let Some(r) = self.resident.as_mut() {
             r.plan[PLAN_FORCE] = 1;
         }
+    }
+}
+
+/// The error of a search run before it was made resident.
+fn not_resident() -> Error {
+    Error::BadParameter {
+        name: "search",
+        value: "not made resident".into(),
+        expected: "make_resident first",
     }
 }

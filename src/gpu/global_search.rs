@@ -1,24 +1,21 @@
-//! The GPU executor of the global search: the tree's refit and the nearest-facet passes in one
-//! command encoder and one submit.
+//! The GPU executor of a search: its buffers and pipelines, its part of a device-resident
+//! increment (`resident`), and a search run on its own (`plan`).
 
 use std::sync::Arc;
 
 use super::buffers::{read_back, read_back_with, GrowBuffer};
-use crate::abi::groups;
 use crate::abi::passes::{self, Buf};
 use crate::abi::search::{box_words, BEST_WORDS};
 use crate::abi::search::{
-    tree_passes, Anchor, FrameParams, GpuHit, ScanLevels, ScanParams, SearchParams, TreeParams,
-    ITEM_WORKGROUP, SCAN_BLOCK, TREE_WORKGROUP,
+    tree_passes, Anchor, FrameParams, GpuHit, ScanLevels, ScanParams, TreeParams,
 };
 use crate::abi::status::STATUS_WORDS;
-use crate::abi::status::{owned_runs, Owner};
 use crate::device::GpuContext;
 use crate::error::{Error, Result};
-use crate::plan::{Prepared, Step, STEPS};
+use crate::plan::Prepared;
 use wgpu::BufferUsages as U;
 
-mod direct;
+mod plan;
 mod resident;
 
 const STATUS_BYTES: u64 = (STATUS_WORDS * 4) as u64;
@@ -35,8 +32,6 @@ pub struct SharedBuffers<'a> {
     pub status: &'a wgpu::Buffer,
 }
 
-/// Readback layout: status words, then the hits.
-const READBACK_HITS_OFFSET: u64 = STATUS_BYTES.next_multiple_of(16);
 /// Uniform offsets must be multiples of this (WebGPU's default alignment).
 const UNIFORM_STRIDE: u64 = 256;
 
@@ -57,25 +52,7 @@ struct Pipelines {
     anchor: wgpu::ComputePipeline,
 }
 
-struct BindGroups {
-    anchor: wgpu::BindGroup,
-    local_search: wgpu::BindGroup,
-    motion: wgpu::BindGroup,
-    /// One per refit pass of the tree.
-    tree_refit: Vec<wgpu::BindGroup>,
-    walk_start: wgpu::BindGroup,
-    nearest_walk: wgpu::BindGroup,
-    work_scan_blocks: Vec<wgpu::BindGroup>,
-    work_scan_add: Vec<wgpu::BindGroup>,
-    nearest_args: wgpu::BindGroup,
-    nearest_chunks: wgpu::BindGroup,
-    nearest_ties: wgpu::BindGroup,
-    nearest_crowded: wgpu::BindGroup,
-    nearest_facet: wgpu::BindGroup,
-}
-
 struct Buffers {
-    params: wgpu::Buffer,
     /// `TreeParams` of each refit pass, one every `UNIFORM_STRIDE` bytes.
     tree_params: GrowBuffer,
     nodes: GrowBuffer,
@@ -97,8 +74,6 @@ struct Buffers {
     anchors: GrowBuffer,
     /// Nearest-facet work items: chunk counts per slave, scanned (all scan levels).
     work: GrowBuffer,
-    /// Scan parameters of each level of `work`.
-    work_scan_params: GrowBuffer,
     /// Nearest-facet record per slave (4 words).
     best: GrowBuffer,
     /// The indirect dispatch of the nearest-facet work items (x, y, z).
@@ -112,25 +87,16 @@ pub struct GpuSearch {
     ctx: Arc<GpuContext>,
     pipelines: Pipelines,
     buffers: Buffers,
-    bind_groups: Option<BindGroups>,
-    /// Tree levels the bind groups and tree parameters were built for.
+    /// Tree levels the buffers were sized for (`None` before `make_resident`).
     tree_levels: Option<u32>,
-    /// Number of work-item scan levels the bind groups were built for.
-    work_levels: usize,
     /// Workgroups per dispatch dimension before folding into y (the device limit, or lower
     /// for tests of the folding).
     max_workgroups_per_dim: u32,
-    /// A global search has run (its hits are what a local search starts from).
-    searched: bool,
-    /// Bumped whenever the bind groups (and so possibly the buffers) are rebuilt.
+    /// Bumped whenever a buffer is replaced (bind groups on the old ones are stale).
     generation: u64,
-    /// The caller's positions buffer for the next run (positions kept on the device).
-    device_positions: Option<wgpu::Buffer>,
-    /// Bind group of to_local for that buffer, with the generation it was built at.
-    to_local_group: Option<(wgpu::Buffer, u64, wgpu::BindGroup)>,
+    /// abut's positions buffer for host positions (`run_plan`), made by the first.
+    host_positions: Option<wgpu::Buffer>,
     frame: wgpu::Buffer,
-    /// Small sliding: local increments run the anchor kernel instead of the local search.
-    anchored: bool,
     /// The pair's constant arrays still have to be uploaded (first run, or buffers replaced).
     static_dirty: bool,
     /// Device-resident increments: their pipelines, plan slots and bind groups.
@@ -171,12 +137,6 @@ impl GpuSearch {
         };
         let storage = U::STORAGE | U::COPY_DST;
         let buffers = Buffers {
-            params: device.create_buffer(&wgpu::BufferDescriptor {
-                label: Some("search params"),
-                size: std::mem::size_of::<SearchParams>() as u64,
-                usage: U::UNIFORM | U::COPY_DST,
-                mapped_at_creation: false,
-            }),
             tree_params: GrowBuffer::new(
                 device,
                 "tree params",
@@ -208,12 +168,6 @@ impl GpuSearch {
             motion_nodes: GrowBuffer::new(device, "motion nodes", 0, storage),
             anchors: GrowBuffer::new(device, "anchors", 0, storage),
             work: GrowBuffer::new(device, "nearest-facet work items", 0, storage | U::COPY_SRC),
-            work_scan_params: GrowBuffer::new(
-                device,
-                "work scan params",
-                4 * UNIFORM_STRIDE,
-                U::UNIFORM | U::COPY_DST,
-            ),
             best: GrowBuffer::new(device, "nearest-facet records", 0, storage | U::COPY_SRC),
             args: device.create_buffer(&wgpu::BufferDescriptor {
                 label: Some("nearest-facet dispatch"),
@@ -238,17 +192,12 @@ impl GpuSearch {
             ctx,
             pipelines,
             buffers,
-            bind_groups: None,
             tree_levels: None,
-            work_levels: 0,
             max_workgroups_per_dim: ctx_limit,
-            searched: false,
             hits_cache: Arc::default(),
             generation: 0,
-            device_positions: None,
-            to_local_group: None,
+            host_positions: None,
             frame: ctx_frame,
-            anchored: false,
             static_dirty: true,
             resident: None,
         })
@@ -263,7 +212,7 @@ impl GpuSearch {
             .anchors
             .ensure(&self.ctx.device, &self.ctx.limits, bytes)?
         {
-            self.bind_groups = None;
+            self.generation += 1;
         }
         super::upload(
             &self.ctx,
@@ -271,14 +220,7 @@ impl GpuSearch {
             0,
             bytemuck::cast_slice(anchors),
         );
-        self.anchored = true;
         Ok(())
-    }
-
-    /// Takes the positions of the next runs from the caller's buffer (one `vec4<f32>` per model
-    /// node, model frame, STORAGE usage) instead of uploading them; `None` goes back to uploads.
-    pub fn set_device_positions(&mut self, buffer: Option<wgpu::Buffer>) {
-        self.device_positions = buffer;
     }
 
     /// Folds dispatches into 2D beyond `groups` workgroups per dimension (at most the device
@@ -319,19 +261,16 @@ impl GpuSearch {
         replaced |= b
             .motion_nodes
             .ensure(d, l, (prep.motion_nodes.len() * 4) as u64)?;
-        let work = work_levels(prep);
+        let work = ScanLevels::new(prep.slaves.len() as u32 + 1);
         replaced |= b.work.ensure(d, l, work.words as u64 * 4)?;
-        replaced |= b
-            .work_scan_params
-            .ensure(d, l, work.levels.len() as u64 * UNIFORM_STRIDE)?;
         replaced |= b
             .best
             .ensure(d, l, (prep.slaves.len() * BEST_WORDS * 4) as u64)?;
-        b.readback.ensure(d, l, READBACK_HITS_OFFSET + hits_bytes)?;
         self.static_dirty |= replaced;
-        if replaced || self.tree_levels != Some(levels) || self.work_levels != work.levels.len() {
-            self.bind_groups = None;
+        if replaced || self.tree_levels != Some(levels) {
+            self.generation += 1;
         }
+        self.tree_levels = Some(levels);
         Ok(())
     }
 
@@ -358,7 +297,6 @@ impl GpuSearch {
     fn resource(&self, buf: Buf) -> Option<wgpu::BindingResource<'_>> {
         let b = &self.buffers;
         Some(match buf {
-            Buf::SearchParams => b.params.as_entire_binding(),
             Buf::FrameParams => self.frame.as_entire_binding(),
             Buf::Nodes => b.nodes.buffer.as_entire_binding(),
             Buf::Facets => b.facets.buffer.as_entire_binding(),
@@ -377,58 +315,6 @@ impl GpuSearch {
             Buf::Args => b.args.as_entire_binding(),
             Buf::Plan => b.plan.as_entire_binding(),
             _ => return None,
-        })
-    }
-
-    fn bind_groups(&self, prep: &Prepared) -> Result<BindGroups> {
-        let d = &self.ctx.device;
-        let b = &self.buffers;
-        let p = &self.pipelines;
-        let group = |pipe: &wgpu::ComputePipeline, pass: &passes::Pass| {
-            super::bind(d, pipe, pass, |buf| self.resource(buf))
-        };
-        // the bind groups of every level of a scan (blocks, then add) over `data`
-        let scan = |params: &wgpu::Buffer, data: &wgpu::Buffer, n: usize| {
-            let level = |pipe: &wgpu::ComputePipeline, pass: &passes::Pass, i: usize| {
-                super::bind(d, pipe, pass, |buf| match buf {
-                    Buf::ScanParams => Some(scan_level(params, i)),
-                    Buf::ScanData => Some(data.as_entire_binding()),
-                    _ => None,
-                })
-            };
-            let blocks = (0..n)
-                .map(|i| level(&p.scan_blocks, &passes::SCAN_BLOCKS, i))
-                .collect::<Result<Vec<_>>>()?;
-            let add = (0..n)
-                .map(|i| level(&p.scan_add, &passes::SCAN_ADD, i))
-                .collect::<Result<Vec<_>>>()?;
-            Ok::<_, Error>((blocks, add))
-        };
-        let n_work_levels = work_levels(prep).levels.len();
-        let (work_scan_blocks, work_scan_add) =
-            scan(&b.work_scan_params.buffer, &b.work.buffer, n_work_levels)?;
-        let tree_refit = (0..tree_passes(prep.params.tree_levels).len())
-            .map(|i| {
-                super::bind(d, &p.tree_refit, &passes::TREE_REFIT, |buf| match buf {
-                    Buf::TreeParams => Some(tree_pass(&b.tree_params.buffer, i)),
-                    other => self.resource(other),
-                })
-            })
-            .collect::<Result<Vec<_>>>()?;
-        Ok(BindGroups {
-            anchor: group(&p.anchor, &passes::ANCHOR)?,
-            local_search: group(&p.local_search, &passes::LOCAL_SEARCH)?,
-            motion: group(&p.motion, &passes::MOTION)?,
-            tree_refit,
-            walk_start: group(&p.walk_start, &passes::WALK_START)?,
-            nearest_walk: group(&p.nearest_walk, &passes::NEAREST_WALK)?,
-            work_scan_blocks,
-            work_scan_add,
-            nearest_args: group(&p.nearest_args, &passes::NEAREST_ARGS)?,
-            nearest_chunks: group(&p.nearest_chunks, &passes::NEAREST_CHUNKS)?,
-            nearest_ties: group(&p.nearest_ties, &passes::NEAREST_TIES)?,
-            nearest_crowded: group(&p.nearest_crowded, &passes::NEAREST_CROWDED)?,
-            nearest_facet: group(&p.nearest_facet, &passes::NEAREST_FACET)?,
         })
     }
 
@@ -501,7 +387,7 @@ impl GpuSearch {
     /// Reads back the search tree's packed boxes after the last global search (one per heap
     /// node, `abi::boxes`). A debugging and testing aid (it allocates and waits).
     pub fn tree_boxes(&self) -> Result<Vec<[u32; 4]>> {
-        let Some(levels) = self.tree_levels.filter(|_| self.searched) else {
+        let Some(levels) = self.tree_levels else {
             return Err(Error::Gpu {
                 during: "reading the search tree".into(),
                 message: "no search has run".into(),
@@ -525,11 +411,6 @@ impl GpuSearch {
     }
 }
 
-/// The scan levels of the nearest-facet work items: one chunk count per slave and the total.
-fn work_levels(prep: &Prepared) -> ScanLevels {
-    ScanLevels::new(prep.slaves.len() as u32 + 1)
-}
-
 /// Refit pass `i`'s parameters in `params` (one uniform block every `UNIFORM_STRIDE` bytes).
 fn tree_pass(params: &wgpu::Buffer, i: usize) -> wgpu::BindingResource<'_> {
     wgpu::BindingResource::Buffer(wgpu::BufferBinding {
@@ -546,34 +427,4 @@ fn scan_level(params: &wgpu::Buffer, i: usize) -> wgpu::BindingResource<'_> {
         offset: i as u64 * UNIFORM_STRIDE,
         size: wgpu::BufferSize::new(std::mem::size_of::<ScanParams>() as u64),
     })
-}
-
-/// Copies the reset values of the status words `owner` resets from `image` into `status`.
-pub(crate) fn reset_status(
-    enc: &mut wgpu::CommandEncoder,
-    image: &wgpu::Buffer,
-    status: &wgpu::Buffer,
-    owner: Owner,
-) {
-    for (first, n) in owned_runs(owner) {
-        let (offset, bytes) = (4 * first as u64, 4 * n as u64);
-        enc.copy_buffer_to_buffer(image, offset, status, offset, bytes);
-    }
-}
-
-/// Appends the dispatches of a multi-level scan over `levels` (its bind groups per level): each
-/// level's blocks upward, then the block sums added back downward.
-fn scan_work<'a>(
-    p: &'a Pipelines,
-    levels: &ScanLevels,
-    blocks: &'a [wgpu::BindGroup],
-    add: &'a [wgpu::BindGroup],
-    work: &mut Vec<super::Work<'a>>,
-) {
-    for (i, level) in levels.levels.iter().enumerate() {
-        work.push((&p.scan_blocks, &blocks[i], level.1, SCAN_BLOCK));
-    }
-    for i in (0..levels.levels.len().saturating_sub(1)).rev() {
-        work.push((&p.scan_add, &add[i], levels.levels[i].1, SCAN_BLOCK));
-    }
 }

@@ -1,5 +1,6 @@
-//! The GPU executor: shader composition, a workspace of buffers that only grows, pipelines,
-//! and the global search's dispatch sequence (one encoder, one submit, one readback).
+//! The GPU executors: the search's, the penalty's and the increment's kernels on buffers that
+//! only grow, and the recording of a plan's entries as dispatches (direct, or indirect from
+//! what the device decided).
 
 pub(crate) mod buffers;
 mod global_search;
@@ -40,32 +41,6 @@ pub(crate) fn run_pass(
         pass.set_pipeline(pipe);
         pass.set_bind_group(0, group, &[]);
         pass.dispatch_workgroups(x, y, 1);
-    }
-}
-
-/// One indirect dispatch: pipeline, bind group, and the byte offset of its (x, y, z) arguments.
-pub(crate) type IndirectWork<'a> = (&'a wgpu::ComputePipeline, &'a wgpu::BindGroup, u64);
-
-/// Records one compute pass running each (pipeline, bind group) in order with the workgroup
-/// counts the device wrote into `args` at each one's offset (x, y, z: an indirect dispatch,
-/// decided on the device).
-pub(crate) fn run_indirect_pass(
-    ctx: &crate::device::GpuContext,
-    enc: &mut wgpu::CommandEncoder,
-    group: &'static crate::abi::groups::Group,
-    work: &[IndirectWork<'_>],
-    args: &wgpu::Buffer,
-) {
-    let label = group.label;
-    if let Ok(mut t) = ctx.traffic.lock() {
-        *t.dispatches.entry(label.to_string()).or_default() += work.len() as u64;
-    }
-    let mut profiler = ctx.profiler.lock().ok();
-    let mut pass = begin_pass(&mut profiler, enc, label);
-    for &(pipe, group, offset) in work {
-        pass.set_pipeline(pipe);
-        pass.set_bind_group(0, group, &[]);
-        pass.dispatch_workgroups_indirect(args, offset);
     }
 }
 

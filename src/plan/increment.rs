@@ -257,76 +257,147 @@ pub(crate) struct PairShape {
     pub slots: Slots,
 }
 
-/// The entries of one device-resident increment of `pairs`, in the order they run: each
-/// pair's search, penalty and statistics, then every pair's largest bound row and the stable
-/// increment.
-pub(crate) fn increment(pairs: &[PairShape]) -> Vec<Entry> {
+/// The search's entries of pair `k` of shape `p`, in the order they run: positions into the
+/// frame, then the anchors' evaluation (small sliding) or the motion budget, the schedule, the
+/// local search and (unless `local_only`) the global search the schedule may choose.
+pub(crate) fn search(k: usize, p: &PairShape) -> Vec<Entry> {
     let mut out = Vec::new();
-    let iw = ITEM_WORKGROUP;
-    for (k, p) in pairs.iter().enumerate() {
-        let mut push = |group: &'static Group, kernel: Kernel, level: usize, size: Size| {
-            out.push(Entry {
-                group,
-                kernel,
-                pair: k,
-                level,
-                size,
-            })
-        };
-        let s = &p.slots;
-        if p.anchored {
-            let g = &groups::TO_LOCAL_ANCHOR;
-            push(g, Kernel::ToLocal, 0, Size::Items(p.n_nodes, iw));
-            push(g, Kernel::Anchor, 0, Size::Items(p.n_slaves, iw));
-        } else {
-            let g = &groups::TO_LOCAL_MOTION_SCHEDULE;
-            push(g, Kernel::ToLocal, 0, Size::Items(p.n_nodes, iw));
-            push(g, Kernel::Motion, 0, Size::Items(p.n_motion_nodes, iw));
-            push(g, Kernel::Schedule, 0, Size::Items(1, 1));
-            let g = &groups::LOCAL;
-            push(g, Kernel::LocalSearch, 0, Size::Slot(s.local_slaves));
-            if !p.local_only {
-                let g = &groups::GLOBAL_SEARCH;
-                for (i, &slot) in s.tree_passes.iter().enumerate() {
-                    push(g, Kernel::TreeRefit, i, Size::Slot(slot));
-                }
-                push(g, Kernel::WalkStart, 0, Size::Slot(s.slave_groups));
-                push(g, Kernel::NearestWalk, 0, Size::Slot(s.slaves));
-                for (i, &slot) in s.work_levels.iter().enumerate() {
-                    push(g, Kernel::ScanBlocks, i, Size::Slot(slot));
-                }
-                for i in (0..s.work_levels.len().saturating_sub(1)).rev() {
-                    push(g, Kernel::ScanAdd, i, Size::Slot(s.work_levels[i]));
-                }
-                push(g, Kernel::NearestArgs, 0, Size::Slot(s.one));
-                push(g, Kernel::NearestChunks, 0, Size::Chunks);
-                push(g, Kernel::NearestTies, 0, Size::Chunks);
-                if p.self_contact {
-                    push(g, Kernel::NearestCrowded, 0, Size::Slot(s.slaves));
-                }
-                push(g, Kernel::NearestFacet, 0, Size::Slot(s.slaves));
-                push(g, Kernel::SetReference, 0, Size::Slot(s.motion_nodes));
-            }
-        }
-        let g = &groups::NORMALS_PENALTY;
-        push(g, Kernel::NodalNormals, 0, Size::Items(p.n_pair_nodes, iw));
-        push(g, Kernel::Penalty, 0, Size::Items(p.n_slaves, iw));
-        let g = &groups::SCATTER_GATHER_ADD;
-        push(g, Kernel::ScatterForces, 0, Size::Items(p.n_slaves, iw));
-        push(g, Kernel::Gather, 0, Size::Items(p.n_pair_nodes, iw));
-        push(g, Kernel::AddForces, 0, Size::Items(p.n_pair_nodes, iw));
-        push(&groups::STATS_PAIR, Kernel::PairStats, 0, Size::Items(1, 1));
-    }
-    let g = &groups::STATS_FINISH;
-    for (k, p) in pairs.iter().enumerate() {
+    let mut push = |group: &'static Group, kernel: Kernel, level: usize, size: Size| {
         out.push(Entry {
+            group,
+            kernel,
+            pair: k,
+            level,
+            size,
+        })
+    };
+    let iw = ITEM_WORKGROUP;
+    let s = &p.slots;
+    if p.anchored {
+        let g = &groups::TO_LOCAL_ANCHOR;
+        push(g, Kernel::ToLocal, 0, Size::Items(p.n_nodes, iw));
+        push(g, Kernel::Anchor, 0, Size::Items(p.n_slaves, iw));
+        return out;
+    }
+    let g = &groups::TO_LOCAL_MOTION_SCHEDULE;
+    push(g, Kernel::ToLocal, 0, Size::Items(p.n_nodes, iw));
+    push(g, Kernel::Motion, 0, Size::Items(p.n_motion_nodes, iw));
+    push(g, Kernel::Schedule, 0, Size::Items(1, 1));
+    push(
+        &groups::LOCAL,
+        Kernel::LocalSearch,
+        0,
+        Size::Slot(s.local_slaves),
+    );
+    if p.local_only {
+        return out;
+    }
+    let g = &groups::GLOBAL_SEARCH;
+    for (i, &slot) in s.tree_passes.iter().enumerate() {
+        push(g, Kernel::TreeRefit, i, Size::Slot(slot));
+    }
+    push(g, Kernel::WalkStart, 0, Size::Slot(s.slave_groups));
+    push(g, Kernel::NearestWalk, 0, Size::Slot(s.slaves));
+    for (i, &slot) in s.work_levels.iter().enumerate() {
+        push(g, Kernel::ScanBlocks, i, Size::Slot(slot));
+    }
+    for i in (0..s.work_levels.len().saturating_sub(1)).rev() {
+        push(g, Kernel::ScanAdd, i, Size::Slot(s.work_levels[i]));
+    }
+    push(g, Kernel::NearestArgs, 0, Size::Slot(s.one));
+    push(g, Kernel::NearestChunks, 0, Size::Chunks);
+    push(g, Kernel::NearestTies, 0, Size::Chunks);
+    if p.self_contact {
+        push(g, Kernel::NearestCrowded, 0, Size::Slot(s.slaves));
+    }
+    push(g, Kernel::NearestFacet, 0, Size::Slot(s.slaves));
+    push(g, Kernel::SetReference, 0, Size::Slot(s.motion_nodes));
+    out
+}
+
+/// The global search of `params` alone, every entry sized by the host (the sizes
+/// [`initial_plan`]'s global slots hold): the tree's refit and walks, the scan, the chunks
+/// and each slave's hit, on nodes already in the frame — no schedule, no motion budget. For
+/// tests that run the kernels on inputs they prepared themselves (`GpuSearch::run_prepared`).
+pub(crate) fn prepared_global(params: &SearchParams) -> Vec<Entry> {
+    let mut out = Vec::new();
+    let mut push = |kernel: Kernel, level: usize, size: Size| {
+        out.push(Entry {
+            group: &groups::GLOBAL_SEARCH,
+            kernel,
+            pair: 0,
+            level,
+            size,
+        })
+    };
+    let (iw, n) = (ITEM_WORKGROUP, params.n_slaves);
+    for (i, tp) in tree_passes(params.tree_levels).iter().enumerate() {
+        push(
+            Kernel::TreeRefit,
+            i,
+            Size::Items(1 << tp.bottom, TREE_WORKGROUP),
+        );
+    }
+    push(
+        Kernel::WalkStart,
+        0,
+        Size::Items(n.div_ceil(WALK_GROUP), iw),
+    );
+    push(Kernel::NearestWalk, 0, Size::Items(n, iw));
+    let levels = ScanLevels::new(n + 1).levels;
+    for (i, level) in levels.iter().enumerate() {
+        push(Kernel::ScanBlocks, i, Size::Items(level.1, SCAN_BLOCK));
+    }
+    for i in (0..levels.len().saturating_sub(1)).rev() {
+        push(Kernel::ScanAdd, i, Size::Items(levels[i].1, SCAN_BLOCK));
+    }
+    push(Kernel::NearestArgs, 0, Size::Items(1, 1));
+    push(Kernel::NearestChunks, 0, Size::Chunks);
+    push(Kernel::NearestTies, 0, Size::Chunks);
+    if params.flags & crate::abi::search::FLAG_SELF_CONTACT != 0 {
+        push(Kernel::NearestCrowded, 0, Size::Items(n, iw));
+    }
+    push(Kernel::NearestFacet, 0, Size::Items(n, iw));
+    out
+}
+
+/// The penalty's entries of pair `k` of shape `p`: normals and springs, the forces scattered,
+/// gathered and added, and the pair's statistics.
+pub(crate) fn penalty(k: usize, p: &PairShape) -> Vec<Entry> {
+    let iw = ITEM_WORKGROUP;
+    let entry = |group: &'static Group, kernel: Kernel, size: Size| Entry {
+        group,
+        kernel,
+        pair: k,
+        level: 0,
+        size,
+    };
+    let (np, ns) = (p.n_pair_nodes, p.n_slaves);
+    let (g, s) = (&groups::NORMALS_PENALTY, &groups::SCATTER_GATHER_ADD);
+    vec![
+        entry(g, Kernel::NodalNormals, Size::Items(np, iw)),
+        entry(g, Kernel::Penalty, Size::Items(ns, iw)),
+        entry(s, Kernel::ScatterForces, Size::Items(ns, iw)),
+        entry(s, Kernel::Gather, Size::Items(np, iw)),
+        entry(s, Kernel::AddForces, Size::Items(np, iw)),
+        entry(&groups::STATS_PAIR, Kernel::PairStats, Size::Items(1, 1)),
+    ]
+}
+
+/// The increment's finish: every pair's largest bound row, then the stable increment.
+pub(crate) fn finish(pairs: &[PairShape]) -> Vec<Entry> {
+    let g = &groups::STATS_FINISH;
+    let mut out: Vec<Entry> = pairs
+        .iter()
+        .enumerate()
+        .map(|(k, p)| Entry {
             group: g,
             kernel: Kernel::BoundMax,
             pair: k,
             level: 0,
-            size: Size::Items(p.n_pair_nodes, iw),
-        });
-    }
+            size: Size::Items(p.n_pair_nodes, ITEM_WORKGROUP),
+        })
+        .collect();
     out.push(Entry {
         group: g,
         kernel: Kernel::FinishStats,
@@ -334,6 +405,19 @@ pub(crate) fn increment(pairs: &[PairShape]) -> Vec<Entry> {
         level: 0,
         size: Size::Items(1, 1),
     });
+    out
+}
+
+/// The entries of one device-resident increment of `pairs`, in the order they run: each
+/// pair's search, penalty and statistics, then the finish. A search alone is its
+/// [`search`] part.
+pub(crate) fn increment(pairs: &[PairShape]) -> Vec<Entry> {
+    let mut out = Vec::new();
+    for (k, p) in pairs.iter().enumerate() {
+        out.extend(search(k, p));
+        out.extend(penalty(k, p));
+    }
+    out.extend(finish(pairs));
     out
 }
 

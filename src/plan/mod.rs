@@ -1,5 +1,6 @@
 //! What a stage hands an executor: the prepared inputs of one search (its parameters, frame,
-//! positions in the frame and the pair's constant arrays) and the steps of a global search.
+//! positions in the frame and the pair's constant arrays), the increment as a list of entries
+//! (`increment`), and where a search's plan reads its positions and what it leaves.
 //! The stages (`search`, `contact`) write these and both executors (`gpu`, `cpu`) read them, so
 //! neither executor depends on a stage.
 
@@ -8,23 +9,9 @@ pub(crate) mod increment;
 
 use std::sync::Arc;
 
-use crate::abi::search::SearchParams;
+use crate::abi::search::{GpuHit, SearchParams};
+use crate::abi::status::STATUS_WORDS;
 use grid::Grid;
-
-/// The steps of one global search, in order (shader and CPU mirror of the same name).
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum Step {
-    /// The search tree's boxes from the positions, leaves up (`tree.wgsl`); collapsed facets
-    /// get empty boxes.
-    TreeRefit,
-    /// Nearest facet per slave node (`nearest_facet.wgsl`: a walk of the tree pruned by the
-    /// best distance, at most `WALK_VISITS` nodes; what a capped walk did not reach projected
-    /// in chunks of bounded size, combined by atomic minima, ties to the lowest id).
-    NearestFacet,
-}
-
-/// All steps of a global search, in order.
-pub const STEPS: [Step; 2] = [Step::TreeRefit, Step::NearestFacet];
 
 /// Input of one search in the kernels' layout: grid-local f32 nodes, active facets, slaves.
 #[derive(Clone, Debug)]
@@ -51,8 +38,29 @@ pub struct Prepared {
     pub adjacency: Arc<[u32]>,
     /// The nodes whose motion the budget measures: slaves, then master nodes not slaves.
     pub motion_nodes: Arc<[u32]>,
-    /// A local-search increment (in the frame of the last global search) rather than a global one.
-    pub local: bool,
     /// Model nodes (`nodes` is empty when the positions stay on the device).
     pub n_nodes: usize,
+}
+
+/// Where a search's plan reads the positions of its nodes.
+#[derive(Clone, Copy)]
+pub(crate) enum PlanPositions<'a> {
+    /// Host positions relative to the frame's origin (subtracted in f64 by the stage), one
+    /// `[f32; 4]` per model node.
+    Host(&'a [[f32; 4]]),
+    /// The caller's GPU buffer (one `vec4<f32>` per model node, model frame, STORAGE usage),
+    /// the frame's origin (model units, f32) subtracted by the kernels.
+    Buffer(&'a wgpu::Buffer, [f32; 3]),
+}
+
+/// What one run of a search's plan leaves: its status words, its plan's words up to the
+/// dispatch slots (the schedule's choice and the params it fitted) and, when read back, the
+/// hits (one per slave; empty otherwise).
+pub(crate) struct PlanRan {
+    /// The status words.
+    pub status: [u32; STATUS_WORDS],
+    /// The plan's words `..PLAN_SLOTS`.
+    pub plan: Vec<u32>,
+    /// The hits, shared with the executor's copy on the CPU path.
+    pub hits: Arc<Vec<GpuHit>>,
 }

@@ -5,20 +5,21 @@
 //! pair, its boxes refitted at every global search), pruned by the best distance found so far,
 //! so its work follows each slave's gap rather than the search radius.
 //!
-//! One search is an ordered list of [`Step`]s, run by either executor: the GPU kernels
-//! (`shaders/*.wgsl`, driven by `crate::gpu`) or their CPU mirrors (`crate::cpu`). Both
-//! work in grid-local f32 coordinates; [`GlobalSearch::run`] converts the result back to model
-//! coordinates in f64.
+//! A search is its part of the device-resident plan (`plan::increment::search`: positions into
+//! the frame, the motion budget, the schedule's choice on the device, the local search or the
+//! tree's refit and walks), run by either executor: the GPU kernels (`shaders/*.wgsl`, driven
+//! by `crate::gpu`) or their CPU mirrors (`crate::cpu`). Both work in f32 relative to a frame
+//! near the master; a [`SearchResult`] decodes the hits back to model coordinates in f64.
 
 mod anchors;
 pub(crate) mod brute_force;
-mod direct;
 mod exec;
 mod prepare;
 mod resident;
+mod run;
 pub(crate) mod tree;
 
-pub use crate::plan::{grid, Prepared, Step, STEPS};
+pub use crate::plan::{grid, Prepared};
 
 use crate::abi::search as layout;
 use crate::abi::status::Status;
@@ -188,8 +189,9 @@ pub enum Trigger {
     Crowded,
     /// A global search asked for by the caller (`run`).
     Requested,
-    /// A global search with a refitted grid: positions kept on the device took a master node
-    /// out of the grid's box.
+    /// A global search in a new frame: a master node had travelled more than 16 times the
+    /// master's extent from the frame's origin (where f32 loses precision), so the frame moved
+    /// to the master (host positions).
     Frame,
     /// The local search.
     Local,
@@ -230,10 +232,8 @@ pub struct SearchStage {
     active: Arc<[u32]>,
     schedule: Schedule,
     self_contact: bool,
-    /// Grid and parameters of the last global search: the frame local increments work in.
-    frame: Option<(Grid, SearchParams)>,
-    since_global: u32,
-    crowded: bool,
+    /// Increments run since the search was made resident.
+    runs: u64,
     /// Sliding formulation of the pair (finite unless set).
     sliding: crate::model::Sliding,
     /// Small sliding: the anchors, fixed at the first global search.
@@ -436,9 +436,7 @@ impl SearchStage {
             ref_node,
             schedule: Schedule::default_for(self_contact),
             self_contact,
-            frame: None,
-            since_global: 0,
-            crowded: false,
+            runs: 0,
             sliding: crate::model::Sliding::Finite,
             anchors: None,
             anchor_reach: None,
@@ -457,6 +455,8 @@ impl SearchStage {
             });
         }
         self.schedule = schedule;
+        // the plan holds the interval: the next increment makes a fresh one
+        self.resident_origin = None;
         Ok(())
     }
 
@@ -473,25 +473,6 @@ impl SearchStage {
     /// The search radius in use, model units.
     pub fn radius(&self) -> f64 {
         self.radius
-    }
-
-    /// A global search on `exec` whatever the schedule (see [`GlobalSearch::run`]).
-    pub(crate) fn run_on(
-        &mut self,
-        exec: &mut dyn SearchExec,
-        positions: &[[f64; 3]],
-    ) -> Result<SearchResult> {
-        Ok(self.execute(exec, positions, Some(Trigger::Requested))?.0)
-    }
-
-    /// One increment of tracking on `exec` (see [`GlobalSearch::step`]).
-    pub(crate) fn step(
-        &mut self,
-        exec: &mut dyn SearchExec,
-        positions: &[[f64; 3]],
-    ) -> Result<SearchResult> {
-        let trigger = self.decide();
-        Ok(self.execute(exec, positions, trigger)?.0)
     }
 
     /// The active facets in the kernels' layout (padded node ids; a raw hit's `facet` indexes

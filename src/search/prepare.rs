@@ -77,7 +77,6 @@ impl SearchStage {
             walk_order: self.walk_order.clone(),
             adjacency: self.adjacency.clone(),
             motion_nodes: self.motion_nodes.clone(),
-            local: false,
             n_nodes: self.masses.len(),
         })
     }
@@ -92,22 +91,6 @@ impl SearchStage {
         } else {
             0
         })
-    }
-
-    /// The kernels' input for a local increment: positions in the frame of the last global
-    /// search (no grid is fitted).
-    pub fn prepare_local(&self, positions: &[[f64; 3]]) -> Result<Prepared> {
-        if positions.len() != self.masses.len() {
-            return Err(Error::LengthMismatch {
-                what: "positions (one per model node)",
-                expected: self.masses.len(),
-                got: positions.len(),
-            });
-        }
-        validate_positions(positions, 0, self.dim)?;
-        let mut prepared = self.prepare_device(true)?;
-        prepared.nodes = self.in_frame(positions, prepared.grid.frame)?;
-        Ok(prepared)
     }
 
     /// Every node's position relative to `frame` in f32, with its mass; an error naming the
@@ -164,32 +147,5 @@ impl SearchStage {
                 frame: frame[axis],
             }),
         }
-    }
-
-    /// The kernels' input when the positions stay on the device: the last global search's
-    /// frame and grid, no node array.
-    pub(super) fn prepare_device(&self, local: bool) -> Result<Prepared> {
-        let Some((grid, mut params)) = self.frame else {
-            return Err(Error::BadParameter {
-                name: "step_device",
-                value: "no global search yet".into(),
-                expected: "a first increment from host positions",
-            });
-        };
-        params.flags = self.flags();
-        params.budget = (self.schedule.budget * self.radius) as f32;
-        Ok(Prepared {
-            params,
-            grid,
-            nodes: Vec::new(),
-            facets: self.facets.clone(),
-            slaves: self.slave_ids.clone(),
-            order: self.order.clone(),
-            walk_order: self.walk_order.clone(),
-            adjacency: self.adjacency.clone(),
-            motion_nodes: self.motion_nodes.clone(),
-            local,
-            n_nodes: self.masses.len(),
-        })
     }
 }

@@ -18,9 +18,9 @@ impl SearchStage {
         positions: &[[f64; 3]],
         caller_frame: bool,
     ) -> Result<()> {
-        let anchored = self.sliding != crate::model::Sliding::Finite;
+        let anchored = self.is_anchored();
         if anchored && self.anchors.is_none() {
-            self.step(exec, positions)?;
+            self.anchor(exec, positions)?;
         }
         let mut prep = self.prepare(positions)?;
         prep.params.cell_capacity = Grid::cell_budget(self.facets.len());
@@ -33,7 +33,28 @@ impl SearchStage {
         let interval = self.schedule.interval;
         self.resident_origin = Some(origin);
         self.resident_span = self.master_span(positions);
+        self.runs = 0;
         exec.make_resident(&prep, interval, anchored, frame)
+    }
+
+    /// Small sliding: anchors the slaves by one global search at `positions` reaching as far
+    /// as the pair allows ([`Self::anchoring_radius`]) — the search's plan without anchors, at
+    /// that radius, its first increment global — whose hits become the anchors, installed in
+    /// `exec`.
+    fn anchor(&mut self, exec: &mut dyn SearchExec, positions: &[[f64; 3]]) -> Result<()> {
+        let reach = self.anchoring_radius(positions);
+        let own = std::mem::replace(&mut self.radius, reach);
+        let prep = self.prepare(positions);
+        self.radius = own;
+        let mut prep = prep?;
+        prep.params.cell_capacity = Grid::cell_budget(self.facets.len());
+        exec.make_resident(&prep, 1, false, [0.0; 3])?;
+        let x = self.in_frame(positions, prep.grid.frame)?;
+        let ran = exec.run_plan(crate::plan::PlanPositions::Host(&x), true)?;
+        let anchors = self.build_anchors(positions, &ran.hits);
+        exec.set_anchors(&anchors)?;
+        self.anchors = Some(anchors);
+        Ok(())
     }
 
     /// Readies a second executor (`exec`, the CPU twin of a split increment) as this search's
@@ -126,7 +147,7 @@ impl SearchStage {
     /// the resident origin), status words, params and trigger code.
     pub(crate) fn resident_result(
         &self,
-        raw: Vec<GpuHit>,
+        raw: Arc<Vec<GpuHit>>,
         status: &[u32; STATUS_WORDS],
         params: &SearchParams,
         trigger: u32,
@@ -155,7 +176,7 @@ impl SearchStage {
                 _ => Trigger::Local,
             }
         };
-        self.finish(origin, grid, Arc::new(raw), trigger, status)
+        self.finish(origin, grid, raw, trigger, status)
     }
 
     /// The origin of the device-resident frame (model units).

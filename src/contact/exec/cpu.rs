@@ -8,7 +8,7 @@ use crate::abi::penalty::SlaveState;
 use crate::abi::search::{GpuHit, PLAN_SLOTS};
 use crate::abi::stats::{IncrementStats, STATS_RESET_WORDS, STATS_WORDS};
 use crate::contact::ResidentIo;
-use crate::cpu::increment::{run_entry, IncrementArrays, PairArrays};
+use crate::cpu::increment::{run_entry, PenaltyArrays};
 use crate::cpu::{CpuPenalty, CpuSearch};
 use crate::device::GpuContext;
 use crate::error::{Error, Result};
@@ -157,20 +157,18 @@ impl CpuExec {
             let search = pair.search.arrays().ok_or_else(not_resident)?;
             run_entry(
                 e,
-                PairArrays {
-                    search,
+                positions.get(k).unwrap_or(&positions[0]),
+                search,
+                Some(PenaltyArrays {
                     penalty: &mut pair.penalty,
                     setup: &inc.pairs[k].setup,
                     params: &inc.params[k],
-                },
-                IncrementArrays {
-                    positions: positions.get(k).unwrap_or(&positions[0]),
                     velocities,
                     forces,
                     rows: &mut r.rows,
                     stats: &mut r.stats,
-                },
-            );
+                }),
+            )?;
         }
         Ok(())
     }

@@ -220,7 +220,7 @@ impl Contact {
         for (pr, raw) in self.pairs.iter_mut().zip(raws) {
             let params = plan_params(&raw.plan);
             let result = pr.search.resident_result(
-                raw.hits,
+                std::sync::Arc::new(raw.hits),
                 &raw.status,
                 &params,
                 raw.plan[PLAN_TRIGGER],

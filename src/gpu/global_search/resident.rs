@@ -126,13 +126,6 @@ impl GpuSearch {
             0,
             bytemuck::cast_slice(&plan),
         );
-        if self.bind_groups.is_none() {
-            self.bind_groups = Some(self.bind_groups(&sized)?);
-            self.tree_levels = Some(params.tree_levels);
-            self.work_levels = work_levels.levels.len();
-            self.generation += 1;
-        }
-        self.anchored = anchored;
         self.resident = Some(Box::new(ResidentSearch {
             schedule,
             set_reference,
