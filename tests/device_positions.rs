@@ -64,7 +64,13 @@ fn positions_on_the_device_give_the_host_results() {
         .unwrap();
     let master = m.surface(s).unwrap().clone();
     let first = r.start as usize;
-    let base = m.positions().to_vec();
+    // away from the origin, so that the frame's origin is not zero: a device increment
+    // subtracts it in f32, a host one has it subtracted in f64 beforehand
+    let base: Vec<[f64; 3]> = m
+        .positions()
+        .iter()
+        .map(|p| [p[0] + 37.5, p[1] - 21.25, p[2]])
+        .collect();
     // slaves slide; from increment 40 on, the whole model drifts in +x, out of the box the
     // first search fitted
     let at = |k: usize| {
@@ -98,13 +104,23 @@ fn positions_on_the_device_give_the_host_results() {
         on_host.set_schedule(every_10).unwrap();
         on_device.set_schedule(every_10).unwrap();
         on_host.step(&at(0)).unwrap();
-        on_device.step(&at(0)).unwrap();
+        let first = on_device.step(&at(0)).unwrap();
+        assert_ne!(
+            first.frame, [0.0; 3],
+            "the frame's origin should be away from zero"
+        );
         let mut drifting_globals = 0;
         for k in 1..60 {
             let x = at(k);
             wq.write_buffer(&buffer, 0, bytemuck::cast_slice(&to_f32(&x))); // the caller's own update
             let a = on_host.step(&x).unwrap();
-            let b = on_device.step_device(&buffer, true).unwrap();
+            // every fifth increment from host positions, the others from the buffer: each
+            // kind of run leaves the frame the other expects
+            let b = if k % 5 == 0 {
+                on_device.step(&x).unwrap()
+            } else {
+                on_device.step_device(&buffer, true).unwrap()
+            };
             assert_eq!(a.stats.trigger, b.stats.trigger, "{g} k={k}");
             if k >= 40 && !matches!(b.stats.trigger, Trigger::Local) {
                 drifting_globals += 1;
@@ -129,6 +145,15 @@ fn positions_on_the_device_give_the_host_results() {
                             "{g} k={k}: distance {} vs {}",
                             ha.distance,
                             hb.distance
+                        );
+                        // in the model's frame: a run in the wrong frame moves every point
+                        let off =
+                            (0..3).fold(0.0f64, |d, c| d.max((ha.point[c] - hb.point[c]).abs()));
+                        assert!(
+                            off < 1e-4,
+                            "{g} k={k}: slave {i}: point {:?} vs {:?}",
+                            ha.point,
+                            hb.point
                         );
                     }
                     (None, None) => {}

@@ -160,11 +160,21 @@ impl CpuSearch {
             });
         }
         self.ws.status = crate::abi::status::reset_image();
+        // host positions are relative to the frame already; the increments' own origin back
+        // after the run
+        let r = self.resident.as_deref_mut().ok_or_else(not_resident)?;
+        let own = std::mem::replace(&mut r.frame.origin, [0.0; 4]);
+        let mut ran = Ok(());
         for e in crate::plan::increment::search(0, &shape) {
             let arrays = self.arrays().ok_or_else(not_resident)?;
-            super::increment::run_entry(&e, positions, arrays, None)?;
+            ran = super::increment::run_entry(&e, positions, arrays, None);
+            if ran.is_err() {
+                break;
+            }
         }
-        let r = self.resident.as_ref().ok_or_else(not_resident)?;
+        let r = self.resident.as_deref_mut().ok_or_else(not_resident)?;
+        r.frame.origin = own;
+        ran?;
         Ok(PlanRan {
             status: self.ws.status,
             plan: r.plan[..PLAN_SLOTS].to_vec(),

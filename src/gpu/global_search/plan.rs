@@ -42,15 +42,27 @@ impl GpuSearch {
             }
             PlanPositions::Buffer(b, origin) => (b.clone(), origin),
         };
-        let frame = FrameParams {
-            origin: [origin[0], origin[1], origin[2], 0.0],
+        // this run's origin, and the increments' own back after it (writes are ordered
+        // with the submits between them)
+        let own = self.resident.as_ref().map_or([0.0; 3], |r| r.frame_origin);
+        let frame = |o: [f32; 3]| FrameParams {
+            origin: [o[0], o[1], o[2], 0.0],
             n_nodes: n_nodes as u32,
             _pad: [0; 3],
         };
-        super::super::upload(&self.ctx, &self.frame, 0, bytemuck::bytes_of(&frame));
+        let set_frame = |s: &Self, o| {
+            super::super::upload(&s.ctx, &s.frame, 0, bytemuck::bytes_of(&frame(o)));
+        };
+        if origin != own {
+            set_frame(self, origin);
+        }
         self.prepare_resident(&buffer)?;
         let entries = crate::plan::increment::search(0, &shape);
-        self.run_entries(&entries, shape.n_slaves, read_hits)
+        let ran = self.run_entries(&entries, shape.n_slaves, read_hits);
+        if origin != own {
+            set_frame(self, own);
+        }
+        ran
     }
 
     /// One global search of `prep` as it is (its params and its nodes, already in the frame):

@@ -27,6 +27,8 @@ pub(crate) struct ResidentSearch {
     n_motion_nodes: u32,
     n_slaves: u32,
     anchored: bool,
+    /// The origin to_local subtracts in the increments' frame (f32, model units).
+    pub(super) frame_origin: [f32; 3],
 }
 
 /// The bind groups of a search's device-resident passes: every pass that reads `SearchParams`
@@ -139,6 +141,7 @@ impl GpuSearch {
             n_motion_nodes: prep.motion_nodes.len() as u32,
             n_slaves: params.n_slaves,
             anchored,
+            frame_origin,
         }));
         Ok(())
     }
