@@ -476,3 +476,76 @@ fn local_search_parity_and_determinism() {
         }
     }
 }
+
+/// A master that travels far (here 60 times its own size, with its slaves) moves the frame: the
+/// increment after it passes 16 sizes from the frame's origin searches globally in a frame at
+/// the master (`Trigger::Frame`), and every increment's contacts — points in model coordinates
+/// included — are a fresh global search's, on the CPU path and every adapter.
+#[test]
+fn a_master_travelling_far_moves_the_frame() {
+    let n = 16;
+    let h = 1.0 / n as f64;
+    let plate = plate_quads(n, n, 1.0, 1.0, 0.0, 2, &|x, y| 0.01 * (x + 2.0 * y));
+    let slaves = abut::mesh::point_cloud(400, [0.05, 0.05, 0.02], [0.95, 0.95, 0.03], 8);
+    let (m, p, _) = model_with(
+        3,
+        &plate.positions,
+        Surface::quads(&quads_of(&plate)),
+        &slaves,
+        2.0 * h,
+    );
+    let base = m.positions().to_vec();
+    let at = |k: usize| {
+        let shift = [3.0 * k as f64, -1.25 * k as f64, 0.5 * k as f64];
+        base.iter()
+            .map(|q| [q[0] + shift[0], q[1] + shift[1], q[2] + shift[2]])
+            .collect::<Vec<_>>()
+    };
+    for d in devices() {
+        let mut tracked = GlobalSearch::new(&d, &m, p).unwrap();
+        let mut fresh = GlobalSearch::new(&Device::cpu(), &m, p).unwrap();
+        let mut moves = Vec::new();
+        for k in 0..20 {
+            let x = at(k);
+            let r = tracked.step(&x).unwrap();
+            let g = fresh.run(&x).unwrap();
+            if r.stats.trigger == Trigger::Frame {
+                moves.push(k);
+                // the new frame is at the master
+                assert!(
+                    (r.frame[0] - x[0][0]).abs() < 4.0 && (r.frame[1] - x[0][1]).abs() < 4.0,
+                    "{d} k={k}: frame {:?} far from the master at {:?}",
+                    r.frame,
+                    x[0]
+                );
+            }
+            let mut compared = 0;
+            for (i, (a, b)) in r.contacts().zip(g.contacts()).enumerate() {
+                let (Some(a), Some(b)) = (a, b) else {
+                    assert_eq!(a.is_some(), b.is_some(), "{d} k={k}: slave {i}");
+                    continue;
+                };
+                compared += 1;
+                assert!(
+                    (a.distance - b.distance).abs() < 1e-5,
+                    "{d} k={k}: slave {i}"
+                );
+                for c in 0..3 {
+                    assert!(
+                        (a.point[c] - b.point[c]).abs() < 1e-5,
+                        "{d} k={k}: slave {i}: point {:?} vs {:?}",
+                        a.point,
+                        b.point
+                    );
+                }
+            }
+            assert_eq!(compared, 400, "{d} k={k}");
+        }
+        // 16 plate sizes are passed in the sixth increment (3.3 per increment), and again 16
+        // sizes after that
+        assert!(
+            moves.len() >= 2 && moves[0] <= 6,
+            "{d}: the frame moved at {moves:?}"
+        );
+    }
+}
