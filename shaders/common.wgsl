@@ -17,16 +17,11 @@ const ITEM_WORKGROUP: u32 = 64u;
 // Lower corner of an empty box (upper: its negation): no point is within any distance of it.
 const EMPTY_LO: f32 = 3.0e38;
 
-// Rust twin: SearchParams (src/abi/search.rs), 96 bytes.
+// Rust twin: SearchParams (src/abi/search.rs), 96 bytes. Coordinates are relative to the
+// search's frame.
 struct SearchParams {
-    cell_size: f32,
-    inv_cell_size: f32,
     radius: f32,
     box_margin: f32,     // growth of the tree's leaf boxes: the frame's f32 round-off
-    dims_x: u32,
-    dims_y: u32,
-    dims_z: u32,
-    n_cells: u32,
     n_facets: u32,
     n_slaves: u32,
     tree_levels: u32,    // levels below the tree's root: 2^tree_levels leaf slots
@@ -35,19 +30,11 @@ struct SearchParams {
     flags: u32,
     budget: f32,
     n_motion_nodes: u32,
-    grid_lo_x: f32,      // lower corner of cell (0, 0, 0) in the local frame
-    grid_lo_y: f32,
-    grid_lo_z: f32,
-    base_cell: f32,      // the cell size a grid fitted on the device starts from
-    cell_capacity: u32,  // cells the buffers hold (a fitted grid has at most this many)
     ref_node: u32,       // the pair's reference master node: motion is measured relative to it
-    _pad1: u32,
-    _pad2: u32,
-}
-
-// Lower corner of the grid in the local frame.
-fn grid_lo(p: SearchParams) -> vec3<f32> {
-    return vec3<f32>(p.grid_lo_x, p.grid_lo_y, p.grid_lo_z);
+    _pad0: u32,
+    master_lo: vec4<f32>, // the master's box at the last global search (xyz)
+    master_hi: vec4<f32>,
+    _pad: vec4<u32>,
 }
 
 const FLAG_WIDE_LOCAL: u32 = 1u;
@@ -59,7 +46,7 @@ struct Hit {
     node: u32,           // tracked master node (nearest node of that facet), NO_NODE when none
     candidates: u32,     // facets examined
     slave: u32,          // the slave node (model node id)
-    point_gap: vec4<f32>,   // xyz closest point (grid-local), w signed gap along the normal
+    point_gap: vec4<f32>,   // xyz closest point (in the frame), w signed gap along the normal
     normal_dist: vec4<f32>, // xyz unit facet normal at the point, w distance
     weights: vec4<f32>,     // load-transfer weights of the facet's nodes
 }
@@ -70,7 +57,6 @@ const STATUS_LOCAL_ITERATIONS: u32 = 3u; // most local-search iterations
 const STATUS_MOTION: u32 = 8u;         // bits of the largest motion since the last global search
 const STATUS_LOCAL_CAPPED: u32 = 9u;   // slaves whose local walk hit the cap
 const STATUS_CROWDED: u32 = 10u;       // self-contact slaves with unconnected facets near
-const STATUS_FRAME_STALE: u32 = 11u;   // a master node left the grid's box (device positions)
 const STATUS_SLID_TOO_FAR: u32 = 12u;  // small sliding: slid more than an element length
 const STATUS_PLANE_OFF: u32 = 13u;     // small sliding: tangent plane > 10° off the facet
 const STATUS_DT_STABLE: u32 = 4u;      // bits of the smallest stable increment (positive f32)
@@ -100,7 +86,7 @@ const PLAN_GLOBAL: u32 = 4u;        // this increment searches globally
 const PLAN_TRIGGER: u32 = 5u;       // why (TRIGGER_*)
 const PLAN_INTERVAL: u32 = 6u;      // the schedule's interval
 const PLAN_N_SLOTS: u32 = 7u;       // dispatch slots in use
-const PLAN_FIT_FAILED: u32 = 9u;    // the grid could not be fitted (the old one was kept)
+const PLAN_FIT_FAILED: u32 = 9u;    // the master box could not be taken (the old one was kept)
 const PLAN_PARAMS: u32 = 64u;       // 24 words: the fitted SearchParams (byte 256: bound as the uniform)
 const PLAN_SLOTS: u32 = 88u;
 const PLAN_SLOT_WORDS: u32 = 8u;

@@ -2,7 +2,7 @@
 // searches"). CPU mirror: src/cpu/local_search.rs.
 // Prelude: common.wgsl, search_common.wgsl (projection, self-contact exclusion, free edges).
 //
-// Bindings: 0 params (uniform SearchParams), 1 nodes (grid-local, in the frame of the last
+// Bindings: 0 params (uniform SearchParams), 1 nodes (in the frame of the last
 //           global search), 2 facets, 3 slaves, 4 adjacency (words 0..=n_nodes: start of each
 //           model node's active facets within this same buffer; then the lists, increasing),
 //           5 status (atomic words), 6 hits (read: the tracked node; written: the result).

@@ -1,7 +1,7 @@
 // motion.wgsl — the motion budget: how far the pair's nodes moved since the last global search.
 // CPU mirror: src/cpu/motion.rs.
 //
-// Bindings: 0 params (uniform SearchParams), 1 nodes (grid-local, frame of the last global
+// Bindings: 0 params (uniform SearchParams), 1 nodes (in the frame of the last global
 //           search), 2 reference (positions at the last global search, same frame),
 //           3 motion_nodes (the slave nodes, in slave order, then the master surface's other
 //           nodes), 4 status, 5 hits (the tracked node of each slave).

@@ -149,7 +149,7 @@ struct Walk {
     projections: u32,
 }
 
-// The slave at walk position t: grid-local position, model node id.
+// The slave at walk position t: position in the frame, model node id.
 struct WalkPoint {
     p: vec3<f32>,
     node: u32,

@@ -1,7 +1,7 @@
 // penalty.wgsl — penalty contact force, friction and outputs of each slave node.
 // CPU mirror: src/cpu/penalty.rs.
 //
-// Bindings: 0 pp (uniform PenaltyParams), 1 nodes (grid-local xyz, w mass), 2 vel (xyz),
+// Bindings: 0 pp (uniform PenaltyParams), 1 nodes (xyz in the frame, w mass), 2 vel (xyz),
 //           3 facets, 4 hits (the search's results), 5 normals (smoothed nodal normals, per
 //           model node, from nodal_normals), 6 state (SlaveState per slave, read-write),
 //           7 out (ContactOut per slave), 8 status (atomic words: overflow read, increments

@@ -1,18 +1,17 @@
 // to_local.wgsl — positions the caller keeps on the device, into the search's local frame.
 // CPU mirror: src/cpu/to_local.rs.
 //
-// Bindings: 0 params (uniform SearchParams), 1 frame (uniform FrameParams: the frame origin),
+// Bindings: 1 frame (uniform FrameParams: the frame origin),
 //           2 positions (the caller's buffer: one vec4<f32> per model node, model frame, w
-//           ignored), 3 nodes (the search's grid-local nodes; w, the mass, is kept),
+//           ignored), 3 nodes (the search's nodes in its frame; w, the mass, is kept),
 //           4 adjacency (as in local_search.wgsl: tells master nodes), 5 status (the master box
 //           and the first non-finite node are raised here).
 // Dispatch: one invocation per model node, ITEM_WORKGROUP per workgroup, folded into 2D.
 // Invariants: nothing is read back; the subtraction is in f32 (the caller's positions are f32
 //             already, so a model far from its origin should keep them relative to a nearby
-//             point). A master node outside the grid's box sets STATUS_FRAME_STALE (positions
-//             from the host's grid: the host refits and runs again). Every master node widens
-//             STATUS_BOX (atomicMin/Max on order-preserving bits, so the box does not depend on
-//             the order): the grid a device-resident increment fits. A node with a NaN or
+//             point). Every master node widens STATUS_BOX (atomicMin/Max on order-preserving
+//             bits, so the box does not depend on the order): the box a global search takes
+//             (schedule.wgsl). A node with a NaN or
 //             infinite coordinate is named in STATUS_NONFINITE (the lowest such node) and left
 //             out of the box.
 
@@ -25,7 +24,6 @@ struct FrameParams {
     _pad2: u32,
 }
 
-@group(0) @binding(0) var<uniform> params: SearchParams;
 @group(0) @binding(1) var<uniform> frame: FrameParams;
 @group(0) @binding(2) var<storage, read> positions: array<vec4<f32>>;
 @group(0) @binding(3) var<storage, read_write> nodes: array<vec4<f32>>;
@@ -45,10 +43,6 @@ fn to_local(@builtin(workgroup_id) wg: vec3<u32>,
         return;
     }
     if (adjacency[i] != adjacency[i + 1u]) {
-        let top = vec3<f32>(f32(params.dims_x), f32(params.dims_y), f32(params.dims_z)) * params.cell_size;
-        let g = x - grid_lo(params);
-        let inside = all(g >= vec3<f32>(0.0)) && all(g <= top);
-        if (!inside) { atomicStore(&status[STATUS_FRAME_STALE], 1u); }
         for (var a = 0u; a < 3u; a++) {
             atomicMin(&status[STATUS_BOX + a], ordered_bits(x[a]));
             atomicMax(&status[STATUS_BOX + 3u + a], ordered_bits(x[a]));

@@ -400,7 +400,7 @@ fn the_tree_and_the_search_match_the_mirror() {
     let order = cpu_search.tree_order().to_vec();
     let leaves = order.len().next_power_of_two();
     assert_eq!(cpu_boxes.len(), 2 * leaves);
-    let frame = cpu.stats.grid.frame;
+    let frame = cpu.frame;
     // the grid step the kernels quantise on: from the box margin of the master's extent
     let (mut lo_m, mut hi_m) = ([f64::INFINITY; 3], [f64::NEG_INFINITY; 3]);
     for &f in &master.active {

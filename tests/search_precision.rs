@@ -59,7 +59,7 @@ fn a_radius_far_beyond_the_master_keeps_the_gaps() {
                 let what = format!("radius {radius:e}, shift {shift:?}, {d}");
                 let r = run(&d, &m, p);
                 check_oracle(&r, &m, p, radius, tol, &what);
-                let frame = r.stats.grid.frame;
+                let frame = r.frame;
                 for a in 0..3 {
                     assert!(
                         (frame[a] - shift[a]).abs() <= 1.0,

@@ -238,8 +238,9 @@ fn wgsl_twins_match_rust() {
 }
 
 /// The device-resident increment's words agree between WGSL and Rust: the plan's layout, the
-/// status words to_local raises, the trigger codes and slot kinds, the statistics' size and the
-/// integrator's parameters; and the plan's params sit where a uniform binding may start.
+/// words of the params the schedule writes, the status words to_local raises, the trigger
+/// codes and slot kinds, the statistics' size and the integrator's parameters; and the plan's
+/// params sit where a uniform binding may start.
 #[test]
 fn resident_twins_match_rust() {
     use abut::testing::abi::search as l;
@@ -258,6 +259,12 @@ fn resident_twins_match_rust() {
         ("PLAN_SLOTS", l::PLAN_SLOTS),
         ("PLAN_SLOT_WORDS", l::PLAN_SLOT_WORDS),
         ("MAX_PLAN_SLOTS", l::MAX_PLAN_SLOTS),
+        // the SearchParams words the schedule writes, from the Rust struct's field offsets
+        ("P_BOX_MARGIN", l::P_BOX_MARGIN),
+        ("P_DIM", l::P_DIM),
+        ("P_FLAGS", l::P_FLAGS),
+        ("P_MASTER_LO", l::P_MASTER_LO),
+        ("P_MASTER_HI", l::P_MASTER_HI),
         ("STATUS_BOX", abut::testing::abi::status::STATUS_BOX),
         (
             "STATUS_NONFINITE",

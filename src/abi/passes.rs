@@ -47,7 +47,7 @@ pub enum Buf {
     Anchors,
     /// Nearest-facet work items: chunk counts per slave, scanned.
     Work,
-    /// The slaves in the order the tree walks take them: grid-local position (f32 bits, xyz)
+    /// The slaves in the order the tree walks take them: position in the frame (f32 bits, xyz)
     /// and model node id (w), one `vec4<u32>` per slave.
     WalkPoints,
     /// Nearest-facet record per slave (distance² bits, facet, crowded, candidates).
@@ -365,13 +365,11 @@ pub const LOCAL_SEARCH: Pass = Pass {
     per_workgroup: ITEM_WORKGROUP,
 };
 
-/// `to_local.wgsl`: the caller's positions into the grid's frame; a master node outside it
-/// raised.
+/// `to_local.wgsl`: the caller's positions into the search's frame; the master's box raised.
 pub const TO_LOCAL: Pass = Pass {
     stem: "to_local",
     entry: "to_local",
     bindings: &[
-        b(0, SearchParams, U),
         b(1, FrameParams, U),
         b(2, Positions, R),
         b(3, Nodes, RW),

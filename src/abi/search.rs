@@ -23,27 +23,15 @@ pub const HIT_BESIDE_FREE_EDGE: u32 = 1 << 31;
 
 /// Uniform parameters of the search kernels. WGSL twin: `SearchParams` in common.wgsl.
 ///
-/// Coordinates are grid-local: model coordinates minus the grid origin, in f32.
+/// Coordinates are relative to the search's frame (an origin near the master), in f32.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, PartialEq, Pod, Zeroable)]
 pub struct SearchParams {
-    /// Edge length of a cubic grid cell.
-    pub cell_size: f32,
-    /// 1 / cell_size.
-    pub inv_cell_size: f32,
     /// Search radius: facets farther than this from a slave node are not its partner.
     pub radius: f32,
-    /// Growth of the search tree's leaf boxes: 16 f32 round-offs of the frame's extent, so a
-    /// facet's distance computed in f32 is never below its box's.
+    /// Growth of the search tree's leaf boxes: 32 f32 round-offs of the largest master
+    /// coordinate in the frame, so a facet's distance computed in f32 is never below its box's.
     pub box_margin: f32,
-    /// Cells along x.
-    pub dims_x: u32,
-    /// Cells along y.
-    pub dims_y: u32,
-    /// Cells along z (1 in 2D).
-    pub dims_z: u32,
-    /// dims_x · dims_y · dims_z.
-    pub n_cells: u32,
     /// Active master facets.
     pub n_facets: u32,
     /// Slave nodes.
@@ -61,22 +49,31 @@ pub struct SearchParams {
     pub budget: f32,
     /// Nodes whose motion is measured (slaves and master nodes).
     pub n_motion_nodes: u32,
-    /// Lower corner of cell (0, 0, 0) in the local frame (0 for a grid fitted on the host,
-    /// whose origin is the frame's).
-    pub grid_lo: [f32; 3],
-    /// The cell size a grid fitted on the device starts from (the host fit's, from the mean
-    /// facet extent and the radius), model length units.
-    pub base_cell: f32,
-    /// Cells the search's buffers hold: a grid fitted on the device has at most this many.
-    pub cell_capacity: u32,
     /// The pair's reference master node (model node id): the motion budget measures every
     /// node's displacement relative to this node's, so that a contact model travelling as a
     /// whole uses none of it ([`crate::search::SearchStage::reference_node`]).
     pub ref_node: u32,
     /// Padding.
-    pub _pad: [u32; 2],
+    pub _pad0: u32,
+    /// The master's box at the last global search, lower corner (xyz; w unused), in the frame.
+    pub master_lo: [f32; 4],
+    /// Its upper corner (xyz; w unused).
+    pub master_hi: [f32; 4],
+    /// Padding.
+    pub _pad: [u32; 4],
 }
 const _: () = assert!(std::mem::size_of::<SearchParams>() == 96);
+
+/// Word of `SearchParams` the schedule writes: the tree's box margin (WGSL: `P_BOX_MARGIN`).
+pub const P_BOX_MARGIN: usize = std::mem::offset_of!(SearchParams, box_margin) / 4;
+/// Word of `SearchParams`: the spatial dimension (WGSL: `P_DIM`).
+pub const P_DIM: usize = std::mem::offset_of!(SearchParams, dim) / 4;
+/// Word of `SearchParams`: the `FLAG_*` bits (WGSL: `P_FLAGS`).
+pub const P_FLAGS: usize = std::mem::offset_of!(SearchParams, flags) / 4;
+/// Word of `SearchParams`: the master box's lower corner (WGSL: `P_MASTER_LO`).
+pub const P_MASTER_LO: usize = std::mem::offset_of!(SearchParams, master_lo) / 4;
+/// Word of `SearchParams`: the master box's upper corner (WGSL: `P_MASTER_HI`).
+pub const P_MASTER_HI: usize = std::mem::offset_of!(SearchParams, master_hi) / 4;
 
 /// Flag: the local search walks the facets around every node of the tracked node's facets
 /// (the more expensive, more robust alternative) (WGSL: `FLAG_WIDE_LOCAL`).
@@ -170,7 +167,7 @@ pub struct ScanParams {
 }
 const _: () = assert!(std::mem::size_of::<ScanParams>() == 16);
 
-/// The raw search result of one slave node, grid-local f32. WGSL twin: `Hit` in common.wgsl.
+/// The raw search result of one slave node, f32 in the kernels' frame. WGSL twin: `Hit` in common.wgsl.
 #[repr(C, align(64))]
 #[derive(Clone, Copy, Debug, PartialEq, Pod, Zeroable)]
 pub struct GpuHit {
@@ -182,7 +179,7 @@ pub struct GpuHit {
     pub candidates: u32,
     /// The slave node (model node id).
     pub slave: u32,
-    /// Closest point (xyz, grid-local) and signed gap along the normal (w).
+    /// Closest point (xyz, in the frame) and signed gap along the normal (w).
     pub point_gap: [f32; 4],
     /// Unit facet normal at the closest point (xyz) and distance (w).
     pub normal_dist: [f32; 4],
@@ -285,7 +282,8 @@ pub const PLAN_TRIGGER: usize = 5;
 pub const PLAN_INTERVAL: usize = 6;
 /// Plan word: dispatch slots in use.
 pub const PLAN_N_SLOTS: usize = 7;
-/// Plan word: grids that could not be fitted (no finite master node; the last grid kept).
+/// Plan word: global searches whose master box could not be taken (no finite master node; the
+/// last box and margin kept).
 pub const PLAN_FIT_FAILED: usize = 9;
 /// Plan words: the `SearchParams` of the increment (24 words, from byte 256: the search passes
 /// bind them as their uniform).
@@ -315,8 +313,8 @@ pub const TRIGGER_CROWDED: u32 = 4;
 /// Trigger code: the host asked for it.
 pub const TRIGGER_REQUESTED: u32 = 5;
 
-/// The words of a fresh plan: the schedule's `interval`, the search's `params` (the grid a
-/// first global search starts from), no dispatch slot yet.
+/// The words of a fresh plan: the schedule's `interval`, the search's `params` (the master box
+/// and margin a first global search starts from), no dispatch slot yet.
 pub fn fresh_plan(params: &SearchParams, interval: u32) -> Vec<u32> {
     let mut plan = vec![0u32; PLAN_WORDS];
     plan[PLAN_INTERVAL] = interval;

@@ -37,7 +37,8 @@ pub struct IncrementStats {
     pub local_capped: u32,
     /// The largest motion since a global search (model length units).
     pub motion: f32,
-    /// Grids that could not be fitted, since the start (the last grid was kept).
+    /// Global searches whose master box could not be taken (no finite master node), since
+    /// the start (the last box was kept).
     pub fit_failed: u32,
     /// Slave nodes whose velocity relative to the master near them (its velocity at their
     /// contact point, or the pair's reference master node's for a slave with no facet within

@@ -25,9 +25,9 @@ pub const STATUS_LOCAL_CAPPED: usize = 9;
 /// Status word: self-contact slaves with unconnected facets within the radius
 /// (WGSL: `STATUS_CROWDED`).
 pub const STATUS_CROWDED: usize = 10;
-/// Status word: a master node left the grid's box (positions on the device): the grid is
-/// refitted and the increment run again (WGSL: `STATUS_FRAME_STALE`).
-pub const STATUS_FRAME_STALE: usize = 11;
+/// Status word no kernel writes (it told a grid fitted on the host was stale, before the
+/// device took the master's box at every global search), kept so the indices after it stay.
+pub const STATUS_UNUSED: usize = 11;
 /// Status word: small sliding, slave nodes that slid more than an element length from their
 /// anchor (WGSL: `STATUS_SLID_TOO_FAR`).
 pub const STATUS_SLID_TOO_FAR: usize = 12;
@@ -152,12 +152,7 @@ pub const STATUS_TABLE: [StatusWord; STATUS_WORDS] = [
         Owner::Search,
         0,
     ),
-    w(
-        STATUS_FRAME_STALE,
-        "a master node left the grid's box",
-        Owner::Search,
-        0,
-    ),
+    w(STATUS_UNUSED, "unused", Owner::Search, 0),
     w(
         STATUS_SLID_TOO_FAR,
         "anchors slid beyond an element",
@@ -315,10 +310,6 @@ impl Status {
     /// Master facets collapsed at the global search's positions (skipped).
     pub fn collapsed(&self) -> u32 {
         self.0[STATUS_COLLAPSED]
-    }
-    /// A master node left the grid's box (positions on the device).
-    pub fn frame_stale(&self) -> bool {
-        self.0[STATUS_FRAME_STALE] != 0
     }
     /// Small sliding: anchors slid more than an element length.
     pub fn slid_too_far(&self) -> u32 {

@@ -97,14 +97,9 @@ pub(crate) fn run_entry(
     let ws = &mut *s.ws;
     let status = &mut ws.status;
     match e.kernel {
-        Kernel::ToLocal => to_local::to_local(
-            &params,
-            s.frame,
-            positions,
-            &mut prep.nodes,
-            &prep.adjacency,
-            status,
-        ),
+        Kernel::ToLocal => {
+            to_local::to_local(s.frame, positions, &mut prep.nodes, &prep.adjacency, status)
+        }
         Kernel::Anchor => anchor::anchor(
             &params,
             &prep.nodes,

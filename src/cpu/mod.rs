@@ -1,4 +1,4 @@
-//! The CPU path: a mirror of every shader (same file name, same loop shape, f32 in grid-local
+//! The CPU path: a mirror of every shader (same file name, same loop shape, f32 in the frame's
 //! coordinates) and a brute-force f64 oracle for the tests.
 //!
 //! The mirror runs the kernels' "invocations" on all cores (rayon): a kernel whose invocations

@@ -41,7 +41,7 @@ pub const WALK_VISITS: u32 = 2048;
 /// (WGSL: `PRUNE_SLACK`).
 pub const PRUNE_SLACK: f32 = 1.0001;
 
-/// The slave at walk position t (WGSL: `walk_point`): grid-local position and node id.
+/// The slave at walk position t (WGSL: `walk_point`): position in the frame and node id.
 fn walk_point(c: &Candidates<'_>, t: usize) -> (V3<f32>, u32) {
     let w = c.walk_points[t];
     (

@@ -28,7 +28,7 @@ pub(crate) struct CpuResident {
 
 /// A resident search's arrays, borrowed for one kernel (`cpu::increment`).
 pub(crate) struct SearchArrays<'a> {
-    /// The pair's constants and its grid-local nodes (updated in place).
+    /// The pair's constants and its nodes in the frame (updated in place).
     pub prep: &'a mut Prepared,
     /// The frame the caller's positions are relative to.
     pub frame: &'a FrameParams,
@@ -91,6 +91,7 @@ impl CpuSearch {
             anchored: r.anchored,
             self_contact: r.prep.params.flags & FLAG_SELF_CONTACT != 0,
             local_only,
+            global_only: false,
             n_nodes: r.prep.n_nodes as u32,
             n_motion_nodes: r.prep.motion_nodes.len() as u32,
             n_slaves: r.prep.slaves.len() as u32,
@@ -149,9 +150,15 @@ impl CpuSearch {
 
     /// Runs the search's entries of one increment (`plan::increment::search`) on `positions`
     /// (one `[f32; 4]` per model node, relative to the frame), each through its kernel's mirror
-    /// (`cpu::increment`), as `GpuSearch::run_plan` does on a GPU.
-    pub(crate) fn run_plan(&mut self, positions: &[[f32; 4]], read_hits: bool) -> Result<PlanRan> {
-        let shape = self.pair_shape(0, false).ok_or_else(not_resident)?;
+    /// (`cpu::increment`), as `GpuSearch::run_plan` does on a GPU (`global`: no motion budget).
+    pub(crate) fn run_plan(
+        &mut self,
+        positions: &[[f32; 4]],
+        read_hits: bool,
+        global: bool,
+    ) -> Result<PlanRan> {
+        let mut shape = self.pair_shape(0, false).ok_or_else(not_resident)?;
+        shape.global_only = global;
         if positions.len() != shape.n_nodes as usize {
             return Err(Error::LengthMismatch {
                 what: "search positions (one per model node)",

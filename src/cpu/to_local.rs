@@ -1,23 +1,17 @@
 //! CPU mirror of `shaders/to_local.wgsl`: model-frame f32 positions into the local frame.
 
-use crate::abi::search::{ordered_bits, FrameParams, SearchParams};
-use crate::abi::status::{STATUS_BOX, STATUS_FRAME_STALE, STATUS_NONFINITE};
+use crate::abi::search::{ordered_bits, FrameParams};
+use crate::abi::status::{STATUS_BOX, STATUS_NONFINITE};
 
-/// One "invocation" per model node; keeps each node's mass (w), flags a master node outside
-/// the grid's box, widens the master box and names the lowest non-finite node (status words).
+/// One "invocation" per model node; keeps each node's mass (w), widens the master box and
+/// names the lowest non-finite node (status words).
 pub fn to_local(
-    params: &SearchParams,
     frame: &FrameParams,
     positions: &[[f32; 4]],
     nodes: &mut [[f32; 4]],
     adjacency: &[u32],
     status: &mut [u32],
 ) {
-    let top = [
-        params.dims_x as f32 * params.cell_size,
-        params.dims_y as f32 * params.cell_size,
-        params.dims_z as f32 * params.cell_size,
-    ];
     for i in 0..frame.n_nodes as usize {
         for a in 0..3 {
             nodes[i][a] = positions[i][a] - frame.origin[a];
@@ -28,13 +22,6 @@ pub fn to_local(
             continue;
         }
         if adjacency[i] != adjacency[i + 1] {
-            let inside = (0..3).all(|a| {
-                let g = x[a] - params.grid_lo[a];
-                g >= 0.0 && g <= top[a]
-            });
-            if !inside {
-                status[STATUS_FRAME_STALE] = 1;
-            }
             for a in 0..3 {
                 status[STATUS_BOX + a] = status[STATUS_BOX + a].min(ordered_bits(x[a]));
                 status[STATUS_BOX + 3 + a] = status[STATUS_BOX + 3 + a].max(ordered_bits(x[a]));

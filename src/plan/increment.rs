@@ -245,6 +245,10 @@ pub(crate) struct PairShape {
     /// The host proved the schedule will choose the local search: the global search's
     /// entries (which would get zero workgroups) are left out.
     pub local_only: bool,
+    /// The host knows the schedule will choose the global search (it asked for one, or none
+    /// has run): the motion budget, which only decides for a local search, and the local
+    /// search (zero workgroups) are left out.
+    pub global_only: bool,
     /// Model nodes.
     pub n_nodes: u32,
     /// Nodes the motion budget watches.
@@ -480,6 +484,7 @@ mod tests {
                 anchored,
                 self_contact,
                 local_only,
+                global_only: false,
                 n_nodes: 2000,
                 n_motion_nodes: 1200,
                 n_slaves: 1000,

@@ -1,26 +1,26 @@
-//! What a stage hands an executor: the prepared inputs of one search (its parameters, frame,
-//! positions in the frame and the pair's constant arrays), the increment as a list of entries
-//! (`increment`), and where a search's plan reads its positions and what it leaves.
+//! What a stage hands an executor: the prepared inputs of one search (its parameters, the
+//! frame's origin (`frame`), positions in the frame and the pair's constant arrays), the
+//! increment as a list of entries (`increment`), and where a search's plan reads its positions
+//! and what it leaves.
 //! The stages (`search`, `contact`) write these and both executors (`gpu`, `cpu`) read them, so
 //! neither executor depends on a stage.
 
-pub mod grid;
+pub mod frame;
 pub(crate) mod increment;
 
 use std::sync::Arc;
 
 use crate::abi::search::{GpuHit, SearchParams};
 use crate::abi::status::STATUS_WORDS;
-use grid::Grid;
 
-/// Input of one search in the kernels' layout: grid-local f32 nodes, active facets, slaves.
+/// Input of one search in the kernels' layout: f32 nodes in the frame, active facets, slaves.
 #[derive(Clone, Debug)]
 pub struct Prepared {
     /// Uniform parameters.
     pub params: SearchParams,
-    /// The grid (its origin is the local frame).
-    pub grid: Grid,
-    /// Every model node, grid-local, w = its mass.
+    /// The origin of the kernels' frame, model units: a node's f32 position is relative to it.
+    pub frame: [f64; 3],
+    /// Every model node relative to the frame, w = its mass.
     pub nodes: Vec<[f32; 4]>,
     /// Active facets, padded node ids (the pair's constant, shared).
     pub facets: Arc<[[u32; 4]]>,

@@ -19,8 +19,14 @@ pub(crate) trait SearchExec: wgpu::WasmNotSend {
     /// Runs the search's entries of one increment on `positions` (after `make_resident`): the
     /// schedule decides on the device between the local and the global search (or, small
     /// sliding, the anchors are evaluated); the status, the plan's head and (with `read_hits`)
-    /// the hits come back in one wait.
-    fn run_plan(&mut self, positions: PlanPositions<'_>, read_hits: bool) -> Result<PlanRan>;
+    /// the hits come back in one wait. `global`: the host asked for a global search (or none
+    /// has run), so the motion budget is left out (`PairShape::global_only`).
+    fn run_plan(
+        &mut self,
+        positions: PlanPositions<'_>,
+        read_hits: bool,
+        global: bool,
+    ) -> Result<PlanRan>;
     /// Small sliding: installs the slaves' anchors (before `make_resident` with `anchored`).
     fn set_anchors(&mut self, anchors: &[Anchor]) -> Result<()>;
     /// Readies device-resident increments of `prep` (see `GpuSearch::make_resident`): a fresh
@@ -50,8 +56,13 @@ pub(crate) fn for_device(device: &Device) -> Result<Box<dyn SearchExec>> {
 }
 
 impl SearchExec for GpuSearch {
-    fn run_plan(&mut self, positions: PlanPositions<'_>, read_hits: bool) -> Result<PlanRan> {
-        GpuSearch::run_plan(self, positions, read_hits)
+    fn run_plan(
+        &mut self,
+        positions: PlanPositions<'_>,
+        read_hits: bool,
+        global: bool,
+    ) -> Result<PlanRan> {
+        GpuSearch::run_plan(self, positions, read_hits, global)
     }
 
     fn set_anchors(&mut self, anchors: &[Anchor]) -> Result<()> {
@@ -82,11 +93,16 @@ impl SearchExec for GpuSearch {
 }
 
 impl SearchExec for CpuSearch {
-    fn run_plan(&mut self, positions: PlanPositions<'_>, read_hits: bool) -> Result<PlanRan> {
+    fn run_plan(
+        &mut self,
+        positions: PlanPositions<'_>,
+        read_hits: bool,
+        global: bool,
+    ) -> Result<PlanRan> {
         let PlanPositions::Host(x) = positions else {
             return Err(cpu_path("positions in a device buffer"));
         };
-        CpuSearch::run_plan(self, x, read_hits)
+        CpuSearch::run_plan(self, x, read_hits, global)
     }
 
     fn set_anchors(&mut self, anchors: &[Anchor]) -> Result<()> {

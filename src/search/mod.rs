@@ -19,7 +19,7 @@ mod resident;
 mod run;
 pub(crate) mod tree;
 
-pub use crate::plan::{grid, Prepared};
+pub use crate::plan::{frame, Prepared};
 
 use crate::abi::search as layout;
 use crate::abi::status::Status;
@@ -28,7 +28,6 @@ use crate::device::Device;
 use crate::error::{Error, Result};
 use crate::model::Schedule;
 use crate::model::{validate_positions, MasterSurface, Model, PairId};
-use crate::plan::grid::Grid;
 pub(crate) use exec::SearchExec;
 use layout::{GpuHit, SearchParams, NO_FACET};
 use std::sync::Arc;
@@ -72,8 +71,9 @@ pub struct SearchStats {
     pub local_capped: u32,
     /// Largest motion of a pair node since the last global search, model units.
     pub motion: f64,
-    /// The frame the kernels worked in, and its box (a master node leaving it moves the frame).
-    pub grid: Grid,
+    /// The master's box at the last global search (lower, upper corner), model units, as the
+    /// device took it in the kernels' frame ([`SearchResult::frame`]).
+    pub master_box: [[f64; 3]; 2],
     /// Facet–node distance evaluations in the nearest-facet step (the tree walks' projections
     /// and the chunks' candidates).
     pub candidates: u64,
@@ -93,7 +93,7 @@ pub struct SearchStats {
 pub struct SearchResult {
     /// The slave nodes (model node ids), in the order of the hits (shared, not copied).
     pub slaves: Arc<[u32]>,
-    /// The raw results the kernels wrote, one per slave (grid-local f32, relative to
+    /// The raw results the kernels wrote, one per slave (f32, relative to
     /// `frame`; for parity checks). Empty when the hits were not read back
     /// ([`GlobalSearch::step_device`] with `read_hits` false).
     pub raw: Arc<Vec<GpuHit>>,
@@ -243,7 +243,7 @@ pub struct SearchStage {
     anchor_reach: Option<f64>,
     /// Device-resident increments: the origin the kernels' frame is relative to.
     resident_origin: Option<[f64; 3]>,
-    /// Device-resident increments: the extent of the grid the frame was fitted to.
+    /// Device-resident increments: the master's extent when the frame was chosen.
     resident_span: f64,
 }
 
@@ -519,7 +519,7 @@ impl SearchStage {
     fn finish(
         &self,
         o: [f64; 3],
-        grid: Grid,
+        master_box: [[f64; 3]; 2],
         raw: Arc<Vec<GpuHit>>,
         trigger: Trigger,
         status: &[u32; STATUS_WORDS],
@@ -540,7 +540,7 @@ impl SearchStage {
                 plane_off: Status(*status).plane_off(),
                 local_capped: Status(*status).local_capped(),
                 motion: Status(*status).motion() as f64,
-                grid,
+                master_box,
                 candidates,
                 fallbacks: Status(*status).fallbacks(),
                 collapsed_facets: Status(*status).collapsed(),

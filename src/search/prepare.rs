@@ -4,7 +4,8 @@
 use super::*;
 
 impl SearchStage {
-    /// Builds the kernels' input: validates positions, fits the grid, converts to local f32.
+    /// Builds the kernels' input: validates positions, chooses the frame at the master,
+    /// converts to f32 relative to it.
     pub fn prepare(&self, positions: &[[f64; 3]]) -> Result<Prepared> {
         if positions.len() != self.masses.len() {
             return Err(Error::LengthMismatch {
@@ -14,11 +15,10 @@ impl SearchStage {
             });
         }
         validate_positions(positions, 0, self.dim)?;
-        // the master's box and its facets' mean extent, from the padded active facets (unused
-        // slots repeat node 1, which changes no box); four lanes of f64 per corner
+        // the master's box, from the padded active facets (unused slots repeat node 1, which
+        // changes no box); four lanes of f64 per corner
         let mut lo = glam::DVec4::splat(f64::INFINITY);
         let mut hi = glam::DVec4::splat(f64::NEG_INFINITY);
-        let mut extent_sum = 0.0;
         for fac in self.facets.iter() {
             let n = crate::model::facet_node_count(*fac);
             let x = |j: usize| {
@@ -26,33 +26,20 @@ impl SearchStage {
                 glam::DVec4::new(p[0], p[1], p[2], 0.0)
             };
             let (x0, x1, x2, x3) = (x(0), x(1), x(2), x(3));
-            let flo = x0.min(x1).min(x2.min(x3));
-            let fhi = x0.max(x1).max(x2.max(x3));
-            lo = lo.min(flo);
-            hi = hi.max(fhi);
-            let e = fhi - flo;
-            extent_sum += e.x.max(e.y).max(e.z);
+            lo = lo.min(x0.min(x1).min(x2.min(x3)));
+            hi = hi.max(x0.max(x1).max(x2.max(x3)));
         }
         let (lo, hi) = ([lo.x, lo.y, lo.z], [hi.x, hi.y, hi.z]);
         let n_facets = self.facets.len();
-        let grid = Grid::fit(
-            lo,
-            hi,
-            self.radius,
-            extent_sum / n_facets as f64,
-            n_facets,
-            self.dim,
-        )?;
-        let nodes = self.in_frame(positions, grid.frame)?;
+        let frame = crate::plan::frame::origin(lo, hi, self.radius, self.dim)?;
+        let nodes = self.in_frame(positions, frame)?;
+        let in_frame = |x: [f64; 3]| {
+            let [a, b, c] = [0, 1, 2].map(|k| (x[k] - frame[k]) as f32);
+            [a, b, c, 0.0]
+        };
         let params = SearchParams {
-            cell_size: grid.cell_size as f32,
-            inv_cell_size: (1.0 / grid.cell_size) as f32,
             radius: self.radius as f32,
-            box_margin: box_margin(lo, hi, grid.frame),
-            dims_x: grid.dims[0],
-            dims_y: grid.dims[1],
-            dims_z: grid.dims[2],
-            n_cells: grid.n_cells(),
+            box_margin: box_margin(lo, hi, frame),
             n_facets: n_facets as u32,
             n_slaves: self.slave_ids.len() as u32,
             tree_levels: tree::levels(n_facets),
@@ -61,15 +48,15 @@ impl SearchStage {
             flags: self.flags(),
             budget: (self.schedule.budget * self.radius) as f32,
             n_motion_nodes: self.motion_nodes.len() as u32,
-            grid_lo: grid.lo_in_frame(),
-            base_cell: Grid::base_cell(self.radius, extent_sum / n_facets as f64) as f32,
-            cell_capacity: grid.n_cells(),
             ref_node: self.ref_node,
-            _pad: [0; 2],
+            _pad0: 0,
+            master_lo: in_frame(lo),
+            master_hi: in_frame(hi),
+            _pad: [0; 4],
         };
         Ok(Prepared {
             params,
-            grid,
+            frame,
             nodes,
             facets: self.facets.clone(),
             slaves: self.slave_ids.clone(),

@@ -4,14 +4,14 @@
 use super::*;
 
 impl SearchStage {
-    /// Readies this search for device-resident increments at `positions` (the frame's box is
-    /// fitted on the device at every global search, within `Grid::cell_budget` cells). The kernels work relative to the origin of the grid the host
-    /// fits at `positions` (near the master, snapped to a power of two: [`GlobalSearch::
-    /// resident_frame`]): the positions the increments read are in the model frame when
-    /// `caller_frame` (the caller's f32 buffers; the kernels subtract the origin in f32), or
-    /// already relative to the origin (host arrays, subtracted in f64 by the host). Small
-    /// sliding anchors its slaves here, by a global search at `positions`, as its first
-    /// increment would.
+    /// Readies this search for device-resident increments at `positions` (the master's box is
+    /// taken on the device at every global search). The kernels work relative to the frame's
+    /// origin the host chooses at `positions` (near the master, snapped to a power of two:
+    /// `crate::plan::frame::origin`): the positions the increments read are in the model frame
+    /// when `caller_frame` (the caller's f32 buffers; the kernels subtract the origin in f32),
+    /// or already relative to the origin (host arrays and a search run alone, subtracted in f64
+    /// by the host). Small sliding anchors its slaves here, by a global search at `positions`,
+    /// as its first increment would.
     pub(crate) fn make_resident(
         &mut self,
         exec: &mut dyn SearchExec,
@@ -22,9 +22,8 @@ impl SearchStage {
         if anchored && self.anchors.is_none() {
             self.anchor(exec, positions)?;
         }
-        let mut prep = self.prepare(positions)?;
-        prep.params.cell_capacity = Grid::cell_budget(self.facets.len());
-        let origin = prep.grid.frame;
+        let prep = self.prepare(positions)?;
+        let origin = prep.frame;
         let frame = if caller_frame {
             origin.map(|o| o as f32)
         } else {
@@ -46,11 +45,10 @@ impl SearchStage {
         let own = std::mem::replace(&mut self.radius, reach);
         let prep = self.prepare(positions);
         self.radius = own;
-        let mut prep = prep?;
-        prep.params.cell_capacity = Grid::cell_budget(self.facets.len());
+        let prep = prep?;
         exec.make_resident(&prep, 1, false, [0.0; 3])?;
-        let x = self.in_frame(positions, prep.grid.frame)?;
-        let ran = exec.run_plan(crate::plan::PlanPositions::Host(&x), true)?;
+        let x = self.in_frame(positions, prep.frame)?;
+        let ran = exec.run_plan(crate::plan::PlanPositions::Host(&x), true, true)?;
         let anchors = self.build_anchors(positions, &ran.hits);
         exec.set_anchors(&anchors)?;
         self.anchors = Some(anchors);
@@ -66,8 +64,7 @@ impl SearchStage {
         positions: &[[f64; 3]],
         caller_frame: bool,
     ) -> Result<()> {
-        let mut prep = self.prepare(positions)?;
-        prep.params.cell_capacity = Grid::cell_budget(self.facets.len());
+        let prep = self.prepare(positions)?;
         let frame = if caller_frame {
             self.resident_frame().map(|o| o as f32)
         } else {
@@ -116,7 +113,7 @@ impl SearchStage {
     /// Host arrays: when a node of the master has travelled more than 16 times the master's own
     /// extent ([`Self::master_span`], not the search radius) from the frame's origin (f32 would
     /// lose precision there, and contact is only ever near the master), the frame moves to the
-    /// grid the host fits at `positions` and the next increment searches globally, which resets
+    /// origin the host chooses at `positions` and the next increment searches globally, which resets
     /// everything that was relative to the old origin. Returns whether it moved.
     pub(crate) fn rebase_if_far(
         &mut self,
@@ -134,16 +131,16 @@ impl SearchStage {
             return Ok(false);
         }
         let prep = self.prepare(positions)?;
-        if prep.grid.frame == o {
+        if prep.frame == o {
             return Ok(false);
         }
-        self.resident_origin = Some(prep.grid.frame);
+        self.resident_origin = Some(prep.frame);
         self.resident_span = self.master_span(positions);
         exec.request_global();
         Ok(true)
     }
 
-    /// The search result of a device-resident increment from its hits (grid-local, relative to
+    /// The search result of a device-resident increment from its hits (relative to
     /// the resident origin), status words, params and trigger code.
     pub(crate) fn resident_result(
         &self,
@@ -154,12 +151,8 @@ impl SearchStage {
         first: bool,
     ) -> SearchResult {
         let origin = self.resident_origin.unwrap_or([0.0; 3]);
-        let grid = Grid {
-            frame: origin,
-            origin: [0, 1, 2].map(|a| origin[a] + params.grid_lo[a] as f64),
-            cell_size: params.cell_size as f64,
-            dims: [params.dims_x, params.dims_y, params.dims_z],
-        };
+        let master_box = [params.master_lo, params.master_hi]
+            .map(|c| [0, 1, 2].map(|a| origin[a] + c[a] as f64));
         let trigger = if self.sliding != crate::model::Sliding::Finite {
             if first {
                 Trigger::First
@@ -176,7 +169,7 @@ impl SearchStage {
                 _ => Trigger::Local,
             }
         };
-        self.finish(origin, grid, raw, trigger, status)
+        self.finish(origin, master_box, raw, trigger, status)
     }
 
     /// The origin of the device-resident frame (model units).

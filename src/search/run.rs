@@ -30,14 +30,29 @@ impl SearchStage {
         positions: &[[f64; 3]],
     ) -> Result<SearchResult> {
         self.check(positions)?;
+        self.step_asked(exec, positions, false)
+    }
+
+    /// [`Self::step`], with a global search asked for when `asked`.
+    fn step_asked(
+        &mut self,
+        exec: &mut dyn SearchExec,
+        positions: &[[f64; 3]],
+        asked: bool,
+    ) -> Result<SearchResult> {
         let moved = if self.resident_origin.is_none() {
             self.make_resident(exec, positions, false)?;
             false
         } else {
             self.rebase_if_far(exec, positions)?
         };
+        if asked {
+            exec.request_global();
+        }
         let x = self.in_frame(positions, self.resident_frame())?;
-        let ran = exec.run_plan(PlanPositions::Host(&x), true)?;
+        // the schedule surely searches globally: asked, moved, or the first increment
+        let global = asked || moved || self.runs == 0;
+        let ran = exec.run_plan(PlanPositions::Host(&x), true, global)?;
         let mut result = self.plan_result(ran);
         if moved && result.stats.trigger == Trigger::Requested {
             result.stats.trigger = Trigger::Frame;
@@ -52,11 +67,7 @@ impl SearchStage {
         positions: &[[f64; 3]],
     ) -> Result<SearchResult> {
         self.check(positions)?;
-        if self.resident_origin.is_none() {
-            self.make_resident(exec, positions, false)?;
-        }
-        exec.request_global();
-        let mut result = self.step(exec, positions)?;
+        let mut result = self.step_asked(exec, positions, true)?;
         if !self.is_anchored() {
             result.stats.trigger = Trigger::Requested;
         }
@@ -78,7 +89,11 @@ impl SearchStage {
             });
         };
         let frame = origin.map(|o| o as f32);
-        let ran = exec.run_plan(PlanPositions::Buffer(positions, frame), read_hits)?;
+        let ran = exec.run_plan(
+            PlanPositions::Buffer(positions, frame),
+            read_hits,
+            self.runs == 0,
+        )?;
         Ok(self.plan_result(ran))
     }
 

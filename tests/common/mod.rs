@@ -56,13 +56,12 @@ pub fn gpus() -> &'static [Device] {
     })
 }
 
-/// Round-off tolerance of the f32 search in grid-local coordinates: 32 ε_f32 times the size
-/// of the local frame (grid extent plus radius). Points, gaps and distances are compared with it.
+/// Round-off tolerance of the f32 search in the kernels' frame: 32 ε_f32 times the size of
+/// the region searched (the master's extent plus the radius on either side, plus the radius).
+/// Points, gaps and distances are compared with it.
 pub fn tolerance(r: &SearchResult, radius: f64) -> f64 {
-    let g = &r.stats.grid;
-    let extent = (0..3)
-        .map(|a| g.dims[a] as f64 * g.cell_size)
-        .fold(0.0, f64::max);
+    let [lo, hi] = r.stats.master_box;
+    let extent = (0..3).map(|a| hi[a] - lo[a]).fold(0.0, f64::max) + 2.0 * radius;
     32.0 * f32::EPSILON as f64 * (extent + radius)
 }
 

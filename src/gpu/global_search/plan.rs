@@ -13,19 +13,22 @@ const PLAN_HEAD_BYTES: u64 = (PLAN_SLOTS * 4) as u64;
 
 impl GpuSearch {
     /// Runs the search's entries of one increment on `positions` (after `make_resident`),
-    /// submits and reads back the status words, the plan's head and, with `read_hits`, the hits.
+    /// submits and reads back the status words, the plan's head and, with `read_hits`, the hits;
+    /// `global`: the host knows the increment searches globally (no motion budget).
     pub(crate) fn run_plan(
         &mut self,
         positions: PlanPositions<'_>,
         read_hits: bool,
+        global: bool,
     ) -> Result<PlanRan> {
-        let shape = self
+        let mut shape = self
             .pair_shape(0, false)
             .ok_or_else(|| Error::BadParameter {
                 name: "search",
                 value: "not made resident".into(),
                 expected: "make_resident first",
             })?;
+        shape.global_only = global;
         let n_nodes = shape.n_nodes as u64;
         let (buffer, origin) = match positions {
             PlanPositions::Host(x) => {

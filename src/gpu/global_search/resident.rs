@@ -303,6 +303,7 @@ impl GpuSearch {
             anchored: r.anchored,
             self_contact: r.self_contact,
             local_only,
+            global_only: false,
             n_nodes: r.n_nodes,
             n_motion_nodes: r.n_motion_nodes,
             n_slaves: r.n_slaves,
