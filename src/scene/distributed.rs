@@ -20,14 +20,16 @@
 //! (a warning says so). A node that moves past its pair's search radius within one increment
 //! stops the run on every rank with the single process's tunnelling error.
 
-use std::io::Write as _;
 use std::path::Path;
-use std::time::Instant;
 
 use mpi::topology::SimpleCommunicator;
 use mpi::traits::*;
 
+mod rank;
+use rank::{part_sums, Rank};
+
 use super::account::{Account, Ends};
+use super::increments;
 use super::{
     built_list, clean_run, finish_outputs, open_history, output_error, stress6, ContactNode,
     PartSummary, Progress, RankSummary, Scene, Summary,
@@ -266,7 +268,7 @@ fn run_into(
     let pairs = rank_pairs(model, &part, me)?;
     let has_contact = !pairs.is_empty();
     let own_ids: Vec<u64> = own.iter().map(|&l| nodes[l] as u64).collect();
-    let mut contact = if has_contact {
+    let contact = if has_contact {
         Some(DistributedContact::new(
             comm,
             device,
@@ -304,28 +306,6 @@ fn run_into(
         })
         .collect();
     let x0 = solver.x.clone();
-    // Σ w·(x − x0) and Σ w·v over each part's own nodes, w its share of the part's mass
-    let part_sums = |solver: &Solver| -> Vec<f64> {
-        let mut out = Vec::with_capacity(6 * part_nodes.len());
-        for (mine, total, count) in &part_nodes {
-            let (mut u, mut v) = ([0.0; 3], [0.0; 3]);
-            for &l in mine {
-                let w = if *total > 0.0 {
-                    solver.mass[l] / total
-                } else {
-                    1.0 / (*count).max(1) as f64
-                };
-                for a in 0..3 {
-                    u[a] += w * (solver.x[l][a] - x0[l][a]);
-                    v[a] += w * solver.v[l][a];
-                }
-            }
-            out.extend(u);
-            out.extend(v);
-        }
-        out
-    };
-
     let mut built_list = built_list(scene, g, &built.slaves);
     built_list.push(format!(
         "{size} MPI ranks, the nodes split by recursive coordinate bisection (see ranks)"
@@ -344,116 +324,33 @@ fn run_into(
     agree(comm, fault)?;
 
     let mut account = Account::new(&scene.run, all_min(comm, solver.stable_increment()))?;
-    let mut balance0: Option<f64> = None;
-    let mut energy = [0.0f64; 5];
-    let (mut halo_bytes, mut contact_bytes) = (0usize, 0usize);
-    while account.running(solver.time) {
-        let step = account.step(solver.time);
-        let t_step = Instant::now();
-        let t_start = solver.time;
-        let mut f = vec![[0.0; 3]; nodes.len()];
-        let mut reported = None;
-        if let Some(c) = contact.as_mut() {
-            c.request_outputs(account.is_last(solver.time, step));
-            let ox: Vec<[f64; 3]> = own.iter().map(|&l| solver.x[l]).collect();
-            let ov: Vec<[f64; 3]> = own.iter().map(|&l| solver.v[l]).collect();
-            let r = c.step(&ox, &ov, step)?;
-            for (j, &l) in own.iter().enumerate() {
-                f[l] = r.forces[j];
-            }
-            reported = Some((r.stable_dt, r.max_overclosure));
-            contact_bytes += r.bytes_sent;
-            // the same on every rank: every rank returns it
-            if let Some(f) = r.fastest {
-                return Err(Error::Tunnelling {
-                    increment: account.k as u64 + 1,
-                    time: t_start,
-                    node: f.node as usize,
-                    pair: f.pair,
-                    distance: f.distance,
-                    radius: f.radius,
-                    more: if r.fast_nodes > 1 {
-                        format!(" ({} more nodes move that far)", r.fast_nodes - 1)
-                    } else {
-                        String::new()
-                    },
-                });
-            }
-        }
-        let stepped = solver.step_with_forces(step, &f);
-        agree(comm, stepped.err())?;
-        // the halo from the owners
-        let out: Vec<Vec<f64>> = send
-            .iter()
-            .map(|l| {
-                l.iter()
-                    .flat_map(|&i| {
-                        let (x, v) = (solver.x[i], solver.v[i]);
-                        [x[0], x[1], x[2], v[0], v[1], v[2]]
-                    })
-                    .collect()
-            })
-            .collect();
-        halo_bytes += 8 * out.iter().map(Vec::len).sum::<usize>();
-        let came: Vec<f64> = exchange(comm, &out).into_iter().flatten().collect();
-        for (&l, s) in halo_in.iter().zip(came.chunks_exact(6)) {
-            solver.x[l] = [s[0], s[1], s[2]];
-            solver.v[l] = [s[3], s[4], s[5]];
-        }
-        account.counted(solver.time, t_step, device, progress);
-        if account.k == 1 {
-            account.first_seconds = all_max(comm, account.first_seconds);
-        }
-        if let Some((stable, over)) = reported {
-            account.penalty_limit(stable, over, step, t_start);
-        }
-        // the ranks' shares, added in rank order: contact force on the slaves, energies, and
-        // the parts' motion on output rows
-        let e = &solver.energy;
-        let mut mine = vec![0.0; 3];
-        for &l in &own_slaves {
-            for a in 0..3 {
-                mine[a] += solver.contact_force[l][a];
-            }
-        }
-        mine.extend([
-            e.kinetic,
-            e.internal,
-            e.external_work,
-            e.contact_work,
-            e.damping,
-        ]);
-        let row = account.row();
-        if row {
-            mine.extend(part_sums(&solver));
-        }
-        let sums = sum_over_ranks(comm, &mine);
-        let (force, _) = account.force(solver.time, step, [sums[0], sums[1], sums[2]]);
-        energy.copy_from_slice(&sums[3..8]);
-        let [kinetic, internal, external, contact_work, damping] = energy;
-        let balance = kinetic + internal - external - contact_work + damping;
-        let b0 = *balance0.get_or_insert(balance);
-        let scale_now = energy.iter().fold(0.0f64, |m, x| m.max(x.abs()));
-        account.energy((balance - b0).abs(), scale_now, balance, solver.time)?;
-        if row {
-            account.sample(solver.time, Vec::new());
-            let mut fault = None;
-            if let Some(f) = history.as_mut() {
-                let mut line = format!(
-                    "{},{kinetic},{internal},{external},{contact_work},{},{force}",
-                    solver.time,
-                    (balance - b0).abs() / scale_now.max(1e-300)
-                );
-                for c in &sums[8..] {
-                    line.push_str(&format!(",{c}"));
-                }
-                if let Err(e) = writeln!(f, "{line}") {
-                    fault = Some(io(e));
-                }
-            }
-            agree(comm, fault)?;
-        }
-    }
+    let mut rank = Rank {
+        comm,
+        solver,
+        contact,
+        own: &own,
+        send: &send,
+        halo_in: &halo_in,
+        own_slaves: &own_slaves,
+        part_nodes: &part_nodes,
+        x0: &x0,
+        history,
+        halo_bytes: 0,
+        contact_bytes: 0,
+        balance0: None,
+        energy: [0.0; 5],
+        last: Vec::new(),
+    };
+    increments::run(&mut account, &mut rank, device, progress)?;
+    let Rank {
+        solver,
+        contact,
+        history,
+        halo_bytes,
+        contact_bytes,
+        energy,
+        ..
+    } = rank;
     let k = account.k;
     let my_seconds = account.seconds_per_increment();
     let seconds = all_max(comm, my_seconds);
@@ -485,7 +382,7 @@ fn run_into(
         })
         .collect();
     // the parts: motion summed over the ranks, stress extremes over each rank's own elements
-    let motion = sum_over_ranks(comm, &part_sums(&solver));
+    let motion = sum_over_ranks(comm, &part_sums(&part_nodes, &solver, &x0));
     let mut parts = Vec::new();
     let mut el = 0;
     let counted_of: Vec<Option<usize>> = {

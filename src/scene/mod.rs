@@ -77,6 +77,7 @@ mod build;
 mod check;
 #[cfg(feature = "mpi")]
 mod distributed;
+mod increments;
 mod run;
 mod spec;
 mod summary;

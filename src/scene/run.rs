@@ -4,10 +4,10 @@
 
 use std::io::Write as _;
 use std::path::Path;
-use std::time::Instant;
 
 use super::account::{Account, Ends};
 use super::build::PartNodes;
+use super::increments::{self, Limits, Ranks, Sums};
 use super::{
     built_list, finish_outputs, open_history, output_error, stress6, BodySummary, ContactNode,
     PartSummary, Progress, Scene, Summary,
@@ -38,12 +38,12 @@ pub(super) fn run_into(
     slaves.dedup();
     let built_list = built_list(scene, &solver, &built.slaves);
     let io = output_error;
-    let mut history = match output {
+    let history = match output {
         Some(dir) => Some(open_history(dir, &built.parts, &built.bodies).map_err(io)?),
         None => None,
     };
     // VTK frames go to a hidden directory renamed only when the run succeeded
-    let mut series = match output {
+    let series = match output {
         Some(dir) if scene.run.vtk_every > 0 && contact.is_some() => {
             let partial = dir.join(".vtk.partial");
             let _ = std::fs::remove_dir_all(&partial);
@@ -53,73 +53,35 @@ pub(super) fn run_into(
     };
     let mut account = Account::new(&scene.run, solver.stable_increment())?;
     let bodies0: Vec<[f64; 3]> = solver.bodies.iter().map(|b| b.state.position).collect();
-    let mut at_peak = bodies0.clone();
     let mut adjusted = None;
     if let (Some(c), true) = (contact.as_mut(), scene.run.adjust_overclosure) {
         let bodies = solver.body_states();
         let first = account.dt.min(scene.run.end_time - solver.time);
         adjusted = Some(c.adjust_initial_overclosure(&mut solver.x, &bodies, first)?);
     }
-    while account.running(solver.time) {
-        let step = account.step(solver.time);
-        // the output variables only when a VTK frame or the final pressures need them
-        if let Some(c) = contact.as_mut() {
-            let last = account.is_last(solver.time, step);
-            let frame = series.is_some() && (account.k + 1) % scene.run.vtk_every == 0;
-            c.request_outputs(last || frame);
-        }
-        let t_step = Instant::now();
-        let t_start = solver.time;
-        solver.step(step, contact.as_mut())?;
-        account.counted(solver.time, t_step, device, progress);
-        if let Some(c) = contact.as_ref() {
-            tunnelling(c, &solver, account.k, t_start)?;
-            if c.has_penalty_pairs() {
-                let r = c.report();
-                account.penalty_limit(r.stable_dt, r.max_overclosure, step, t_start);
-            }
-            if c.has_kinematic_pairs() {
-                account.overclosure(c.kinematic_report().max_overclosure);
-            }
-        }
-        let mut f = [0.0; 3];
-        for &s in &slaves {
-            for a in 0..3 {
-                f[a] += solver.contact_force[s as usize][a];
-            }
-        }
-        let (force, peak) = account.force(solver.time, step, f);
-        if peak {
-            at_peak = solver.bodies.iter().map(|b| b.state.position).collect();
-        }
-        if account.row() {
-            let moved = solver
-                .bodies
-                .iter()
-                .zip(&bodies0)
-                .map(|(b, p0)| std::array::from_fn(|a| b.state.position[a] - p0[a]))
-                .collect();
-            account.sample(solver.time, moved);
-        }
-        account.energy(
-            solver.energy_drift(),
-            solver.energy_scale(),
-            solver.energy.balance(),
-            solver.time,
-        )?;
-        if let (Some(s), Some(c)) = (series.as_mut(), contact.as_ref()) {
-            if account.k % scene.run.vtk_every == 0 {
-                s.add(
-                    solver.time,
-                    &crate::io::vtk::Frame::from_contact(&model, c, &solver.x)?,
-                )?;
-            }
-        }
-        if let (Some(f), true) = (history.as_mut(), account.row()) {
-            let line = history_row(&solver, &x0, &bodies0, &built.parts, &built.bodies, force);
-            writeln!(f, "{line}").map_err(io)?;
-        }
-    }
+    let mut one = OneProcess {
+        scene,
+        model: &model,
+        at_peak: bodies0.clone(),
+        solver,
+        contact,
+        slaves,
+        x0: &x0,
+        bodies0: &bodies0,
+        parts: &built.parts,
+        bodies: &built.bodies,
+        history,
+        series,
+    };
+    increments::run(&mut account, &mut one, device, progress)?;
+    let OneProcess {
+        solver,
+        contact,
+        history,
+        series,
+        at_peak,
+        ..
+    } = one;
     let ends = ends(
         device,
         built_list,
@@ -143,6 +105,96 @@ pub(super) fn run_into(
         }
     }
     Ok(summary)
+}
+
+/// One process: the solver stepped with its contact, its totals the values themselves.
+struct OneProcess<'a> {
+    scene: &'a Scene,
+    model: &'a crate::model::Model,
+    solver: Solver,
+    contact: Option<Contact>,
+    /// Every slave node, once (the contact force is summed over them).
+    slaves: Vec<u32>,
+    x0: &'a [[f64; 3]],
+    bodies0: &'a [[f64; 3]],
+    /// The rigid bodies' positions when the contact force peaked.
+    at_peak: Vec<[f64; 3]>,
+    parts: &'a [PartNodes],
+    bodies: &'a [(String, usize)],
+    history: Option<std::io::BufWriter<std::fs::File>>,
+    series: Option<crate::io::vtk::Series>,
+}
+
+impl Ranks for OneProcess<'_> {
+    fn time(&self) -> f64 {
+        self.solver.time
+    }
+
+    fn advance(&mut self, step: f64, k: usize, last: bool) -> Result<Limits> {
+        // the output variables only when a VTK frame or the final pressures need them
+        if let Some(c) = self.contact.as_mut() {
+            let frame = self.series.is_some() && (k + 1).is_multiple_of(self.scene.run.vtk_every);
+            c.request_outputs(last || frame);
+        }
+        let t_start = self.solver.time;
+        self.solver.step(step, self.contact.as_mut())?;
+        let mut limits = Limits::default();
+        if let Some(c) = self.contact.as_ref() {
+            tunnelling(c, &self.solver, k + 1, t_start)?;
+            if c.has_penalty_pairs() {
+                let r = c.report();
+                limits.penalty = Some((r.stable_dt, r.max_overclosure));
+            }
+            if c.has_kinematic_pairs() {
+                limits.kinematic = Some(c.kinematic_report().max_overclosure);
+            }
+        }
+        Ok(limits)
+    }
+
+    fn sums(&mut self, row: bool) -> Result<Sums> {
+        let s = &self.solver;
+        let mut force = [0.0; 3];
+        for &n in &self.slaves {
+            for a in 0..3 {
+                force[a] += s.contact_force[n as usize][a];
+            }
+        }
+        let moved = if row {
+            s.bodies
+                .iter()
+                .zip(self.bodies0)
+                .map(|(b, p0)| std::array::from_fn(|a| b.state.position[a] - p0[a]))
+                .collect()
+        } else {
+            Vec::new()
+        };
+        Ok(Sums {
+            force,
+            drift: s.energy_drift(),
+            scale: s.energy_scale(),
+            balance: s.energy.balance(),
+            moved,
+        })
+    }
+
+    fn output(&mut self, k: usize, row: bool, force: f64, peak: bool) -> Result<()> {
+        let s = &self.solver;
+        if peak {
+            self.at_peak = s.bodies.iter().map(|b| b.state.position).collect();
+        }
+        if let (Some(series), Some(c)) = (self.series.as_mut(), self.contact.as_ref()) {
+            if k.is_multiple_of(self.scene.run.vtk_every) {
+                let frame = crate::io::vtk::Frame::from_contact(self.model, c, &s.x)?;
+                series.add(s.time, &frame)?;
+            }
+        }
+        if let (Some(f), true) = (self.history.as_mut(), row) {
+            let line = history_row(s, self.x0, self.bodies0, self.parts, self.bodies, force);
+            writeln!(f, "{line}").map_err(output_error)?;
+        }
+        Ok(())
+    }
 }
 
 /// The error of a node that moved past its pair's search radius in the increment `k` from

@@ -1,0 +1,198 @@
+//! This rank of N in the one increment loop (`scene::increments`): its share of the solver,
+//! the distributed contact on its own nodes, the halo from the owners after every increment,
+//! and the increment's totals summed over the ranks in rank order.
+
+use std::io::Write as _;
+
+use mpi::topology::SimpleCommunicator;
+
+use super::sum_over_ranks;
+use crate::distributed::{agree, all_max, exchange, DistributedContact};
+use crate::error::{Error, Result};
+use crate::explicit::Solver;
+use crate::scene::account::Account;
+use crate::scene::increments::{Limits, Ranks, Sums};
+use crate::scene::output_error;
+
+/// Each part's own nodes (local indices), its whole mass and its node count.
+pub(super) type PartNodes = [(Vec<usize>, f64, usize)];
+
+/// Σ w·(x − x0) and Σ w·v over each part's own nodes, w its share of the part's mass: this
+/// rank's share of the parts' mean motion.
+pub(super) fn part_sums(part_nodes: &PartNodes, solver: &Solver, x0: &[[f64; 3]]) -> Vec<f64> {
+    let mut out = Vec::with_capacity(6 * part_nodes.len());
+    for (mine, total, count) in part_nodes {
+        let (mut u, mut v) = ([0.0; 3], [0.0; 3]);
+        for &l in mine {
+            let w = if *total > 0.0 {
+                solver.mass[l] / total
+            } else {
+                1.0 / (*count).max(1) as f64
+            };
+            for a in 0..3 {
+                u[a] += w * (solver.x[l][a] - x0[l][a]);
+                v[a] += w * solver.v[l][a];
+            }
+        }
+        out.extend(u);
+        out.extend(v);
+    }
+    out
+}
+
+/// This rank of N: its share of the solver, the distributed contact on its own nodes, the halo
+/// from the owners after every increment, and totals summed over the ranks in rank order.
+pub(super) struct Rank<'a> {
+    pub(super) comm: &'a SimpleCommunicator,
+    pub(super) solver: Solver,
+    pub(super) contact: Option<DistributedContact>,
+    /// Own nodes (local indices).
+    pub(super) own: &'a [usize],
+    /// The own nodes (local indices) each rank holds as halo.
+    pub(super) send: &'a [Vec<usize>],
+    /// The halo nodes (local indices), in the order their owners send them.
+    pub(super) halo_in: &'a [usize],
+    /// The slave nodes this rank owns (local indices).
+    pub(super) own_slaves: &'a [usize],
+    pub(super) part_nodes: &'a PartNodes,
+    pub(super) x0: &'a [[f64; 3]],
+    /// Rank 0's history file.
+    pub(super) history: Option<std::io::BufWriter<std::fs::File>>,
+    pub(super) halo_bytes: usize,
+    pub(super) contact_bytes: usize,
+    /// The energy balance at the first increment.
+    pub(super) balance0: Option<f64>,
+    /// Kinetic, internal, external, contact and damping energies, summed over the ranks.
+    pub(super) energy: [f64; 5],
+    /// The last increment's sums over the ranks (force, energies, the parts' motion on rows).
+    pub(super) last: Vec<f64>,
+}
+
+impl Ranks for Rank<'_> {
+    fn time(&self) -> f64 {
+        self.solver.time
+    }
+
+    fn advance(&mut self, step: f64, k: usize, last: bool) -> Result<Limits> {
+        let t_start = self.solver.time;
+        let solver = &mut self.solver;
+        let mut f = vec![[0.0; 3]; solver.x.len()];
+        let mut limits = Limits::default();
+        if let Some(c) = self.contact.as_mut() {
+            c.request_outputs(last);
+            let ox: Vec<[f64; 3]> = self.own.iter().map(|&l| solver.x[l]).collect();
+            let ov: Vec<[f64; 3]> = self.own.iter().map(|&l| solver.v[l]).collect();
+            let r = c.step(&ox, &ov, step)?;
+            for (j, &l) in self.own.iter().enumerate() {
+                f[l] = r.forces[j];
+            }
+            limits.penalty = Some((r.stable_dt, r.max_overclosure));
+            self.contact_bytes += r.bytes_sent;
+            // the same on every rank: every rank returns it
+            if let Some(f) = r.fastest {
+                return Err(Error::Tunnelling {
+                    increment: k as u64 + 1,
+                    time: t_start,
+                    node: f.node as usize,
+                    pair: f.pair,
+                    distance: f.distance,
+                    radius: f.radius,
+                    more: if r.fast_nodes > 1 {
+                        format!(" ({} more nodes move that far)", r.fast_nodes - 1)
+                    } else {
+                        String::new()
+                    },
+                });
+            }
+        }
+        let stepped = solver.step_with_forces(step, &f);
+        agree(self.comm, stepped.err())?;
+        // the halo from the owners
+        let out: Vec<Vec<f64>> = self
+            .send
+            .iter()
+            .map(|l| {
+                l.iter()
+                    .flat_map(|&i| {
+                        let (x, v) = (solver.x[i], solver.v[i]);
+                        [x[0], x[1], x[2], v[0], v[1], v[2]]
+                    })
+                    .collect()
+            })
+            .collect();
+        self.halo_bytes += 8 * out.iter().map(Vec::len).sum::<usize>();
+        let came: Vec<f64> = exchange(self.comm, &out).into_iter().flatten().collect();
+        for (&l, s) in self.halo_in.iter().zip(came.chunks_exact(6)) {
+            solver.x[l] = [s[0], s[1], s[2]];
+            solver.v[l] = [s[3], s[4], s[5]];
+        }
+        Ok(limits)
+    }
+
+    fn counted(&mut self, account: &mut Account<'_>) {
+        if account.k == 1 {
+            account.first_seconds = all_max(self.comm, account.first_seconds);
+        }
+    }
+
+    fn sums(&mut self, row: bool) -> Result<Sums> {
+        // the ranks' shares, added in rank order: contact force on the slaves, energies, and
+        // the parts' motion on output rows
+        let solver = &self.solver;
+        let e = &solver.energy;
+        let mut mine = vec![0.0; 3];
+        for &l in self.own_slaves {
+            for a in 0..3 {
+                mine[a] += solver.contact_force[l][a];
+            }
+        }
+        mine.extend([
+            e.kinetic,
+            e.internal,
+            e.external_work,
+            e.contact_work,
+            e.damping,
+        ]);
+        if row {
+            mine.extend(part_sums(self.part_nodes, solver, self.x0));
+        }
+        self.last = sum_over_ranks(self.comm, &mine);
+        self.energy.copy_from_slice(&self.last[3..8]);
+        let [kinetic, internal, external, contact_work, damping] = self.energy;
+        let balance = kinetic + internal - external - contact_work + damping;
+        let b0 = *self.balance0.get_or_insert(balance);
+        Ok(Sums {
+            force: [self.last[0], self.last[1], self.last[2]],
+            drift: (balance - b0).abs(),
+            scale: self.energy.iter().fold(0.0f64, |m, x| m.max(x.abs())),
+            balance,
+            moved: Vec::new(),
+        })
+    }
+
+    fn output(&mut self, _k: usize, row: bool, force: f64, _peak: bool) -> Result<()> {
+        if !row {
+            return Ok(());
+        }
+        let [kinetic, internal, external, contact_work, damping] = self.energy;
+        let balance = kinetic + internal - external - contact_work + damping;
+        let drift = (balance - self.balance0.unwrap_or(balance)).abs();
+        let scale = self.energy.iter().fold(0.0f64, |m, x| m.max(x.abs()));
+        // rank 0 writes; a failure there is agreed, so no rank is left waiting
+        let mut fault = None;
+        if let Some(f) = self.history.as_mut() {
+            let mut line = format!(
+                "{},{kinetic},{internal},{external},{contact_work},{},{force}",
+                self.solver.time,
+                drift / scale.max(1e-300)
+            );
+            for c in &self.last[8..] {
+                line.push_str(&format!(",{c}"));
+            }
+            if let Err(e) = writeln!(f, "{line}") {
+                fault = Some(output_error(e));
+            }
+        }
+        agree(self.comm, fault)
+    }
+}
