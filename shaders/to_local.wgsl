@@ -10,9 +10,9 @@
 // Invariants: nothing is read back; the subtraction is in f32 (the caller's positions are f32
 //             already, so a model far from its origin should keep them relative to a nearby
 //             point). Every master node widens STATUS_BOX (min/max on order-preserving bits,
-//             reduced per workgroup, then atomicMin/Max by one invocation: the box does not
+//             gathered per workgroup, then raised by three invocations: the box does not
 //             depend on the order): the box a global search takes (schedule.wgsl). Every
-//             invocation reaches the workgroup barriers; the reduction runs 6 steps. A node with
+//             invocation reaches the two workgroup barriers. A node with
 //             a NaN or infinite coordinate is named in STATUS_NONFINITE (the lowest such node)
 //             and left out of the box.
 
@@ -31,11 +31,10 @@ struct FrameParams {
 @group(0) @binding(4) var<storage, read> adjacency: array<u32>;
 @group(0) @binding(5) var<storage, read_write> status: array<atomic<u32>>;
 
-// The workgroup's master box (order-preserving bits), reduced in workgroup memory so that one
-// invocation per workgroup, not every master node, raises STATUS_BOX: 6 global atomics per 64
-// nodes instead of 6 per node, which all go to the same six words.
-var<workgroup> wg_lo: array<vec3<u32>, 64>;
-var<workgroup> wg_hi: array<vec3<u32>, 64>;
+// The workgroup's master box (order-preserving bits: lo xyz, hi xyz), gathered by workgroup
+// atomics so that one invocation per workgroup, not every master node, raises STATUS_BOX: 6
+// global atomics per 64 nodes instead of 6 per master node, which all go to the same six words.
+var<workgroup> wg_box: array<atomic<u32>, 6>;
 
 @compute @workgroup_size(64)
 fn to_local(@builtin(workgroup_id) wg: vec3<u32>,
@@ -43,33 +42,31 @@ fn to_local(@builtin(workgroup_id) wg: vec3<u32>,
             @builtin(local_invocation_index) li: u32) {
     let i = folded_id(wg, nwg, li, ITEM_WORKGROUP);
     // an empty box: nothing below the highest bits, nothing above the lowest
-    var lo = vec3<u32>(0xffffffffu);
-    var hi = vec3<u32>(0u);
+    if (li < 3u) {
+        atomicStore(&wg_box[li], 0xffffffffu);
+        atomicStore(&wg_box[3u + li], 0u);
+    }
+    // every invocation reaches both barriers (uniform control flow)
+    workgroupBarrier();
     if (i < frame.n_nodes) {
         let x = positions[i].xyz - frame.origin.xyz;
         nodes[i] = vec4<f32>(x, nodes[i].w);
         if (non_finite(x.x) || non_finite(x.y) || non_finite(x.z)) {
             atomicMin(&status[STATUS_NONFINITE], i);
         } else if (adjacency[i] != adjacency[i + 1u]) {
-            lo = vec3<u32>(ordered_bits(x.x), ordered_bits(x.y), ordered_bits(x.z));
-            hi = lo;
+            for (var a = 0u; a < 3u; a++) {
+                atomicMin(&wg_box[a], ordered_bits(x[a]));
+                atomicMax(&wg_box[3u + a], ordered_bits(x[a]));
+            }
         }
     }
-    // every invocation reaches the barriers (uniform control flow): six halvings of 64
-    wg_lo[li] = lo;
-    wg_hi[li] = hi;
     workgroupBarrier();
-    for (var s = 32u; s > 0u; s >>= 1u) {
-        if (li < s) {
-            wg_lo[li] = min(wg_lo[li], wg_lo[li + s]);
-            wg_hi[li] = max(wg_hi[li], wg_hi[li + s]);
-        }
-        workgroupBarrier();
-    }
-    if (li == 0u && wg_lo[0].x <= wg_hi[0].x) {
-        for (var a = 0u; a < 3u; a++) {
-            atomicMin(&status[STATUS_BOX + a], wg_lo[0][a]);
-            atomicMax(&status[STATUS_BOX + 3u + a], wg_hi[0][a]);
+    if (li < 3u) {
+        let lo = atomicLoad(&wg_box[li]);
+        let hi = atomicLoad(&wg_box[3u + li]);
+        if (lo <= hi) {
+            atomicMin(&status[STATUS_BOX + li], lo);
+            atomicMax(&status[STATUS_BOX + 3u + li], hi);
         }
     }
 }
