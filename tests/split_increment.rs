@@ -246,7 +246,8 @@ fn a_split_at_every_entry_gives_the_gpu_increment() {
     }
 }
 
-/// The CPU path has nothing to split: an error, not a silent full run.
+/// The CPU path has nothing to split: an error, not a silent full run — and one that leaves
+/// the `Contact` as it was (not made device-resident: its host-array increments still run).
 #[test]
 fn the_cpu_path_refuses_a_split() {
     let s = scene();
@@ -255,4 +256,7 @@ fn the_cpu_path_refuses_a_split() {
     let [x, v, f] = node_buffers(gpu, s.model.positions().len());
     let e = c.run_split(&x, &v, &f, s.dt, 0).unwrap_err();
     assert!(e.to_string().contains("CPU path"), "{e}");
+    let rest = vec![[0.0; 3]; s.model.positions().len()];
+    c.penalty_step(s.model.positions(), &rest, s.dt)
+        .unwrap_or_else(|e| panic!("a host-array increment after the refused split: {e}"));
 }

@@ -124,7 +124,8 @@ impl Contact {
     /// before and written back after. Returns how many entries the increment has (`first_gpu`
     /// at or beyond it runs all of them on the CPU). When the two executors disagree, the
     /// smallest split that reproduces the CPU's result names the first kernel that diverges.
-    /// The caller's buffers need COPY_SRC (and COPY_DST for the forces). Errors on the CPU path.
+    /// The caller's buffers need COPY_SRC (and COPY_DST for the forces). Errors on the CPU path,
+    /// leaving the `Contact` as it was.
     pub fn run_split(
         &mut self,
         positions: &wgpu::Buffer,
@@ -133,6 +134,10 @@ impl Contact {
         dt: f64,
         first_gpu: usize,
     ) -> Result<usize> {
+        // refused before anything is made resident: the Contact stays as it was
+        if self.exec.context().is_none() {
+            return Err(super::exec::no_split_on_cpu());
+        }
         self.begin_device_increment(dt)?;
         let mut twin =
             super::exec::cpu::CpuExec::twin(&self.pairs, self.n_nodes, &self.initial_positions)?;

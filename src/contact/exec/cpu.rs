@@ -291,11 +291,7 @@ impl IncrementExec for CpuExec {
         _: usize,
         _: &mut CpuExec,
     ) -> Result<usize> {
-        Err(Error::BadParameter {
-            name: "run_split",
-            value: "CPU path".into(),
-            expected: "a GPU device (a split runs part of an increment on each executor)",
-        })
+        Err(super::no_split_on_cpu())
     }
 
     fn last_hits(&self, k: usize, n_slaves: usize) -> Result<Vec<GpuHit>> {

@@ -79,6 +79,15 @@ pub(crate) fn not_resident() -> Error {
     }
 }
 
+/// The error of a split increment on the CPU path, which has nothing to split.
+pub(crate) fn no_split_on_cpu() -> Error {
+    Error::BadParameter {
+        name: "run_split",
+        value: "CPU path".into(),
+        expected: "a GPU device (a split runs part of an increment on each executor)",
+    }
+}
+
 /// The device work of a `Contact`'s penalty increments. Pair `k` is the `Contact`'s k-th
 /// penalty pass (a balanced pair has two). `Send` where [`SearchExec`] is.
 pub(crate) trait IncrementExec: wgpu::WasmNotSend {
