@@ -207,7 +207,11 @@ fn main() -> ExitCode {
     match result {
         Ok(()) => ExitCode::SUCCESS,
         Err(e) => {
-            eprintln!("abut: {e}");
+            // one write of the whole line: ranks of an MPI run that fail together share a
+            // stderr, and a message written in pieces interleaves with another rank's
+            use std::io::Write as _;
+            let line = format!("abut: {e}\n");
+            let _ = std::io::stderr().lock().write_all(line.as_bytes());
             ExitCode::FAILURE
         }
     }
