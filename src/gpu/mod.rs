@@ -94,6 +94,19 @@ pub(crate) fn direct_dispatch<'a>(
 /// A declared group (`abi::groups`) and the dispatches recorded under its label.
 pub(crate) type GroupWork<'a> = (&'static crate::abi::groups::Group, Vec<Dispatch<'a>>);
 
+/// Appends `work` to the last group when it is `group` (consecutive entries of one group are
+/// recorded, timed and counted together), else opens a new one.
+pub(crate) fn push_grouped<'a>(
+    groups: &mut Vec<GroupWork<'a>>,
+    group: &'static crate::abi::groups::Group,
+    work: Dispatch<'a>,
+) {
+    match groups.last_mut() {
+        Some((g, w)) if std::ptr::eq(*g, group) => w.push(work),
+        _ => groups.push((group, vec![work])),
+    }
+}
+
 /// Records `groups` in order: all in one compute pass (WebGPU's usage scopes are per dispatch,
 /// so a dispatch may read as its indirect arguments or uniform what an earlier one wrote), or,
 /// with timestamps on, one compute pass per group so that each gets its own time.

@@ -177,10 +177,7 @@ impl GpuExec {
                         e.pair
                     ),
                 })?;
-            match groups.last_mut() {
-                Some((g, w)) if std::ptr::eq(*g, e.group) => w.push(work),
-                _ => groups.push((e.group, vec![work])),
-            }
+            crate::gpu::push_grouped(&mut groups, e.group, work);
         }
         crate::gpu::record_groups(
             &self.ctx,

@@ -117,10 +117,7 @@ impl GpuSearch {
                 during: "recording a search".into(),
                 message: format!("no dispatch for {}", e.kernel.pass().entry),
             })?;
-            match groups.last_mut() {
-                Some((g, w)) if std::ptr::eq(*g, e.group) => w.push(work),
-                _ => groups.push((e.group, vec![work])),
-            }
+            crate::gpu::push_grouped(&mut groups, e.group, work);
         }
         crate::gpu::record_groups(
             &self.ctx,
