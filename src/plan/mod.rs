@@ -38,7 +38,7 @@ pub struct Prepared {
     pub adjacency: Arc<[u32]>,
     /// The nodes whose motion the budget measures: slaves, then master nodes not slaves.
     pub motion_nodes: Arc<[u32]>,
-    /// Model nodes (`nodes` is empty when the positions stay on the device).
+    /// Model nodes.
     pub n_nodes: usize,
 }
 
