@@ -79,50 +79,38 @@ fn slaves_of_a_rigid_part_share_its_mass_in_the_automatic_stiffness() {
 
 #[cfg(feature = "solver")]
 mod kinematic_friction {
+    use crate::common::scene_toml::{contact, part, SceneToml};
     use abut::scene::{run, Scene};
     use abut::*;
 
     /// §4's elastic block (0.1 m, E = 10⁷ Pa, ρ = 1000) launched at `v0` along +x on a fixed
     /// rigid plate under gravity, kinematic contact with Coulomb μ, no bulk viscosity (so that
     /// friction is the only thing that takes its energy).
-    fn sliding_block(v0: f64, mu: f64, end: f64) -> String {
-        format!(
-            r#"
-title = "a block sliding to a stop under kinematic friction"
-[run]
-end_time = {end}
-gravity = [0.0, 0.0, -9.81]
-output_every = 20
-bulk_viscosity = 0.0
-bulk_viscosity_quadratic = 0.0
-[[material]]
-name = "block"
-young = 1.0e7
-poisson = 0.3
-density = 1000.0
-[[part]]
-name = "block"
-shape = "block"
-material = "block"
-origin = [0.0, 0.0, 0.0]
-size = [0.1, 0.1, 0.1]
-divisions = [2, 2, 2]
-velocity = [{v0}, 0.0, 0.0]
-[[part]]
-name = "floor"
-shape = "plate"
-origin = [-0.2, -0.2, 0.0]
-size = [1.0, 0.5, 0.0]
-divisions = [20, 10, 0]
-[[contact]]
-slave = "block"
-slave_face = "z-"
-master = "floor"
-master_face = "z+"
-enforce = "kinematic"
-friction = {mu}
-"#
-        )
+    fn sliding_block(v0: f64, mu: f64, end: f64) -> Scene {
+        SceneToml::new("a block sliding to a stop under kinematic friction", end)
+            .run("gravity", [0.0, 0.0, -9.81])
+            .run("output_every", 20)
+            .run("bulk_viscosity", 0.0)
+            .run("bulk_viscosity_quadratic", 0.0)
+            .material("block", 1.0e7, 0.3, 1000.0)
+            .part(
+                part("block", "block", [0.0; 3], [0.1, 0.1, 0.1], [2, 2, 2])
+                    .with("material", "block")
+                    .with("velocity", [v0, 0.0, 0.0]),
+            )
+            .part(part(
+                "floor",
+                "plate",
+                [-0.2, -0.2, 0.0],
+                [1.0, 0.5, 0.0],
+                [20, 10, 0],
+            ))
+            .contact(
+                contact("block", "z-", "floor", "z+")
+                    .with("enforce", "kinematic")
+                    .with("friction", mu),
+            )
+            .scene()
     }
 
     /// The block slides to a stop: the frictional dissipation the summary books equals the
@@ -135,7 +123,7 @@ friction = {mu}
         let mass = 1000.0 * 0.1f64.powi(3);
         let ke0 = 0.5 * mass * v0 * v0;
         // stops after v0/(μ g) = 0.127 s
-        let scene = Scene::parse(&sliding_block(v0, mu, 0.25)).unwrap();
+        let scene = sliding_block(v0, mu, 0.25);
         for d in super::devices() {
             let s = run(&scene, &d, None).unwrap();
             let dissipated = s.frictional_dissipation;

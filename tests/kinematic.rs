@@ -15,6 +15,38 @@ fn kinematic(softened: Option<PressureOverclosure>) -> Enforce {
 /// A spring between nodes i and j: (i, j, stiffness k, rest length L0).
 type Spring = (usize, usize, f64, f64);
 
+/// A rigid body of `mass`, inertia `inertia`·I about its reference point, carrying `surface`.
+fn body(mass: f64, inertia: f64, surface: Analytical) -> RigidBody {
+    RigidBody {
+        mass,
+        inertia: [
+            [inertia, 0.0, 0.0],
+            [0.0, inertia, 0.0],
+            [0.0, 0.0, inertia],
+        ],
+        surface,
+    }
+}
+
+/// A fixed wall: the analytical plane through the origin with outward `normal`, on a body of
+/// mass and inertia 10³⁰.
+fn fixed_plane(normal: [f64; 3]) -> RigidBody {
+    let surface = Analytical::Plane {
+        point: [0.0; 3],
+        normal,
+    };
+    body(1e30, 1e30, surface)
+}
+
+/// The node set `slave` against rigid body `body`'s surface, hard (`None`) or softened.
+fn rigid_pair(slave: NodeSetId, body: BodyId, softened: Option<PressureOverclosure>) -> RigidPair {
+    RigidPair {
+        slave,
+        body,
+        softened,
+    }
+}
+
 /// A lumped-mass bar as a chain of nodes along x from `x0`: `n` elements of length `h`, total
 /// mass `mass`, axial stiffness `ea`. Returns the node ids and the springs (i, j, k, L0).
 fn chain(
@@ -257,23 +289,9 @@ fn truss_impact_on_a_rigid_wall() {
     let h = l / n as f64;
     let mut m = Model::new_3d();
     let (ids, springs) = chain(&mut m, 0.0, 0.0, n, h, rho * a * l, e * a, false);
-    let wall = m
-        .add_rigid_body(RigidBody {
-            mass: 1e30,
-            inertia: [[1e30, 0.0, 0.0], [0.0, 1e30, 0.0], [0.0, 0.0, 1e30]],
-            surface: Analytical::Plane {
-                point: [0.0; 3],
-                normal: [-1.0, 0.0, 0.0],
-            },
-        })
-        .unwrap();
+    let wall = m.add_rigid_body(fixed_plane([-1.0, 0.0, 0.0])).unwrap();
     let set = m.add_node_set(&[*ids.last().unwrap()]).unwrap();
-    m.add_rigid_pair(RigidPair {
-        slave: set,
-        body: wall,
-        softened: None,
-    })
-    .unwrap();
+    m.add_rigid_pair(rigid_pair(set, wall, None)).unwrap();
     let v = vec![[v0, 0.0, 0.0]; m.positions().len()];
     let dt = 0.9 * h / c;
     let (f_exact, t_exact, t0) = (rho * c * v0 * a, 2.0 * l / c, clear / v0);
@@ -466,25 +484,11 @@ fn body_on_analytical_and_meshed_plane_agree() {
             )
             .unwrap();
         } else {
-            let body = m
-                .add_rigid_body(RigidBody {
-                    mass: 1e30,
-                    inertia: [[1e30, 0.0, 0.0], [0.0, 1e30, 0.0], [0.0, 0.0, 1e30]],
-                    surface: Analytical::Plane {
-                        point: [0.0; 3],
-                        normal: [0.0, 0.0, 1.0],
-                    },
-                })
-                .unwrap();
+            let body = m.add_rigid_body(fixed_plane([0.0, 0.0, 1.0])).unwrap();
             let r = m.add_nodes(&drops, &[0.25; 4]).unwrap();
             first = r.start as usize;
             let set = m.add_node_set(&r.to_vec()).unwrap();
-            m.add_rigid_pair(RigidPair {
-                slave: set,
-                body,
-                softened: None,
-            })
-            .unwrap();
+            m.add_rigid_pair(rigid_pair(set, body, None)).unwrap();
             bodies.push(BodyState::at([0.0; 3]));
         }
         let mut c = Contact::new(d, &m).unwrap();
@@ -558,24 +562,11 @@ fn softened_contact_reproduces_its_law_at_equilibrium() {
                 )
                 .unwrap();
             } else {
-                let body = m
-                    .add_rigid_body(RigidBody {
-                        mass: 1e30,
-                        inertia: [[1e30, 0.0, 0.0], [0.0, 1e30, 0.0], [0.0, 0.0, 1e30]],
-                        surface: Analytical::Plane {
-                            point: [0.0; 3],
-                            normal: [0.0, 0.0, 1.0],
-                        },
-                    })
-                    .unwrap();
+                let body = m.add_rigid_body(fixed_plane([0.0, 0.0, 1.0])).unwrap();
                 let r = m.add_nodes(&[[0.2, 0.3, 0.0]], &[mass]).unwrap();
                 let set = m.add_node_set_with_areas(&r.to_vec(), &[area]).unwrap();
-                m.add_rigid_pair(RigidPair {
-                    slave: set,
-                    body,
-                    softened: Some(law.clone()),
-                })
-                .unwrap();
+                m.add_rigid_pair(rigid_pair(set, body, Some(law.clone())))
+                    .unwrap();
                 bodies.push(BodyState::at([0.0; 3]));
             }
             let mut c = Contact::new(&Device::cpu(), &m).unwrap();
@@ -664,21 +655,10 @@ fn rigid_bodies_with_analytical_surfaces() {
         } else {
             Model::new_3d()
         };
-        let body = m
-            .add_rigid_body(RigidBody {
-                mass: 5.0,
-                inertia: [[2.0, 0.0, 0.0], [0.0, 2.0, 0.0], [0.0, 0.0, 2.0]],
-                surface,
-            })
-            .unwrap();
+        let body = m.add_rigid_body(body(5.0, 2.0, surface)).unwrap();
         let r = m.add_nodes(&nodes, &vec![0.7; nodes.len()]).unwrap();
         let set = m.add_node_set(&r.to_vec()).unwrap();
-        m.add_rigid_pair(RigidPair {
-            slave: set,
-            body,
-            softened: None,
-        })
-        .unwrap();
+        m.add_rigid_pair(rigid_pair(set, body, None)).unwrap();
         let mut c = Contact::new(&Device::cpu(), &m).unwrap();
         let mut x = m.positions().to_vec();
         let mut v = vec![[0.0; 3]; x.len()];
@@ -782,44 +762,27 @@ fn bad_kinematic_input_is_an_error() {
     .unwrap();
     let s = m.add_surface(Surface::quads(&[[0, 1, 2, 3]])).unwrap();
     let set = m.add_node_set(&[4]).unwrap();
-    // kinematic friction: pure finite-sliding pairs only
-    let e = m
-        .add_pair(
-            Pair::new(set, s)
-                .enforce(kinematic(None))
-                .sliding(Sliding::Small)
-                .friction(Friction::coulomb(0.2)),
-        )
-        .unwrap_err();
-    assert!(e.to_string().contains("friction"), "{e}");
-    let e = m
-        .add_pair(
-            Pair::new(set, s)
-                .enforce(kinematic(None))
-                .balanced(s, 0.5)
-                .friction(Friction::coulomb(0.2)),
-        )
-        .unwrap_err();
-    assert!(e.to_string().contains("friction"), "{e}");
-    assert!(m
-        .clone()
-        .add_pair(
-            Pair::new(set, s)
-                .enforce(kinematic(None))
-                .friction(Friction::coulomb(0.2))
-        )
-        .is_ok());
-    let e = m
-        .add_pair(Pair::new(set, s).enforce(kinematic(Some(PressureOverclosure::Linear))))
-        .unwrap_err();
-    assert!(e.to_string().contains("softened"), "{e}");
-    let e = m
-        .add_pair(
-            Pair::new(set, s)
-                .balanced(SurfaceId(9), 0.5)
-                .enforce(kinematic(None)),
-        )
-        .unwrap_err();
+    let hard = || Pair::new(set, s).enforce(kinematic(None));
+    let coulomb = || Friction::coulomb(0.2);
+    assert!(m.clone().add_pair(hard().friction(coulomb())).is_ok());
+    // each refused by what is wrong with it
+    for (pair, says) in [
+        // kinematic friction: pure finite-sliding pairs only
+        (
+            hard().sliding(Sliding::Small).friction(coulomb()),
+            "friction",
+        ),
+        (hard().balanced(s, 0.5).friction(coulomb()), "friction"),
+        (
+            Pair::new(set, s).enforce(kinematic(Some(PressureOverclosure::Linear))),
+            "softened",
+        ),
+        (hard().balanced(s, 1.5), "weight"),
+    ] {
+        let e = m.add_pair(pair).unwrap_err();
+        assert!(e.to_string().contains(says), "{says}: {e}");
+    }
+    let e = m.add_pair(hard().balanced(SurfaceId(9), 0.5)).unwrap_err();
     assert!(
         matches!(
             e,
@@ -830,48 +793,23 @@ fn bad_kinematic_input_is_an_error() {
         ),
         "{e}"
     );
-    let e = m
-        .add_pair(Pair::new(set, s).balanced(s, 1.5).enforce(kinematic(None)))
-        .unwrap_err();
-    assert!(e.to_string().contains("weight"), "{e}");
-    let e = m
-        .add_rigid_body(RigidBody {
-            mass: -1.0,
-            inertia: [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]],
-            surface: Analytical::Sphere {
-                centre: [0.0; 3],
-                radius: 1.0,
-            },
-        })
-        .unwrap_err();
-    assert!(e.to_string().contains("mass"), "{e}");
-    let e = m
-        .add_rigid_body(RigidBody {
-            mass: 1.0,
-            inertia: [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]],
-            surface: Analytical::Circle {
-                centre: [0.0; 2],
-                radius: 1.0,
-            },
-        })
-        .unwrap_err();
-    assert!(e.to_string().contains("2D"), "{e}");
-    let body = m
-        .add_rigid_body(RigidBody {
-            mass: 1.0,
-            inertia: [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]],
-            surface: Analytical::Sphere {
-                centre: [0.0; 3],
-                radius: 1.0,
-            },
-        })
-        .unwrap();
-    m.add_rigid_pair(RigidPair {
-        slave: set,
-        body,
-        softened: None,
-    })
-    .unwrap();
+    let sphere = Analytical::Sphere {
+        centre: [0.0; 3],
+        radius: 1.0,
+    };
+    let circle = Analytical::Circle {
+        centre: [0.0; 2],
+        radius: 1.0,
+    };
+    for (rigid, says) in [
+        (body(-1.0, 1.0, sphere), "mass"),
+        (body(1.0, 1.0, circle), "2D"),
+    ] {
+        let e = m.add_rigid_body(rigid).unwrap_err();
+        assert!(e.to_string().contains(says), "{says}: {e}");
+    }
+    let body = m.add_rigid_body(body(1.0, 1.0, sphere)).unwrap();
+    m.add_rigid_pair(rigid_pair(set, body, None)).unwrap();
     let mut c = Contact::new(&Device::cpu(), &m).unwrap();
     let mut x = m.positions().to_vec();
     let mut v = vec![[0.0; 3]; x.len()];

@@ -14,6 +14,7 @@ use abut::explicit::Solver;
 use abut::mesh::plate_quads;
 use abut::IncrementStats;
 use abut::*;
+use common::scene_toml::{boundary, contact, part, part_of, SceneToml};
 use common::{devices, node_buffers, read_buffer, vec4};
 
 const K: f64 = 1e4;
@@ -466,66 +467,46 @@ fn a_master_travelling_far_with_a_large_radius_keeps_its_gaps() {
 /// names the increment in force and that no elements limit it (not a stable increment of ∞).
 #[test]
 fn a_mass_pressed_onto_a_free_rigid_master_runs_and_a_thrown_one_is_named() {
-    use abut::scene::{run, Scene};
+    use abut::scene::run;
     let scene = |two_d: bool, motion: &str, height: f64, push: f64, end: f64| {
         let (master, face, up) = if two_d {
             (
-                "shape = \"line\"\norigin = [0.0, 0.0, 0.0]\nsize = [1.0, 0.0, 0.0]\ndivisions = [2, 0, 0]",
+                part("master", "line", [0.0; 3], [1.0, 0.0, 0.0], [2, 0, 0]),
                 "y+",
                 1,
             )
         } else {
             (
-                "shape = \"plate\"\norigin = [0.0, 0.0, 0.0]\nsize = [1.0, 1.0, 0.0]\ndivisions = [2, 2, 0]",
+                part("master", "plate", [0.0; 3], [1.0, 1.0, 0.0], [2, 2, 0]),
                 "z+",
                 2,
             )
         };
         let mut load = [0.0; 3];
         load[up] = -push;
-        let load = format!("[{}, {}, {}]", load[0], load[1], load[2]);
         let mut p = [0.5, 0.5, 0.0];
         p[up] = height;
-        format!(
-            r#"
-title = "a point mass and a rigid master"
-[run]
-end_time = {end}
-dt = 2e-3
-[[part]]
-name = "mass"
-shape = "points"
-points = [[{}, {}, {}]]
-mass = 1.0
-[[part]]
-name = "master"
-{master}
-motion = "{motion}"
-mass = 4.0
-[[boundary]]
-part = "mass"
-face = "all"
-load = {load}
-[[contact]]
-slave = "mass"
-slave_face = "all"
-master = "master"
-master_face = "{face}"
-stiffness = 1.0e5
-search_radius = 0.05
-"#,
-            p[0], p[1], p[2]
-        )
+        SceneToml::new("a point mass and a rigid master", end)
+            .run("dt", 2e-3)
+            .part(
+                part_of("mass", "points")
+                    .with("points", [p])
+                    .with("mass", 1.0),
+            )
+            .part(master.with("motion", motion).with("mass", 4.0))
+            .boundary(boundary("mass", "all").with("load", load))
+            .contact(
+                contact("mass", "all", "master", face)
+                    .with("stiffness", 1.0e5)
+                    .with("search_radius", 0.05),
+            )
+            .scene()
     };
     for two_d in [false, true] {
         // pressed: a = 50/5 = 10; at t = 3 the pair moves 30·Δt = 0.06 per increment (Δt =
         // 2e-3, ω·Δt = 0.71 for the spring between the mass and the plate), beyond the radius
-        let s = run(
-            &Scene::parse(&scene(two_d, "free", 1e-4, 50.0, 3.0)).unwrap(),
-            &Device::cpu(),
-            None,
-        )
-        .unwrap_or_else(|e| panic!("2D {two_d}: {e}"));
+        let s = run(&scene(two_d, "free", 1e-4, 50.0, 3.0), &Device::cpu(), None)
+            .unwrap_or_else(|e| panic!("2D {two_d}: {e}"));
         let b = &s.bodies[0];
         let speed = b.velocity.iter().map(|v| v * v).sum::<f64>().sqrt();
         let dt = s.end_time / s.increments as f64;
@@ -548,7 +529,7 @@ search_radius = 0.05
         );
         // driven at a fixed master from 1 above: beyond the radius per increment at the fourth
         let e = run(
-            &Scene::parse(&scene(two_d, "fixed", 1.0, 5000.0, 0.1)).unwrap(),
+            &scene(two_d, "fixed", 1.0, 5000.0, 0.1),
             &Device::cpu(),
             None,
         )

@@ -4,6 +4,7 @@
 mod common;
 
 use common::devices;
+use common::scene_toml::{boundary, contact, fixed, part, part_of, Entry, SceneToml};
 
 use abut::scene::{run, Scene};
 use abut::Device;
@@ -182,6 +183,28 @@ fn graded_axes_keep_a_uniform_core() {
     }
 }
 
+/// A bar of unit stiffness (E = ρ = A = 1, length 1, 10 elements) standing at z = `z0` on a
+/// rigid plate of one 2 × 2 facet at z = `plate_z`, its end in penalty contact with the plate at
+/// 100 times the bar's axial stiffness; 40 time units, history every 100 increments.
+fn bar_on_plate(title: &str, z0: f64, plate_z: f64) -> SceneToml {
+    SceneToml::new(title, 40.0)
+        .run("output_every", 100)
+        .material("unit", 1.0, 0.0, 1.0)
+        .part(
+            part("bar", "bar", [0.0, 0.0, z0], [0.0, 0.0, 1.0], [10, 0, 0])
+                .with("material", "unit")
+                .with("area", 1.0),
+        )
+        .part(part(
+            "floor",
+            "plate",
+            [-1.0, -1.0, plate_z],
+            [2.0, 2.0, 0.0],
+            [1, 1, 0],
+        ))
+        .contact(contact("bar", "z-", "floor", "z+").with("stiffness", 100.0))
+}
+
 /// Contact chatter: a bar whose top is pushed down slowly by 1 % of its length presses its
 /// end into a rigid floor through a penalty spring 400 times its axial stiffness. The static
 /// answer is EA·δ/L ≈ 0.01. At the default contact safety (0.5) the run stays quiet; at 0.9 the
@@ -192,56 +215,24 @@ fn graded_axes_keep_a_uniform_core() {
 /// its own increment).
 #[test]
 fn penalty_contact_chatter_is_kept_from_running_away() {
-    let scene_at = |z0: f64, extra_run: &str, extra_contact: &str| {
-        format!(
-            r#"
-title = "bar pressed into a stiff penalty floor"
-[run]
-end_time = 40.0
-output_every = 100
-{extra_run}
-[[material]]
-name = "unit"
-young = 1.0
-poisson = 0.0
-density = 1.0
-[[part]]
-name = "bar"
-shape = "bar"
-material = "unit"
-origin = [0.0, 0.0, {z0:?}]
-size = [0.0, 0.0, 1.0]
-area = 1.0
-divisions = [10, 0, 0]
-[[part]]
-name = "floor"
-shape = "plate"
-origin = [-1.0, -1.0, 0.0]
-size = [2.0, 2.0, 0.0]
-divisions = [1, 1, 0]
-[[boundary]]
-part = "bar"
-face = "z+"
-displacement = [0.0, 0.0, -0.01]
-ramp = 20.0
-[[contact]]
-slave = "bar"
-slave_face = "z-"
-master = "floor"
-master_face = "z+"
-stiffness = 100.0
-{extra_contact}
-"#
+    let scene_at = |z0: f64| {
+        bar_on_plate("bar pressed into a stiff penalty floor", z0, 0.0).boundary(
+            boundary("bar", "z+")
+                .with("displacement", [0.0, 0.0, -0.01])
+                .with("ramp", 20.0),
         )
     };
-    let scene = |extra_run: &str, extra_contact: &str| scene_at(0.0, extra_run, extra_contact);
-    let run_text = |t: String| run(&Scene::parse(&t).unwrap(), &Device::cpu(), None).unwrap();
+    let run_scene = |t: SceneToml| run(&t.scene(), &Device::cpu(), None).unwrap();
     let static_force = 0.01 / (1.0 + 1.0 / 400.0);
     for (what, s) in [
-        ("default", run_text(scene("", ""))),
+        ("default", run_scene(scene_at(0.0))),
         (
             "0.9 damped",
-            run_text(scene("contact_safety = 0.9", "damping = 0.1")),
+            run_scene(
+                scene_at(0.0)
+                    .run("contact_safety", 0.9)
+                    .set_in("contact", 0, "damping", 0.1),
+            ),
         ),
     ] {
         assert!(
@@ -264,11 +255,12 @@ stiffness = 100.0
     // touching from a gap of 10⁻⁴ (a contact that switches on at once; pressed from touching,
     // the gap grows from round-off and the force with it)
     // (no bulk viscosity either: the elements' own damping would take the pumped energy out)
-    let s = run_text(scene_at(
-        1e-4,
-        "contact_safety = 0.9\nbulk_viscosity = 0.0\nbulk_viscosity_quadratic = 0.0",
-        "",
-    ));
+    let s = run_scene(
+        scene_at(1e-4)
+            .run("contact_safety", 0.9)
+            .run("bulk_viscosity", 0.0)
+            .run("bulk_viscosity_quadratic", 0.0),
+    );
     assert!(
         s.peak_force > 20.0 * static_force,
         "undamped at 0.9 was expected to run away: peak {}",
@@ -398,63 +390,42 @@ fn mesh_parts_from_gmsh_and_abaqus_files() {
 /// it (penalty, searched on every device).
 #[test]
 fn moving_rigid_parts() {
-    let push = r#"
-title = "a plate lifting a point mass"
-[run]
-end_time = 0.2
-dt = 1e-4
-[[part]]
-name = "lift"
-shape = "plate"
-origin = [0.0, 0.0, 0.0]
-size = [1.0, 1.0, 0.0]
-divisions = [2, 2, 0]
-motion = "velocity"
-velocity = [0.0, 0.0, 1.0]
-mass = 10.0
-[[part]]
-name = "mass"
-shape = "points"
-points = [[0.4, 0.6, 0.001]]
-mass = 1.0
-[[contact]]
-slave = "mass"
-slave_face = "all"
-master = "lift"
-master_face = "z+"
-stiffness = 1.0e5
-damping = 0.0
-"#;
-    let drop = r#"
-title = "a rigid meshed sphere dropped on a plate"
-[run]
-end_time = 0.08
-dt = 2e-4
-gravity = [0.0, 0.0, -9.81]
-[[part]]
-name = "ball"
-shape = "sphere"
-origin = [0.5, 0.5, 0.205]
-radius = 0.2
-divisions = [12, 24, 0]
-motion = "free"
-mass = 2.0
-velocity = [0.0, 0.0, -1.0]
-[[part]]
-name = "floor"
-shape = "plate"
-origin = [0.0, 0.0, 0.0]
-size = [1.0, 1.0, 0.0]
-divisions = [8, 8, 0]
-[[contact]]
-slave = "ball"
-slave_face = "all"
-master = "floor"
-master_face = "z+"
-stiffness = 1.0e4
-"#;
+    let push = SceneToml::new("a plate lifting a point mass", 0.2)
+        .run("dt", 1e-4)
+        .part(
+            part("lift", "plate", [0.0; 3], [1.0, 1.0, 0.0], [2, 2, 0])
+                .with("motion", "velocity")
+                .with("velocity", [0.0, 0.0, 1.0])
+                .with("mass", 10.0),
+        )
+        .part(
+            part_of("mass", "points")
+                .with("points", [[0.4, 0.6, 0.001]])
+                .with("mass", 1.0),
+        )
+        .contact(
+            contact("mass", "all", "lift", "z+")
+                .with("stiffness", 1.0e5)
+                .with("damping", 0.0),
+        )
+        .scene();
+    let drop = SceneToml::new("a rigid meshed sphere dropped on a plate", 0.08)
+        .run("dt", 2e-4)
+        .run("gravity", [0.0, 0.0, -9.81])
+        .part(
+            part_of("ball", "sphere")
+                .with("origin", [0.5, 0.5, 0.205])
+                .with("radius", 0.2)
+                .with("divisions", [12, 24, 0])
+                .with("motion", "free")
+                .with("mass", 2.0)
+                .with("velocity", [0.0, 0.0, -1.0]),
+        )
+        .part(part("floor", "plate", [0.0; 3], [1.0, 1.0, 0.0], [8, 8, 0]))
+        .contact(contact("ball", "all", "floor", "z+").with("stiffness", 1.0e4))
+        .scene();
     for d in devices() {
-        let s = run(&Scene::parse(push).unwrap(), &d, None).unwrap();
+        let s = run(&push, &d, None).unwrap();
         let m = &s.parts[1];
         let lift = &s.bodies[0];
         assert!(
@@ -473,7 +444,7 @@ stiffness = 1.0e4
             "{d}: the mass is at {:?}",
             m.displacement
         );
-        let s = run(&Scene::parse(drop).unwrap(), &d, None).unwrap();
+        let s = run(&drop, &d, None).unwrap();
         let ball = &s.bodies[0];
         assert_eq!(ball.name, "ball");
         // it came down, touched once and went back up (the default contact damping takes part of
@@ -499,69 +470,28 @@ stiffness = 1.0e4
 /// plate's one facet and gains energy: issue 16's chatter, a case of its own).
 #[test]
 fn a_rigid_plate_moved_at_a_set_velocity_books_its_work() {
-    let scene = |speed: f64, friction: &str| {
-        format!(
-            r#"
-title = "bar pressed by a plate at a set velocity"
-[run]
-end_time = 40.0
-output_every = 100
-[[material]]
-name = "unit"
-young = 1.0
-poisson = 0.0
-density = 1.0
-[[part]]
-name = "bar"
-shape = "bar"
-material = "unit"
-origin = [0.0, 0.0, 0.0]
-size = [0.0, 0.0, 1.0]
-area = 1.0
-divisions = [10, 0, 0]
-[[part]]
-name = "plate"
-shape = "plate"
-origin = [-1.0, -1.0, -0.001]
-size = [2.0, 2.0, 0.0]
-divisions = [1, 1, 0]
-motion = "velocity"
-velocity = [0.0, 0.0, {v:?}]
-mass = 1.0
-[[boundary]]
-part = "bar"
-face = "z+"
-fix = ["x", "y", "z"]
-[[contact]]
-slave = "bar"
-slave_face = "z-"
-master = "plate"
-master_face = "z+"
-stiffness = 100.0
-damping = 0.1
-{friction}
-"#,
-            v = speed
-        )
+    let scene = |speed: f64, friction: f64| {
+        bar_on_plate("bar pressed by a plate at a set velocity", 0.0, -0.001)
+            .set_in("part", 1, "motion", "velocity")
+            .set_in("part", 1, "velocity", [0.0, 0.0, speed])
+            .set_in("part", 1, "mass", 1.0)
+            .boundary(fixed("bar", "z+", ["x", "y", "z"]))
+            .set_in("contact", 0, "damping", 0.1)
+            .set_in("contact", 0, "friction", friction)
     };
-    for (speed, friction) in [(5e-4, ""), (2.5e-4, ""), (5e-4, "friction = 0.3")] {
-        let s = run(
-            &Scene::parse(&scene(speed, friction)).unwrap(),
-            &Device::cpu(),
-            None,
-        )
-        .unwrap();
+    for (speed, friction) in [(5e-4, 0.0), (2.5e-4, 0.0), (5e-4, 0.3)] {
+        let s = run(&scene(speed, friction).scene(), &Device::cpu(), None).unwrap();
         // pressed by 40·speed − 0.001 in all, shared by the bar (k = 1) and the penalty (100)
         let squeeze = 40.0 * speed - 0.001;
         let force = squeeze / (1.0 + 1.0 / 100.0);
         assert!(
             (s.final_contact_force[2].abs() / force - 1.0).abs() < 0.05,
-            "{speed} {friction}: force {:?}, expected {force}",
+            "{speed} μ = {friction}: force {:?}, expected {force}",
             s.final_contact_force
         );
         assert!(
             s.energy_balance_error < 2e-3,
-            "{speed} {friction}: energy balance error {}",
+            "{speed} μ = {friction}: energy balance error {}",
             s.energy_balance_error
         );
         // the penalty spring (100) is far stiffer than the bar's elements (10): contact governs,
@@ -585,15 +515,12 @@ damping = 0.1
         );
     }
     // a fixed increment is named as such
-    let fixed = scene(5e-4, "").replace("output_every = 100", "output_every = 100\ndt = 0.01");
-    let s = run(&Scene::parse(&fixed).unwrap(), &Device::cpu(), None).unwrap();
+    let fixed = scene(5e-4, 0.0).run("dt", 0.01);
+    let s = run(&fixed.scene(), &Device::cpu(), None).unwrap();
     assert_eq!(s.governing_limit, "fixed");
     // and the elements alone, with the plate out of reach of a small search radius
-    let far = scene(1e-5, "").replace(
-        "stiffness = 100.0",
-        "stiffness = 100.0\nsearch_radius = 1e-4",
-    );
-    let s = run(&Scene::parse(&far).unwrap(), &Device::cpu(), None).unwrap();
+    let far = scene(1e-5, 0.0).set_in("contact", 0, "search_radius", 1e-4);
+    let s = run(&far.scene(), &Device::cpu(), None).unwrap();
     assert_eq!(s.governing_limit, "elements", "{}", s.increment_note);
     assert_eq!(s.contact_lowered_increment, 0.0);
 }
@@ -606,52 +533,18 @@ damping = 0.1
 #[test]
 fn the_axis_node_carries_the_same_pressure_as_its_neighbours() {
     for divisions in [8, 13] {
-        let text = format!(
-            r#"
-title = "axisymmetric disc under a rigid flat"
-[run]
-end_time = 40.0
-output_every = 100
-[[material]]
-name = "m"
-young = 1.0
-poisson = 0.3
-density = 1.0
-[[part]]
-name = "disc"
-shape = "rect"
-axisymmetric = true
-material = "m"
-origin = [0.0, 0.0, 0.0]
-size = [1.0, 0.5, 0.0]
-divisions = [{divisions}, 4, 0]
-[[part]]
-name = "flat"
-shape = "line"
-origin = [-0.5, -0.0005, 0.0]
-size = [2.0, 0.0, 0.0]
-divisions = [4, 0, 0]
-motion = "velocity"
-velocity = [0.0, 2.5e-4, 0.0]
-mass = 1.0
-[[boundary]]
-part = "disc"
-face = "x-"
-fix = ["x"]
-[[boundary]]
-part = "disc"
-face = "y+"
-fix = ["y"]
-[[contact]]
-slave = "disc"
-slave_face = "y-"
-master = "flat"
-master_face = "y+"
-stiffness_per_area = 1000.0
-damping = 0.1
-"#
-        );
-        let s = run(&Scene::parse(&text).unwrap(), &Device::cpu(), None).unwrap();
+        let disc = part("disc", "rect", [0.0; 3], [1.0, 0.5, 0.0], [divisions, 4, 0])
+            .with("axisymmetric", true);
+        let scene = disc_under_flat(
+            "axisymmetric disc under a rigid flat",
+            disc,
+            "y-",
+            "y+",
+            2.0,
+        )
+        .boundary(fixed("disc", "x-", ["x"]))
+        .set_in("contact", 0, "damping", 0.1);
+        let s = run(&scene.scene(), &Device::cpu(), None).unwrap();
         let nodes: Vec<_> = s.contact_nodes.iter().collect();
         assert_eq!(nodes.len(), divisions + 1, "every face node in contact");
         let axis = nodes
@@ -679,47 +572,18 @@ damping = 0.1
 #[test]
 fn a_scene_names_the_slave_nodes_small_sliding_left_out() {
     for sliding in ["small", "finite"] {
-        let text = format!(
-            r#"
-title = "axisymmetric disc under a short rigid flat"
-[run]
-end_time = 2.0
-[[material]]
-name = "m"
-young = 1.0
-poisson = 0.3
-density = 1.0
-[[part]]
-name = "disc"
-shape = "rect"
-axisymmetric = true
-material = "m"
-origin = [0.0, 0.0, 0.0]
-size = [1.0, 0.5, 0.0]
-divisions = [8, 4, 0]
-[[part]]
-name = "flat"
-shape = "line"
-origin = [-0.5, -0.0005, 0.0]
-size = [1.1, 0.0, 0.0]
-divisions = [4, 0, 0]
-motion = "velocity"
-velocity = [0.0, 2.5e-4, 0.0]
-mass = 1.0
-[[boundary]]
-part = "disc"
-face = "y+"
-fix = ["y"]
-[[contact]]
-slave = "disc"
-slave_face = "y-"
-master = "flat"
-master_face = "y+"
-sliding = "{sliding}"
-stiffness_per_area = 1000.0
-"#
-        );
-        let s = run(&Scene::parse(&text).unwrap(), &Device::cpu(), None).unwrap();
+        let disc =
+            part("disc", "rect", [0.0; 3], [1.0, 0.5, 0.0], [8, 4, 0]).with("axisymmetric", true);
+        let scene = disc_under_flat(
+            "axisymmetric disc under a short rigid flat",
+            disc,
+            "y-",
+            "y+",
+            1.1,
+        )
+        .run("end_time", 2.0)
+        .set_in("contact", 0, "sliding", sliding);
+        let s = run(&scene.scene(), &Device::cpu(), None).unwrap();
         if sliding == "small" {
             // the flat ends at x = 0.6: the nodes at 0.625, 0.75, 0.875 and 1 are beyond it
             assert_eq!(s.anchored_slaves, 5, "{s:?}");
@@ -857,26 +721,13 @@ fn the_history_has_each_parts_and_bodys_motion() {
 #[test]
 fn nearly_incompressible_materials_are_named_and_runs_report_progress() {
     let scene_with = |nu: f64| {
-        Scene::parse(&format!(
-            r#"
-title = "a block at rest"
-[run]
-end_time = 1.0e-3
-[[material]]
-name = "rubber"
-young = 1.0e6
-poisson = {nu}
-density = 1000.0
-[[part]]
-name = "block"
-shape = "block"
-material = "rubber"
-origin = [0.0, 0.0, 0.0]
-size = [0.1, 0.1, 0.1]
-divisions = [1, 1, 1]
-"#
-        ))
-        .unwrap()
+        SceneToml::new("a block at rest", 1.0e-3)
+            .material("rubber", 1.0e6, nu, 1000.0)
+            .part(
+                part("block", "block", [0.0; 3], [0.1, 0.1, 0.1], [1, 1, 1])
+                    .with("material", "rubber"),
+            )
+            .scene()
     };
     for nu in [0.0, 0.3, 0.49, 0.499] {
         assert!(scene_with(nu).notes().is_empty(), "poisson {nu}");
@@ -910,48 +761,36 @@ divisions = [1, 1, 1]
     assert_eq!(seen[0].estimated, s.increments as u64);
 }
 
-/// The axisymmetric disc of `the_axis_node_carries_the_same_pressure_as_its_neighbours` (radius
-/// 1, height 0.5, pressed by a rigid flat from below) as a mesh part: `mesh` is the part's
-/// lines after `shape = "mesh"` (file, faces), `bottom`/`top` its face names.
-fn disc_from_file(mesh: &str, bottom: &str, top: &str) -> String {
-    format!(
-        r#"
-title = "axisymmetric disc from a file"
-[run]
-end_time = 40.0
-output_every = 100
-[[material]]
-name = "m"
-young = 1.0
-poisson = 0.3
-density = 1.0
-[[part]]
-name = "disc"
-shape = "mesh"
-material = "m"
-{mesh}
-[[part]]
-name = "flat"
-shape = "line"
-origin = [-0.5, -0.0005, 0.0]
-size = [2.0, 0.0, 0.0]
-divisions = [4, 0, 0]
-motion = "velocity"
-velocity = [0.0, 2.5e-4, 0.0]
-mass = 1.0
-[[boundary]]
-part = "disc"
-face = "{top}"
-fix = ["y"]
-[[contact]]
-slave = "disc"
-slave_face = "{bottom}"
-master = "flat"
-master_face = "y+"
-stiffness_per_area = 1000.0
-damping = 0.1
-"#
-    )
+/// The axisymmetric disc of `the_axis_node_carries_the_same_pressure_as_its_neighbours`
+/// (radius 1, height 0.5; E = 1, ν = 0.3, ρ = 1), part `disc` with faces `bottom` and `top`,
+/// its top on rollers, pressed from below by a rigid flat line `flat_length` long moving up at
+/// 2.5e-4, from x = −0.5, 0.0005 below it; penalty 1000 per area; 40 time units, history every
+/// 100 increments.
+fn disc_under_flat(
+    title: &str,
+    disc: Entry,
+    bottom: &str,
+    top: &str,
+    flat_length: f64,
+) -> SceneToml {
+    SceneToml::new(title, 40.0)
+        .run("output_every", 100)
+        .material("m", 1.0, 0.3, 1.0)
+        .part(disc.with("material", "m"))
+        .part(
+            part(
+                "flat",
+                "line",
+                [-0.5, -0.0005, 0.0],
+                [flat_length, 0.0, 0.0],
+                [4, 0, 0],
+            )
+            .with("motion", "velocity")
+            .with("velocity", [0.0, 2.5e-4, 0.0])
+            .with("mass", 1.0),
+        )
+        .boundary(fixed("disc", top, ["y"]))
+        .contact(contact("disc", bottom, "flat", "y+").with("stiffness_per_area", 1000.0))
 }
 
 /// An Abaqus deck of CAX4R quadrilaterals (or CPE4R) on [0, 1] × [0, 0.5], 8 × 4 cells, with
@@ -1006,23 +845,30 @@ fn axisymmetric_parts_from_gmsh_and_abaqus_files() {
     std::fs::write(dir.join("cax.inp"), disc_deck("CAX4R")).unwrap();
     std::fs::write(dir.join("cpe.inp"), disc_deck("CPE4R")).unwrap();
     let exact = 1.0 * (40.0 * 2.5e-4 - 0.0005) / 0.5 / (1.0 + 2.0 / 1000.0);
+    let disc = |file: &str| part_of("disc", "mesh").with("file", file);
+    let from_file = |disc: Entry, bottom: &str, top: &str| {
+        disc_under_flat("axisymmetric disc from a file", disc, bottom, top, 2.0)
+            .set_in("contact", 0, "damping", 0.1)
+    };
     let cases = [
         (
-            "file = \"rect_2d.msh\"\naxisymmetric = true",
+            "rect_2d.msh",
+            disc("rect_2d.msh").with("axisymmetric", true),
             "bottom",
             "top",
             1.0,
         ),
-        ("file = \"cax.inp\"", "BOTTOM", "TOP", 1.0),
+        ("cax.inp", disc("cax.inp"), "BOTTOM", "TOP", 1.0),
         (
-            "file = \"cpe.inp\"\ndimension = 2",
+            "cpe.inp",
+            disc("cpe.inp").with("dimension", 2),
             "BOTTOM",
             "TOP",
             1.0 / (1.0 - 0.09),
         ),
     ];
-    for (mesh, bottom, top, factor) in cases {
-        let mut scene = Scene::parse(&disc_from_file(mesh, bottom, top)).unwrap();
+    for (mesh, disc, bottom, top, factor) in cases {
+        let mut scene = from_file(disc, bottom, top).scene();
         scene.base_dir = Some(dir.clone());
         let s = run(&scene, &Device::cpu(), None).unwrap();
         assert!(
@@ -1059,14 +905,12 @@ fn axisymmetric_parts_from_gmsh_and_abaqus_files() {
         }
     }
     // a CAX deck needs a 2D scene
-    let mut scene = Scene::parse(
-        &disc_from_file("file = \"cax.inp\"\ndimension = 3", "BOTTOM", "TOP")
-            .replace("shape = \"line\"", "shape = \"plate\"")
-            .replace("size = [2.0, 0.0, 0.0]", "size = [2.0, 2.0, 0.0]")
-            .replace("divisions = [4, 0, 0]", "divisions = [4, 4, 0]")
-            .replace("master_face = \"y+\"", "master_face = \"z+\""),
-    )
-    .unwrap();
+    let mut scene = from_file(disc("cax.inp").with("dimension", 3), "BOTTOM", "TOP")
+        .set_in("part", 1, "shape", "plate")
+        .set_in("part", 1, "size", [2.0, 2.0, 0.0])
+        .set_in("part", 1, "divisions", [4, 4, 0])
+        .set_in("contact", 0, "master_face", "z+")
+        .scene();
     scene.base_dir = Some(dir.clone());
     let e = run(&scene, &Device::cpu(), None).unwrap_err().to_string();
     assert!(e.contains("CAX") && e.contains("2D scene"), "{e}");
@@ -1161,36 +1005,25 @@ fn gmsh_meshes_without_groups_give_surfaces() {
         strip(&std::fs::read_to_string(data("box_tets.msh")).unwrap()),
     )
     .unwrap();
-    let text = r#"
-title = "box without groups"
-[run]
-end_time = 0.02
-gravity = [0.0, 0.0, -9.81]
-[[material]]
-name = "m"
-young = 1.0e6
-poisson = 0.3
-density = 1000.0
-[[part]]
-name = "box"
-shape = "mesh"
-material = "m"
-file = "box.msh"
-origin = [0.0, 0.0, 0.001]
-velocity = [0.0, 0.0, -0.5]
-[[part]]
-name = "floor"
-shape = "plate"
-origin = [-1.0, -1.0, 0.0]
-size = [3.0, 3.0, 0.0]
-divisions = [6, 6, 0]
-[[contact]]
-slave = "box"
-slave_face = "boundary"
-master = "floor"
-master_face = "z+"
-"#;
-    let mut scene = Scene::parse(text).unwrap();
+    let mut scene = SceneToml::new("box without groups", 0.02)
+        .run("gravity", [0.0, 0.0, -9.81])
+        .material("m", 1.0e6, 0.3, 1000.0)
+        .part(
+            part_of("box", "mesh")
+                .with("material", "m")
+                .with("file", "box.msh")
+                .with("origin", [0.0, 0.0, 0.001])
+                .with("velocity", [0.0, 0.0, -0.5]),
+        )
+        .part(part(
+            "floor",
+            "plate",
+            [-1.0, -1.0, 0.0],
+            [3.0, 3.0, 0.0],
+            [6, 6, 0],
+        ))
+        .contact(contact("box", "boundary", "floor", "z+"))
+        .scene();
     scene.base_dir = Some(dir.clone());
     let s = run(&scene, &Device::cpu(), None).unwrap();
     assert!(
@@ -1207,36 +1040,31 @@ master_face = "z+"
 /// fixed body or with a fix on a rigid part is refused by name.
 #[test]
 fn loads_on_free_rigid_bodies() {
-    let text = r#"
-title = "pulled bodies"
-[run]
-end_time = 0.5
-dt = 1.0e-3
-[[rigid]]
-name = "ball"
-surface = "sphere"
-point = [0.0, 0.0, 5.0]
-radius = 0.5
-mass = 2.0
-inertia = [[4.0, 0.0, 0.0], [0.0, 4.0, 0.0], [0.0, 0.0, 4.0]]
-load = [1.0, 0.0, 0.0]
-moment = [0.0, 0.0, 2.0]
-[[part]]
-name = "plate"
-shape = "plate"
-origin = [0.0, 0.0, 0.0]
-size = [1.0, 1.0, 0.0]
-divisions = [2, 2, 0]
-motion = "free"
-mass = 4.0
-[[boundary]]
-part = "plate"
-face = "all"
-load = [0.0, 0.0, 8.0]
-"#;
+    let pulled = SceneToml::new("pulled bodies", 0.5)
+        .run("dt", 1.0e-3)
+        .rigid(
+            Entry::default()
+                .with("name", "ball")
+                .with("surface", "sphere")
+                .with("point", [0.0, 0.0, 5.0])
+                .with("radius", 0.5)
+                .with("mass", 2.0)
+                .with(
+                    "inertia",
+                    [[4.0, 0.0, 0.0], [0.0, 4.0, 0.0], [0.0, 0.0, 4.0]],
+                )
+                .with("load", [1.0, 0.0, 0.0])
+                .with("moment", [0.0, 0.0, 2.0]),
+        )
+        .part(
+            part("plate", "plate", [0.0; 3], [1.0, 1.0, 0.0], [2, 2, 0])
+                .with("motion", "free")
+                .with("mass", 4.0),
+        )
+        .boundary(boundary("plate", "all").with("load", [0.0, 0.0, 8.0]));
     let dir = std::env::temp_dir().join(format!("abut-body-loads-{}", std::process::id()));
     let _ = std::fs::remove_dir_all(&dir);
-    let s = run(&Scene::parse(text).unwrap(), &Device::cpu(), Some(&dir)).unwrap();
+    let s = run(&pulled.scene(), &Device::cpu(), Some(&dir)).unwrap();
     let csv = std::fs::read_to_string(dir.join("history.csv")).unwrap();
     let mut lines = csv.lines();
     let head: Vec<&str> = lines.next().unwrap().split(',').collect();
@@ -1279,25 +1107,19 @@ load = [0.0, 0.0, 8.0]
     let _ = std::fs::remove_dir_all(&dir);
     for (bad, key) in [
         (
-            text.replace(
-                "load = [1.0, 0.0, 0.0]",
-                "load = [1.0, 0.0, 0.0]\nmotion = \"fixed\"",
-            ),
+            pulled.clone().set_in("rigid", 0, "motion", "fixed"),
             "rigid.load",
         ),
         (
-            text.replace("motion = \"free\"", "motion = \"fixed\""),
+            pulled.clone().set_in("part", 0, "motion", "fixed"),
             "boundary.part",
         ),
         (
-            text.replace(
-                "load = [0.0, 0.0, 8.0]",
-                "load = [0.0, 0.0, 8.0]\nfix = [\"x\"]",
-            ),
+            pulled.clone().set_in("boundary", 0, "fix", ["x"]),
             "boundary.part",
         ),
     ] {
-        let e = Scene::parse(&bad).unwrap_err().to_string();
+        let e = Scene::parse(&bad.text()).unwrap_err().to_string();
         assert!(e.contains(key), "{key}: {e}");
     }
 }
@@ -1310,45 +1132,33 @@ load = [0.0, 0.0, 8.0]
 /// and the box settles onto the plate (before, the unstable run hopped in silence).
 #[test]
 fn a_fixed_increment_above_the_contacts_limit_is_warned_about() {
-    let text = |extra: &str| {
-        format!(
-            r#"
-title = "a rigid box put down on a plate"
-[run]
-end_time = 0.05
-dt = 1e-4
-gravity = [0.0, 0.0, -9.81]
-[[part]]
-name = "box"
-shape = "mesh"
-file = "{}/scenes/meshes/box_tets.msh"
-rigid = true
-motion = "free"
-mass = 1.0
-[[part]]
-name = "plate"
-shape = "plate"
-origin = [-0.5, -0.5, 0.0]
-size = [2.0, 2.0, 0.0]
-divisions = [8, 8, 0]
-[[contact]]
-slave = "box"
-slave_face = "bottom"
-master = "plate"
-master_face = "z+"
-{extra}
-"#,
-            env!("CARGO_MANIFEST_DIR")
-        )
+    let scene = |penalty_scale: Option<f64>| {
+        let mesh = concat!(env!("CARGO_MANIFEST_DIR"), "/scenes/meshes/box_tets.msh");
+        SceneToml::new("a rigid box put down on a plate", 0.05)
+            .run("dt", 1e-4)
+            .run("gravity", [0.0, 0.0, -9.81])
+            .part(
+                part_of("box", "mesh")
+                    .with("file", mesh)
+                    .with("rigid", true)
+                    .with("motion", "free")
+                    .with("mass", 1.0),
+            )
+            .part(part(
+                "plate",
+                "plate",
+                [-0.5, -0.5, 0.0],
+                [2.0, 2.0, 0.0],
+                [8, 8, 0],
+            ))
+            .contact(
+                contact("box", "bottom", "plate", "z+").with_some("penalty_scale", penalty_scale),
+            )
+            .scene()
     };
-    let quiet = run(&Scene::parse(&text("")).unwrap(), &Device::cpu(), None).unwrap();
+    let quiet = run(&scene(None), &Device::cpu(), None).unwrap();
     assert!(quiet.warnings.is_empty(), "scale 1: {:?}", quiet.warnings);
-    let s = run(
-        &Scene::parse(&text("penalty_scale = 16.0")).unwrap(),
-        &Device::cpu(),
-        None,
-    )
-    .unwrap();
+    let s = run(&scene(Some(16.0)), &Device::cpu(), None).unwrap();
     let w: Vec<&String> = s
         .warnings
         .iter()
@@ -1363,12 +1173,7 @@ master_face = "z+"
         .and_then(|f| f.parse().ok())
         .expect("a factor");
     assert!(factor > 0.0 && factor < 0.5, "{}", w[0]);
-    let s = run(
-        &Scene::parse(&text(&format!("penalty_scale = {}", 16.0 * factor))).unwrap(),
-        &Device::cpu(),
-        None,
-    )
-    .unwrap();
+    let s = run(&scene(Some(16.0 * factor)), &Device::cpu(), None).unwrap();
     assert!(s.warnings.is_empty(), "{:?}", s.warnings);
     // settled: at rest on the plate, pressed in by about its weight over the springs
     let b = &s.bodies[0];

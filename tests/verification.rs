@@ -5,6 +5,7 @@
 mod common;
 
 use common::devices;
+use common::scene_toml::{boundary, fixed, part, SceneToml};
 
 use std::f64::consts::PI;
 
@@ -365,40 +366,23 @@ fn s5_penalty_stability_bound() {
 /// surface's inward slide all stiffen it; a softer one would mean contact force lost).
 #[test]
 fn s3_hertz_sphere_force_indentation_axisymmetric() {
-    let cylinder = r#"
-title = "axisymmetric cylinder in uniaxial compression"
-[run]
-end_time = 40.0
-damping = 0.3
-nlgeom = false
-[[material]]
-name = "m"
-young = 1.0
-poisson = 0.3
-density = 1.0
-[[part]]
-name = "cyl"
-shape = "rect"
-axisymmetric = true
-material = "m"
-origin = [0.0, 0.0, 0.0]
-size = [1.0, 1.0, 0.0]
-divisions = [8, 8, 0]
-[[boundary]]
-part = "cyl"
-face = "x-"
-fix = ["x"]
-[[boundary]]
-part = "cyl"
-face = "y-"
-fix = ["y"]
-[[boundary]]
-part = "cyl"
-face = "y+"
-displacement = [0.0, -0.01, 0.0]
-ramp = 10.0
-"#;
-    let s = run_text(cylinder, &Device::cpu());
+    let cylinder = SceneToml::new("axisymmetric cylinder in uniaxial compression", 40.0)
+        .run("damping", 0.3)
+        .run("nlgeom", false)
+        .material("m", 1.0, 0.3, 1.0)
+        .part(
+            part("cyl", "rect", [0.0; 3], [1.0, 1.0, 0.0], [8, 8, 0])
+                .with("axisymmetric", true)
+                .with("material", "m"),
+        )
+        .boundary(fixed("cyl", "x-", ["x"]))
+        .boundary(fixed("cyl", "y-", ["y"]))
+        .boundary(
+            boundary("cyl", "y+")
+                .with("displacement", [0.0, -0.01, 0.0])
+                .with("ramp", 10.0),
+        );
+    let s = run_text(&cylinder.text(), &Device::cpu());
     let p = &s.parts[0];
     for c in [0, 2, 3] {
         assert!(

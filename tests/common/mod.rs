@@ -5,6 +5,8 @@ use std::sync::OnceLock;
 
 #[cfg(feature = "capi")]
 pub mod capi;
+#[cfg(feature = "solver")]
+pub mod scene_toml;
 
 use abut::geometry::{closest_on_facet, V3};
 use abut::model::MasterSurface;

@@ -1,46 +1,52 @@
+use crate::common::devices;
+use crate::common::scene_toml::{contact, part, SceneToml};
 use abut::scene::{run, Scene};
 use abut::{Device, Error};
 
-/// A block of 2 × 2 × 2 cells on a rigid floor, its base at `z0`, moving at `vz`.
-fn block_on_floor(z0: f64, vz: f64, enforce: &str, adjust: bool, end: f64) -> String {
-    format!(
-        r#"
-title = "block and floor"
-[run]
-end_time = {end}
-output_every = 10
-adjust_overclosure = {adjust}
-[[material]]
-name = "m"
-young = 1.0e7
-poisson = 0.3
-density = 1000.0
-[[part]]
-name = "block"
-shape = "block"
-material = "m"
-origin = [0.0, 0.0, {z0}]
-size = [0.1, 0.1, 0.1]
-divisions = [2, 2, 2]
-velocity = [0.0, 0.0, {vz}]
-[[part]]
-name = "floor"
-shape = "plate"
-origin = [-0.2, -0.2, 0.0]
-size = [0.5, 0.5, 0.0]
-divisions = [5, 5, 0]
-[[contact]]
-slave = "block"
-slave_face = "z-"
-master = "floor"
-master_face = "z+"
-enforce = "{enforce}"
-"#
-    )
+/// A 0.1 m elastic block (2 × 2 × 2 cells; E = 10⁷, ν = 0.3, ρ = 1000) at `velocity`, its base
+/// at `z0`, on a rigid plate of 0.1 m facets spanning [x0, x0 + sx] × [y0, y0 + sy] (z = 0),
+/// under `gravity` (downwards), in contact enforced by `enforce`, run to `end`.
+fn block_on_plate(
+    enforce: &str,
+    z0: f64,
+    velocity: [f64; 3],
+    plate: [f64; 4],
+    gravity: f64,
+    end: f64,
+) -> SceneToml {
+    let [x0, y0, sx, sy] = plate;
+    let (nx, ny) = ((sx / 0.1).round() as usize, (sy / 0.1).round() as usize);
+    SceneToml::new("block on a plate", end)
+        .run("gravity", [0.0, 0.0, -gravity])
+        .material("m", 1.0e7, 0.3, 1000.0)
+        .part(
+            part("block", "block", [0.0, 0.0, z0], [0.1, 0.1, 0.1], [2, 2, 2])
+                .with("material", "m")
+                .with("velocity", velocity),
+        )
+        .part(part(
+            "plate",
+            "plate",
+            [x0, y0, 0.0],
+            [sx, sy, 0.0],
+            [nx, ny, 0],
+        ))
+        .contact(contact("block", "z-", "plate", "z+").with("enforce", enforce))
 }
 
-fn scene(text: &str) -> Scene {
-    Scene::parse(text).unwrap()
+/// The block of [`block_on_plate`] on a 0.5 m plate around it, its base at `z0`, moving at
+/// `vz`; `adjust` removes an initial overclosure before the run.
+fn block_on_floor(z0: f64, vz: f64, enforce: &str, adjust: bool, end: f64) -> SceneToml {
+    block_on_plate(
+        enforce,
+        z0,
+        [0.0, 0.0, vz],
+        [-0.2, -0.2, 0.5, 0.5],
+        0.0,
+        end,
+    )
+    .run("output_every", 10)
+    .run("adjust_overclosure", adjust)
 }
 
 /// Tunnelling stops the run with an error naming the node, its motion and the radius (the
@@ -51,7 +57,7 @@ fn tunnelling_stops_the_run() {
     for enforce in ["penalty", "kinematic"] {
         // increment ≈ 1.58e-4 s: 2000 m/s moves 0.32 per increment
         let e = run(
-            &scene(&block_on_floor(0.3, -2000.0, enforce, false, 2e-3)),
+            &block_on_floor(0.3, -2000.0, enforce, false, 2e-3).scene(),
             &Device::cpu(),
             None,
         )
@@ -70,7 +76,7 @@ fn tunnelling_stops_the_run() {
             other => panic!("{enforce}: {other}"),
         }
         run(
-            &scene(&block_on_floor(0.03, -2.0, enforce, false, 5e-3)),
+            &block_on_floor(0.03, -2.0, enforce, false, 5e-3).scene(),
             &Device::cpu(),
             None,
         )
@@ -86,7 +92,7 @@ fn tunnelling_stops_the_run() {
 #[test]
 fn an_initial_overclosure_blows_up_named_or_is_adjusted() {
     let e = run(
-        &scene(&block_on_floor(-0.05, 0.0, "kinematic", false, 0.01)),
+        &block_on_floor(-0.05, 0.0, "kinematic", false, 0.01).scene(),
         &Device::cpu(),
         None,
     )
@@ -113,7 +119,7 @@ fn an_initial_overclosure_blows_up_named_or_is_adjusted() {
     assert!(cause.contains("at increment 1"), "{e}");
     assert!(cause.contains("adjust_overclosure"), "{e}");
     let s = run(
-        &scene(&block_on_floor(-0.05, 0.0, "kinematic", true, 0.01)),
+        &block_on_floor(-0.05, 0.0, "kinematic", true, 0.01).scene(),
         &Device::cpu(),
         None,
     )
@@ -131,68 +137,35 @@ fn an_initial_overclosure_blows_up_named_or_is_adjusted() {
 /// `gap` away (`two = false`), or two such bars towards each other `2·gap` apart, with
 /// penalty contact at the default settings.
 #[allow(clippy::too_many_arguments)]
-fn bars(n: usize, l: f64, a: f64, e: f64, rho: f64, v: f64, gap: f64, two: bool) -> String {
+fn bars(n: usize, l: f64, a: f64, e: f64, rho: f64, v: f64, gap: f64, two: bool) -> SceneToml {
     let c = (e / rho).sqrt();
     let end = 1.5 * (gap / v + 2.0 * l / c);
-    let other = if two {
-        format!(
-            r#"[[part]]
-name = "other"
-shape = "bar"
-material = "m"
-origin = [0.0, 0.0, {z}]
-size = [0.0, 0.0, {l}]
-area = {a}
-divisions = [{n}, 0, 0]
-velocity = [0.0, 0.0, {v}]
-[[contact]]
-slave = "bar"
-slave_face = "z-"
-master = "other"
-master_face = "z+"
-enforce = "penalty"
-"#,
-            z = -gap - l
-        )
-    } else {
-        r#"[[part]]
-name = "wall"
-shape = "plate"
-origin = [-1.0, -1.0, 0.0]
-size = [2.0, 2.0, 0.0]
-divisions = [2, 2, 0]
-[[contact]]
-slave = "bar"
-slave_face = "z-"
-master = "wall"
-master_face = "z+"
-enforce = "penalty"
-"#
-        .to_string()
+    let bar = |name: &str, z: f64, v: f64| {
+        part(name, "bar", [0.0, 0.0, z], [0.0, 0.0, l], [n, 0, 0])
+            .with("material", "m")
+            .with("area", a)
+            .with("velocity", [0.0, 0.0, v])
     };
-    let z0 = gap;
-    format!(
-        r#"
-title = "bar impact"
-[run]
-end_time = {end}
-[[material]]
-name = "m"
-young = {e}
-poisson = 0.0
-density = {rho}
-[[part]]
-name = "bar"
-shape = "bar"
-material = "m"
-origin = [0.0, 0.0, {z0}]
-size = [0.0, 0.0, {l}]
-area = {a}
-divisions = [{n}, 0, 0]
-velocity = [0.0, 0.0, {mv}]
-{other}"#,
-        mv = -v
-    )
+    let scene = SceneToml::new("bar impact", end)
+        .material("m", e, 0.0, rho)
+        .part(bar("bar", gap, -v));
+    let (other, other_part) = if two {
+        ("other", bar("other", -gap - l, v))
+    } else {
+        (
+            "wall",
+            part(
+                "wall",
+                "plate",
+                [-1.0, -1.0, 0.0],
+                [2.0, 2.0, 0.0],
+                [2, 2, 0],
+            ),
+        )
+    };
+    scene
+        .part(other_part)
+        .contact(contact("bar", "z-", other, "z+").with("enforce", "penalty"))
 }
 
 /// The contact force history of a run's output: (time, total contact force).
@@ -232,12 +205,9 @@ fn default_penalty_follows_bar_impacts_within_two_increments_and_two_percent() {
         (20, 0.3, 1e-4, 3e9, 1200.0, 5.0, 5e-4, false),
         (20, 10.0, 1.0, 1e6, 1e3, 1.0, 0.05, false),
     ];
-    for d in [Device::cpu()]
-        .into_iter()
-        .chain(crate::common::gpus().iter().cloned())
-    {
+    for d in devices() {
         for &(n, l, a, e, rho, v, gap, two) in &cases {
-            let sc = scene(&bars(n, l, a, e, rho, v, gap, two));
+            let sc = bars(n, l, a, e, rho, v, gap, two).scene();
             let dir = std::env::temp_dir().join(format!(
                 "abut-bar-default-penalty-{}-{n}-{two}",
                 d.backend_name()
@@ -293,43 +263,32 @@ fn an_axisymmetric_bar_on_a_line_ending_at_its_axis_gains_no_energy() {
     for (width, cells) in [(0.2, 2), (0.3, 5)] {
         for start in [0.0, 1e-7, -1e-7, -1e-3, 0.02, -0.1] {
             for enforce in ["penalty", "kinematic"] {
-                let text = format!(
-                    r#"
-title = "axisymmetric bar on a wall"
-[run]
-end_time = 1.5
-[[material]]
-name = "m"
-young = 1.0
-poisson = 0.3
-density = 1.0
-[[part]]
-name = "bar"
-shape = "rect"
-axisymmetric = true
-material = "m"
-origin = [0.0, 0.01, 0.0]
-size = [{width}, 1.0, 0.0]
-divisions = [{cells}, 10, 0]
-velocity = [0.0, -0.1, 0.0]
-[[part]]
-name = "wall"
-shape = "line"
-origin = [{start}, 0.0, 0.0]
-size = [1.0, 0.0, 0.0]
-divisions = [4, 0, 0]
-[[contact]]
-slave = "bar"
-slave_face = "y-"
-master = "wall"
-master_face = "y+"
-enforce = "{enforce}"
-"#
-                );
+                let text = SceneToml::new("axisymmetric bar on a wall", 1.5)
+                    .material("m", 1.0, 0.3, 1.0)
+                    .part(
+                        part(
+                            "bar",
+                            "rect",
+                            [0.0, 0.01, 0.0],
+                            [width, 1.0, 0.0],
+                            [cells, 10, 0],
+                        )
+                        .with("axisymmetric", true)
+                        .with("material", "m")
+                        .with("velocity", [0.0, -0.1, 0.0]),
+                    )
+                    .part(part(
+                        "wall",
+                        "line",
+                        [start, 0.0, 0.0],
+                        [1.0, 0.0, 0.0],
+                        [4, 0, 0],
+                    ))
+                    .contact(contact("bar", "y-", "wall", "y+").with("enforce", enforce));
                 let dir =
                     std::env::temp_dir().join(format!("abut-axi-edge-{width}-{start}-{enforce}"));
                 let _ = std::fs::remove_dir_all(&dir);
-                let s = run(&scene(&text), &Device::cpu(), Some(&dir)).unwrap();
+                let s = run(&text.scene(), &Device::cpu(), Some(&dir)).unwrap();
                 let csv = std::fs::read_to_string(dir.join("history.csv")).unwrap();
                 let mut lines = csv.lines();
                 let head: Vec<&str> = lines.next().unwrap().split(',').collect();
@@ -382,56 +341,77 @@ fn mechanical_energy(dir: &std::path::Path) -> (f64, f64, f64) {
     )
 }
 
-/// A 0.1 m elastic block (2 × 2 × 2 cells) at `velocity`, its base at `z0`, on a rigid
-/// plate of 0.1 m facets spanning [x0, x0 + sx] × [y0, y0 + sy], with `gravity`.
-#[allow(clippy::too_many_arguments)]
-fn block_on_plate(
-    enforce: &str,
-    z0: f64,
-    velocity: [f64; 3],
-    plate: [f64; 4],
-    gravity: f64,
-    end: f64,
-) -> String {
-    let [x0, y0, sx, sy] = plate;
-    let (nx, ny) = ((sx / 0.1).round() as usize, (sy / 0.1).round() as usize);
-    format!(
-        r#"
-title = "block on a plate's edge"
-[run]
-end_time = {end}
-gravity = [0.0, 0.0, {g}]
-[[material]]
-name = "m"
-young = 1.0e7
-poisson = 0.3
-density = 1000.0
-[[part]]
-name = "block"
-shape = "block"
-material = "m"
-origin = [0.0, 0.0, {z0}]
-size = [0.1, 0.1, 0.1]
-divisions = [2, 2, 2]
-velocity = [{vx}, {vy}, {vz}]
-[[part]]
-name = "plate"
-shape = "plate"
-origin = [{x0}, {y0}, 0.0]
-size = [{sx}, {sy}, 0.0]
-divisions = [{nx}, {ny}, 0]
-[[contact]]
-slave = "block"
-slave_face = "z-"
-master = "plate"
-master_face = "z+"
-enforce = "{enforce}"
-"#,
-        g = -gravity,
-        vx = velocity[0],
-        vy = velocity[1],
-        vz = velocity[2]
-    )
+/// A run of the elastic block of VERIFICATION §4 (scenes/incline.toml) launched along x.
+struct Slide {
+    summary: abut::scene::Summary,
+    /// Where the block stopped: its mean x displacement at the end.
+    travel: f64,
+    /// Where a rigid block stops: v0²/(2·g·(μ·cos θ − sin θ)).
+    stop: f64,
+}
+
+/// The block of scenes/incline.toml launched at `v0` down an incline of `theta` degrees with
+/// Coulomb `mu`, `enforce`d, with Abaqus' default linear bulk viscosity and a history row every
+/// increment, run until 1.3 times the rigid block's stopping time. While it slides (after
+/// settling onto the plate: t > 0.01, vx > 0.05; more than 100 increments) the contact force
+/// never vanishes.
+fn slide_to_stop(theta: f64, mu: f64, v0: f64, enforce: &str) -> Slide {
+    let base = std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/scenes/incline.toml"))
+        .unwrap();
+    let (t, g) = (theta.to_radians(), 9.81);
+    let a = g * (mu * t.cos() - t.sin());
+    let text = base
+        .replace(
+            "gravity = [4.905, 0.0, -8.495709211]",
+            &format!(
+                "gravity = [{}, 0.0, {}]\nbulk_viscosity = 0.06",
+                g * t.sin(),
+                -g * t.cos()
+            ),
+        )
+        .replace(
+            "friction = 0.2",
+            &format!("friction = {mu}\nenforce = \"{enforce}\""),
+        )
+        .replace("output_every = 50", "output_every = 1")
+        .replace("end_time = 1.0", &format!("end_time = {}", 1.3 * v0 / a))
+        .replace(
+            "divisions = [2, 2, 2]",
+            &format!("divisions = [2, 2, 2]\nvelocity = [{v0}, 0.0, 0.0]"),
+        );
+    let dir = std::env::temp_dir().join(format!("abut-{enforce}-incline-{theta}"));
+    let _ = std::fs::remove_dir_all(&dir);
+    let summary = run(&Scene::parse(&text).unwrap(), &Device::cpu(), Some(&dir)).unwrap();
+    let h = force_history(&dir);
+    let csv = std::fs::read_to_string(dir.join("history.csv")).unwrap();
+    let mut lines = csv.lines();
+    let head: Vec<&str> = lines.next().unwrap().split(',').collect();
+    let (cu, cv) = (
+        head.iter().position(|x| *x == "block.ux").unwrap(),
+        head.iter().position(|x| *x == "block.vx").unwrap(),
+    );
+    let rows: Vec<Vec<f64>> = lines
+        .map(|l| l.split(',').map(|x| x.parse().unwrap()).collect())
+        .collect();
+    let sliding: Vec<usize> = (0..rows.len())
+        .filter(|&i| h[i].0 > 0.01 && rows[i][cv] > 0.05)
+        .collect();
+    let _ = std::fs::remove_dir_all(&dir);
+    assert!(
+        sliding.len() > 100,
+        "θ = {theta}°, {enforce}: {}",
+        sliding.len()
+    );
+    let open = sliding.iter().filter(|&&i| h[i].1 == 0.0).count();
+    assert_eq!(
+        open, 0,
+        "θ = {theta}°, {enforce}: the contact opened in {open} increments"
+    );
+    Slide {
+        summary,
+        travel: rows.last().unwrap()[cu],
+        stop: v0 * v0 / (2.0 * a),
+    }
 }
 
 /// Issue 16, item 3 (what is done of it): the elastic block of VERIFICATION §4 sliding to a
@@ -442,57 +422,12 @@ enforce = "{enforce}"
 /// left; on the flat and at 10° it is within v·Δt).
 #[test]
 fn an_elastic_block_slides_to_a_stop_under_kinematic_friction_without_chatter() {
-    let base = std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/scenes/incline.toml"))
-        .unwrap();
     for (theta, mu, v0) in [(0.0f64, 0.5, 2.0), (10.0, 0.5, 1.0), (20.0, 0.5, 1.0)] {
-        let t = theta.to_radians();
-        let g = 9.81;
-        let a = g * (mu * t.cos() - t.sin());
-        let text = base
-            .replace(
-                "gravity = [4.905, 0.0, -8.495709211]",
-                &format!(
-                    "gravity = [{}, 0.0, {}]\nbulk_viscosity = 0.06",
-                    g * t.sin(),
-                    -g * t.cos()
-                ),
-            )
-            .replace(
-                "friction = 0.2",
-                &format!("friction = {mu}\nenforce = \"kinematic\""),
-            )
-            .replace("output_every = 50", "output_every = 1")
-            .replace("end_time = 1.0", &format!("end_time = {}", 1.3 * v0 / a))
-            .replace(
-                "divisions = [2, 2, 2]",
-                &format!("divisions = [2, 2, 2]\nvelocity = [{v0}, 0.0, 0.0]"),
-            );
-        let dir = std::env::temp_dir().join(format!("abut-kin-incline-{theta}"));
-        let _ = std::fs::remove_dir_all(&dir);
-        let s = run(&scene(&text), &Device::cpu(), Some(&dir)).unwrap();
-        let h = force_history(&dir);
-        let csv = std::fs::read_to_string(dir.join("history.csv")).unwrap();
-        let mut lines = csv.lines();
-        let head: Vec<&str> = lines.next().unwrap().split(',').collect();
-        let (cu, cv) = (
-            head.iter().position(|x| *x == "block.ux").unwrap(),
-            head.iter().position(|x| *x == "block.vx").unwrap(),
-        );
-        let rows: Vec<Vec<f64>> = lines
-            .map(|l| l.split(',').map(|x| x.parse().unwrap()).collect())
-            .collect();
-        // while it slides (after settling onto the floor), the force never vanishes
-        let sliding: Vec<usize> = (0..rows.len())
-            .filter(|&i| h[i].0 > 0.01 && rows[i][cv] > 0.05)
-            .collect();
-        assert!(sliding.len() > 100);
-        let open = sliding.iter().filter(|&&i| h[i].1 == 0.0).count();
-        assert_eq!(
-            open, 0,
-            "θ = {theta}°: the contact opened in {open} increments"
-        );
-        let stop = v0 * v0 / (2.0 * a);
-        let travel = rows.last().unwrap()[cu];
+        let Slide {
+            summary: s,
+            travel,
+            stop,
+        } = slide_to_stop(theta, mu, v0, "kinematic");
         let dt = s.end_time / s.increments as f64;
         let tol = if theta <= 10.0 { v0 * dt } else { 0.004 * stop };
         assert!(
@@ -513,53 +448,13 @@ fn an_elastic_block_slides_to_a_stop_under_kinematic_friction_without_chatter() 
 /// docs/BENCHMARKS.md, "Coulomb sliding".)
 #[test]
 fn an_elastic_block_slides_to_a_stop_under_default_penalty_friction() {
-    let base = std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/scenes/incline.toml"))
-        .unwrap();
-    let (mu, v0, g) = (0.3f64, 1.0f64, 9.81f64);
+    let (mu, v0) = (0.3f64, 1.0f64);
     for theta in [0.0f64, 5.0, 10.0] {
-        let t = theta.to_radians();
-        let a = g * (mu * t.cos() - t.sin());
-        let text = base
-            .replace(
-                "gravity = [4.905, 0.0, -8.495709211]",
-                &format!(
-                    "gravity = [{}, 0.0, {}]\nbulk_viscosity = 0.06",
-                    g * t.sin(),
-                    -g * t.cos()
-                ),
-            )
-            .replace("friction = 0.2", &format!("friction = {mu}"))
-            .replace("output_every = 50", "output_every = 1")
-            .replace("end_time = 1.0", &format!("end_time = {}", 1.3 * v0 / a))
-            .replace(
-                "divisions = [2, 2, 2]",
-                &format!("divisions = [2, 2, 2]\nvelocity = [{v0}, 0.0, 0.0]"),
-            );
-        let dir = std::env::temp_dir().join(format!("abut-penalty-incline-{theta}"));
-        let _ = std::fs::remove_dir_all(&dir);
-        let s = run(&scene(&text), &Device::cpu(), Some(&dir)).unwrap();
-        let h = force_history(&dir);
-        let csv = std::fs::read_to_string(dir.join("history.csv")).unwrap();
-        let mut lines = csv.lines();
-        let head: Vec<&str> = lines.next().unwrap().split(',').collect();
-        let (cu, cv) = (
-            head.iter().position(|x| *x == "block.ux").unwrap(),
-            head.iter().position(|x| *x == "block.vx").unwrap(),
-        );
-        let rows: Vec<Vec<f64>> = lines
-            .map(|l| l.split(',').map(|x| x.parse().unwrap()).collect())
-            .collect();
-        let sliding: Vec<usize> = (0..rows.len())
-            .filter(|&i| h[i].0 > 0.01 && rows[i][cv] > 0.05)
-            .collect();
-        assert!(sliding.len() > 100);
-        let open = sliding.iter().filter(|&&i| h[i].1 == 0.0).count();
-        assert_eq!(
-            open, 0,
-            "θ = {theta}°: the contact opened in {open} increments"
-        );
-        let stop = v0 * v0 / (2.0 * a);
-        let travel = rows.last().unwrap()[cu];
+        let Slide {
+            summary: s,
+            travel,
+            stop,
+        } = slide_to_stop(theta, mu, v0, "penalty");
         let dt = s.end_time / s.increments as f64;
         // pre-slip: μ times the resting overclosure (the stick spring is the normal one)
         let tol = mu * s.max_penetration + v0 * dt;
@@ -582,19 +477,16 @@ fn an_elastic_block_slides_to_a_stop_under_default_penalty_friction() {
 fn slaves_at_and_around_free_edges_and_corners_gain_no_energy() {
     let h = 0.1;
     let offsets = [0.0, 1e-6, 0.03, 0.095, 0.099, 0.101, 0.11, 0.2];
-    let devices: Vec<Device> = [Device::cpu()]
-        .into_iter()
-        .chain(crate::common::gpus().iter().cloned())
-        .collect();
+    let devices = devices();
     for (d, enforce) in devices
         .iter()
         .flat_map(|d| ["penalty", "kinematic"].map(|e| (d, e)))
     {
-        let run_dir = |tag: String, text: String| {
+        let run_dir = |tag: String, scene: SceneToml| {
             let dir = std::env::temp_dir()
                 .join(format!("abut-edge-{}-{enforce}-{tag}", d.backend_name()));
             let _ = std::fs::remove_dir_all(&dir);
-            run(&scene(&text), d, Some(&dir)).unwrap();
+            run(&scene.scene(), d, Some(&dir)).unwrap();
             mechanical_energy(&dir)
         };
         let drop =
