@@ -9,7 +9,7 @@ pub mod elements;
 mod prescribed;
 mod rigid;
 
-pub use prescribed::{Motion, Prescribed};
+pub use prescribed::{Amplitude, Motion, Prescribed};
 
 pub use elements::{Element, Material};
 pub use rigid::{BodyMotion, SolverBody};

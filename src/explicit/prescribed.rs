@@ -1,7 +1,95 @@
 //! Prescribed motion: a node's velocity or displacement along an axis as a function of time.
 
+/// A curve of time scaling a prescribed value: Abaqus' `*AMPLITUDE`, tabular (linear between
+/// points) or smooth step (a quintic between points, zero rate at each). Before the first point
+/// it holds the first value, after the last the last.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Amplitude {
+    /// Smooth step (quintic 10ξ³ − 15ξ⁴ + 6ξ⁵ between points); linear otherwise.
+    pub smooth: bool,
+    /// (time, value) points, time increasing.
+    pub points: Vec<(f64, f64)>,
+}
+
+impl Amplitude {
+    /// Abaqus/Explicit's default for a value given in a step without an amplitude: applied at
+    /// once (1 from the start).
+    pub fn step() -> Self {
+        Self {
+            smooth: false,
+            points: vec![(0.0, 1.0)],
+        }
+    }
+
+    /// The amplitude at time `t`.
+    pub fn value(&self, t: f64) -> f64 {
+        let p = &self.points;
+        let Some(&(t0, a0)) = p.first() else {
+            return 1.0;
+        };
+        if t <= t0 {
+            return a0;
+        }
+        for w in p.windows(2) {
+            let ((ta, a), (tb, b)) = (w[0], w[1]);
+            if t <= tb {
+                let xi = if tb > ta { (t - ta) / (tb - ta) } else { 1.0 };
+                return a + (b - a) * self.shape(xi);
+            }
+        }
+        p[p.len() - 1].1
+    }
+
+    fn shape(&self, xi: f64) -> f64 {
+        if self.smooth {
+            xi * xi * xi * (10.0 - 15.0 * xi + 6.0 * xi * xi)
+        } else {
+            xi
+        }
+    }
+
+    /// The integral of [`Amplitude::value`] from 0 to `t` (a velocity amplitude's
+    /// displacement per unit value), exact for both definitions.
+    pub fn integral(&self, t: f64) -> f64 {
+        let p = &self.points;
+        let Some(&(t0, a0)) = p.first() else {
+            return t;
+        };
+        if t <= 0.0 {
+            return 0.0;
+        }
+        // before the first point: its value
+        let mut sum = a0 * t.min(t0).max(0.0);
+        for w in p.windows(2) {
+            let ((ta, a), (tb, b)) = (w[0], w[1]);
+            let (lo, hi) = (ta.max(0.0), tb.min(t));
+            if hi <= lo || tb <= ta {
+                continue;
+            }
+            // ∫ a + (b − a)·s(ξ) dt, with ∫ s dξ = ξ²/2 (linear) or 5ξ⁴/2 − 3ξ⁵ + ξ⁶
+            // (smooth step)
+            let h = tb - ta;
+            let antiderivative = |x: f64| {
+                let xi = (x - ta) / h;
+                let s = if self.smooth {
+                    xi.powi(4) * (2.5 - 3.0 * xi + xi * xi)
+                } else {
+                    0.5 * xi * xi
+                };
+                a * x + (b - a) * h * s
+            };
+            sum += antiderivative(hi) - antiderivative(lo);
+        }
+        let (tn, an) = p[p.len() - 1];
+        if t > tn {
+            sum += an * (t - tn.max(0.0));
+        }
+        sum
+    }
+}
+
 /// A prescribed motion of one degree of freedom.
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Debug, PartialEq)]
 pub enum Motion {
     /// Constant velocity (model length per time).
     Velocity(f64),
@@ -12,6 +100,16 @@ pub enum Motion {
         displacement: f64,
         /// Ramp time.
         duration: f64,
+    },
+    /// A displacement `value`·a(t), or a velocity `value`·a(t) (Abaqus' `*BOUNDARY` with
+    /// `AMPLITUDE=`, `TYPE=DISPLACEMENT|VELOCITY`).
+    Amplitude {
+        /// The value the amplitude scales.
+        value: f64,
+        /// The curve a(t).
+        amplitude: std::sync::Arc<Amplitude>,
+        /// The value is a velocity (its displacement the amplitude's integral).
+        velocity: bool,
     },
 }
 
@@ -31,6 +129,19 @@ impl Motion {
                         * (1.0 - (2.0 * std::f64::consts::PI * t / duration).cos())
                 }
             }
+            Motion::Amplitude {
+                value,
+                ref amplitude,
+                velocity,
+            } => {
+                if velocity {
+                    value * amplitude.value(t)
+                } else {
+                    // the rate of the displacement: central difference over a small step
+                    let h = 1e-6 * (1.0 + t.abs());
+                    value * (amplitude.value(t + h) - amplitude.value(t - h)) / (2.0 * h)
+                }
+            }
         }
     }
 
@@ -47,12 +158,26 @@ impl Motion {
                     * (tau
                         - (2.0 * std::f64::consts::PI * tau).sin() / (2.0 * std::f64::consts::PI))
             }
+            Motion::Amplitude {
+                value,
+                ref amplitude,
+                velocity,
+            } => {
+                if velocity {
+                    value * amplitude.integral(t)
+                } else if t <= 0.0 {
+                    // a displacement applied at once still starts from where the node is
+                    0.0
+                } else {
+                    value * amplitude.value(t)
+                }
+            }
         }
     }
 }
 
 /// A degree of freedom whose motion is prescribed.
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Debug, PartialEq)]
 pub struct Prescribed {
     /// Node index.
     pub node: u32,

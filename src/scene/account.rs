@@ -244,6 +244,7 @@ impl<'a> Account<'a> {
             anchored_slaves: ends.anchored_slaves,
             unanchored_slaves: ends.unanchored_slaves,
             warnings,
+            deck_notes: scene.deck_notes.clone(),
             reference: scene.reference.clone(),
             device: ends.device,
             built: ends.built,

@@ -371,6 +371,22 @@ impl Scene {
                 }
             }
         }
+        // a deck's loads and prescribed motions, node by node
+        for (spec, nodes) in self.part.iter().zip(&parts) {
+            let Some(piece) = &spec.deck else { continue };
+            for (i, l) in piece.loads.iter().enumerate() {
+                for d in 0..3 {
+                    solver.loads[nodes.base + i][d] += l[d];
+                }
+            }
+            for (i, axis, motion) in &piece.prescribed {
+                solver.prescribe(Prescribed {
+                    node: nodes.base as u32 + i,
+                    dof: *axis,
+                    motion: motion.clone(),
+                })?;
+            }
+        }
         let mut model = if two_d {
             Model::new_2d()
         } else {
@@ -468,6 +484,21 @@ impl Scene {
                 );
             }
             let surf = model.add_surface(Surface::from_facets(mface.facets))?;
+            if let Some(deck) = &c.deck {
+                let mut pair = Pair::new(set, surf)
+                    .enforce(deck.enforce.clone())
+                    .friction(deck.friction.clone())
+                    .sliding(deck.sliding);
+                if let Some(schedule) = deck.schedule {
+                    pair = pair.schedule(schedule);
+                }
+                if let Some(w) = c.balanced {
+                    let s = model.add_surface(Surface::from_facets(sface.facets))?;
+                    pair = pair.balanced(s, w);
+                }
+                model.add_pair(pair)?;
+                continue;
+            }
             let enforce = match c.enforce.as_deref() {
                 Some("kinematic") => Enforce::Kinematic(Kinematic::default()),
                 _ => Enforce::Penalty(Penalty {

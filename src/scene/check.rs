@@ -249,8 +249,11 @@ impl Scene {
                 );
             }
         }
-        let deformable =
-            matches!(p.shape.as_str(), "block" | "rect" | "bar") || (p.shape == "mesh" && !p.rigid);
+        // a deck's part of point masses alone has no material
+        let deformable = matches!(p.shape.as_str(), "block" | "rect" | "bar")
+            || (p.shape == "mesh"
+                && !p.rigid
+                && p.deck.as_ref().is_none_or(|d| !d.materials.is_empty()));
         if deformable
             && !self
                 .material

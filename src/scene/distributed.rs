@@ -232,7 +232,7 @@ fn run_into(
         .filter(|p| is_local[p.node as usize])
         .map(|p| Prescribed {
             node: local_of[p.node as usize],
-            ..*p
+            ..p.clone()
         })
         .collect();
     solver.gravity = g.gravity;

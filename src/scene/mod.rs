@@ -77,6 +77,7 @@ mod build;
 mod check;
 #[cfg(feature = "mpi")]
 mod distributed;
+mod from_inp;
 mod increments;
 mod run;
 mod spec;
@@ -85,6 +86,7 @@ mod summary;
 pub use build::Built;
 #[cfg(feature = "mpi")]
 pub use distributed::run_distributed;
+pub use from_inp::{DeckPiece, DeckRigid};
 pub use spec::{
     BoundarySpec, ContactSpec, MaterialSpec, PartSpec, RigidSpec, RunSpec, Scene,
     DEFAULT_BULK_VISCOSITY, DEFAULT_BULK_VISCOSITY_QUADRATIC,

@@ -32,6 +32,10 @@ pub struct Scene {
     /// The directory mesh files are relative to (the scene file's, set by [`Scene::load`]).
     #[serde(skip)]
     pub base_dir: Option<std::path::PathBuf>,
+    /// A scene read from an Abaqus deck ([`Scene::from_inp`]): what abut made of the deck
+    /// beyond its tables — keywords read and not acted on, conversions — listed in the summary.
+    #[serde(skip)]
+    pub deck_notes: Vec<String>,
 }
 
 /// Run controls.
@@ -85,6 +89,26 @@ pub struct RunSpec {
     /// launches the nodes (default false).
     #[serde(default)]
     pub adjust_overclosure: bool,
+}
+
+impl RunSpec {
+    /// The run controls of a deck's step running to `end_time`, the rest at the scene defaults.
+    pub(super) fn for_deck(end_time: f64) -> Self {
+        Self {
+            end_time,
+            safety: default_safety(),
+            contact_safety: default_contact_safety(),
+            dt: None,
+            gravity: [0.0; 3],
+            damping: 0.0,
+            bulk_viscosity: default_bulk_linear(),
+            bulk_viscosity_quadratic: default_bulk_quadratic(),
+            nlgeom: true,
+            output_every: default_every(),
+            vtk_every: 0,
+            adjust_overclosure: false,
+        }
+    }
 }
 
 fn default_safety() -> f64 {
@@ -205,6 +229,10 @@ pub struct PartSpec {
     /// The dimension a "mesh" part is read in (3, or 2 for plane-strain scenes).
     #[serde(default)]
     pub dimension: Option<u32>,
+    /// A part read from an Abaqus deck ([`Scene::from_inp`]): its mesh and what the deck says
+    /// about its elements and nodes (then `file` names the deck, for messages).
+    #[serde(skip)]
+    pub deck: Option<std::sync::Arc<super::from_inp::DeckPiece>>,
     /// A "rect" or 2D "mesh" part that is axisymmetric about the y axis (x = radius ≥ 0): its
     /// triangles (a mesh's quadrilaterals split in two) and everything measured on it are per
     /// radian of circumference (forces, masses, areas). A deck's CAX3/CAX4(R) elements make a
@@ -219,6 +247,37 @@ pub struct PartSpec {
 }
 
 impl PartSpec {
+    /// A part of the deck `file`: shape "mesh", its mesh and state in `piece`.
+    pub(super) fn deck_part(
+        name: String,
+        file: &str,
+        piece: std::sync::Arc<super::from_inp::DeckPiece>,
+    ) -> Self {
+        Self {
+            name,
+            shape: "mesh".into(),
+            material: None,
+            origin: [0.0; 3],
+            size: [0.0; 3],
+            divisions: [0; 3],
+            grading: default_grading(),
+            grading_core: default_core(),
+            area: 1.0,
+            thickness: 1.0,
+            radius: 0.0,
+            angles: [0.0; 2],
+            points: Vec::new(),
+            mass: 0.0,
+            velocity: [0.0; 3],
+            file: Some(file.to_string()),
+            rigid: false,
+            dimension: None,
+            deck: Some(piece),
+            axisymmetric: false,
+            motion: None,
+        }
+    }
+
     /// Whether the part is a fixed rigid surface.
     pub fn is_rigid(&self) -> bool {
         matches!(self.shape.as_str(), "plate" | "line" | "arc" | "sphere")
@@ -347,6 +406,42 @@ pub struct ContactSpec {
     /// farther than this from every master facet is not in the pair's contacts.
     #[serde(default)]
     pub search_radius: Option<f64>,
+    /// A pair read from an Abaqus deck: its enforcement, friction, sliding and schedule as the
+    /// deck defines them (the keys above then only name the faces).
+    #[serde(skip)]
+    pub deck: Option<crate::io::inp::PairSettings>,
+}
+
+impl ContactSpec {
+    /// A deck's `*CONTACT PAIR`: the slave surface on one part against the master surface on
+    /// another (or the same), balanced at `weight` when given.
+    pub(super) fn deck_pair(
+        slave: String,
+        slave_face: String,
+        master: String,
+        master_face: String,
+        weight: Option<f64>,
+        settings: crate::io::inp::PairSettings,
+    ) -> Self {
+        let kinematic = matches!(settings.enforce, crate::model::Enforce::Kinematic(_));
+        Self {
+            slave,
+            slave_face,
+            master,
+            master_face: Some(master_face),
+            enforce: Some(if kinematic { "kinematic" } else { "penalty" }.into()),
+            friction: 0.0,
+            sliding: None,
+            balanced: weight,
+            penalty_scale: None,
+            stiffness: None,
+            stiffness_per_area: None,
+            damping: None,
+            search_interval: None,
+            search_radius: None,
+            deck: Some(settings),
+        }
+    }
 }
 
 /// What a part may take in memory, estimated from its divisions before anything is built.
@@ -526,9 +621,21 @@ impl Scene {
             .collect()
     }
 
+    /// Checks a scene built from a deck as a scene file is checked.
+    pub(super) fn check_deck(&self) -> Result<()> {
+        self.check().map_err(Located::named)
+    }
+
     /// Reads and parses the scene file at `path`; mesh files are then relative to its
-    /// directory. Errors name the file, and the key or line.
+    /// directory. An Abaqus deck (`.inp`) is read by [`Scene::from_inp`]. Errors name the
+    /// file, and the key or line.
     pub fn load(path: &std::path::Path) -> Result<Self> {
+        if path
+            .extension()
+            .is_some_and(|e| e.eq_ignore_ascii_case("inp"))
+        {
+            return Self::from_inp(path);
+        }
         let text = std::fs::read_to_string(path).map_err(|e| Error::Io {
             file: path.display().to_string(),
             message: e.to_string(),

@@ -99,6 +99,10 @@ pub struct Summary {
     pub unanchored_slaves: Vec<u32>,
     /// What a user should know before trusting the results (also printed by `abut run`).
     pub warnings: Vec<String>,
+    /// A scene read from an Abaqus deck: the keywords read and not acted on, and what abut
+    /// made of the deck beyond its tables ([`crate::scene::Scene::deck_notes`]).
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub deck_notes: Vec<String>,
     /// First time a contact force acted (start of its increment; NaN if none).
     pub contact_start: f64,
     /// Last time a contact force acted (end of its increment).

@@ -87,7 +87,8 @@ struct VerifyArgs {
 
 #[derive(clap::Args, Clone)]
 struct RunArgs {
-    /// The scene file (TOML; see `abut::scene`).
+    /// The scene file (TOML; see `abut::scene`) or an Abaqus input deck (`.inp`: its
+    /// explicit-dynamics keywords; see `abut::scene::Scene::from_inp`).
     scene: std::path::PathBuf,
     /// Where to run.
     #[arg(long, value_enum, default_value_t = BackendArg::Auto)]
@@ -282,6 +283,9 @@ fn run_scene(a: &RunArgs) -> abut::Result<()> {
         println!("scene: {}", scene.title);
         for n in &notes {
             eprintln!("abut: warning: {n}");
+        }
+        for n in &scene.deck_notes {
+            eprintln!("abut: deck: {n}");
         }
     }
     // a bar on a terminal (hidden otherwise), and the estimate once for long runs

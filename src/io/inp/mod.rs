@@ -20,10 +20,15 @@ use crate::model::{
     PressureOverclosure, Sliding, Stiffness, Surface, SurfaceId,
 };
 
+mod analysis;
 mod keywords;
 mod to_model;
 
-pub use to_model::DeckModel;
+pub use analysis::{
+    AmplitudeDef, Analysis, At, BoundaryDef, BoundaryKind, CloadDef, GravityDef, MaterialDef,
+    RigidBodyDef, SectionDef, StepDef,
+};
+pub use to_model::{DeckModel, PairSettings};
 
 /// `*SURFACE BEHAVIOR, PRESSURE-OVERCLOSURE=…`.
 #[derive(Clone, Debug, PartialEq)]
@@ -114,6 +119,11 @@ pub struct Deck {
     pub time_period: Option<f64>,
     /// Lumped nodal masses from `*SOLID SECTION` densities (0 where none).
     pub masses: Vec<f64>,
+    /// `*HEADING`'s first data line, when given.
+    pub heading: Option<String>,
+    /// What the deck asks to run: materials, sections, rigid bodies, boundary conditions,
+    /// loads, the step (read by [`crate::scene::Scene::from_inp`]).
+    pub analysis: Analysis,
 }
 
 /// One logical line of a deck.
@@ -277,6 +287,8 @@ struct Parser {
     sections: Vec<(String, String, f64, Line)>,
     /// Whether the deck's plane elements are axisymmetric (set by the first one).
     plane_axisymmetric: Option<bool>,
+    /// The nodes of the `TYPE=MASS` and `TYPE=ROTARYI` elements of each `ELSET=`.
+    point_sets: BTreeMap<String, Vec<u32>>,
 }
 
 impl Parser {
@@ -333,6 +345,20 @@ pub fn parse(text: &str, name: &Path) -> Result<Deck> {
     parse_lines(&lines)
 }
 
+/// Whether keyword `kw` has data lines.
+fn takes_data(kw: &str) -> bool {
+    !matches!(
+        kw,
+        "MATERIAL"
+            | "SURFACE INTERACTION"
+            | "END STEP"
+            | "RIGID BODY"
+            | "DAMPING"
+            | "FIXED MASS SCALING"
+            | "OUTPUT"
+    )
+}
+
 fn parse_lines(lines: &[Line]) -> Result<Deck> {
     let mut p = Parser {
         deck: Deck {
@@ -344,6 +370,7 @@ fn parse_lines(lines: &[Line]) -> Result<Deck> {
         densities: BTreeMap::new(),
         sections: Vec::new(),
         plane_axisymmetric: None,
+        point_sets: BTreeMap::new(),
         current_material: None,
         current_interaction: None,
         in_step: false,
@@ -364,45 +391,55 @@ fn parse_lines(lines: &[Line]) -> Result<Deck> {
             j += 1;
         }
         let data = &lines[i + 1..j];
+        if let Some(why) = keywords::ignored(&kw) {
+            p.on_ignored(l, &kw, why);
+            i = j;
+            continue;
+        }
         match kw.as_str() {
-            "HEADING" => only(l, &kw, &opts, &[])?,
+            "HEADING" => {
+                only(l, &kw, &opts, &[])?;
+                p.deck.heading = data.first().map(|d| d.text.clone());
+            }
             "NODE" => p.on_node(l, &kw, &opts, data)?,
             "ELEMENT" => p.on_element(l, &kw, &opts, data)?,
             "NSET" | "ELSET" => p.on_nset(l, &kw, &opts, data)?,
             "SURFACE" => p.on_surface(l, &kw, &opts, data)?,
             "MATERIAL" => p.on_material(l, &kw, &opts, data)?,
             "DENSITY" | "ELASTIC" => p.on_density(l, &kw, &opts, data)?,
+            "DAMPING" => p.on_damping(l, &kw, &opts, data)?,
             "SOLID SECTION" => p.on_solid_section(l, &kw, &opts, data)?,
             "SURFACE INTERACTION" => p.on_surface_interaction(l, &kw, &opts, data)?,
             "FRICTION" => p.on_friction(l, &kw, &opts, data)?,
             "SURFACE BEHAVIOR" => p.on_surface_behavior(l, &kw, &opts, data)?,
             "CONTACT PAIR" => p.on_contact_pair(l, &kw, &opts, data)?,
             "CONTACT CONTROLS" => p.on_contact_controls(l, &kw, &opts, data)?,
+            "RIGID BODY" => p.on_rigid_body(l, &kw, &opts, data)?,
+            "MASS" | "ROTARY INERTIA" => p.on_mass(l, &kw, &opts, data)?,
+            "BOUNDARY" => p.on_boundary(l, &kw, &opts, data)?,
+            "INITIAL CONDITIONS" => p.on_initial_conditions(l, &kw, &opts, data)?,
+            "AMPLITUDE" => p.on_amplitude(l, &kw, &opts, data)?,
+            "CLOAD" => p.on_cload(l, &kw, &opts, data)?,
+            "DLOAD" => p.on_dload(l, &kw, &opts, data)?,
+            "BULK VISCOSITY" => p.on_bulk_viscosity(l, &kw, &opts, data)?,
+            "FIXED MASS SCALING" => p.on_fixed_mass_scaling(l, &kw, &opts, data)?,
+            "OUTPUT" => p.on_output(l, &kw, &opts, data)?,
             "STEP" => p.on_step(l, &kw, &opts, data)?,
-            "DYNAMIC" => p.on_dynamic(l, &kw, &opts, data)?,
+            "DYNAMIC" | "STATIC" => p.on_dynamic(l, &kw, &opts, data)?,
             "END STEP" => p.on_end_step(l, &kw, &opts, data)?,
             other => {
-                return Err(err(l, format!("keyword *{other} is not supported by abut")));
+                return Err(err(
+                    l,
+                    match keywords::not_modelled(other) {
+                        Some(what) => {
+                            format!("keyword *{other} ({what}) is not modelled by abut")
+                        }
+                        None => format!("keyword *{other} is not supported by abut"),
+                    },
+                ));
             }
         }
-        if !matches!(
-            kw.as_str(),
-            "HEADING"
-                | "NODE"
-                | "ELEMENT"
-                | "NSET"
-                | "ELSET"
-                | "SURFACE"
-                | "CONTACT PAIR"
-                | "DENSITY"
-                | "ELASTIC"
-                | "SOLID SECTION"
-                | "FRICTION"
-                | "SURFACE BEHAVIOR"
-                | "DYNAMIC"
-                | "CONTACT CONTROLS"
-        ) && !data.is_empty()
-        {
+        if !takes_data(&kw) && !data.is_empty() {
             return Err(err(&data[0], format!("*{kw} takes no data lines")));
         }
         i = j;

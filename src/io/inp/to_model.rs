@@ -3,6 +3,20 @@
 
 use super::*;
 
+/// How a `*CONTACT PAIR` is enforced: what its interaction, its controls and the step make of
+/// it.
+#[derive(Clone, Debug, PartialEq)]
+pub struct PairSettings {
+    /// Penalty (`MECHANICAL CONSTRAINT=PENALTY`) or kinematic, with the pressure–overclosure law.
+    pub enforce: Enforce,
+    /// `*FRICTION`.
+    pub friction: Friction,
+    /// `SMALL SLIDING`: small with NLGEOM, infinitesimal without; finite otherwise.
+    pub sliding: Sliding,
+    /// `*CONTACT CONTROLS`' `GLOBTRKINC` and `FASTLOCALTRK`, when given.
+    pub schedule: Option<Schedule>,
+}
+
 /// What [`Deck::to_model`] built: the model and, per `*CONTACT PAIR`, its pair.
 #[derive(Clone, Debug)]
 pub struct DeckModel {
@@ -17,12 +31,81 @@ pub struct DeckModel {
 }
 
 impl Deck {
+    /// How `pair` is enforced. Penalty pairs take `LINEAR` slopes as stiffness per area,
+    /// `EXPONENTIAL` and `TABULAR` as laws (hard: the automatic stiffness, scaled by `SCALE
+    /// PENALTY`); kinematic pairs take non-hard behaviours as softened contact.
+    pub fn pair_settings(&self, pair: &ContactPairDef) -> PairSettings {
+        let controls = self
+            .controls
+            .iter()
+            .filter(|c| c.cpset.is_none() || c.cpset == pair.cpset)
+            .fold(Controls::default(), |a, c| Controls {
+                cpset: None,
+                global_interval: c.global_interval.or(a.global_interval),
+                wide_local: c.wide_local || a.wide_local,
+                penalty_scale: c.penalty_scale.or(a.penalty_scale),
+            });
+        let inter = &self.interactions[&pair.interaction];
+        let law = |b: &Behavior| match b {
+            Behavior::Hard | Behavior::Linear(_) => PressureOverclosure::Linear,
+            Behavior::Exponential {
+                pressure,
+                clearance,
+            } => PressureOverclosure::Exponential {
+                clearance: *clearance,
+                pressure: *pressure,
+            },
+            Behavior::Tabular(t) => {
+                PressureOverclosure::Tabular(t.iter().map(|&(p, h)| (h, p)).collect())
+            }
+        };
+        let enforce = if pair.penalty {
+            Enforce::Penalty(Penalty {
+                stiffness: match inter.behavior {
+                    Behavior::Linear(k) => Stiffness::PerArea(k),
+                    _ => Stiffness::Auto {
+                        scale: controls.penalty_scale.unwrap_or(1.0),
+                    },
+                },
+                law: law(&inter.behavior),
+                ..Default::default()
+            })
+        } else {
+            Enforce::Kinematic(Kinematic {
+                softened: match &inter.behavior {
+                    Behavior::Hard => None,
+                    Behavior::Linear(k) => Some(PressureOverclosure::linear(*k)),
+                    b => Some(law(b)),
+                },
+            })
+        };
+        let schedule = (controls.global_interval.is_some() || controls.wide_local).then(|| {
+            let d = Schedule::default_for(pair.slave == pair.master);
+            Schedule {
+                interval: controls.global_interval.unwrap_or(d.interval),
+                wide_local: controls.wide_local,
+                ..d
+            }
+        });
+        PairSettings {
+            enforce,
+            friction: if inter.friction > 0.0 {
+                Friction::coulomb(inter.friction)
+            } else {
+                Friction::Frictionless
+            },
+            sliding: match (pair.small_sliding, self.nlgeom) {
+                (false, _) => Sliding::Finite,
+                (true, true) => Sliding::Small,
+                (true, false) => Sliding::Infinitesimal,
+            },
+            schedule,
+        }
+    }
+
     /// The model with every contact pair: nodes with the sections' lumped masses (`default_mass`
-    /// where no section gives one, e.g. rigid surfaces), 2D when every element is planar.
-    /// Penalty pairs take `LINEAR` slopes as stiffness per area, `EXPONENTIAL` and `TABULAR`
-    /// as laws (hard: the automatic stiffness, scaled by `SCALE PENALTY`); kinematic pairs take
-    /// non-hard behaviours as softened contact. `SMALL SLIDING` is small sliding with NLGEOM
-    /// and infinitesimal without. `GLOBTRKINC` and `FASTLOCALTRK` set the pair's schedule.
+    /// where no section gives one, e.g. rigid surfaces), 2D when every element is planar; each
+    /// pair as [`Deck::pair_settings`] says.
     pub fn to_model(&self, default_mass: f64) -> Result<DeckModel> {
         let planar = !self.mesh.elements.is_empty()
             && self
@@ -48,17 +131,6 @@ impl Deck {
             slave_sets: BTreeMap::new(),
         };
         for pair in &self.pairs {
-            let controls = self
-                .controls
-                .iter()
-                .filter(|c| c.cpset.is_none() || c.cpset == pair.cpset)
-                .fold(Controls::default(), |a, c| Controls {
-                    cpset: None,
-                    global_interval: c.global_interval.or(a.global_interval),
-                    wide_local: c.wide_local || a.wide_local,
-                    penalty_scale: c.penalty_scale.or(a.penalty_scale),
-                });
-            let inter = &self.interactions[&pair.interaction];
             let slave = match &self.surfaces[&pair.slave] {
                 SurfaceDef::Nodes(n, a) => out.model.add_node_set_with_areas(n, a)?,
                 SurfaceDef::Faces(f) => {
@@ -83,58 +155,13 @@ impl Deck {
                 .model
                 .add_surface(Surface::from_facets(master_faces.clone()))?;
             out.surfaces.insert(pair.master.clone(), master);
-            let law = |b: &Behavior| match b {
-                Behavior::Hard | Behavior::Linear(_) => PressureOverclosure::Linear,
-                Behavior::Exponential {
-                    pressure,
-                    clearance,
-                } => PressureOverclosure::Exponential {
-                    clearance: *clearance,
-                    pressure: *pressure,
-                },
-                Behavior::Tabular(t) => {
-                    PressureOverclosure::Tabular(t.iter().map(|&(p, h)| (h, p)).collect())
-                }
-            };
-            let enforce = if pair.penalty {
-                Enforce::Penalty(Penalty {
-                    stiffness: match inter.behavior {
-                        Behavior::Linear(k) => Stiffness::PerArea(k),
-                        _ => Stiffness::Auto {
-                            scale: controls.penalty_scale.unwrap_or(1.0),
-                        },
-                    },
-                    law: law(&inter.behavior),
-                    ..Default::default()
-                })
-            } else {
-                Enforce::Kinematic(Kinematic {
-                    softened: match &inter.behavior {
-                        Behavior::Hard => None,
-                        Behavior::Linear(k) => Some(PressureOverclosure::linear(*k)),
-                        b => Some(law(b)),
-                    },
-                })
-            };
+            let set = self.pair_settings(pair);
             let mut p = Pair::new(slave, master)
-                .enforce(enforce)
-                .friction(if inter.friction > 0.0 {
-                    Friction::coulomb(inter.friction)
-                } else {
-                    Friction::Frictionless
-                })
-                .sliding(match (pair.small_sliding, self.nlgeom) {
-                    (false, _) => Sliding::Finite,
-                    (true, true) => Sliding::Small,
-                    (true, false) => Sliding::Infinitesimal,
-                });
-            if controls.global_interval.is_some() || controls.wide_local {
-                let d = Schedule::default_for(pair.slave == pair.master);
-                p = p.schedule(Schedule {
-                    interval: controls.global_interval.unwrap_or(d.interval),
-                    wide_local: controls.wide_local,
-                    ..d
-                });
+                .enforce(set.enforce)
+                .friction(set.friction)
+                .sliding(set.sliding);
+            if let Some(schedule) = set.schedule {
+                p = p.schedule(schedule);
             }
             if let Some(w) = pair.weight {
                 let SurfaceDef::Faces(f) = &self.surfaces[&pair.slave] else {

@@ -173,7 +173,9 @@ impl Scene {
                         _ => std::path::PathBuf::from(file),
                     };
                     let dim = p.dimension.unwrap_or(if two_d { 2 } else { 3 });
-                    let (mesh, surfaces) = if file.ends_with(".msh") {
+                    let (mesh, surfaces) = if let Some(piece) = &p.deck {
+                        (piece.mesh.clone(), piece.surfaces.clone())
+                    } else if file.ends_with(".msh") {
                         (crate::io::gmsh::read(&path, dim)?, BTreeMap::new())
                     } else {
                         let d = crate::io::inp::read(&path)?;
@@ -192,7 +194,9 @@ impl Scene {
                             expected: "axisymmetric elements (CAX3, CAX4(R)) in a 2D scene: set dimension = 2 or axisymmetric = true on the part",
                         });
                     }
-                    if !rigid {
+                    if let (Some(piece), false) = (&p.deck, rigid) {
+                        deck_elements(piece, base, &x, &mut elements, &p.name)?;
+                    } else if !rigid {
                         let mat = material(self, p);
                         let bad_el = |k: usize| Error::BadParameter {
                             name: "part.file",
@@ -252,7 +256,7 @@ impl Scene {
                                 _ => {} // boundary facets and lines: surfaces only
                             }
                         }
-                        if elements.len() == n_el {
+                        if elements.len() == n_el && p.deck.is_none() {
                             return Err(Error::BadParameter {
                                 name: "part.file",
                                 value: format!("{file} (part {})", p.name),
@@ -269,9 +273,42 @@ impl Scene {
                 }
             };
             let count = x.len() - base;
-            let moving = rigid && p.motion.as_deref().is_some_and(|m| m != "fixed");
+            let moving = match p.deck.as_ref().and_then(|d| d.rigid.as_ref()) {
+                Some(r) => r.motion != BodyMotion::Fixed,
+                None => rigid && p.motion.as_deref().is_some_and(|m| m != "fixed"),
+            };
             if moving {
                 moving_parts.push((parts.len(), base, count));
+            }
+            if let Some(piece) = &p.deck {
+                // the deck's own masses, velocities and held directions, node by node
+                let body_mass = piece.rigid.as_ref().map(|r| r.mass);
+                point.extend(piece.point_mass.iter().map(|&m| match (body_mass, moving) {
+                    (Some(b), true) => b,
+                    (Some(_), false) => IMMOVABLE_MASS,
+                    (None, _) => m,
+                }));
+                velocity.extend(
+                    piece
+                        .velocity
+                        .iter()
+                        .map(|&v| if rigid { [0.0; 3] } else { v }),
+                );
+                fixed.extend(piece.fixed.iter().map(|f| {
+                    let mut held = if rigid && !moving { [true; 3] } else { *f };
+                    if two_d {
+                        held[2] = true;
+                    }
+                    held
+                }));
+                parts.push(PartNodes {
+                    name: p.name.clone(),
+                    base,
+                    count,
+                    elements: elements.len() - n_el,
+                    grid,
+                });
+                continue;
             }
             point.extend(std::iter::repeat_n(
                 if moving {
@@ -336,6 +373,20 @@ impl Scene {
         for &(k, base, count) in moving_parts {
             let p = &self.part[k];
             let nodes: Vec<u32> = (base as u32..(base + count) as u32).collect();
+            if let Some(r) = p.deck.as_ref().and_then(|d| d.rigid.as_ref()) {
+                // a deck's body: its reference node, mass and inertia as the deck gives them
+                if r.motion == BodyMotion::Free {
+                    free_parts.push((nodes.clone(), r.mass, r.inertia));
+                }
+                let mut body = SolverBody::new(r.mass, r.inertia, r.reference, nodes, x, r.motion)?;
+                body.state.velocity = r.velocity;
+                body.locked = r.locked;
+                body.rotation_locked = r.rotation_locked;
+                body.load = r.load;
+                body.moment = r.moment;
+                meshed_bodies.push((p.name.clone(), body));
+                continue;
+            }
             let mut c = [0.0; 3];
             for &n in &nodes {
                 for a in 0..3 {
@@ -373,4 +424,59 @@ impl Scene {
         }
         Ok((meshed_bodies, free_parts))
     }
+}
+
+/// The deformable elements of a deck's part (first node `base`, positions `x`): each with its
+/// section's material, thickness (plane elements) or cross-section area (trusses); a plane
+/// quadrilateral as two triangles.
+fn deck_elements(
+    piece: &super::super::from_inp::DeckPiece,
+    base: usize,
+    x: &[[f64; 3]],
+    elements: &mut Vec<Element>,
+    name: &str,
+) -> Result<()> {
+    for (k, e) in piece.mesh.elements.iter().enumerate() {
+        let (mat, t) = (piece.materials[k], piece.thickness[k]);
+        let n: Vec<u32> = e.nodes.iter().map(|&i| i + base as u32).collect();
+        let bad = || {
+            Error::BadParameter {
+            name: "element",
+            value: format!("element {} of part {name}", e.label),
+            expected: "an element with positive length, area or volume (axisymmetric: every node at x ≥ 0)",
+        }
+        };
+        match e.kind {
+            ElementKind::Tet4 => {
+                let q = [n[0], n[1], n[2], n[3]];
+                elements.push(
+                    Element::tet4(q, x, mat)
+                        .or_else(|| Element::tet4([q[0], q[2], q[1], q[3]], x, mat))
+                        .ok_or_else(bad)?,
+                );
+            }
+            ElementKind::Tri3In2d | ElementKind::Quad4In2d => {
+                let tris: Vec<[u32; 3]> = if n.len() == 3 {
+                    vec![[n[0], n[1], n[2]]]
+                } else {
+                    vec![[n[0], n[1], n[2]], [n[0], n[2], n[3]]]
+                };
+                for q in tris {
+                    let el = if e.axisymmetric {
+                        Element::axi3(q, x, mat)
+                            .or_else(|| Element::axi3([q[0], q[2], q[1]], x, mat))
+                    } else {
+                        Element::tri3(q, x, t, mat)
+                            .or_else(|| Element::tri3([q[0], q[2], q[1]], x, t, mat))
+                    };
+                    elements.push(el.ok_or_else(bad)?);
+                }
+            }
+            ElementKind::Line2 => {
+                elements.push(Element::bar([n[0], n[1]], x, t, mat).ok_or_else(bad)?);
+            }
+            _ => return Err(bad()),
+        }
+    }
+    Ok(())
 }

@@ -1,7 +1,8 @@
 //! The material, section, interaction, contact and step keywords: `*MATERIAL`, `*DENSITY`,
 //! `*ELASTIC`, `*SOLID SECTION`, `*SURFACE INTERACTION`, `*FRICTION`, `*SURFACE BEHAVIOR`,
-//! `*CONTACT PAIR`, `*CONTACT CONTROLS`, `*STEP`, `*DYNAMIC`, `*END STEP`.
+//! `*CONTACT PAIR`, `*CONTACT CONTROLS`, `*STEP`, `*DYNAMIC`, `*STATIC`, `*END STEP`.
 
+use super::super::analysis::{SectionDef, StepDef};
 use super::super::*;
 
 impl Parser {
@@ -29,7 +30,19 @@ impl Parser {
         opts: &BTreeMap<String, String>,
         data: &[Line],
     ) -> Result<()> {
-        only(l, kw, opts, &[])?;
+        if kw == "ELASTIC" {
+            if let Some(t) = opts.get("TYPE").map(|t| t.to_uppercase()) {
+                if t != "ISOTROPIC" {
+                    return Err(err(
+                        l,
+                        format!("*ELASTIC: TYPE={t} is not modelled by abut (ISOTROPIC)"),
+                    ));
+                }
+            }
+            only(l, kw, opts, &["TYPE"])?;
+        } else {
+            only(l, kw, opts, &[])?;
+        }
         let Some(m) = self.current_material.clone() else {
             return Err(err(l, format!("*{kw} outside a *MATERIAL")));
         };
@@ -42,7 +55,17 @@ impl Parser {
             return Err(err(d, format!("*{kw}: {v} must be positive")));
         }
         if kw == "DENSITY" {
-            self.densities.insert(m, v);
+            self.densities.insert(m.clone(), v);
+            self.material_mut(&m, l).density = Some(v);
+        } else {
+            let nu: f64 = num(d, f.get(1).copied().unwrap_or("0"), "Poisson's ratio")?;
+            if !(nu.is_finite() && (-1.0..0.5).contains(&nu)) {
+                return Err(err(
+                    d,
+                    format!("*ELASTIC: Poisson's ratio {nu} must be in [-1, 0.5)"),
+                ));
+            }
+            self.material_mut(&m, l).elastic = Some((v, nu));
         }
         Ok(())
     }
@@ -68,6 +91,13 @@ impl Parser {
         };
         self.sections
             .push((e.to_uppercase(), m.to_uppercase(), t, l.clone()));
+        let at = self.at(l);
+        self.deck.analysis.sections.push(SectionDef {
+            elset: e.to_uppercase(),
+            material: m.to_uppercase(),
+            thickness: t,
+            at,
+        });
         Ok(())
     }
 
@@ -153,6 +183,16 @@ impl Parser {
         let behavior = match po.as_str() {
             "HARD" => Behavior::Hard,
             "LINEAR" if values.len() == 1 => Behavior::Linear(values[0]),
+            "LINEAR" if values.len() <= 3 => {
+                // CalculiX's dialect: slope, then the tension at large clearance and the
+                // clearance it is reached at (a regularisation abut's linear law does not have)
+                self.on_ignored(
+                    l,
+                    "SURFACE BEHAVIOR, PRESSURE-OVERCLOSURE=LINEAR: values after the slope",
+                    "CalculiX's tension at large clearance; abut's linear law has no tension",
+                );
+                Behavior::Linear(values[0])
+            }
             // Abaqus' data line: clearance c0 at zero pressure, pressure p0 at contact
             "EXPONENTIAL" if values.len() == 2 => Behavior::Exponential {
                 clearance: values[0],
@@ -194,8 +234,23 @@ impl Parser {
                 "MECHANICAL CONSTRAINT",
                 "WEIGHT",
                 "CPSET",
+                "TYPE",
             ],
         )?;
+        match opts.get("TYPE").map(|t| t.to_uppercase()).as_deref() {
+            None | Some("NODE TO SURFACE") => {}
+            Some("SURFACE TO SURFACE") => self.on_ignored(
+                l,
+                "CONTACT PAIR, TYPE=SURFACE TO SURFACE",
+                "abut enforces contact pairs node to surface (slave nodes on master facets), as Abaqus/Explicit's pure master–slave pairs do",
+            ),
+            Some(other) => {
+                return Err(err(
+                    l,
+                    format!("*CONTACT PAIR: TYPE={other} is not supported by abut (NODE TO SURFACE, SURFACE TO SURFACE)"),
+                ))
+            }
+        }
         let Some(inter) = opts.get("INTERACTION") else {
             return Err(err(l, "*CONTACT PAIR needs INTERACTION="));
         };
@@ -307,17 +362,32 @@ impl Parser {
         opts: &BTreeMap<String, String>,
         _data: &[Line],
     ) -> Result<()> {
-        only(l, kw, opts, &["NLGEOM", "NAME"])?;
+        only(l, kw, opts, &["NLGEOM", "NAME", "INC"])?;
         if self.in_step {
             return Err(err(l, "*STEP inside a step (missing *END STEP)"));
         }
         self.in_step = true;
         self.deck.nlgeom = match opts.get("NLGEOM").map(|s| s.to_uppercase()) {
             None => true,
-            Some(s) if s == "YES" => true,
+            // the option alone means YES
+            Some(s) if s == "YES" || s.is_empty() => true,
             Some(s) if s == "NO" => false,
             Some(other) => return Err(err(l, format!("NLGEOM={other}: expected YES or NO"))),
         };
+        let at = self.at(l);
+        self.deck.analysis.steps.push(StepDef {
+            name: opts.get("NAME").cloned(),
+            nlgeom: self.deck.nlgeom,
+            procedure: None,
+            time_period: None,
+            fixed_increment: None,
+            scale_factor: None,
+            bulk_viscosity: None,
+            mass_scaling: None,
+            history_every: None,
+            field_every: None,
+            at,
+        });
         Ok(())
     }
 
@@ -329,20 +399,90 @@ impl Parser {
         opts: &BTreeMap<String, String>,
         data: &[Line],
     ) -> Result<()> {
-        only(l, kw, opts, &["EXPLICIT"])?;
+        if kw == "STATIC" {
+            // read as written; Scene::from_inp decides how it runs
+            let period = data
+                .first()
+                .map(|d| {
+                    let f: Vec<&str> = d.text.split(',').map(str::trim).collect();
+                    f.get(1)
+                        .filter(|s| !s.is_empty())
+                        .map(|t| num::<f64>(d, t, "time period"))
+                        .transpose()
+                })
+                .transpose()?
+                .flatten();
+            let step = self.step_mut(l, kw)?;
+            step.procedure = Some("STATIC".into());
+            step.time_period = period.or(Some(1.0));
+            return Ok(());
+        }
+        only(
+            l,
+            kw,
+            opts,
+            &[
+                "EXPLICIT",
+                "DIRECT USER CONTROL",
+                "SCALE FACTOR",
+                "ELEMENT BY ELEMENT",
+            ],
+        )?;
         if !opts.contains_key("EXPLICIT") {
             return Err(err(
                 l,
                 "*DYNAMIC: abut reads explicit steps only (*DYNAMIC, EXPLICIT)",
             ));
         }
-        // positional data: initial increment (may be empty), time period
+        let scale = match opts.get("SCALE FACTOR") {
+            Some(s) => {
+                let v: f64 = num(l, s, "SCALE FACTOR")?;
+                if !(v.is_finite() && v > 0.0 && v <= 1.0) {
+                    return Err(err(
+                        l,
+                        format!("*DYNAMIC: SCALE FACTOR={v} must be in (0, 1]"),
+                    ));
+                }
+                Some(v)
+            }
+            None => None,
+        };
+        // positional data: initial (or, with DIRECT USER CONTROL, fixed) increment, time period
+        let mut period = None;
+        let mut first = None;
         if let Some(d) = data.first() {
             let f: Vec<&str> = d.text.split(',').map(str::trim).collect();
             if let Some(t) = f.get(1).filter(|s| !s.is_empty()) {
-                self.deck.time_period = Some(num(d, t, "time period")?);
+                period = Some(num::<f64>(d, t, "time period")?);
+            }
+            if let Some(t) = f.first().filter(|s| !s.is_empty()) {
+                first = Some(num::<f64>(d, t, "time increment")?);
             }
         }
+        self.deck.time_period = period;
+        let direct = opts.contains_key("DIRECT USER CONTROL");
+        if direct && first.is_none_or(|dt| !(dt.is_finite() && dt > 0.0)) {
+            return Err(err(
+                l,
+                "*DYNAMIC, EXPLICIT, DIRECT USER CONTROL: the data line's first value, the fixed increment, must be positive",
+            ));
+        }
+        if opts.contains_key("ELEMENT BY ELEMENT") {
+            self.on_ignored(
+                l,
+                "DYNAMIC, ELEMENT BY ELEMENT",
+                "abut's stable increment is the whole model's (never larger than the element-by-element one)",
+            );
+        }
+        if !self.in_step {
+            // a contact-only deck (Deck::to_model) may give the procedure alone
+            return Ok(());
+        }
+        let step = self.step_mut(l, kw)?;
+        step.procedure = Some("DYNAMIC EXPLICIT".into());
+        step.time_period = period;
+        step.scale_factor = scale;
+        step.fixed_increment = if direct { first } else { None };
         Ok(())
     }
 

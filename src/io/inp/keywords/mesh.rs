@@ -61,7 +61,40 @@ impl Parser {
         let Some(t) = opts.get("TYPE") else {
             return Err(err(l, "*ELEMENT needs TYPE="));
         };
+        if matches!(t.to_uppercase().as_str(), "MASS" | "ROTARYI") {
+            // one-node elements carrying *MASS or *ROTARY INERTIA: their nodes, by ELSET
+            let Some(set) = opts.get("ELSET") else {
+                return Err(err(
+                    l,
+                    format!("*ELEMENT, TYPE={t} needs ELSET= (for *MASS or *ROTARY INERTIA)"),
+                ));
+            };
+            let mut nodes = Vec::new();
+            for d in data {
+                let f = fields(d);
+                if f.len() != 2 {
+                    return Err(err(
+                        d,
+                        format!("*ELEMENT, TYPE={t}: expected a label and a node"),
+                    ));
+                }
+                let _: u64 = num(d, f[0], "element label")?;
+                nodes.push(self.node(d, num(d, f[1], "node label")?)?);
+            }
+            self.deck.analysis.mass_sets.insert(set.to_uppercase());
+            self.point_sets
+                .entry(set.to_uppercase())
+                .or_default()
+                .extend(nodes);
+            return Ok(());
+        }
         let (kind, axisymmetric) = element_kind(l, t)?;
+        let at = self.at(l);
+        let first = self.deck.mesh.elements.len() as u32;
+        self.deck
+            .analysis
+            .element_blocks
+            .push((first, t.to_uppercase(), at));
         let n = kind.node_count();
         let mut set = Vec::new();
         // an element's nodes may continue on the next line after a trailing comma
@@ -120,6 +153,9 @@ impl Parser {
             }
             let idx = self.deck.mesh.elements.len() as u32;
             self.element_index.insert(label, idx);
+            if t.to_uppercase().starts_with("CPS") {
+                self.deck.analysis.plane_stress.push(idx);
+            }
             self.deck.mesh.elements.push(MeshElement {
                 kind,
                 nodes,

@@ -1,5 +1,8 @@
 //! The keywords of an Abaqus deck, one method of the parser each: what a keyword's options
 //! and data lines add to the deck, and the errors that name the line.
 
+mod analysis;
 mod interaction;
 mod mesh;
+
+pub(super) use analysis::{ignored, not_modelled};

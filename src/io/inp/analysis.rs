@@ -1,0 +1,233 @@
+//! What a deck asks to run, beside its mesh and contact: materials and sections, rigid bodies,
+//! point masses, boundary conditions, initial velocities, amplitudes, loads, the explicit step
+//! and its controls, and the keywords read but not acted on (print and file requests of other
+//! codes), each with the line it came from.
+
+use std::collections::BTreeMap;
+
+/// Where a definition stands in the deck: its file and line, for messages.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct At {
+    /// The file.
+    pub file: String,
+    /// The line (from 1).
+    pub line: usize,
+}
+
+impl std::fmt::Display for At {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(f, "{}:{}", self.file, self.line)
+    }
+}
+
+/// A `*MATERIAL` with what abut models of it.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct MaterialDef {
+    /// `*DENSITY` (mass per volume), when given.
+    pub density: Option<f64>,
+    /// `*ELASTIC` Young's modulus and Poisson's ratio, when given.
+    pub elastic: Option<(f64, f64)>,
+    /// `*DAMPING, ALPHA=`: mass-proportional damping α (0: none).
+    pub alpha: f64,
+    /// Where it was defined.
+    pub at: At,
+}
+
+/// A `*SOLID SECTION`: an element set, its material and its thickness (plane elements) or
+/// cross-section area (trusses).
+#[derive(Clone, Debug, PartialEq)]
+pub struct SectionDef {
+    /// Element set (upper case).
+    pub elset: String,
+    /// Material name (upper case).
+    pub material: String,
+    /// Thickness (plane elements) or area (trusses); 1 when not given.
+    pub thickness: f64,
+    /// Where it was defined.
+    pub at: At,
+}
+
+/// A `*RIGID BODY`: the elements or analytical surface it carries and its reference node.
+#[derive(Clone, Debug, PartialEq)]
+pub struct RigidBodyDef {
+    /// `REF NODE=` (node index).
+    pub ref_node: u32,
+    /// `ELSET=`: the rigid elements (element indices).
+    pub elements: Vec<u32>,
+    /// `PIN NSET=` and `TIE NSET=`: nodes carried by the body (node indices).
+    pub nodes: Vec<u32>,
+    /// `ANALYTICAL SURFACE=` (upper case).
+    pub analytical: Option<String>,
+    /// Where it was defined.
+    pub at: At,
+}
+
+/// What a `*BOUNDARY` data line prescribes.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum BoundaryKind {
+    /// `TYPE=DISPLACEMENT` (the default): displacement (rotation for 4–6).
+    Displacement,
+    /// `TYPE=VELOCITY`.
+    Velocity,
+}
+
+/// One `*BOUNDARY` data line: degrees of freedom `first..=last` (1–6) of `nodes` held at
+/// `value` (times the amplitude).
+#[derive(Clone, Debug, PartialEq)]
+pub struct BoundaryDef {
+    /// The nodes (node indices).
+    pub nodes: Vec<u32>,
+    /// First degree of freedom (1–6).
+    pub first: usize,
+    /// Last degree of freedom (1–6).
+    pub last: usize,
+    /// The value (0 for a fixed degree of freedom).
+    pub value: f64,
+    /// Displacement or velocity.
+    pub kind: BoundaryKind,
+    /// `AMPLITUDE=` (upper case); none: Abaqus/Explicit's default, applied at once.
+    pub amplitude: Option<String>,
+    /// Given in a step (history data) rather than before the first (model data).
+    pub in_step: bool,
+    /// Where it was given.
+    pub at: At,
+}
+
+/// An `*AMPLITUDE` curve.
+#[derive(Clone, Debug, PartialEq)]
+pub struct AmplitudeDef {
+    /// `DEFINITION=SMOOTH STEP` (a quintic between points, zero rate at each); tabular
+    /// (piecewise linear) otherwise.
+    pub smooth: bool,
+    /// (time, value) points, time increasing.
+    pub points: Vec<(f64, f64)>,
+    /// Where it was defined.
+    pub at: At,
+}
+
+/// One `*CLOAD` data line: a force (1–3) or moment (4–6) on each of `nodes`.
+#[derive(Clone, Debug, PartialEq)]
+pub struct CloadDef {
+    /// The nodes (node indices).
+    pub nodes: Vec<u32>,
+    /// Degree of freedom (1–6).
+    pub dof: usize,
+    /// Magnitude (force or moment units).
+    pub value: f64,
+    /// `AMPLITUDE=` (upper case).
+    pub amplitude: Option<String>,
+    /// Where it was given.
+    pub at: At,
+}
+
+/// A `*DLOAD` of type `GRAV`: gravity on an element set.
+#[derive(Clone, Debug, PartialEq)]
+pub struct GravityDef {
+    /// The element set (upper case), or an element label.
+    pub elset: String,
+    /// The acceleration vector (magnitude times the direction given).
+    pub acceleration: [f64; 3],
+    /// Where it was given.
+    pub at: At,
+}
+
+/// The `*STEP` with its `*DYNAMIC, EXPLICIT` procedure and step-level controls.
+#[derive(Clone, Debug, PartialEq)]
+pub struct StepDef {
+    /// `NAME=`, when given.
+    pub name: Option<String>,
+    /// `NLGEOM=` (Abaqus/Explicit's default is YES).
+    pub nlgeom: bool,
+    /// The procedure: `DYNAMIC EXPLICIT` or `STATIC`.
+    pub procedure: Option<String>,
+    /// The step's time period.
+    pub time_period: Option<f64>,
+    /// `DIRECT USER CONTROL`: the fixed increment.
+    pub fixed_increment: Option<f64>,
+    /// `SCALE FACTOR=` on the stable increment.
+    pub scale_factor: Option<f64>,
+    /// `*BULK VISCOSITY`: linear and quadratic coefficients.
+    pub bulk_viscosity: Option<(f64, f64)>,
+    /// `*FIXED MASS SCALING, FACTOR=` over the whole model.
+    pub mass_scaling: Option<f64>,
+    /// `*OUTPUT, HISTORY, FREQUENCY=`: a history row every this many increments.
+    pub history_every: Option<usize>,
+    /// `*OUTPUT, FIELD, FREQUENCY=`: a contact frame every this many increments.
+    pub field_every: Option<usize>,
+    /// Where the step began.
+    pub at: At,
+}
+
+/// What a deck asks to run.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Analysis {
+    /// Materials by name (upper case).
+    pub materials: BTreeMap<String, MaterialDef>,
+    /// Sections in deck order.
+    pub sections: Vec<SectionDef>,
+    /// Rigid bodies in deck order.
+    pub rigid_bodies: Vec<RigidBodyDef>,
+    /// Point masses (`*MASS` on `TYPE=MASS` elements): node index and mass.
+    pub point_masses: Vec<(u32, f64, At)>,
+    /// Rotary inertia (`*ROTARY INERTIA` on `TYPE=ROTARYI` elements): node index and the
+    /// inertia tensor about it.
+    pub rotary_inertia: Vec<(u32, [[f64; 3]; 3], At)>,
+    /// Boundary conditions in deck order (model data, then the step's).
+    pub boundaries: Vec<BoundaryDef>,
+    /// `*INITIAL CONDITIONS, TYPE=VELOCITY`: node index, degree of freedom (1–3), value.
+    pub initial_velocities: Vec<(u32, usize, f64, At)>,
+    /// Amplitudes by name (upper case).
+    pub amplitudes: BTreeMap<String, AmplitudeDef>,
+    /// Concentrated loads in deck order.
+    pub cloads: Vec<CloadDef>,
+    /// Gravity loads.
+    pub gravity: Vec<GravityDef>,
+    /// The steps, in order.
+    pub steps: Vec<StepDef>,
+    /// Each `*ELEMENT` keyword: the index of its first element, its `TYPE=` and where it is.
+    pub element_blocks: Vec<(u32, String, At)>,
+    /// Plane-stress elements (CPS3, CPS4, CPS4R), by element index: read as plane meshes, not
+    /// modelled as deformable (abut's plane elements are plane strain).
+    pub plane_stress: Vec<u32>,
+    /// The element sets of `TYPE=MASS` and `TYPE=ROTARYI` elements (upper case).
+    pub mass_sets: std::collections::BTreeSet<String>,
+    /// Keywords read but not acted on, with why: print and file requests of other codes,
+    /// output variables abut does not write.
+    pub ignored: Vec<String>,
+}
+
+/// The degrees of freedom a `*BOUNDARY` type word holds: ENCASTRE, PINNED and the
+/// symmetry conditions, as (first, last) ranges.
+pub(crate) fn boundary_type(word: &str) -> Option<&'static [(usize, usize)]> {
+    Some(match word {
+        "ENCASTRE" => &[(1, 6)],
+        "PINNED" => &[(1, 3)],
+        "XSYMM" => &[(1, 1), (5, 6)],
+        "YSYMM" => &[(2, 2), (4, 4), (6, 6)],
+        "ZSYMM" => &[(3, 5)],
+        "XASYMM" => &[(2, 4)],
+        "YASYMM" => &[(1, 1), (3, 3), (5, 5)],
+        "ZASYMM" => &[(1, 2), (6, 6)],
+        _ => return None,
+    })
+}
+
+impl Analysis {
+    /// The `*ELEMENT` keyword element `e` was defined under: its `TYPE=` and where it is.
+    pub fn element_block(&self, e: u32) -> Option<(&str, &At)> {
+        let k = self.element_blocks.partition_point(|b| b.0 <= e);
+        self.element_blocks
+            .get(k.checked_sub(1)?)
+            .map(|b| (b.1.as_str(), &b.2))
+    }
+}
+
+impl AmplitudeDef {
+    /// The curve, for the solver.
+    pub fn curve(&self) -> crate::explicit::Amplitude {
+        crate::explicit::Amplitude {
+            smooth: self.smooth,
+            points: self.points.clone(),
+        }
+    }
+}

@@ -1,0 +1,794 @@
+//! An Abaqus deck as a scene ([`Scene::from_inp`]): its sections' elements as deformable parts
+//! (elements that share nodes in one part), each `*RIGID BODY` as a rigid part moving as its
+//! reference node's boundary conditions say, the point masses not on an element as a part of
+//! their own; boundary conditions, initial velocities, loads and amplitudes on the parts' nodes;
+//! the contact pairs as the deck defines them; the step's controls as the run's. What abut does
+//! not model is refused here, naming the definition's file and line; what it reads and does not
+//! act on is listed in [`Scene::deck_notes`].
+
+use std::collections::{BTreeMap, BTreeSet};
+use std::path::Path;
+use std::sync::Arc;
+
+use crate::error::{Error, Result};
+use crate::explicit::{Amplitude, BodyMotion, Material, Motion};
+use crate::io::inp::{At, BoundaryKind, Deck, PairSettings, SurfaceDef};
+use crate::io::{ElementKind, MeshData, MeshElement};
+use crate::model::Facet;
+
+use super::spec::{ContactSpec, MaterialSpec, PartSpec, RunSpec, Scene};
+
+/// A part of a deck: its mesh (node indices local to the part) and what the deck says about
+/// its elements and nodes.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct DeckPiece {
+    /// Nodes, elements, sets (restricted to the part) in deck order.
+    pub mesh: MeshData,
+    /// The deck's surfaces, restricted to the part's nodes.
+    pub surfaces: BTreeMap<String, SurfaceDef>,
+    /// Each element's material (deformable parts).
+    pub materials: Vec<Material>,
+    /// Each element's thickness (plane elements) or cross-section area (trusses).
+    pub thickness: Vec<f64>,
+    /// Each node's initial velocity.
+    pub velocity: Vec<[f64; 3]>,
+    /// Each node's point mass (`*MASS`).
+    pub point_mass: Vec<f64>,
+    /// Each node's constant load (`*CLOAD`).
+    pub loads: Vec<[f64; 3]>,
+    /// Each node's held translations.
+    pub fixed: Vec<[bool; 3]>,
+    /// Prescribed motions: local node, axis, motion.
+    pub prescribed: Vec<(u32, usize, Motion)>,
+    /// A rigid part: its body.
+    pub rigid: Option<DeckRigid>,
+    /// Each node's deck index (for messages and the history).
+    pub deck_nodes: Vec<u32>,
+}
+
+/// The rigid body a `*RIGID BODY` makes of its elements.
+#[derive(Clone, Debug, PartialEq)]
+pub struct DeckRigid {
+    /// Its reference node's position.
+    pub reference: [f64; 3],
+    /// Mass (`*MASS` on the reference node).
+    pub mass: f64,
+    /// Inertia about the reference node (`*ROTARY INERTIA`).
+    pub inertia: [[f64; 3]; 3],
+    /// How it moves, from its reference node's boundary conditions.
+    pub motion: BodyMotion,
+    /// Held translations of a free body.
+    pub locked: [bool; 3],
+    /// Rotation held (all three rotational degrees of freedom fixed).
+    pub rotation_locked: bool,
+    /// Initial velocity (`*INITIAL CONDITIONS` on the reference node).
+    pub velocity: [f64; 3],
+    /// Constant force and moment (`*CLOAD` on the reference node).
+    pub load: [f64; 3],
+    /// Constant moment.
+    pub moment: [f64; 3],
+}
+
+fn refuse<T>(at: &At, message: impl Into<String>) -> Result<T> {
+    Err(Error::Parse {
+        file: at.file.clone(),
+        line: at.line,
+        message: message.into(),
+    })
+}
+
+/// Union–find over deck nodes.
+fn root(parent: &mut [u32], mut a: u32) -> u32 {
+    while parent[a as usize] != a {
+        parent[a as usize] = parent[parent[a as usize] as usize];
+        a = parent[a as usize];
+    }
+    a
+}
+
+/// What each deck element is.
+#[derive(Clone, Copy, PartialEq)]
+enum Role {
+    /// In a section: material index and thickness.
+    Deformable(usize, f64),
+    /// In rigid body k.
+    Rigid(usize),
+}
+
+impl Scene {
+    /// Reads the Abaqus deck at `path` as a scene: the explicit-dynamics subset of its
+    /// keywords (the module doc of [`crate::io::inp`] and of this function's module list them).
+    /// Errors name the file and line of what abut does not model.
+    pub fn from_inp(path: &Path) -> Result<Scene> {
+        let deck = crate::io::inp::read(path)?;
+        let file = path.display().to_string();
+        from_deck(&deck, &file)
+    }
+}
+
+fn from_deck(deck: &Deck, file: &str) -> Result<Scene> {
+    let a = &deck.analysis;
+    let whole = At {
+        file: file.to_string(),
+        line: 1,
+    };
+    let mut notes: Vec<String> = a.ignored.clone();
+    // the one explicit step
+    let Some(step) = a.steps.first() else {
+        return refuse(
+            &whole,
+            "the deck has no *STEP: abut runs a deck's *DYNAMIC, EXPLICIT step",
+        );
+    };
+    if let Some(second) = a.steps.get(1) {
+        return refuse(
+            &second.at,
+            format!(
+                "a second *STEP: abut runs decks of one step so far ({} here)",
+                a.steps.len()
+            ),
+        );
+    }
+    match step.procedure.as_deref() {
+        Some("DYNAMIC EXPLICIT") => {}
+        Some(p) => {
+            return refuse(
+                &step.at,
+                format!("*STEP with *{p}: abut runs *DYNAMIC, EXPLICIT steps (a quasi-static *STATIC step is not run yet)"),
+            )
+        }
+        None => return refuse(&step.at, "*STEP without a procedure (*DYNAMIC, EXPLICIT)"),
+    }
+    let Some(end_time) = step.time_period.filter(|t| t.is_finite() && *t > 0.0) else {
+        return refuse(
+            &step.at,
+            "*DYNAMIC, EXPLICIT needs a positive time period (the data line's second value)",
+        );
+    };
+    let scaling = step.mass_scaling.unwrap_or(1.0);
+    // materials (densities scaled)
+    let mut materials: Vec<(String, Material, f64)> = Vec::new();
+    let mut material_index = BTreeMap::new();
+    for s in &a.sections {
+        if material_index.contains_key(&s.material) {
+            continue;
+        }
+        let Some(m) = a.materials.get(&s.material) else {
+            return refuse(
+                &s.at,
+                format!("*SOLID SECTION: material {} is not defined", s.material),
+            );
+        };
+        let (Some(rho), Some((young, poisson))) = (m.density, m.elastic) else {
+            return refuse(
+                &m.at,
+                format!(
+                    "material {} needs *DENSITY and *ELASTIC for an explicit run",
+                    s.material
+                ),
+            );
+        };
+        material_index.insert(s.material.clone(), materials.len());
+        materials.push((
+            s.material.clone(),
+            Material {
+                young,
+                poisson,
+                density: rho * scaling,
+            },
+            m.alpha,
+        ));
+    }
+    if scaling != 1.0 {
+        notes.push(format!(
+            "{}: *FIXED MASS SCALING, FACTOR={scaling}: every density multiplied by it",
+            step.at
+        ));
+    }
+    let alphas: BTreeSet<u64> = materials.iter().map(|m| m.2.to_bits()).collect();
+    if alphas.len() > 1 {
+        return refuse(
+            &whole,
+            "materials with different *DAMPING, ALPHA=: abut applies one mass-proportional damping to the whole model",
+        );
+    }
+    let damping = materials.first().map_or(0.0, |m| m.2);
+    // each element's role
+    let mesh = &deck.mesh;
+    let n_nodes = mesh.positions.len();
+    let mut role: Vec<Option<Role>> = vec![None; mesh.elements.len()];
+    for s in &a.sections {
+        let Some(els) = mesh.element_sets.get(&s.elset) else {
+            return refuse(
+                &s.at,
+                format!("*SOLID SECTION: element set {} is not defined", s.elset),
+            );
+        };
+        for &e in els {
+            if role[e as usize].is_some() {
+                return refuse(
+                    &s.at,
+                    format!(
+                        "element {} is in two sections",
+                        mesh.elements[e as usize].label
+                    ),
+                );
+            }
+            role[e as usize] = Some(Role::Deformable(material_index[&s.material], s.thickness));
+        }
+    }
+    for (k, r) in a.rigid_bodies.iter().enumerate() {
+        if let Some(s) = &r.analytical {
+            return refuse(
+                &r.at,
+                format!("*RIGID BODY, ANALYTICAL SURFACE={s}: analytical rigid surfaces are not read from decks yet (a [[rigid]] table of a TOML scene has them)"),
+            );
+        }
+        for &e in &r.elements {
+            role[e as usize] = Some(Role::Rigid(k));
+        }
+    }
+    let at_element = |e: usize| -> (String, At) {
+        match a.element_block(e as u32) {
+            Some((t, at)) => (t.to_string(), at.clone()),
+            None => (String::new(), whole.clone()),
+        }
+    };
+    for (k, (e, r)) in mesh.elements.iter().zip(&role).enumerate() {
+        let (ty, at) = at_element(k);
+        match r {
+            None => {
+                return refuse(
+                    &at,
+                    format!("element {} (TYPE={ty}) has no *SOLID SECTION and is in no *RIGID BODY", e.label),
+                )
+            }
+            Some(Role::Deformable(..)) if matches!(e.kind, ElementKind::Tri3 | ElementKind::Quad4) => {
+                return refuse(
+                    &at,
+                    format!("element {} (TYPE={ty}): shells and membranes are not modelled by abut", e.label),
+                )
+            }
+            Some(Role::Deformable(..)) if e.kind == ElementKind::Hex8 => {
+                return refuse(
+                    &at,
+                    format!("element {} (TYPE={ty}): deformable hexahedra are not modelled by abut yet (C3D4 tetrahedra are)", e.label),
+                )
+            }
+            _ => {}
+        }
+    }
+    if let Some(&e) = a
+        .plane_stress
+        .iter()
+        .find(|&&e| matches!(role[e as usize], Some(Role::Deformable(..))))
+    {
+        return refuse(
+            &at_element(e as usize).1,
+            format!("element {}: plane stress (CPS3, CPS4(R)) is not modelled by abut (its plane elements are plane strain, CPE, or axisymmetric, CAX)", mesh.elements[e as usize].label),
+        );
+    }
+    if mesh
+        .elements
+        .iter()
+        .zip(&role)
+        .any(|(e, r)| e.kind == ElementKind::Quad4In2d && matches!(r, Some(Role::Deformable(..))))
+    {
+        notes.push(
+            "plane quadrilaterals (CPE4(R), CAX4(R)) run as two linear triangles each".into(),
+        );
+    }
+    // pieces: deformable elements joined by shared nodes; each rigid body one piece
+    let mut parent: Vec<u32> = (0..n_nodes as u32).collect();
+    let mut in_element = vec![false; n_nodes];
+    for e in &mesh.elements {
+        for &n in &e.nodes {
+            in_element[n as usize] = true;
+        }
+        for w in e.nodes.windows(2) {
+            let (x, y) = (root(&mut parent, w[0]), root(&mut parent, w[1]));
+            parent[x.max(y) as usize] = x.min(y);
+        }
+    }
+    let ref_nodes: BTreeMap<u32, usize> = a
+        .rigid_bodies
+        .iter()
+        .enumerate()
+        .map(|(k, r)| (r.ref_node, k))
+        .collect();
+    for r in &a.rigid_bodies {
+        if in_element[r.ref_node as usize] {
+            return refuse(
+                &r.at,
+                "*RIGID BODY: its REF NODE is a node of an element (give it a node of its own)",
+            );
+        }
+        let mut members: Vec<u32> = r
+            .elements
+            .iter()
+            .flat_map(|&e| mesh.elements[e as usize].nodes.clone())
+            .collect();
+        members.extend(&r.nodes);
+        for w in members.windows(2) {
+            let (x, y) = (root(&mut parent, w[0]), root(&mut parent, w[1]));
+            parent[x.max(y) as usize] = x.min(y);
+        }
+    }
+    let point_mass: BTreeMap<u32, f64> = {
+        let mut m = BTreeMap::new();
+        for (n, v, _) in &a.point_masses {
+            *m.entry(*n).or_insert(0.0) += v;
+        }
+        m
+    };
+    // a piece per root, in the order of their first node; free point masses together
+    let mut piece_of_root: BTreeMap<u32, usize> = BTreeMap::new();
+    let mut piece_nodes: Vec<Vec<u32>> = Vec::new();
+    let mut free_points = Vec::new();
+    let mut piece_of = vec![usize::MAX; n_nodes];
+    for n in 0..n_nodes as u32 {
+        let member = in_element[n as usize] || a.rigid_bodies.iter().any(|r| r.nodes.contains(&n));
+        if !member {
+            if point_mass.contains_key(&n) && !ref_nodes.contains_key(&n) {
+                free_points.push(n);
+            }
+            continue;
+        }
+        let r = root(&mut parent, n);
+        let k = *piece_of_root.entry(r).or_insert_with(|| {
+            piece_nodes.push(Vec::new());
+            piece_nodes.len() - 1
+        });
+        piece_nodes[k].push(n);
+        piece_of[n as usize] = k;
+    }
+    if !free_points.is_empty() {
+        for &n in &free_points {
+            piece_of[n as usize] = piece_nodes.len();
+        }
+        piece_nodes.push(free_points);
+    }
+    // the rigid body of each piece
+    let mut rigid_of_piece: Vec<Option<usize>> = vec![None; piece_nodes.len()];
+    for (k, r) in a.rigid_bodies.iter().enumerate() {
+        let first = r
+            .elements
+            .first()
+            .map(|&e| mesh.elements[e as usize].nodes[0])
+            .or(r.nodes.first().copied());
+        let Some(first) = first else { continue };
+        let p = piece_of[first as usize];
+        if rigid_of_piece[p].is_some_and(|o| o != k) {
+            return refuse(&r.at, "two *RIGID BODY definitions share nodes");
+        }
+        rigid_of_piece[p] = Some(k);
+    }
+    let mut pieces: Vec<DeckPiece> = Vec::new();
+    let mut local = vec![u32::MAX; n_nodes];
+    for (k, nodes) in piece_nodes.iter().enumerate() {
+        for (i, &n) in nodes.iter().enumerate() {
+            local[n as usize] = i as u32;
+        }
+        let mut piece = DeckPiece {
+            deck_nodes: nodes.clone(),
+            velocity: vec![[0.0; 3]; nodes.len()],
+            point_mass: nodes
+                .iter()
+                .map(|n| point_mass.get(n).copied().unwrap_or(0.0))
+                .collect(),
+            loads: vec![[0.0; 3]; nodes.len()],
+            fixed: vec![[false; 3]; nodes.len()],
+            ..Default::default()
+        };
+        piece.mesh.positions = nodes.iter().map(|&n| mesh.positions[n as usize]).collect();
+        piece.mesh.node_labels = nodes
+            .iter()
+            .map(|&n| mesh.node_labels[n as usize])
+            .collect();
+        let mut element_local = BTreeMap::new();
+        for (e, el) in mesh.elements.iter().enumerate() {
+            if piece_of[el.nodes[0] as usize] != k {
+                continue;
+            }
+            element_local.insert(e as u32, piece.mesh.elements.len() as u32);
+            piece.mesh.elements.push(MeshElement {
+                kind: el.kind,
+                nodes: el.nodes.iter().map(|&n| local[n as usize]).collect(),
+                label: el.label,
+                axisymmetric: el.axisymmetric,
+            });
+            match role[e] {
+                Some(Role::Deformable(m, t)) => {
+                    piece.materials.push(materials[m].1);
+                    piece.thickness.push(t);
+                }
+                _ => {
+                    piece.materials.push(Material {
+                        young: 0.0,
+                        poisson: 0.0,
+                        density: 0.0,
+                    });
+                    piece.thickness.push(1.0);
+                }
+            }
+        }
+        for (name, set) in &mesh.node_sets {
+            let s: Vec<u32> = set
+                .iter()
+                .filter(|&&n| piece_of[n as usize] == k)
+                .map(|&n| local[n as usize])
+                .collect();
+            if !s.is_empty() {
+                piece.mesh.node_sets.insert(name.clone(), s);
+            }
+        }
+        for (name, set) in &mesh.element_sets {
+            let s: Vec<u32> = set
+                .iter()
+                .filter_map(|e| element_local.get(e).copied())
+                .collect();
+            if !s.is_empty() {
+                piece.mesh.element_sets.insert(name.clone(), s);
+            }
+        }
+        for (name, def) in &deck.surfaces {
+            let inside = |n: &u32| piece_of[*n as usize] == k;
+            let mapped = match def {
+                SurfaceDef::Faces(f) => {
+                    let f: Vec<Facet> = f
+                        .iter()
+                        .filter(|f| f.nodes().iter().all(inside))
+                        .map(|f| map_facet(f, &local))
+                        .collect();
+                    (!f.is_empty()).then_some(SurfaceDef::Faces(f))
+                }
+                SurfaceDef::Nodes(n, ar) => {
+                    let (n, ar): (Vec<u32>, Vec<f64>) = n
+                        .iter()
+                        .zip(ar)
+                        .filter(|(n, _)| inside(n))
+                        .map(|(n, a)| (local[*n as usize], *a))
+                        .unzip();
+                    (!n.is_empty()).then_some(SurfaceDef::Nodes(n, ar))
+                }
+            };
+            if let Some(s) = mapped {
+                piece.surfaces.insert(name.clone(), s);
+            }
+        }
+        pieces.push(piece);
+    }
+    // rigid bodies: mass, inertia, motion from the reference node
+    let amplitude = |name: &Option<String>| -> Arc<Amplitude> {
+        Arc::new(match name {
+            Some(n) => a.amplitudes[n].curve(),
+            None => Amplitude::step(),
+        })
+    };
+    let two_d = mesh.elements.iter().any(|e| e.kind.is_planar());
+    let mut dropped_rotations = false;
+    for (p, rigid) in rigid_of_piece.iter().enumerate() {
+        let Some(k) = *rigid else { continue };
+        let r = &a.rigid_bodies[k];
+        let mass = point_mass.get(&r.ref_node).copied().unwrap_or(0.0);
+        let inertia = a
+            .rotary_inertia
+            .iter()
+            .filter(|(n, _, _)| *n == r.ref_node)
+            .fold([[0.0; 3]; 3], |acc, (_, i, _)| {
+                std::array::from_fn(|x| std::array::from_fn(|y| acc[x][y] + i[x][y]))
+            });
+        // per degree of freedom: held (None value) or a velocity
+        let mut held = [false; 6];
+        let mut velocity = [None; 3];
+        for b in a
+            .boundaries
+            .iter()
+            .filter(|b| b.nodes.contains(&r.ref_node))
+        {
+            for d in b.first..=b.last {
+                match (b.kind, b.value == 0.0, &b.amplitude) {
+                    (BoundaryKind::Displacement, true, _) => held[d - 1] = true,
+                    (BoundaryKind::Velocity, _, None) if d <= 3 => velocity[d - 1] = Some(b.value),
+                    _ => {
+                        return refuse(
+                            &b.at,
+                            "a rigid body's reference node moved by a prescribed displacement, an amplitude or a rotation rate: abut moves rigid bodies held, at a constant velocity, or free",
+                        )
+                    }
+                }
+            }
+        }
+        let rotation_held = held[3..].iter().filter(|h| **h).count();
+        if rotation_held != 0 && rotation_held != 3 && !two_d {
+            return refuse(
+                &r.at,
+                "a rigid body with some of its rotations held: abut holds all three or none",
+            );
+        }
+        let motion = if velocity.iter().any(Option::is_some) {
+            if (0..3).any(|d| velocity[d].is_none() && !held[d]) {
+                return refuse(
+                    &r.at,
+                    "a rigid body with a prescribed velocity in some directions and free in others",
+                );
+            }
+            BodyMotion::Velocity(std::array::from_fn(|d| velocity[d].unwrap_or(0.0)))
+        } else if held[..3].iter().all(|h| *h) && (rotation_held == 3 || two_d) {
+            BodyMotion::Fixed
+        } else {
+            BodyMotion::Free
+        };
+        if motion == BodyMotion::Free && mass <= 0.0 {
+            return refuse(
+                &r.at,
+                "a free rigid body needs a mass: *MASS on its reference node",
+            );
+        }
+        let mut v0 = [0.0; 3];
+        for (n, d, v, _) in &a.initial_velocities {
+            if *n == r.ref_node {
+                v0[d - 1] = *v;
+            }
+        }
+        let mut load = [0.0; 3];
+        let mut moment = [0.0; 3];
+        for c in a.cloads.iter().filter(|c| c.nodes.contains(&r.ref_node)) {
+            if c.amplitude.is_some() {
+                return refuse(
+                    &c.at,
+                    "*CLOAD with AMPLITUDE=: abut applies constant loads so far",
+                );
+            }
+            if c.dof <= 3 {
+                load[c.dof - 1] += c.value;
+            } else {
+                moment[c.dof - 4] += c.value;
+            }
+        }
+        let rotation_locked = rotation_held > 0 || two_d;
+        if motion == BodyMotion::Free && !rotation_locked && (0..3).any(|d| inertia[d][d] <= 0.0) {
+            return refuse(
+                &r.at,
+                "a free rigid body that can rotate needs *ROTARY INERTIA on its reference node",
+            );
+        }
+        pieces[p].rigid = Some(DeckRigid {
+            reference: mesh.positions[r.ref_node as usize],
+            mass: if mass > 0.0 {
+                mass
+            } else {
+                super::build::IMMOVABLE_MASS
+            },
+            inertia,
+            motion,
+            locked: [held[0], held[1], held[2]],
+            rotation_locked,
+            velocity: v0,
+            load,
+            moment,
+        });
+    }
+    // boundary conditions, initial velocities and loads on the deformable parts' nodes
+    for b in &a.boundaries {
+        for &n in &b.nodes {
+            if ref_nodes.contains_key(&n) {
+                continue;
+            }
+            let p = piece_of[n as usize];
+            if p == usize::MAX {
+                continue;
+            }
+            if pieces[p].rigid.is_some() {
+                return refuse(
+                    &b.at,
+                    format!(
+                        "*BOUNDARY on node {} of a rigid body: hold or move its reference node",
+                        mesh.node_labels[n as usize]
+                    ),
+                );
+            }
+            let i = local[n as usize] as usize;
+            for d in b.first..=b.last {
+                if d > 3 || (two_d && d == 3) {
+                    dropped_rotations = true;
+                    continue;
+                }
+                let axis = d - 1;
+                let zero = b.value == 0.0 && b.kind == BoundaryKind::Displacement;
+                if zero {
+                    pieces[p].fixed[i][axis] = true;
+                } else {
+                    pieces[p].prescribed.push((
+                        i as u32,
+                        axis,
+                        Motion::Amplitude {
+                            value: b.value,
+                            amplitude: amplitude(&b.amplitude),
+                            velocity: b.kind == BoundaryKind::Velocity,
+                        },
+                    ));
+                }
+            }
+        }
+    }
+    if dropped_rotations {
+        notes.push("*BOUNDARY on degrees of freedom a solid node does not have (rotations, or z in a plane model): not applied, as Abaqus does".into());
+    }
+    for (n, d, v, at) in &a.initial_velocities {
+        let p = piece_of[*n as usize];
+        if ref_nodes.contains_key(n) || p == usize::MAX {
+            continue;
+        }
+        if pieces[p].rigid.is_some() {
+            return refuse(at, "*INITIAL CONDITIONS on a node of a rigid body: give its reference node the velocity");
+        }
+        pieces[p].velocity[local[*n as usize] as usize][d - 1] = *v;
+    }
+    for c in &a.cloads {
+        for &n in &c.nodes {
+            let p = piece_of[n as usize];
+            if ref_nodes.contains_key(&n) || p == usize::MAX {
+                continue;
+            }
+            if c.amplitude.is_some() {
+                return refuse(
+                    &c.at,
+                    "*CLOAD with AMPLITUDE=: abut applies constant loads so far",
+                );
+            }
+            if pieces[p].rigid.is_some() || c.dof > 3 {
+                return refuse(&c.at, format!("*CLOAD on node {}: loads go on deformable nodes' translations or a rigid body's reference node", mesh.node_labels[n as usize]));
+            }
+            pieces[p].loads[local[n as usize] as usize][c.dof - 1] += c.value;
+        }
+    }
+    // gravity: on every deformable element
+    let mut gravity = [0.0; 3];
+    for g in &a.gravity {
+        let covers = match mesh.element_sets.get(&g.elset) {
+            Some(set) => {
+                let set: BTreeSet<u32> = set.iter().copied().collect();
+                role.iter().enumerate().all(|(e, r)| {
+                    !matches!(r, Some(Role::Deformable(..))) || set.contains(&(e as u32))
+                })
+            }
+            // a set of point masses: the whole model when nothing else is deformable
+            None => {
+                a.mass_sets.contains(&g.elset)
+                    && !role.iter().any(|r| matches!(r, Some(Role::Deformable(..))))
+            }
+        };
+        if !covers {
+            return refuse(&g.at, format!("*DLOAD, GRAV on {}: abut applies gravity to the whole model (an element set holding every deformable element)", g.elset));
+        }
+        for d in 0..3 {
+            gravity[d] += g.acceleration[d];
+        }
+    }
+    // parts
+    let names = |p: usize| -> String {
+        if let Some(k) = rigid_of_piece[p] {
+            let r = &a.rigid_bodies[k];
+            return format!("RIGID-{}", mesh.node_labels[r.ref_node as usize]);
+        }
+        a.sections
+            .iter()
+            .find(|s| {
+                mesh.element_sets.get(&s.elset).is_some_and(|els| {
+                    els.iter()
+                        .any(|&e| piece_of[mesh.elements[e as usize].nodes[0] as usize] == p)
+                })
+            })
+            .map_or_else(|| "POINT-MASSES".to_string(), |s| s.elset.clone())
+    };
+    let mut parts = Vec::new();
+    for (p, piece) in pieces.into_iter().enumerate() {
+        let rigid = piece.rigid.is_some();
+        let material = (!rigid)
+            .then(|| {
+                piece
+                    .materials
+                    .first()
+                    .and_then(|m| materials.iter().find(|x| x.1 == *m))
+                    .map(|x| x.0.clone())
+            })
+            .flatten();
+        let mut spec = PartSpec::deck_part(names(p), file, Arc::new(piece));
+        spec.material = material;
+        spec.rigid = rigid;
+        spec.dimension = Some(if two_d { 2 } else { 3 });
+        parts.push(spec);
+    }
+    // contact pairs
+    let part_of_surface = |name: &str, at: &At| -> Result<String> {
+        let holders: Vec<&PartSpec> = parts
+            .iter()
+            .filter(|p| {
+                p.deck
+                    .as_ref()
+                    .is_some_and(|d| d.surfaces.contains_key(name))
+            })
+            .collect();
+        match holders[..] {
+            [p] => Ok(p.name.clone()),
+            [] => refuse(at, format!("surface {name} has no facet or node on a part")),
+            _ => refuse(
+                at,
+                format!(
+                    "surface {name} spans several parts: abut takes a contact surface on one part"
+                ),
+            ),
+        }
+    };
+    let mut contact = Vec::new();
+    for pair in &deck.pairs {
+        let at = At {
+            file: file.to_string(),
+            line: pair.line,
+        };
+        let settings: PairSettings = deck.pair_settings(pair);
+        contact.push(ContactSpec::deck_pair(
+            part_of_surface(&pair.slave, &at)?,
+            pair.slave.clone(),
+            part_of_surface(&pair.master, &at)?,
+            pair.master.clone(),
+            pair.weight,
+            settings,
+        ));
+    }
+    if step.fixed_increment.is_none()
+        && !role.iter().any(|r| matches!(r, Some(Role::Deformable(..))))
+    {
+        return refuse(
+            &step.at,
+            "a deck without deformable elements has no stable increment: give one with *DYNAMIC, EXPLICIT, DIRECT USER CONTROL (the data line's first value)",
+        );
+    }
+    let mut run = RunSpec::for_deck(end_time);
+    run.dt = step.fixed_increment;
+    if let Some(s) = step.scale_factor {
+        run.safety = s;
+    }
+    if let Some((b1, b2)) = step.bulk_viscosity {
+        run.bulk_viscosity = b1;
+        run.bulk_viscosity_quadratic = b2;
+    }
+    run.nlgeom = step.nlgeom;
+    run.output_every = step.history_every.unwrap_or(1);
+    run.vtk_every = step.field_every.unwrap_or(0);
+    run.damping = damping;
+    run.gravity = gravity;
+    let title = deck.heading.clone().unwrap_or_else(|| file.to_string());
+    let scene = Scene {
+        title,
+        reference: None,
+        run,
+        material: materials
+            .iter()
+            .map(|(name, m, _)| MaterialSpec {
+                name: name.clone(),
+                young: m.young,
+                poisson: m.poisson,
+                density: m.density,
+            })
+            .collect(),
+        part: parts,
+        rigid: Vec::new(),
+        boundary: Vec::new(),
+        contact,
+        base_dir: Path::new(file).parent().map(Path::to_path_buf),
+        deck_notes: notes,
+    };
+    scene.check_deck()?;
+    Ok(scene)
+}
+
+fn map_facet(f: &Facet, local: &[u32]) -> Facet {
+    let m = |n: u32| local[n as usize];
+    match *f {
+        Facet::Segment(s) => Facet::Segment(s.map(m)),
+        Facet::Triangle(t) => Facet::Triangle(t.map(m)),
+        Facet::Quad(q) => Facet::Quad(q.map(m)),
+    }
+}
