@@ -334,7 +334,10 @@ fn abaqus_plane_strain_faces() {
 #[test]
 fn bad_decks_name_the_file_line_and_what_was_expected() {
     let cases: &[(&str, &str, usize)] = &[
-        ("*NODE\n1, 0, 0, 0\n*BOUNDARY\n1, 1, 3\n", "*BOUNDARY is not supported", 3),
+        ("*NODE\n1, 0, 0, 0\n*BOUNDARY, TYPE=ACCELERATION\n1, 1, 3\n", "TYPE=ACCELERATION is not supported", 3),
+        ("*NODE\n1, 0, 0, 0\n*BOUNDARY\n1, 7\n", "degree of freedom 7", 4),
+        ("*NODE\n1, 0, 0, 0\n*TIE, NAME=T\nA, B\n", "*TIE (a constraint between nodes) is not modelled", 3),
+        ("*NODE\n1, 0, 0, 0\n*CONTACT PAIR, INTERACTION=I, TYPE=MORTAR\nA, B\n", "TYPE=MORTAR", 3),
         ("*NODE, NSET=A, SYSTEM=R\n1, 0, 0, 0\n", "option SYSTEM", 1),
         ("*NODE\n1, 0, zero, 0\n", "expected a number", 2),
         ("*NODE\n1, 0, 0, 0\n*ELEMENT, TYPE=C3D4\n1, 1, 2, 3, 4\n", "node 2 is not defined", 4),
