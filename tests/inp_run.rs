@@ -191,10 +191,10 @@ fn what_abut_does_not_model_is_refused_by_name_and_line() {
         (
             base.replace(
                 "*DYNAMIC, EXPLICIT, DIRECT USER CONTROL\n1e-3, 0.3",
-                "*STATIC\n0.1, 1.0",
+                "*DYNAMIC\n0.1, 1.0",
             ),
-            "*STATIC",
-            "quasi-static",
+            "*DYNAMIC",
+            "explicit steps only",
         ),
         (
             base.replace(
@@ -232,7 +232,7 @@ fn what_abut_does_not_model_is_refused_by_name_and_line() {
         let e = deck("refused.inp", &text).unwrap_err().to_string();
         assert!(e.contains(why), "{what}: {e}");
         assert!(e.contains("refused.inp:"), "{what}: the file is named: {e}");
-        if what.starts_with('*') && what != "*STATIC" {
+        if what.starts_with('*') {
             let line = if what == "second *STEP" {
                 text.lines()
                     .enumerate()
@@ -246,6 +246,79 @@ fn what_abut_does_not_model_is_refused_by_name_and_line() {
                 e.contains(&format!(":{}:", line.unwrap())),
                 "{what}: the line: {e}"
             );
+        }
+    }
+}
+
+/// The verification cases of `abut verify`.
+const CASES: [&str; 8] = [
+    "bar_impact",
+    "truss_wall",
+    "patch_test",
+    "hertz_cylinder",
+    "hertz_sphere",
+    "hertz_impact",
+    "incline",
+    "penalty_stability",
+];
+
+fn scene_file(name: &str) -> std::path::PathBuf {
+    std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("scenes")
+        .join(name)
+}
+
+/// Each verification case exists as a deck, `scenes/NAME.inp`, written by `abut inp` from its
+/// TOML scene (regenerated with `ABUT_BLESS=1`): the deck in the repository is what the scene
+/// writes today.
+#[test]
+fn every_verification_case_has_its_deck() {
+    for case in CASES {
+        let scene = Scene::load(&scene_file(&format!("{case}.toml"))).unwrap();
+        let written = scene.to_inp().unwrap();
+        let path = scene_file(&format!("{case}.inp"));
+        if std::env::var("ABUT_BLESS").is_ok_and(|v| v == "1") {
+            std::fs::write(&path, &written).unwrap();
+        }
+        let kept = std::fs::read_to_string(&path).unwrap();
+        assert!(
+            kept == written,
+            "scenes/{case}.inp is not what scenes/{case}.toml writes (ABUT_BLESS=1 cargo test --release --test inp_run rewrites it)"
+        );
+    }
+}
+
+/// Each verification deck gives its TOML scene's history bit for bit: every case on the CPU
+/// path, and the small ones on every adapter too.
+#[test]
+fn every_verification_deck_gives_its_scenes_history_bit_for_bit() {
+    let small = ["truss_wall", "patch_test", "incline", "penalty_stability"];
+    for d in common::devices() {
+        for case in CASES {
+            if d.backend_name() != "cpu" && !small.contains(&case) {
+                continue;
+            }
+            let toml = Scene::load(&scene_file(&format!("{case}.toml"))).unwrap();
+            let deck = Scene::load(&scene_file(&format!("{case}.inp"))).unwrap();
+            let rows = |s: &Scene, tag: &str| {
+                let dir = std::env::temp_dir().join(format!(
+                    "abut-inp-verify-{case}-{tag}-{}-{}",
+                    d.backend_name(),
+                    std::process::id()
+                ));
+                let _ = std::fs::remove_dir_all(&dir);
+                let summary = run(s, &d, Some(&dir)).unwrap();
+                let csv = std::fs::read_to_string(dir.join("history.csv")).unwrap();
+                let _ = std::fs::remove_dir_all(&dir);
+                let rows: Vec<String> = csv.lines().skip(1).map(String::from).collect();
+                (summary, rows)
+            };
+            let (st, ht) = rows(&toml, "toml");
+            let (sd, hd) = rows(&deck, "deck");
+            assert!(ht.len() > 5, "{d} {case}");
+            assert_eq!(st.increments, sd.increments, "{d} {case}");
+            assert!(ht == hd, "{d} {case}: the deck's history differs");
+            assert_eq!(st.impulse.to_bits(), sd.impulse.to_bits(), "{d} {case}");
         }
     }
 }

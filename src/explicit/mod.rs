@@ -66,6 +66,9 @@ pub struct Solver {
     pub gravity: [f64; 3],
     /// Constant external forces per node.
     pub loads: Vec<[f64; 3]>,
+    /// A curve of time scaling `loads` and the bodies' loads and moments (a quasi-static run's
+    /// smooth ramp); none: the loads as they are.
+    pub load_factor: Option<std::sync::Arc<Amplitude>>,
     /// Mass-proportional damping coefficient α (force −α·m·v).
     pub damping: f64,
     /// Linear bulk viscosity b1 (Abaqus' default is 0.06, scenes' too; 0 = none).
@@ -155,6 +158,7 @@ impl Solver {
             prescribed: Vec::new(),
             bodies: Vec::new(),
             loads: vec![[0.0; 3]; n],
+            load_factor: None,
             x,
             mass,
             elements,
@@ -349,6 +353,10 @@ impl Solver {
         let bodies_old: Vec<BodyState> = self.body_states();
         let mut ext = vec![[0.0; 3]; n];
         let mut damp = vec![[0.0; 3]; n];
+        let factor = self
+            .load_factor
+            .as_ref()
+            .map_or(1.0, |f| f.value(self.time));
         for i in 0..n {
             if self.carried[i].is_some() {
                 continue;
@@ -358,7 +366,7 @@ impl Solver {
                     self.v[i][a] = 0.0;
                     continue;
                 }
-                ext[i][a] = self.loads[i][a] + self.mass[i] * self.gravity[a];
+                ext[i][a] = factor * self.loads[i][a] + self.mass[i] * self.gravity[a];
                 damp[i][a] = -self.damping * self.mass[i] * self.v[i][a];
                 self.v[i][a] += dv_scale * (f_int[i][a] + ext[i][a] + penalty[i][a] + damp[i][a])
                     / self.mass[i];
@@ -390,9 +398,9 @@ impl Solver {
         for (k, b) in self.bodies.iter_mut().enumerate() {
             let (fp, mp) = body_pen[k];
             let (fl, ml) = b.resultant(&self.x, &self.loads);
-            let ml = [0, 1, 2].map(|a| ml[a] + b.moment[a]);
+            let ml = [0, 1, 2].map(|a| factor * (ml[a] + b.moment[a]));
             let g = self.gravity.map(|g| g * b.mass);
-            let f_ext = [0, 1, 2].map(|a| fl[a] + g[a] + b.load[a]);
+            let f_ext = [0, 1, 2].map(|a| factor * (fl[a] + b.load[a]) + g[a]);
             let moving = b.motion == BodyMotion::Free;
             body_ext[k] = if moving {
                 (f_ext, ml)

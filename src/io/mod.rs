@@ -187,10 +187,13 @@ impl MeshData {
             el.kind,
             ElementKind::Tri3 | ElementKind::Quad4 | ElementKind::Line2
         );
+        // a 2D line's positive side is to its left (Abaqus: the direction from node 1 to node
+        // 2 turned 90° counterclockwise); abut's segments face right of their direction
+        let line = el.kind == ElementKind::Line2;
         let pick: Vec<(usize, bool)> = match face {
-            None => (0..faces.len()).map(|k| (k, false)).collect(),
-            Some("SPOS") if shell => vec![(0, false)],
-            Some("SNEG") if shell => vec![(0, true)],
+            None => (0..faces.len()).map(|k| (k, line)).collect(),
+            Some("SPOS") if shell => vec![(0, line)],
+            Some("SNEG") if shell => vec![(0, !line)],
             Some(s) if !shell && s.starts_with('S') => {
                 let k: usize = s[1..]
                     .parse()

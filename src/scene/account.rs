@@ -6,6 +6,7 @@
 
 use std::time::Instant;
 
+use super::summary::QuasiStaticSummary;
 use super::{CurveSample, Progress, RunSpec, Scene, Summary};
 use crate::device::{Device, Traffic};
 use crate::error::{Error, Result};
@@ -44,6 +45,11 @@ pub(super) struct Account<'a> {
     /// when it first happened.
     over_ratio: f64,
     over_from: f64,
+    /// Kinetic over internal energy: at the end of a quasi-static ramp, the last, and the
+    /// largest from half the ramp on.
+    ke_ie: [f64; 3],
+    /// A quasi-static run's ramp time (NaN otherwise).
+    pub ramp: f64,
 }
 
 impl<'a> Account<'a> {
@@ -81,6 +87,8 @@ impl<'a> Account<'a> {
             lowered_from: f64::NAN,
             over_ratio: 1.0,
             over_from: f64::NAN,
+            ke_ie: [f64::NAN, f64::NAN, 0.0],
+            ramp: f64::NAN,
         })
     }
 
@@ -187,6 +195,23 @@ impl<'a> Account<'a> {
         });
     }
 
+    /// Kinetic and internal energy after the increment to `time`: their ratio at the end of a
+    /// quasi-static ramp, at the end, and its largest from half the ramp on.
+    pub fn kinetic_internal(&mut self, time: f64, [kinetic, internal]: [f64; 2]) {
+        let ratio = if internal > 0.0 {
+            kinetic / internal
+        } else {
+            f64::NAN
+        };
+        self.ke_ie[1] = ratio;
+        if time >= self.ramp && self.ke_ie[0].is_nan() {
+            self.ke_ie[0] = ratio;
+        }
+        if time >= 0.5 * self.ramp && ratio.is_finite() {
+            self.ke_ie[2] = self.ke_ie[2].max(ratio);
+        }
+    }
+
     /// The energy balance's drift and scale after the increment to `time`; an error when the
     /// energy is no longer finite.
     pub fn energy(&mut self, drift: f64, scale: f64, balance: f64, time: f64) -> Result<()> {
@@ -245,6 +270,15 @@ impl<'a> Account<'a> {
             unanchored_slaves: ends.unanchored_slaves,
             warnings,
             deck_notes: scene.deck_notes.clone(),
+            quasi_static: scene
+                .quasi_static
+                .clone()
+                .map(|settings| QuasiStaticSummary {
+                    settings,
+                    kinetic_to_internal_at_ramp_end: self.ke_ie[0],
+                    kinetic_to_internal_at_end: self.ke_ie[1],
+                    kinetic_to_internal_max: self.ke_ie[2],
+                }),
             reference: scene.reference.clone(),
             device: ends.device,
             built: ends.built,

@@ -5,7 +5,9 @@
 use std::collections::BTreeMap;
 
 use crate::error::{Error, Result};
-use crate::explicit::{BodyMotion, Element, Material, Motion, Prescribed, Solver, SolverBody};
+use crate::explicit::{
+    Amplitude, BodyMotion, Element, Material, Motion, Prescribed, Solver, SolverBody,
+};
 use crate::io::inp::SurfaceDef;
 use crate::io::{ElementKind, MeshData};
 use crate::mesh::rect_triangles_on;
@@ -24,6 +26,7 @@ use super::spec::{axis_of, bad, PartSpec, Scene};
 pub const IMMOVABLE_MASS: f64 = 1e12;
 
 mod parts;
+pub(crate) use parts::centroid_and_inertia;
 use parts::Meshed;
 
 /// A part's nodes and how to find its faces.
@@ -321,6 +324,7 @@ impl Scene {
         solver.v = meshed.velocity;
         let (meshed_bodies, free_parts) = self.moving_bodies(&moving_parts, &x)?;
         solver.gravity = self.run.gravity;
+        solver.load_factor = self.load_factor.clone();
         solver.safety = self.run.safety;
         solver.damping = self.run.damping;
         solver.bulk_viscosity = self.run.bulk_viscosity;
@@ -354,9 +358,15 @@ impl Scene {
                         solver.prescribe(Prescribed {
                             node: n,
                             dof: a,
-                            motion: Motion::Ramp {
-                                displacement: u[a],
-                                duration: b.ramp,
+                            // Abaqus' smooth step from 0 to 1 over the ramp time, as a deck's
+                            // *AMPLITUDE, DEFINITION=SMOOTH STEP gives it
+                            motion: Motion::Amplitude {
+                                value: u[a],
+                                amplitude: std::sync::Arc::new(Amplitude {
+                                    smooth: true,
+                                    points: vec![(0.0, 0.0), (b.ramp, 1.0)],
+                                }),
+                                velocity: false,
                             },
                         })?;
                     }

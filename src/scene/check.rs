@@ -253,7 +253,7 @@ impl Scene {
         let deformable = matches!(p.shape.as_str(), "block" | "rect" | "bar")
             || (p.shape == "mesh"
                 && !p.rigid
-                && p.deck.as_ref().is_none_or(|d| !d.materials.is_empty()));
+                && p.deck.as_ref().is_none_or(|d| d.deformable.contains(&true)));
         if deformable
             && !self
                 .material

@@ -226,6 +226,7 @@ fn run_into(
     solver.v = nodes.iter().map(|&i| g.v[i]).collect();
     solver.fixed = nodes.iter().map(|&i| g.fixed[i]).collect();
     solver.loads = nodes.iter().map(|&i| g.loads[i]).collect();
+    solver.load_factor = g.load_factor.clone();
     solver.prescribed = g
         .prescribed
         .iter()
@@ -324,6 +325,10 @@ fn run_into(
     agree(comm, fault)?;
 
     let mut account = Account::new(&scene.run, all_min(comm, solver.stable_increment()))?;
+    account.ramp = scene
+        .quasi_static
+        .as_ref()
+        .map_or(f64::NAN, |q| q.ramp_time);
     let mut rank = Rank {
         comm,
         solver,

@@ -35,6 +35,8 @@ pub(super) struct Sums {
     /// On output rows: each rigid body's displacement from its start (empty where a run has
     /// none).
     pub moved: Vec<[f64; 3]>,
+    /// Kinetic and internal energy.
+    pub kinetic_internal: [f64; 2],
 }
 
 /// How a run steps and adds up: one process, or this rank of N.
@@ -84,6 +86,7 @@ pub(super) fn run(
             account.sample(time, sums.moved);
         }
         account.energy(sums.drift, sums.scale, sums.balance, time)?;
+        account.kinetic_internal(time, sums.kinetic_internal);
         ranks.output(account.k, row, force, peak)?;
     }
     Ok(())

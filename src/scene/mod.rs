@@ -82,13 +82,14 @@ mod increments;
 mod run;
 mod spec;
 mod summary;
+mod to_inp;
 
 pub use build::Built;
 #[cfg(feature = "mpi")]
 pub use distributed::run_distributed;
 pub use from_inp::{DeckPiece, DeckRigid};
 pub use spec::{
-    BoundarySpec, ContactSpec, MaterialSpec, PartSpec, RigidSpec, RunSpec, Scene,
+    BoundarySpec, ContactSpec, MaterialSpec, PartSpec, QuasiStatic, RigidSpec, RunSpec, Scene,
     DEFAULT_BULK_VISCOSITY, DEFAULT_BULK_VISCOSITY_QUADRATIC,
 };
 
@@ -102,7 +103,9 @@ use crate::device::Device;
 use crate::error::{Error, Result};
 use crate::explicit::{Element, Solver};
 use build::PartNodes;
-pub use summary::{BodySummary, ContactNode, CurveSample, PartSummary, RankSummary, Summary};
+pub use summary::{
+    BodySummary, ContactNode, CurveSample, PartSummary, QuasiStaticSummary, RankSummary, Summary,
+};
 
 /// Rising and falling edges of a force history (time, force per increment) at half its
 /// plateau (the mean over the middle half of the contact), by linear interpolation; the

@@ -52,6 +52,10 @@ pub(super) fn run_into(
         _ => None,
     };
     let mut account = Account::new(&scene.run, solver.stable_increment())?;
+    account.ramp = scene
+        .quasi_static
+        .as_ref()
+        .map_or(f64::NAN, |q| q.ramp_time);
     let bodies0: Vec<[f64; 3]> = solver.bodies.iter().map(|b| b.state.position).collect();
     let mut adjusted = None;
     if let (Some(c), true) = (contact.as_mut(), scene.run.adjust_overclosure) {
@@ -175,6 +179,7 @@ impl Ranks for OneProcess<'_> {
             scale: s.energy_scale(),
             balance: s.energy.balance(),
             moved,
+            kinetic_internal: [s.energy.kinetic, s.energy.internal],
         })
     }
 

@@ -36,6 +36,31 @@ pub struct Scene {
     /// beyond its tables — keywords read and not acted on, conversions — listed in the summary.
     #[serde(skip)]
     pub deck_notes: Vec<String>,
+    /// A deck's `*STATIC` step, run as explicit quasi-static ([`Scene::from_inp`]).
+    #[serde(skip)]
+    pub quasi_static: Option<QuasiStatic>,
+    /// A curve of time scaling every load (a deck's `*CLOAD` amplitude); none: constant.
+    #[serde(skip)]
+    pub load_factor: Option<std::sync::Arc<crate::explicit::Amplitude>>,
+}
+
+/// How a deck's `*STATIC` step runs: as Abaqus/Explicit users run quasi-static problems, its
+/// loads and motions ramped by a smooth step over ten of the model's fundamental periods, then
+/// held for five more, with mass-proportional damping at half of critical on the fundamental
+/// mode; the summary reports how small the kinetic energy stayed against the internal energy.
+#[derive(Clone, Debug, PartialEq, serde::Serialize)]
+pub struct QuasiStatic {
+    /// The static step's time period (the time its amplitudes are given in).
+    pub step_period: f64,
+    /// The model's fundamental period, estimated as 4·L/c (L: the deformable parts' largest
+    /// extent, c: the slowest material's bar wave speed √(E/ρ)).
+    pub fundamental_period: f64,
+    /// Run time over which the loads and motions ramp: 10 fundamental periods.
+    pub ramp_time: f64,
+    /// Run time they are held after the ramp: 5 fundamental periods.
+    pub hold_time: f64,
+    /// Mass-proportional damping α = 2π / period (ξ = 0.5 on the fundamental mode).
+    pub damping: f64,
 }
 
 /// Run controls.
@@ -342,7 +367,8 @@ pub struct BoundarySpec {
     /// Directions held at zero displacement: any of "x", "y", "z".
     #[serde(default)]
     pub fix: Vec<String>,
-    /// Prescribed displacement per direction, reached by a smooth ramp over `ramp`.
+    /// Prescribed displacement per direction, reached by a smooth step over `ramp` (Abaqus'
+    /// `SMOOTH STEP` amplitude: 10ξ³ − 15ξ⁴ + 6ξ⁵, at rest at both ends).
     #[serde(default)]
     pub displacement: Option<[f64; 3]>,
     /// Ramp time of `displacement`.

@@ -103,6 +103,10 @@ pub struct Summary {
     /// made of the deck beyond its tables ([`crate::scene::Scene::deck_notes`]).
     #[serde(skip_serializing_if = "Vec::is_empty")]
     pub deck_notes: Vec<String>,
+    /// A deck's `*STATIC` step run as quasi-static: how, and how small the kinetic energy stayed
+    /// against the internal energy.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub quasi_static: Option<QuasiStaticSummary>,
     /// First time a contact force acted (start of its increment; NaN if none).
     pub contact_start: f64,
     /// Last time a contact force acted (end of its increment).
@@ -163,6 +167,20 @@ pub struct Summary {
     /// rank order; empty for a single process.
     #[serde(skip_serializing_if = "Vec::is_empty")]
     pub ranks: Vec<RankSummary>,
+}
+
+/// A quasi-static run's settings and its kinetic energy against its internal energy.
+#[derive(Clone, Debug, Serialize)]
+pub struct QuasiStaticSummary {
+    /// How it ran.
+    pub settings: super::spec::QuasiStatic,
+    /// Kinetic over internal energy at the end of the ramp.
+    pub kinetic_to_internal_at_ramp_end: f64,
+    /// Kinetic over internal energy at the end of the run.
+    pub kinetic_to_internal_at_end: f64,
+    /// The largest kinetic over internal energy from half the ramp on (before, both are near
+    /// zero and their ratio says nothing).
+    pub kinetic_to_internal_max: f64,
 }
 
 /// One rank of a distributed run.

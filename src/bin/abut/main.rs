@@ -50,6 +50,10 @@ enum Command {
     /// Runs a scene file with the explicit solver and abut's contact; writes history.csv and
     /// summary.json to --output when given, and prints the summary.
     Run(RunArgs),
+    /// Writes a TOML scene as an Abaqus input deck: every node and element as the scene meshes
+    /// them, sections, rigid bodies, surfaces, boundary conditions and contact pairs, and one
+    /// *DYNAMIC, EXPLICIT step; `abut run` of the deck gives the scene's history bit for bit.
+    Inp(InpArgs),
     /// Global contact search on a built-in scene: a cloud of slave nodes around a wavy quad
     /// plate. Prints the adapter, what was found, the time and the error against an f64
     /// brute-force oracle on a sample of nodes.
@@ -83,6 +87,15 @@ struct VerifyArgs {
     /// Only these cases (bars, truss, patch, cylinder, sphere, impact, incline, stability).
     #[arg(long = "case")]
     cases: Vec<String>,
+}
+
+#[derive(clap::Args, Clone)]
+struct InpArgs {
+    /// The scene file (TOML).
+    scene: std::path::PathBuf,
+    /// Where to write the deck (standard output without it).
+    #[arg(long)]
+    output: Option<std::path::PathBuf>,
 }
 
 #[derive(clap::Args, Clone)]
@@ -202,6 +215,7 @@ fn main() -> ExitCode {
         },
         Command::Bounce(a) => bounce::bounce(&a),
         Command::Run(a) => run_scene(&a),
+        Command::Inp(a) => write_inp(&a),
         Command::Bench(a) => bench::bench(&a),
         Command::Search(a) => search(&a),
     };
@@ -235,6 +249,20 @@ fn under_mpirun() -> bool {
     ["OMPI_COMM_WORLD_SIZE", "PMI_SIZE", "PMIX_RANK"]
         .iter()
         .any(|v| std::env::var_os(v).is_some())
+}
+
+fn write_inp(a: &InpArgs) -> abut::Result<()> {
+    let deck = abut::scene::Scene::load(&a.scene)?.to_inp()?;
+    match &a.output {
+        Some(path) => std::fs::write(path, deck).map_err(|e| abut::Error::Io {
+            file: path.display().to_string(),
+            message: e.to_string(),
+        }),
+        None => {
+            print!("{deck}");
+            Ok(())
+        }
+    }
 }
 
 fn run_scene(a: &RunArgs) -> abut::Result<()> {

@@ -52,6 +52,8 @@ pub struct SectionDef {
 pub struct RigidBodyDef {
     /// `REF NODE=` (node index).
     pub ref_node: u32,
+    /// `ELSET=` (upper case), when given.
+    pub elset: Option<String>,
     /// `ELSET=`: the rigid elements (element indices).
     pub elements: Vec<u32>,
     /// `PIN NSET=` and `TIE NSET=`: nodes carried by the body (node indices).
@@ -158,6 +160,21 @@ pub struct StepDef {
     pub at: At,
 }
 
+/// An analytical rigid surface (`*SURFACE, TYPE=REVOLUTION | SEGMENTS | CYLINDER`): its
+/// local system and its profile, as written.
+#[derive(Clone, Debug, PartialEq)]
+pub struct AnalyticalDef {
+    /// `REVOLUTION`, `SEGMENTS` or `CYLINDER`.
+    pub kind: String,
+    /// The local system's points: a (origin) and b (on the local axis), and for a cylinder c
+    /// (on the generator); empty for `SEGMENTS`.
+    pub points: Vec<[f64; 3]>,
+    /// The profile: `START`, then `LINE` and `CIRCL` segments, each with its values.
+    pub profile: Vec<(String, Vec<f64>)>,
+    /// Where it was defined.
+    pub at: At,
+}
+
 /// What a deck asks to run.
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct Analysis {
@@ -165,6 +182,8 @@ pub struct Analysis {
     pub materials: BTreeMap<String, MaterialDef>,
     /// Sections in deck order.
     pub sections: Vec<SectionDef>,
+    /// Analytical rigid surfaces by name (upper case).
+    pub analytical: BTreeMap<String, AnalyticalDef>,
     /// Rigid bodies in deck order.
     pub rigid_bodies: Vec<RigidBodyDef>,
     /// Point masses (`*MASS` on `TYPE=MASS` elements): node index and mass.
@@ -186,6 +205,8 @@ pub struct Analysis {
     pub steps: Vec<StepDef>,
     /// Each `*ELEMENT` keyword: the index of its first element, its `TYPE=` and where it is.
     pub element_blocks: Vec<(u32, String, At)>,
+    /// Surface elements (`*SURFACE SECTION`), by element index: they carry surfaces only.
+    pub surface_elements: Vec<u32>,
     /// Plane-stress elements (CPS3, CPS4, CPS4R), by element index: read as plane meshes, not
     /// modelled as deformable (abut's plane elements are plane strain).
     pub plane_stress: Vec<u32>,

@@ -25,8 +25,8 @@ mod keywords;
 mod to_model;
 
 pub use analysis::{
-    AmplitudeDef, Analysis, At, BoundaryDef, BoundaryKind, CloadDef, GravityDef, MaterialDef,
-    RigidBodyDef, SectionDef, StepDef,
+    AmplitudeDef, Analysis, AnalyticalDef, At, BoundaryDef, BoundaryKind, CloadDef, GravityDef,
+    MaterialDef, RigidBodyDef, SectionDef, StepDef,
 };
 pub use to_model::{DeckModel, PairSettings};
 
@@ -55,6 +55,9 @@ pub struct Interaction {
     pub friction: f64,
     /// Pressure–overclosure.
     pub behavior: Behavior,
+    /// `*CONTACT DAMPING, DEFINITION=CRITICAL DAMPING FRACTION`: the penalty springs' viscous
+    /// damping as a fraction of critical (none: abut's default, Abaqus/Explicit's 3 %).
+    pub damping: Option<f64>,
 }
 
 /// A `*CONTACT PAIR` data line with its options.
@@ -254,15 +257,15 @@ fn element_kind(l: &Line, t: &str) -> Result<(ElementKind, bool)> {
     let kind = match t.to_uppercase().as_str() {
         "C3D4" => ElementKind::Tet4,
         "C3D8" | "C3D8R" | "C3D8I" => ElementKind::Hex8,
-        "S3" | "S3R" | "R3D3" | "M3D3" => ElementKind::Tri3,
-        "S4" | "S4R" | "R3D4" | "M3D4" | "M3D4R" => ElementKind::Quad4,
+        "S3" | "S3R" | "R3D3" | "M3D3" | "SFM3D3" => ElementKind::Tri3,
+        "S4" | "S4R" | "R3D4" | "M3D4" | "M3D4R" | "SFM3D4" | "SFM3D4R" => ElementKind::Quad4,
         "CPE3" | "CPS3" => ElementKind::Tri3In2d,
         "CPE4" | "CPE4R" | "CPS4" | "CPS4R" => ElementKind::Quad4In2d,
         "T2D2" | "R2D2" | "T3D2" | "RAX2" => ElementKind::Line2,
         other => {
             return Err(err(
                 l,
-                format!("*ELEMENT: TYPE={other} is not supported by abut (C3D4, C3D8(R/I), S3(R), S4(R), R3D3, R3D4, M3D3, M3D4(R), CPE3, CPS3, CPE4(R), CPS4(R), CAX3, CAX4(R), T2D2, R2D2, RAX2, T3D2)"),
+                format!("*ELEMENT: TYPE={other} is not supported by abut (C3D4, C3D8(R/I), S3(R), S4(R), R3D3, R3D4, M3D3, M3D4(R), SFM3D3, SFM3D4(R), CPE3, CPS3, CPE4(R), CPS4(R), CAX3, CAX4(R), T2D2, R2D2, RAX2, T3D2)"),
             ))
         }
     };
@@ -356,6 +359,7 @@ fn takes_data(kw: &str) -> bool {
             | "DAMPING"
             | "FIXED MASS SCALING"
             | "OUTPUT"
+            | "SURFACE SECTION"
     )
 }
 
@@ -409,6 +413,8 @@ fn parse_lines(lines: &[Line]) -> Result<Deck> {
             "DENSITY" | "ELASTIC" => p.on_density(l, &kw, &opts, data)?,
             "DAMPING" => p.on_damping(l, &kw, &opts, data)?,
             "SOLID SECTION" => p.on_solid_section(l, &kw, &opts, data)?,
+            "SURFACE SECTION" => p.on_surface_section(l, &kw, &opts, data)?,
+            "CONTACT DAMPING" => p.on_contact_damping(l, &kw, &opts, data)?,
             "SURFACE INTERACTION" => p.on_surface_interaction(l, &kw, &opts, data)?,
             "FRICTION" => p.on_friction(l, &kw, &opts, data)?,
             "SURFACE BEHAVIOR" => p.on_surface_behavior(l, &kw, &opts, data)?,
@@ -480,7 +486,8 @@ fn parse_lines(lines: &[Line]) -> Result<Deck> {
     p.deck.masses = masses;
     for pair in &p.deck.pairs {
         for s in [&pair.slave, &pair.master] {
-            if !p.deck.surfaces.contains_key(s) {
+            let analytical_master = s == &pair.master && p.deck.analysis.analytical.contains_key(s);
+            if !p.deck.surfaces.contains_key(s) && !analytical_master {
                 return Err(Error::Parse {
                     file: lines
                         .first()

@@ -68,7 +68,9 @@ impl Deck {
                     },
                 },
                 law: law(&inter.behavior),
-                ..Default::default()
+                damping: inter
+                    .damping
+                    .unwrap_or(crate::model::DEFAULT_CONTACT_DAMPING),
             })
         } else {
             Enforce::Kinematic(Kinematic {
@@ -144,11 +146,11 @@ impl Deck {
                 }
             };
             out.slave_sets.insert(pair.slave.clone(), slave);
-            let SurfaceDef::Faces(master_faces) = &self.surfaces[&pair.master] else {
+            let Some(SurfaceDef::Faces(master_faces)) = self.surfaces.get(&pair.master) else {
                 return Err(Error::BadParameter {
                     name: "*CONTACT PAIR master surface",
                     value: pair.master.clone(),
-                    expected: "an element-based surface (a node-based surface can only be a slave)",
+                    expected: "an element-based surface (a node-based surface can only be a slave; an analytical surface needs a rigid body: Scene::from_inp)",
                 });
             };
             let master = out

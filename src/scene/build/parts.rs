@@ -387,30 +387,7 @@ impl Scene {
                 meshed_bodies.push((p.name.clone(), body));
                 continue;
             }
-            let mut c = [0.0; 3];
-            for &n in &nodes {
-                for a in 0..3 {
-                    c[a] += x[n as usize][a] / count as f64;
-                }
-            }
-            // inertia of the nodes as equal point masses about their centroid
-            let mut inertia = [[0.0; 3]; 3];
-            for &n in &nodes {
-                let r = [0, 1, 2].map(|a| x[n as usize][a] - c[a]);
-                let r2 = r[0] * r[0] + r[1] * r[1] + r[2] * r[2];
-                for a in 0..3 {
-                    for b in 0..3 {
-                        let d = if a == b { r2 } else { 0.0 };
-                        inertia[a][b] += p.mass / count as f64 * (d - r[a] * r[b]);
-                    }
-                }
-            }
-            // a flat part has no inertia about its normal's perpendiculars only in the limit:
-            // keep it positive definite
-            let tr = inertia[0][0] + inertia[1][1] + inertia[2][2];
-            for (a, row) in inertia.iter_mut().enumerate() {
-                row[a] += 1e-6 * tr.max(p.mass * 1e-12);
-            }
+            let (c, inertia) = centroid_and_inertia(&nodes, x, p.mass);
             let motion = match p.motion.as_deref() {
                 Some("velocity") => BodyMotion::Velocity(p.velocity),
                 _ => BodyMotion::Free,
@@ -437,6 +414,9 @@ fn deck_elements(
     name: &str,
 ) -> Result<()> {
     for (k, e) in piece.mesh.elements.iter().enumerate() {
+        if !piece.deformable[k] {
+            continue;
+        }
         let (mat, t) = (piece.materials[k], piece.thickness[k]);
         let n: Vec<u32> = e.nodes.iter().map(|&i| i + base as u32).collect();
         let bad = || {
@@ -479,4 +459,39 @@ fn deck_elements(
         }
     }
     Ok(())
+}
+
+/// The centroid of `nodes` and the inertia about it of `mass` shared equally among them (kept
+/// positive definite for flat sets): a moving rigid part's reference point and inertia.
+pub(crate) fn centroid_and_inertia(
+    nodes: &[u32],
+    x: &[[f64; 3]],
+    mass: f64,
+) -> ([f64; 3], [[f64; 3]; 3]) {
+    let count = nodes.len();
+    let mut c = [0.0; 3];
+    for &n in nodes {
+        for a in 0..3 {
+            c[a] += x[n as usize][a] / count as f64;
+        }
+    }
+    // inertia of the nodes as equal point masses about their centroid
+    let mut inertia = [[0.0; 3]; 3];
+    for &n in nodes {
+        let r = [0, 1, 2].map(|a| x[n as usize][a] - c[a]);
+        let r2 = r[0] * r[0] + r[1] * r[1] + r[2] * r[2];
+        for a in 0..3 {
+            for b in 0..3 {
+                let d = if a == b { r2 } else { 0.0 };
+                inertia[a][b] += mass / count as f64 * (d - r[a] * r[b]);
+            }
+        }
+    }
+    // a flat part has no inertia about its normal's perpendiculars only in the limit:
+    // keep it positive definite
+    let tr = inertia[0][0] + inertia[1][1] + inertia[2][2];
+    for (a, row) in inertia.iter_mut().enumerate() {
+        row[a] += 1e-6 * tr.max(mass * 1e-12);
+    }
+    (c, inertia)
 }

@@ -167,6 +167,7 @@ impl Ranks for Rank<'_> {
             scale: self.energy.iter().fold(0.0f64, |m, x| m.max(x.abs())),
             balance,
             moved: Vec::new(),
+            kinetic_internal: [kinetic, internal],
         })
     }
 

@@ -71,6 +71,7 @@ impl Parser {
             Some(e) => self.members(l, e, false)?,
             None => Vec::new(),
         };
+        let elset = opts.get("ELSET").map(|e| e.to_uppercase());
         let mut nodes = Vec::new();
         for k in ["PIN NSET", "TIE NSET"] {
             if let Some(s) = opts.get(k) {
@@ -87,12 +88,77 @@ impl Parser {
         let at = self.at(l);
         self.deck.analysis.rigid_bodies.push(RigidBodyDef {
             ref_node,
+            elset,
             elements,
             nodes,
             analytical,
             at,
         });
         Ok(())
+    }
+
+    /// The data of an analytical surface: its points and profile.
+    pub(in crate::io::inp) fn analytical_surface(
+        &mut self,
+        l: &Line,
+        kind: &str,
+        data: &[Line],
+    ) -> Result<AnalyticalDef> {
+        // a and b (REVOLUTION, CYLINDER), then c (CYLINDER)
+        let wanted = match kind {
+            "SEGMENTS" => 0,
+            "REVOLUTION" => 6,
+            _ => 9,
+        };
+        let mut values: Vec<f64> = Vec::new();
+        let mut k = 0;
+        while k < data.len() && values.len() < wanted {
+            for s in fields(&data[k]) {
+                values.push(finite(&data[k], s, "coordinate")?);
+            }
+            k += 1;
+        }
+        let points: Vec<[f64; 3]> = values
+            .chunks(3)
+            .filter(|c| c.len() == 3)
+            .map(|c| [c[0], c[1], c[2]])
+            .collect();
+        let mut profile = Vec::new();
+        for d in &data[k..] {
+            let f = fields(d);
+            let word = f.first().map(|w| w.to_uppercase()).unwrap_or_default();
+            let want = match word.as_str() {
+                "START" | "LINE" => 2,
+                "CIRCL" => 4,
+                other => {
+                    return Err(err(
+                        d,
+                        format!("*SURFACE, TYPE={kind}: segment {other} is not supported by abut (START, LINE, CIRCL)"),
+                    ))
+                }
+            };
+            if f.len() != want + 1 {
+                return Err(err(d, format!("{word}: expected {want} values")));
+            }
+            let v = f[1..]
+                .iter()
+                .map(|s| finite(d, s, "coordinate"))
+                .collect::<Result<Vec<f64>>>()?;
+            profile.push((word, v));
+        }
+        if profile.first().is_none_or(|p| p.0 != "START") {
+            return Err(err(
+                l,
+                format!("*SURFACE, TYPE={kind}: the profile begins with START"),
+            ));
+        }
+        let at = self.at(l);
+        Ok(AnalyticalDef {
+            kind: kind.to_string(),
+            points,
+            profile,
+            at,
+        })
     }
 
     /// `*MASS` and `*ROTARY INERTIA` on the `TYPE=MASS` / `TYPE=ROTARYI` elements of `ELSET`.
@@ -143,6 +209,30 @@ impl Parser {
                 self.deck.analysis.rotary_inertia.push((n, i, at.clone()));
             }
         }
+        Ok(())
+    }
+
+    /// `*SURFACE SECTION, ELSET=`: surface elements (SFM3D3, SFM3D4(R)) that carry a surface and
+    /// nothing else.
+    pub(in crate::io::inp) fn on_surface_section(
+        &mut self,
+        l: &Line,
+        kw: &str,
+        opts: &BTreeMap<String, String>,
+        _data: &[Line],
+    ) -> Result<()> {
+        only(l, kw, opts, &["ELSET", "DENSITY"])?;
+        let Some(e) = opts.get("ELSET") else {
+            return Err(err(l, "*SURFACE SECTION needs ELSET="));
+        };
+        if opts.contains_key("DENSITY") {
+            return Err(err(
+                l,
+                "*SURFACE SECTION, DENSITY=: massive surface elements are not modelled by abut",
+            ));
+        }
+        let els = self.members(l, e, false)?;
+        self.deck.analysis.surface_elements.extend(els);
         Ok(())
     }
 
@@ -445,10 +535,21 @@ impl Parser {
                 .iter()
                 .map(|s| finite(d, s, "direction"))
                 .collect::<Result<_>>()?;
+            // a magnitude and a direction: the direction normalised (as given when it already
+            // is a unit vector to round-off)
+            let len = (n[0] * n[0] + n[1] * n[1] + n[2] * n[2]).sqrt();
+            if len == 0.0 {
+                return Err(err(d, "*DLOAD, GRAV: the direction is zero"));
+            }
+            let scale = if (len - 1.0).abs() <= 4.0 * f64::EPSILON {
+                1.0
+            } else {
+                1.0 / len
+            };
             let at = self.at(d);
             self.deck.analysis.gravity.push(GravityDef {
                 elset: f[0].to_uppercase(),
-                acceleration: [g * n[0], g * n[1], g * n[2]],
+                acceleration: [g * (n[0] * scale), g * (n[1] * scale), g * (n[2] * scale)],
                 at,
             });
         }
@@ -608,7 +709,7 @@ pub(in crate::io::inp) fn not_modelled(kw: &str) -> Option<&'static str> {
         "DSLOAD" | "DSFLUX" | "DFLUX" | "CFLUX" | "TEMPERATURE" | "FILM" => {
             "a load abut does not apply (distributed surface loads, fluxes, temperatures)"
         }
-        "GAP" | "CONTACT DAMPING" | "CHANGE FRICTION" | "MODEL CHANGE" => {
+        "GAP" | "CHANGE FRICTION" | "MODEL CHANGE" | "CHANGE SURFACE BEHAVIOR" => {
             "a contact option abut does not read yet"
         }
         _ => return None,

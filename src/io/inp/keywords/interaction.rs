@@ -119,9 +119,47 @@ impl Parser {
             Interaction {
                 friction: 0.0,
                 behavior: Behavior::Hard,
+                damping: None,
             },
         );
         self.current_interaction = Some(name);
+        Ok(())
+    }
+
+    /// `*CONTACT DAMPING, DEFINITION=CRITICAL DAMPING FRACTION` in a surface interaction.
+    pub(in crate::io::inp) fn on_contact_damping(
+        &mut self,
+        l: &Line,
+        kw: &str,
+        opts: &BTreeMap<String, String>,
+        data: &[Line],
+    ) -> Result<()> {
+        only(l, kw, opts, &["DEFINITION"])?;
+        let Some(name) = self.current_interaction.clone() else {
+            return Err(err(l, "*CONTACT DAMPING outside a *SURFACE INTERACTION"));
+        };
+        if opts.get("DEFINITION").map(|d| d.to_uppercase()).as_deref()
+            != Some("CRITICAL DAMPING FRACTION")
+        {
+            return Err(err(
+                l,
+                "*CONTACT DAMPING: abut takes DEFINITION=CRITICAL DAMPING FRACTION",
+            ));
+        }
+        let Some(d) = data.first() else {
+            return Err(err(l, "*CONTACT DAMPING needs a data line (the fraction)"));
+        };
+        let f: f64 = num(
+            d,
+            fields(d).first().copied().unwrap_or(""),
+            "damping fraction",
+        )?;
+        if !(f.is_finite() && (0.0..=1.0).contains(&f)) {
+            return Err(err(d, format!("*CONTACT DAMPING: {f} must be in [0, 1]")));
+        }
+        if let Some(i) = self.deck.interactions.get_mut(&name) {
+            i.damping = Some(f);
+        }
         Ok(())
     }
 

@@ -243,10 +243,16 @@ impl Parser {
         opts: &BTreeMap<String, String>,
         data: &[Line],
     ) -> Result<()> {
-        only(l, kw, opts, &["NAME", "TYPE"])?;
+        only(l, kw, opts, &["NAME", "TYPE", "FILLET RADIUS"])?;
         let Some(name) = opts.get("NAME") else {
             return Err(err(l, "*SURFACE needs NAME="));
         };
+        if opts.contains_key("FILLET RADIUS") {
+            return Err(err(
+                l,
+                "*SURFACE, FILLET RADIUS=: abut's analytical surfaces have no fillets",
+            ));
+        }
         let ty = opts
             .get("TYPE")
             .map_or("ELEMENT".to_string(), |t| t.to_uppercase());
@@ -301,10 +307,18 @@ impl Parser {
                 }
                 SurfaceDef::Nodes(nodes, areas)
             }
+            "REVOLUTION" | "SEGMENTS" | "CYLINDER" => {
+                let def = self.analytical_surface(l, &ty, data)?;
+                self.deck
+                    .analysis
+                    .analytical
+                    .insert(name.to_uppercase(), def);
+                return Ok(());
+            }
             other => {
                 return Err(err(
                     l,
-                    format!("*SURFACE: TYPE={other} is not supported by abut (ELEMENT, NODE)"),
+                    format!("*SURFACE: TYPE={other} is not supported by abut (ELEMENT, NODE, REVOLUTION, SEGMENTS, CYLINDER)"),
                 ))
             }
         };

@@ -16,7 +16,9 @@ use crate::io::inp::{At, BoundaryKind, Deck, PairSettings, SurfaceDef};
 use crate::io::{ElementKind, MeshData, MeshElement};
 use crate::model::Facet;
 
-use super::spec::{ContactSpec, MaterialSpec, PartSpec, RunSpec, Scene};
+use super::spec::{ContactSpec, MaterialSpec, PartSpec, QuasiStatic, RunSpec, Scene};
+
+mod rigid;
 
 /// A part of a deck: its mesh (node indices local to the part) and what the deck says about
 /// its elements and nodes.
@@ -28,6 +30,8 @@ pub struct DeckPiece {
     pub surfaces: BTreeMap<String, SurfaceDef>,
     /// Each element's material (deformable parts).
     pub materials: Vec<Material>,
+    /// Whether each element is deformable (not a surface element).
+    pub deformable: Vec<bool>,
     /// Each element's thickness (plane elements) or cross-section area (trusses).
     pub thickness: Vec<f64>,
     /// Each node's initial velocity.
@@ -93,6 +97,8 @@ enum Role {
     Deformable(usize, f64),
     /// In rigid body k.
     Rigid(usize),
+    /// A surface element (`*SURFACE SECTION`): a surface on the nodes of another part.
+    Surface,
 }
 
 impl Scene {
@@ -129,16 +135,17 @@ fn from_deck(deck: &Deck, file: &str) -> Result<Scene> {
             ),
         );
     }
-    match step.procedure.as_deref() {
-        Some("DYNAMIC EXPLICIT") => {}
+    let static_step = match step.procedure.as_deref() {
+        Some("DYNAMIC EXPLICIT") => false,
+        Some("STATIC") => true,
         Some(p) => {
             return refuse(
                 &step.at,
-                format!("*STEP with *{p}: abut runs *DYNAMIC, EXPLICIT steps (a quasi-static *STATIC step is not run yet)"),
+                format!("*STEP with *{p}: abut runs *DYNAMIC, EXPLICIT steps and *STATIC ones as quasi-static"),
             )
         }
-        None => return refuse(&step.at, "*STEP without a procedure (*DYNAMIC, EXPLICIT)"),
-    }
+        None => return refuse(&step.at, "*STEP without a procedure (*DYNAMIC, EXPLICIT or *STATIC)"),
+    };
     let Some(end_time) = step.time_period.filter(|t| t.is_finite() && *t > 0.0) else {
         return refuse(
             &step.at,
@@ -159,7 +166,18 @@ fn from_deck(deck: &Deck, file: &str) -> Result<Scene> {
                 format!("*SOLID SECTION: material {} is not defined", s.material),
             );
         };
-        let (Some(rho), Some((young, poisson))) = (m.density, m.elastic) else {
+        // a quasi-static run's increments do not depend on the density: without one, 1
+        let density = match m.density {
+            None if static_step && a.gravity.is_empty() => {
+                notes.push(format!(
+                    "material {}: no *DENSITY; the quasi-static run takes 1 (its increments and its static answer do not depend on it)",
+                    s.material
+                ));
+                Some(1.0)
+            }
+            d => d,
+        };
+        let (Some(rho), Some((young, poisson))) = (density, m.elastic) else {
             return refuse(
                 &m.at,
                 format!(
@@ -217,13 +235,19 @@ fn from_deck(deck: &Deck, file: &str) -> Result<Scene> {
             role[e as usize] = Some(Role::Deformable(material_index[&s.material], s.thickness));
         }
     }
-    for (k, r) in a.rigid_bodies.iter().enumerate() {
-        if let Some(s) = &r.analytical {
+    for &e in &a.surface_elements {
+        if role[e as usize].is_some() {
             return refuse(
-                &r.at,
-                format!("*RIGID BODY, ANALYTICAL SURFACE={s}: analytical rigid surfaces are not read from decks yet (a [[rigid]] table of a TOML scene has them)"),
+                &whole,
+                format!(
+                    "element {} has a *SURFACE SECTION and a *SOLID SECTION",
+                    mesh.elements[e as usize].label
+                ),
             );
         }
+        role[e as usize] = Some(Role::Surface);
+    }
+    for (k, r) in a.rigid_bodies.iter().enumerate() {
         for &e in &r.elements {
             role[e as usize] = Some(Role::Rigid(k));
         }
@@ -343,10 +367,14 @@ fn from_deck(deck: &Deck, file: &str) -> Result<Scene> {
         piece_of[n as usize] = k;
     }
     if !free_points.is_empty() {
-        for &n in &free_points {
-            piece_of[n as usize] = piece_nodes.len();
-        }
         piece_nodes.push(free_points);
+    }
+    // in the order of their first node: a deck written part by part keeps its parts' order
+    piece_nodes.sort_by_key(|nodes| nodes[0]);
+    for (k, nodes) in piece_nodes.iter().enumerate() {
+        for &n in nodes {
+            piece_of[n as usize] = k;
+        }
     }
     // the rigid body of each piece
     let mut rigid_of_piece: Vec<Option<usize>> = vec![None; piece_nodes.len()];
@@ -397,6 +425,9 @@ fn from_deck(deck: &Deck, file: &str) -> Result<Scene> {
                 label: el.label,
                 axisymmetric: el.axisymmetric,
             });
+            piece
+                .deformable
+                .push(matches!(role[e], Some(Role::Deformable(..))));
             match role[e] {
                 Some(Role::Deformable(m, t)) => {
                     piece.materials.push(materials[m].1);
@@ -459,115 +490,73 @@ fn from_deck(deck: &Deck, file: &str) -> Result<Scene> {
         pieces.push(piece);
     }
     // rigid bodies: mass, inertia, motion from the reference node
+    let quasi_static = if static_step {
+        Some(quasi_static(
+            deck,
+            &role,
+            &materials,
+            step.time_period.unwrap_or(1.0),
+            step,
+        )?)
+    } else {
+        None
+    };
+    // a step's values without an amplitude: at once (explicit dynamics), or ramped by a
+    // smooth step (quasi-static); an amplitude given in a static step's time, stretched to the
+    // ramp's
     let amplitude = |name: &Option<String>| -> Arc<Amplitude> {
-        Arc::new(match name {
-            Some(n) => a.amplitudes[n].curve(),
-            None => Amplitude::step(),
+        let scale = quasi_static
+            .as_ref()
+            .map_or(1.0, |q| q.ramp_time / q.step_period);
+        Arc::new(match (name, &quasi_static) {
+            (Some(n), _) => {
+                let mut c = a.amplitudes[n].curve();
+                for p in &mut c.points {
+                    p.0 *= scale;
+                }
+                c
+            }
+            (None, Some(q)) => Amplitude {
+                smooth: true,
+                points: vec![(0.0, 0.0), (q.ramp_time, 1.0)],
+            },
+            (None, None) => Amplitude::step(),
         })
     };
-    let two_d = mesh.elements.iter().any(|e| e.kind.is_planar());
+    // every load follows one curve
+    let load_amplitudes: BTreeSet<&Option<String>> =
+        a.cloads.iter().map(|c| &c.amplitude).collect();
+    if load_amplitudes.len() > 1 {
+        return refuse(
+            &a.cloads[0].at,
+            "*CLOAD with different amplitudes: abut scales every load by one curve",
+        );
+    }
+    let load_factor = match load_amplitudes.first() {
+        Some(name) if name.is_some() || static_step => Some(amplitude(name)),
+        _ => None,
+    };
+    // plane continuum elements, or plane trusses and rigid segments
+    let two_d = mesh.elements.iter().any(|e| e.kind.is_planar())
+        || a.element_blocks
+            .iter()
+            .any(|(_, t, _)| matches!(t.as_str(), "T2D2" | "R2D2" | "RAX2"));
     let mut dropped_rotations = false;
     for (p, rigid) in rigid_of_piece.iter().enumerate() {
-        let Some(k) = *rigid else { continue };
-        let r = &a.rigid_bodies[k];
-        let mass = point_mass.get(&r.ref_node).copied().unwrap_or(0.0);
-        let inertia = a
-            .rotary_inertia
-            .iter()
-            .filter(|(n, _, _)| *n == r.ref_node)
-            .fold([[0.0; 3]; 3], |acc, (_, i, _)| {
-                std::array::from_fn(|x| std::array::from_fn(|y| acc[x][y] + i[x][y]))
-            });
-        // per degree of freedom: held (None value) or a velocity
-        let mut held = [false; 6];
-        let mut velocity = [None; 3];
-        for b in a
-            .boundaries
-            .iter()
-            .filter(|b| b.nodes.contains(&r.ref_node))
-        {
-            for d in b.first..=b.last {
-                match (b.kind, b.value == 0.0, &b.amplitude) {
-                    (BoundaryKind::Displacement, true, _) => held[d - 1] = true,
-                    (BoundaryKind::Velocity, _, None) if d <= 3 => velocity[d - 1] = Some(b.value),
-                    _ => {
-                        return refuse(
-                            &b.at,
-                            "a rigid body's reference node moved by a prescribed displacement, an amplitude or a rotation rate: abut moves rigid bodies held, at a constant velocity, or free",
-                        )
-                    }
-                }
-            }
+        if let Some(k) = *rigid {
+            pieces[p].rigid = Some(rigid::body(
+                a,
+                &a.rigid_bodies[k],
+                &point_mass,
+                mesh,
+                two_d,
+            )?);
         }
-        let rotation_held = held[3..].iter().filter(|h| **h).count();
-        if rotation_held != 0 && rotation_held != 3 && !two_d {
-            return refuse(
-                &r.at,
-                "a rigid body with some of its rotations held: abut holds all three or none",
-            );
-        }
-        let motion = if velocity.iter().any(Option::is_some) {
-            if (0..3).any(|d| velocity[d].is_none() && !held[d]) {
-                return refuse(
-                    &r.at,
-                    "a rigid body with a prescribed velocity in some directions and free in others",
-                );
-            }
-            BodyMotion::Velocity(std::array::from_fn(|d| velocity[d].unwrap_or(0.0)))
-        } else if held[..3].iter().all(|h| *h) && (rotation_held == 3 || two_d) {
-            BodyMotion::Fixed
-        } else {
-            BodyMotion::Free
-        };
-        if motion == BodyMotion::Free && mass <= 0.0 {
-            return refuse(
-                &r.at,
-                "a free rigid body needs a mass: *MASS on its reference node",
-            );
-        }
-        let mut v0 = [0.0; 3];
-        for (n, d, v, _) in &a.initial_velocities {
-            if *n == r.ref_node {
-                v0[d - 1] = *v;
-            }
-        }
-        let mut load = [0.0; 3];
-        let mut moment = [0.0; 3];
-        for c in a.cloads.iter().filter(|c| c.nodes.contains(&r.ref_node)) {
-            if c.amplitude.is_some() {
-                return refuse(
-                    &c.at,
-                    "*CLOAD with AMPLITUDE=: abut applies constant loads so far",
-                );
-            }
-            if c.dof <= 3 {
-                load[c.dof - 1] += c.value;
-            } else {
-                moment[c.dof - 4] += c.value;
-            }
-        }
-        let rotation_locked = rotation_held > 0 || two_d;
-        if motion == BodyMotion::Free && !rotation_locked && (0..3).any(|d| inertia[d][d] <= 0.0) {
-            return refuse(
-                &r.at,
-                "a free rigid body that can rotate needs *ROTARY INERTIA on its reference node",
-            );
-        }
-        pieces[p].rigid = Some(DeckRigid {
-            reference: mesh.positions[r.ref_node as usize],
-            mass: if mass > 0.0 {
-                mass
-            } else {
-                super::build::IMMOVABLE_MASS
-            },
-            inertia,
-            motion,
-            locked: [held[0], held[1], held[2]],
-            rotation_locked,
-            velocity: v0,
-            load,
-            moment,
-        });
+    }
+    let mut rigid_specs = Vec::new();
+    for r in a.rigid_bodies.iter().filter(|r| r.analytical.is_some()) {
+        let body = rigid::body(a, r, &point_mass, mesh, two_d)?;
+        rigid_specs.push(rigid::analytical(a, r, &body, mesh)?);
     }
     // boundary conditions, initial velocities and loads on the deformable parts' nodes
     for b in &a.boundaries {
@@ -631,12 +620,6 @@ fn from_deck(deck: &Deck, file: &str) -> Result<Scene> {
             if ref_nodes.contains_key(&n) || p == usize::MAX {
                 continue;
             }
-            if c.amplitude.is_some() {
-                return refuse(
-                    &c.at,
-                    "*CLOAD with AMPLITUDE=: abut applies constant loads so far",
-                );
-            }
             if pieces[p].rigid.is_some() || c.dof > 3 {
                 return refuse(&c.at, format!("*CLOAD on node {}: loads go on deformable nodes' translations or a rigid body's reference node", mesh.node_labels[n as usize]));
             }
@@ -670,7 +653,10 @@ fn from_deck(deck: &Deck, file: &str) -> Result<Scene> {
     let names = |p: usize| -> String {
         if let Some(k) = rigid_of_piece[p] {
             let r = &a.rigid_bodies[k];
-            return format!("RIGID-{}", mesh.node_labels[r.ref_node as usize]);
+            return r
+                .elset
+                .clone()
+                .unwrap_or_else(|| format!("RIGID-{}", mesh.node_labels[r.ref_node as usize]));
         }
         a.sections
             .iter()
@@ -689,12 +675,23 @@ fn from_deck(deck: &Deck, file: &str) -> Result<Scene> {
             .then(|| {
                 piece
                     .materials
-                    .first()
-                    .and_then(|m| materials.iter().find(|x| x.1 == *m))
+                    .iter()
+                    .zip(&piece.deformable)
+                    .find(|(_, d)| **d)
+                    .and_then(|(m, _)| materials.iter().find(|x| x.1 == *m))
                     .map(|x| x.0.clone())
             })
             .flatten();
+        // plane elements' faces carry their section's thickness
+        let thickness = piece
+            .mesh
+            .elements
+            .iter()
+            .zip(&piece.thickness)
+            .find(|(e, _)| e.kind.is_planar())
+            .map_or(1.0, |(_, t)| *t);
         let mut spec = PartSpec::deck_part(names(p), file, Arc::new(piece));
+        spec.thickness = thickness;
         spec.material = material;
         spec.rigid = rigid;
         spec.dimension = Some(if two_d { 2 } else { 3 });
@@ -728,6 +725,30 @@ fn from_deck(deck: &Deck, file: &str) -> Result<Scene> {
             line: pair.line,
         };
         let settings: PairSettings = deck.pair_settings(pair);
+        if rigid_specs.iter().any(|r| r.name == pair.master) {
+            // against an analytical surface: hard kinematic contact, abut's rigid pairs
+            let hard = matches!(
+                settings.enforce,
+                crate::model::Enforce::Kinematic(crate::model::Kinematic { softened: None })
+            );
+            if !hard || pair.weight.is_some() || settings.sliding != crate::model::Sliding::Finite {
+                return refuse(
+                    &at,
+                    format!("*CONTACT PAIR against analytical surface {}: abut enforces it by hard kinematic contact, finite sliding, pure master–slave", pair.master),
+                );
+            }
+            let mut c = ContactSpec::deck_pair(
+                part_of_surface(&pair.slave, &at)?,
+                pair.slave.clone(),
+                pair.master.clone(),
+                String::new(),
+                None,
+                settings,
+            );
+            c.master_face = None;
+            contact.push(c);
+            continue;
+        }
         contact.push(ContactSpec::deck_pair(
             part_of_surface(&pair.slave, &at)?,
             pair.slave.clone(),
@@ -745,6 +766,9 @@ fn from_deck(deck: &Deck, file: &str) -> Result<Scene> {
             "a deck without deformable elements has no stable increment: give one with *DYNAMIC, EXPLICIT, DIRECT USER CONTROL (the data line's first value)",
         );
     }
+    let end_time = quasi_static
+        .as_ref()
+        .map_or(end_time, |q| q.ramp_time + q.hold_time);
     let mut run = RunSpec::for_deck(end_time);
     run.dt = step.fixed_increment;
     if let Some(s) = step.scale_factor {
@@ -757,7 +781,13 @@ fn from_deck(deck: &Deck, file: &str) -> Result<Scene> {
     run.nlgeom = step.nlgeom;
     run.output_every = step.history_every.unwrap_or(1);
     run.vtk_every = step.field_every.unwrap_or(0);
-    run.damping = damping;
+    run.damping = damping + quasi_static.as_ref().map_or(0.0, |q| q.damping);
+    if let Some(q) = &quasi_static {
+        notes.push(format!(
+            "{}: *STATIC run as explicit quasi-static: loads and motions ramped by a smooth step over {:.4e} (10 estimated fundamental periods of {:.4e}) and held {:.4e}, mass-proportional damping α = {:.4e}; the summary's quasi_static reports the kinetic energy against the internal energy",
+            step.at, q.ramp_time, q.fundamental_period, q.hold_time, q.damping
+        ));
+    }
     run.gravity = gravity;
     let title = deck.heading.clone().unwrap_or_else(|| file.to_string());
     let scene = Scene {
@@ -774,14 +804,63 @@ fn from_deck(deck: &Deck, file: &str) -> Result<Scene> {
             })
             .collect(),
         part: parts,
-        rigid: Vec::new(),
+        rigid: rigid_specs,
         boundary: Vec::new(),
         contact,
         base_dir: Path::new(file).parent().map(Path::to_path_buf),
         deck_notes: notes,
+        quasi_static,
+        load_factor,
     };
     scene.check_deck()?;
     Ok(scene)
+}
+
+/// How a `*STATIC` step runs: the fundamental period estimated as 4·L/c over the deformable
+/// elements' extent L and the slowest bar wave c = √(E/ρ), the ramp ten of them, the hold five,
+/// damping α = 2π/period.
+fn quasi_static(
+    deck: &Deck,
+    role: &[Option<Role>],
+    materials: &[(String, Material, f64)],
+    step_period: f64,
+    step: &crate::io::inp::StepDef,
+) -> Result<QuasiStatic> {
+    let mesh = &deck.mesh;
+    let mut lo = [f64::INFINITY; 3];
+    let mut hi = [f64::NEG_INFINITY; 3];
+    let mut slowest = f64::INFINITY;
+    for (e, r) in mesh.elements.iter().zip(role) {
+        let Some(Role::Deformable(m, _)) = r else {
+            continue;
+        };
+        let mat = materials[*m].1;
+        slowest = slowest.min((mat.young / mat.density).sqrt());
+        for &n in &e.nodes {
+            for d in 0..3 {
+                lo[d] = lo[d].min(mesh.positions[n as usize][d]);
+                hi[d] = hi[d].max(mesh.positions[n as usize][d]);
+            }
+        }
+    }
+    let extent = (0..3).map(|d| hi[d] - lo[d]).fold(0.0, f64::max);
+    if !(extent > 0.0 && slowest.is_finite() && slowest > 0.0) {
+        return refuse(
+            &step.at,
+            "a *STATIC step needs deformable elements (their extent and wave speed set its pace)",
+        );
+    }
+    if !(step_period.is_finite() && step_period > 0.0) {
+        return refuse(&step.at, "*STATIC: the time period must be positive");
+    }
+    let period = 4.0 * extent / slowest;
+    Ok(QuasiStatic {
+        step_period,
+        fundamental_period: period,
+        ramp_time: 10.0 * period,
+        hold_time: 5.0 * period,
+        damping: 2.0 * std::f64::consts::PI / period,
+    })
 }
 
 fn map_facet(f: &Facet, local: &[u32]) -> Facet {
