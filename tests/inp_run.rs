@@ -322,3 +322,184 @@ fn every_verification_deck_gives_its_scenes_history_bit_for_bit() {
         }
     }
 }
+
+/// A block pressed on a block, then pushed sideways until it slides, as a `*STATIC` deck of
+/// C3D4 tetrahedra (no `*DENSITY`): two unit cubes of E = 1000, ν = 0 (uniaxial: the static
+/// answer is exact), the lower one held at its base, the upper one's top pressed down by
+/// δ = 0.01 over the first half of the step and then moved 0.03 sideways over the second;
+/// penalty contact of 10⁵ per area with Coulomb μ = 0.3. Static answer: a uniform pressure
+/// p = δ/(H/E + H/E + 1/k) = 4.975 over the unit area, the normal force N = p, and once the
+/// top block slides (the blocks' shear takes less than half of the 0.03; the edge nodes then
+/// stand less than 0.02 beyond the lower block's edge, within its extension zone) a tangential
+/// force μ·N, which the stopped interface holds within 5 % below it.
+#[test]
+fn a_static_deck_of_a_block_pressed_and_slid_on_a_block_runs_quasi_static() {
+    let n = 3;
+    let grid = |z0: f64| {
+        let c: Vec<f64> = (0..=n).map(|i| i as f64 / n as f64).collect();
+        abut::mesh::block_tets_on([c.clone(), c.clone(), c.iter().map(|z| z + z0).collect()])
+    };
+    let (lower, upper) = (grid(0.0), grid(1.0));
+    let per = lower.positions.len();
+    let mut s = String::from("*HEADING\nblock pressed and slid on a block\n*NODE\n");
+    for (k, p) in lower.positions.iter().chain(&upper.positions).enumerate() {
+        s += &format!("{}, {:?}, {:?}, {:?}\n", k + 1, p[0], p[1], p[2]);
+    }
+    let mut label = 0;
+    for (name, mesh, base) in [("LOWER", &lower, 0), ("UPPER", &upper, per)] {
+        s += &format!("*ELEMENT, TYPE=C3D4, ELSET={name}\n");
+        for t in &mesh.facets {
+            label += 1;
+            s += &format!(
+                "{label}, {}, {}, {}, {}\n",
+                t[0] as usize + base + 1,
+                t[1] as usize + base + 1,
+                t[2] as usize + base + 1,
+                t[3] as usize + base + 1
+            );
+        }
+        s += &format!("*SOLID SECTION, ELSET={name}, MATERIAL=SOFT\n");
+    }
+    // node sets by height (the base and the top each on one block)
+    let at = |z: f64| -> Vec<usize> {
+        lower
+            .positions
+            .iter()
+            .chain(&upper.positions)
+            .enumerate()
+            .filter(|(_, p)| (p[2] - z).abs() < 1e-12)
+            .map(|(k, _)| k + 1)
+            .collect()
+    };
+    let base: Vec<usize> = at(0.0);
+    let top: Vec<usize> = at(2.0);
+    let lower_top: Vec<usize> = (0..per)
+        .filter(|&k| (lower.positions[k][2] - 1.0).abs() < 1e-12)
+        .map(|k| k + 1)
+        .collect();
+    let upper_bottom: Vec<usize> = (0..per)
+        .filter(|&k| (upper.positions[k][2] - 1.0).abs() < 1e-12)
+        .map(|k| k + per + 1)
+        .collect();
+    let list = |v: &[usize]| {
+        v.iter()
+            .map(|k| k.to_string())
+            .collect::<Vec<_>>()
+            .join(",\n")
+            + "\n"
+    };
+    s += &format!(
+        "*NSET, NSET=BASE\n{}*NSET, NSET=TOP\n{}",
+        list(&base),
+        list(&top)
+    );
+    // the lower block's top as surface elements, the upper block's bottom as its nodes with
+    // their tributary areas (a node of the 3 × 3 grid: 1/36 at a corner, 1/18 on an edge, 1/9
+    // inside)
+    s += "*ELEMENT, TYPE=SFM3D4, ELSET=LOWER-TOP\n";
+    for j in 0..n {
+        for i in 0..n {
+            let id = |i: usize, j: usize| {
+                let (x, y) = (i as f64 / n as f64, j as f64 / n as f64);
+                lower_top[lower_top
+                    .iter()
+                    .position(|&k| {
+                        let p = lower.positions[k - 1];
+                        (p[0] - x).abs() < 1e-12 && (p[1] - y).abs() < 1e-12
+                    })
+                    .unwrap()]
+            };
+            label += 1;
+            s += &format!(
+                "{label}, {}, {}, {}, {}\n",
+                id(i, j),
+                id(i + 1, j),
+                id(i + 1, j + 1),
+                id(i, j + 1)
+            );
+        }
+    }
+    s += "*SURFACE SECTION, ELSET=LOWER-TOP\n*SURFACE, NAME=MASTER\nLOWER-TOP, SPOS\n";
+    s += "*SURFACE, NAME=SLAVE, TYPE=NODE\n";
+    for &k in &upper_bottom {
+        let p = upper.positions[k - per - 1];
+        let edge = |c: f64| {
+            if c.abs() < 1e-12 || (c - 1.0).abs() < 1e-12 {
+                0.5
+            } else {
+                1.0
+            }
+        };
+        s += &format!("{k}, {:?}\n", edge(p[0]) * edge(p[1]) / 9.0);
+    }
+    s += "*MATERIAL, NAME=SOFT\n*ELASTIC\n1000.0, 0.0\n";
+    s += "*SURFACE INTERACTION, NAME=GRIP\n*FRICTION\n0.3\n*SURFACE BEHAVIOR, PRESSURE-OVERCLOSURE=LINEAR\n1.0e5\n";
+    s += "*CONTACT PAIR, INTERACTION=GRIP, MECHANICAL CONSTRAINT=PENALTY\nSLAVE, MASTER\n";
+    s += "*AMPLITUDE, NAME=PRESS, DEFINITION=SMOOTH STEP\n0.0, 0.0, 0.5, 1.0\n";
+    s += "*AMPLITUDE, NAME=SLIDE, DEFINITION=SMOOTH STEP\n0.0, 0.0, 0.5, 0.0, 1.0, 1.0\n";
+    s += "*BOUNDARY\nBASE, ENCASTRE\n";
+    s += "*STEP, NLGEOM=NO\n*STATIC\n0.1, 1.0\n";
+    s += "*BOUNDARY, AMPLITUDE=PRESS\nTOP, 3, 3, -0.01\n*BOUNDARY, AMPLITUDE=SLIDE\nTOP, 1, 1, 0.03\n*BOUNDARY\nTOP, 2, 2\n";
+    s += "*NODE PRINT, NSET=TOP\nRF\n*END STEP\n";
+    let scene = deck("blocks.inp", &s).unwrap();
+    let q = scene
+        .quasi_static
+        .clone()
+        .expect("a *STATIC step runs quasi-static");
+    let summary = run(&scene, &Device::cpu(), None).unwrap();
+    let exact_p = 0.01 / (1e-3 + 1e-3 + 1e-5);
+    let f = summary.final_contact_force;
+    let qs = summary
+        .quasi_static
+        .clone()
+        .expect("the summary reports the quasi-static run");
+    eprintln!(
+        "quasi-static blocks: {} increments, ramp {:.3e} over a period of {:.3e}; N = {:.5} (static {exact_p:.5}), T = {:.5} (μN {:.5}); KE/IE at the ramp's end {:.2e}, at the end {:.2e}, largest {:.2e}",
+        summary.increments,
+        q.ramp_time,
+        q.fundamental_period,
+        f[2],
+        f[0].hypot(f[1]),
+        0.3 * f[2],
+        qs.kinetic_to_internal_at_ramp_end,
+        qs.kinetic_to_internal_at_end,
+        qs.kinetic_to_internal_max
+    );
+    assert!(
+        (f[2] / exact_p - 1.0).abs() < 0.02,
+        "normal force {} against {exact_p}",
+        f[2]
+    );
+    // it slid (Coulomb's limit reached) and stopped: the interface holds what it slid at, less
+    // what the blocks relax once the top stops (statics allows any force up to μN then)
+    let ratio = f[0].hypot(f[1]) / (0.3 * f[2]);
+    assert!(
+        ratio <= 1.001 && ratio > 0.95,
+        "tangential {f:?} against μN: {ratio}"
+    );
+    // every contact node carries the static pressure, in the mean; the moment of the
+    // tangential force tilts the distribution linearly about it
+    let mean = summary
+        .contact_nodes
+        .iter()
+        .map(|n| n.pressure)
+        .sum::<f64>()
+        / summary.contact_nodes.len() as f64;
+    assert_eq!(summary.contact_nodes.len(), (n + 1) * (n + 1));
+    assert!(
+        (mean / exact_p - 1.0).abs() < 0.05,
+        "mean pressure {mean} against {exact_p}"
+    );
+    assert!(
+        qs.kinetic_to_internal_max < 0.05 && qs.kinetic_to_internal_at_end < 1e-3,
+        "{qs:?}"
+    );
+    assert!(
+        summary
+            .deck_notes
+            .iter()
+            .any(|n| n.contains("quasi-static")),
+        "{:?}",
+        summary.deck_notes
+    );
+}

@@ -453,11 +453,10 @@ fn parse_lines(lines: &[Line]) -> Result<Deck> {
     // lumped masses from the sections
     let mut masses = vec![0.0; p.deck.mesh.positions.len()];
     for (elset, material, thickness, l) in &p.sections {
+        // a material without density lumps no mass (Deck::to_model gives such nodes its
+        // default; Scene::from_inp refuses it in a dynamic step)
         let Some(&rho) = p.densities.get(material) else {
-            return Err(err(
-                l,
-                format!("*SOLID SECTION: material {material} has no *DENSITY"),
-            ));
+            continue;
         };
         let Some(els) = p.deck.mesh.element_sets.get(elset) else {
             return Err(err(
