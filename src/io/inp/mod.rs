@@ -262,6 +262,14 @@ fn element_kind(l: &Line, t: &str) -> Result<(ElementKind, bool)> {
         "CPE3" | "CPS3" => ElementKind::Tri3In2d,
         "CPE4" | "CPE4R" | "CPS4" | "CPS4R" => ElementKind::Quad4In2d,
         "T2D2" | "R2D2" | "T3D2" | "RAX2" => ElementKind::Line2,
+        other @ ("C3D20" | "C3D20R" | "C3D10" | "C3D10M" | "C3D15" | "C3D6" | "CAX6" | "CAX8"
+        | "CAX8R" | "CPE6" | "CPE8" | "CPE8R" | "CPS6" | "CPS8" | "CPS8R" | "S8" | "S8R"
+        | "STRI65" | "M3D8" | "M3D8R" | "M3D6") => {
+            return Err(err(
+                l,
+                format!("*ELEMENT: TYPE={other} (a quadratic or wedge element) is not supported by abut: its elements are linear (C3D4, CPE3, CAX3, T3D2; Abaqus/Explicit has no C3D20 either)"),
+            ))
+        }
         other => {
             return Err(err(
                 l,
