@@ -1,13 +1,17 @@
 //! Abaqus input decks (`.inp`): the mesh (`*NODE`, `*ELEMENT`, `*NSET`, `*ELSET` with
-//! `GENERATE`, `*SURFACE` of element faces and of nodes, `*INCLUDE`), densities for lumped
-//! masses (`*MATERIAL`, `*DENSITY`, `*ELASTIC`, `*SOLID SECTION`) and the contact definitions the
-//! seed's "Input File Usage" lines show: `*CONTACT PAIR` (`INTERACTION=`, `SMALL SLIDING`,
-//! `MECHANICAL CONSTRAINT=KINEMATIC|PENALTY`, `WEIGHT=`, `CPSET=`), `*SURFACE INTERACTION` with
-//! `*FRICTION` and `*SURFACE BEHAVIOR, PRESSURE-OVERCLOSURE=HARD|LINEAR|EXPONENTIAL|TABULAR`,
-//! `*CONTACT CONTROLS` (`GLOBTRKINC=`, `FASTLOCALTRK=`, `SCALE PENALTY=`, `CPSET=`) and
-//! `*STEP, NLGEOM=YES|NO` (small against infinitesimal sliding), `*DYNAMIC, EXPLICIT`,
-//! `*END STEP`, `*HEADING`. Any other keyword or option is an error naming it, its file and
-//! line — never silently ignored.
+//! `GENERATE`, `*SURFACE` of element faces, of nodes, and analytical ones, `*INCLUDE`),
+//! materials and sections (`*MATERIAL`, `*DENSITY`, `*ELASTIC`, `*DAMPING`, `*SOLID SECTION`,
+//! `*SURFACE SECTION`), the contact definitions the seed's "Input File Usage" lines show
+//! (`*CONTACT PAIR` with `INTERACTION=`, `SMALL SLIDING`, `MECHANICAL CONSTRAINT=KINEMATIC|
+//! PENALTY`, `WEIGHT=`, `CPSET=`; `*SURFACE INTERACTION` with `*FRICTION`, `*CONTACT DAMPING`
+//! and `*SURFACE BEHAVIOR, PRESSURE-OVERCLOSURE=HARD|LINEAR|EXPONENTIAL|TABULAR`; `*CONTACT
+//! CONTROLS` with `GLOBTRKINC=`, `FASTLOCALTRK=`, `SCALE PENALTY=`, `CPSET=`) and what a deck
+//! runs (analysis.rs: `*RIGID BODY`, `*MASS`, `*ROTARY INERTIA`, `*BOUNDARY`, `*INITIAL
+//! CONDITIONS`, `*AMPLITUDE`, `*CLOAD`, `*DLOAD` gravity, `*STEP` with `*DYNAMIC, EXPLICIT`
+//! or `*STATIC`, `*BULK VISCOSITY`, `*FIXED MASS SCALING`, `*OUTPUT`), which
+//! [`crate::scene::Scene::from_inp`] runs. Print and file requests of other codes are read and
+//! listed as not acted on; any other keyword or option is an error naming it, its file and line
+//! — never silently ignored.
 
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
