@@ -116,30 +116,10 @@ pub struct RunSpec {
     pub adjust_overclosure: bool,
 }
 
-impl RunSpec {
-    /// The run controls of a deck's step running to `end_time`, the rest at the scene defaults.
-    pub(super) fn for_deck(end_time: f64) -> Self {
-        Self {
-            end_time,
-            safety: default_safety(),
-            contact_safety: default_contact_safety(),
-            dt: None,
-            gravity: [0.0; 3],
-            damping: 0.0,
-            bulk_viscosity: default_bulk_linear(),
-            bulk_viscosity_quadratic: default_bulk_quadratic(),
-            nlgeom: true,
-            output_every: default_every(),
-            vtk_every: 0,
-            adjust_overclosure: false,
-        }
-    }
-}
-
-fn default_safety() -> f64 {
+pub(super) fn default_safety() -> f64 {
     0.9
 }
-fn default_contact_safety() -> f64 {
+pub(super) fn default_contact_safety() -> f64 {
     0.5
 }
 /// Abaqus/Explicit's default linear bulk viscosity.
@@ -147,13 +127,13 @@ pub const DEFAULT_BULK_VISCOSITY: f64 = 0.06;
 /// Abaqus/Explicit's default quadratic bulk viscosity.
 pub const DEFAULT_BULK_VISCOSITY_QUADRATIC: f64 = 1.2;
 
-fn default_bulk_linear() -> f64 {
+pub(super) fn default_bulk_linear() -> f64 {
     DEFAULT_BULK_VISCOSITY
 }
-fn default_bulk_quadratic() -> f64 {
+pub(super) fn default_bulk_quadratic() -> f64 {
     DEFAULT_BULK_VISCOSITY_QUADRATIC
 }
-fn default_every() -> usize {
+pub(super) fn default_every() -> usize {
     1
 }
 fn default_true() -> bool {
@@ -162,10 +142,10 @@ fn default_true() -> bool {
 fn default_one() -> f64 {
     1.0
 }
-fn default_core() -> [usize; 3] {
+pub(super) fn default_core() -> [usize; 3] {
     [1; 3]
 }
-fn default_grading() -> [f64; 3] {
+pub(super) fn default_grading() -> [f64; 3] {
     [1.0; 3]
 }
 
@@ -272,37 +252,6 @@ pub struct PartSpec {
 }
 
 impl PartSpec {
-    /// A part of the deck `file`: shape "mesh", its mesh and state in `piece`.
-    pub(super) fn deck_part(
-        name: String,
-        file: &str,
-        piece: std::sync::Arc<super::from_inp::DeckPiece>,
-    ) -> Self {
-        Self {
-            name,
-            shape: "mesh".into(),
-            material: None,
-            origin: [0.0; 3],
-            size: [0.0; 3],
-            divisions: [0; 3],
-            grading: default_grading(),
-            grading_core: default_core(),
-            area: 1.0,
-            thickness: 1.0,
-            radius: 0.0,
-            angles: [0.0; 2],
-            points: Vec::new(),
-            mass: 0.0,
-            velocity: [0.0; 3],
-            file: Some(file.to_string()),
-            rigid: false,
-            dimension: None,
-            deck: Some(piece),
-            axisymmetric: false,
-            motion: None,
-        }
-    }
-
     /// Whether the part is a fixed rigid surface.
     pub fn is_rigid(&self) -> bool {
         matches!(self.shape.as_str(), "plate" | "line" | "arc" | "sphere")
@@ -436,38 +385,6 @@ pub struct ContactSpec {
     /// deck defines them (the keys above then only name the faces).
     #[serde(skip)]
     pub deck: Option<crate::io::inp::PairSettings>,
-}
-
-impl ContactSpec {
-    /// A deck's `*CONTACT PAIR`: the slave surface on one part against the master surface on
-    /// another (or the same), balanced at `weight` when given.
-    pub(super) fn deck_pair(
-        slave: String,
-        slave_face: String,
-        master: String,
-        master_face: String,
-        weight: Option<f64>,
-        settings: crate::io::inp::PairSettings,
-    ) -> Self {
-        let kinematic = matches!(settings.enforce, crate::model::Enforce::Kinematic(_));
-        Self {
-            slave,
-            slave_face,
-            master,
-            master_face: Some(master_face),
-            enforce: Some(if kinematic { "kinematic" } else { "penalty" }.into()),
-            friction: 0.0,
-            sliding: None,
-            balanced: weight,
-            penalty_scale: None,
-            stiffness: None,
-            stiffness_per_area: None,
-            damping: None,
-            search_interval: None,
-            search_radius: None,
-            deck: Some(settings),
-        }
-    }
 }
 
 /// What a part may take in memory, estimated from its divisions before anything is built.

@@ -217,44 +217,22 @@ impl Scene {
                         }
                         };
                         for (k, e) in mesh.elements.iter().enumerate() {
-                            let n: Vec<u32> = e.nodes.iter().map(|&i| i + base as u32).collect();
-                            match e.kind {
-                                ElementKind::Tet4 => {
-                                    let t = [n[0], n[1], n[2], n[3]];
-                                    let el = Element::tet4(t, &x, mat)
-                                        .or_else(|| Element::tet4([t[0], t[2], t[1], t[3]], &x, mat))
-                                        .ok_or_else(|| bad_el(k))?;
-                                    elements.push(el);
-                                }
-                                ElementKind::Tri3In2d | ElementKind::Quad4In2d => {
-                                    let tris: Vec<[u32; 3]> = if n.len() == 3 {
-                                        vec![[n[0], n[1], n[2]]]
-                                    } else {
-                                        vec![[n[0], n[1], n[2]], [n[0], n[2], n[3]]]
-                                    };
-                                    for t in tris {
-                                        let el = if axisymmetric {
-                                            // x is the radius: no node left of the axis
-                                            Element::axi3(t, &x, mat)
-                                                .or_else(|| Element::axi3([t[0], t[2], t[1]], &x, mat))
-                                                .ok_or_else(|| bad_axi(k))?
-                                        } else {
-                                            Element::tri3(t, &x, p.thickness, mat)
-                                                .or_else(|| Element::tri3([t[0], t[2], t[1]], &x, p.thickness, mat))
-                                                .ok_or_else(|| bad_el(k))?
-                                        };
-                                        elements.push(el);
-                                    }
-                                }
-                                ElementKind::Hex8 => {
-                                    return Err(Error::BadParameter {
-                                        name: "part.file",
-                                        value: format!("{file} (part {}) has hexahedra", p.name),
-                                        expected: "tetrahedra for a deformable mesh part (the solver's 3D element); hexahedra can be rigid or give surfaces",
-                                    })
-                                }
-                                _ => {} // boundary facets and lines: surfaces only
+                            if e.kind == ElementKind::Hex8 {
+                                return Err(Error::BadParameter {
+                                    name: "part.file",
+                                    value: format!("{file} (part {}) has hexahedra", p.name),
+                                    expected: "tetrahedra for a deformable mesh part (the solver's 3D element); hexahedra can be rigid or give surfaces",
+                                });
                             }
+                            if !matches!(
+                                e.kind,
+                                ElementKind::Tet4 | ElementKind::Tri3In2d | ElementKind::Quad4In2d
+                            ) {
+                                continue; // boundary facets and lines: surfaces only
+                            }
+                            let els = continuum(e, base, &x, mat, p.thickness, axisymmetric)
+                                .ok_or_else(|| if axisymmetric { bad_axi(k) } else { bad_el(k) })?;
+                            elements.extend(els);
                         }
                         if elements.len() == n_el && p.deck.is_none() {
                             return Err(Error::BadParameter {
@@ -418,7 +396,6 @@ fn deck_elements(
             continue;
         }
         let (mat, t) = (piece.materials[k], piece.thickness[k]);
-        let n: Vec<u32> = e.nodes.iter().map(|&i| i + base as u32).collect();
         let bad = || {
             Error::BadParameter {
             name: "element",
@@ -427,38 +404,54 @@ fn deck_elements(
         }
         };
         match e.kind {
-            ElementKind::Tet4 => {
-                let q = [n[0], n[1], n[2], n[3]];
-                elements.push(
-                    Element::tet4(q, x, mat)
-                        .or_else(|| Element::tet4([q[0], q[2], q[1], q[3]], x, mat))
-                        .ok_or_else(bad)?,
-                );
-            }
-            ElementKind::Tri3In2d | ElementKind::Quad4In2d => {
-                let tris: Vec<[u32; 3]> = if n.len() == 3 {
-                    vec![[n[0], n[1], n[2]]]
-                } else {
-                    vec![[n[0], n[1], n[2]], [n[0], n[2], n[3]]]
-                };
-                for q in tris {
-                    let el = if e.axisymmetric {
-                        Element::axi3(q, x, mat)
-                            .or_else(|| Element::axi3([q[0], q[2], q[1]], x, mat))
-                    } else {
-                        Element::tri3(q, x, t, mat)
-                            .or_else(|| Element::tri3([q[0], q[2], q[1]], x, t, mat))
-                    };
-                    elements.push(el.ok_or_else(bad)?);
-                }
-            }
             ElementKind::Line2 => {
-                elements.push(Element::bar([n[0], n[1]], x, t, mat).ok_or_else(bad)?);
+                let n = [e.nodes[0], e.nodes[1]].map(|i| i + base as u32);
+                elements.push(Element::bar(n, x, t, mat).ok_or_else(bad)?);
+            }
+            ElementKind::Tet4 | ElementKind::Tri3In2d | ElementKind::Quad4In2d => {
+                let els = continuum(e, base, x, mat, t, e.axisymmetric).ok_or_else(bad)?;
+                elements.extend(els);
             }
             _ => return Err(bad()),
         }
     }
     Ok(())
+}
+
+/// The solver's elements of mesh element `e` (its nodes from `base`): a tetrahedron, a plane
+/// triangle of `thickness` (or axisymmetric), a plane quadrilateral as two triangles — each
+/// turned to a positive volume or area; `None` when one has none.
+fn continuum(
+    e: &crate::io::MeshElement,
+    base: usize,
+    x: &[[f64; 3]],
+    mat: Material,
+    thickness: f64,
+    axisymmetric: bool,
+) -> Option<Vec<Element>> {
+    let n: Vec<u32> = e.nodes.iter().map(|&i| i + base as u32).collect();
+    if e.kind == ElementKind::Tet4 {
+        let t = [n[0], n[1], n[2], n[3]];
+        return Some(vec![
+            Element::tet4(t, x, mat).or_else(|| Element::tet4([t[0], t[2], t[1], t[3]], x, mat))?
+        ]);
+    }
+    let tris: Vec<[u32; 3]> = if n.len() == 3 {
+        vec![[n[0], n[1], n[2]]]
+    } else {
+        vec![[n[0], n[1], n[2]], [n[0], n[2], n[3]]]
+    };
+    tris.into_iter()
+        .map(|t| {
+            if axisymmetric {
+                // x is the radius: no node left of the axis
+                Element::axi3(t, x, mat).or_else(|| Element::axi3([t[0], t[2], t[1]], x, mat))
+            } else {
+                Element::tri3(t, x, thickness, mat)
+                    .or_else(|| Element::tri3([t[0], t[2], t[1]], x, thickness, mat))
+            }
+        })
+        .collect()
 }
 
 /// The centroid of `nodes` and the inertia about it of `mass` shared equally among them (kept

@@ -13,12 +13,15 @@ use std::sync::Arc;
 use crate::error::{Error, Result};
 use crate::explicit::{Amplitude, BodyMotion, Material, Motion};
 use crate::io::inp::{At, BoundaryKind, Deck, PairSettings, SurfaceDef};
-use crate::io::{ElementKind, MeshData, MeshElement};
-use crate::model::Facet;
+use crate::io::MeshData;
 
-use super::spec::{ContactSpec, MaterialSpec, PartSpec, QuasiStatic, RunSpec, Scene};
+use super::spec::{ContactSpec, MaterialSpec, PartSpec, RunSpec, Scene};
 
+mod pieces;
+mod quasi_static;
 mod rigid;
+mod roles;
+mod specs;
 
 /// A part of a deck: its mesh (node indices local to the part) and what the deck says about
 /// its elements and nodes.
@@ -79,15 +82,6 @@ fn refuse<T>(at: &At, message: impl Into<String>) -> Result<T> {
         line: at.line,
         message: message.into(),
     })
-}
-
-/// Union–find over deck nodes.
-fn root(parent: &mut [u32], mut a: u32) -> u32 {
-    while parent[a as usize] != a {
-        parent[a as usize] = parent[parent[a as usize] as usize];
-        a = parent[a as usize];
-    }
-    a
 }
 
 /// What each deck element is.
@@ -211,287 +205,19 @@ fn from_deck(deck: &Deck, file: &str) -> Result<Scene> {
         );
     }
     let damping = materials.first().map_or(0.0, |m| m.2);
-    // each element's role
     let mesh = &deck.mesh;
-    let n_nodes = mesh.positions.len();
-    let mut role: Vec<Option<Role>> = vec![None; mesh.elements.len()];
-    for s in &a.sections {
-        let Some(els) = mesh.element_sets.get(&s.elset) else {
-            return refuse(
-                &s.at,
-                format!("*SOLID SECTION: element set {} is not defined", s.elset),
-            );
-        };
-        for &e in els {
-            if role[e as usize].is_some() {
-                return refuse(
-                    &s.at,
-                    format!(
-                        "element {} is in two sections",
-                        mesh.elements[e as usize].label
-                    ),
-                );
-            }
-            role[e as usize] = Some(Role::Deformable(material_index[&s.material], s.thickness));
-        }
-    }
-    for &e in &a.surface_elements {
-        if role[e as usize].is_some() {
-            return refuse(
-                &whole,
-                format!(
-                    "element {} has a *SURFACE SECTION and a *SOLID SECTION",
-                    mesh.elements[e as usize].label
-                ),
-            );
-        }
-        role[e as usize] = Some(Role::Surface);
-    }
-    for (k, r) in a.rigid_bodies.iter().enumerate() {
-        for &e in &r.elements {
-            role[e as usize] = Some(Role::Rigid(k));
-        }
-    }
-    let at_element = |e: usize| -> (String, At) {
-        match a.element_block(e as u32) {
-            Some((t, at)) => (t.to_string(), at.clone()),
-            None => (String::new(), whole.clone()),
-        }
-    };
-    for (k, (e, r)) in mesh.elements.iter().zip(&role).enumerate() {
-        let (ty, at) = at_element(k);
-        match r {
-            None => {
-                return refuse(
-                    &at,
-                    format!("element {} (TYPE={ty}) has no *SOLID SECTION and is in no *RIGID BODY", e.label),
-                )
-            }
-            Some(Role::Deformable(..)) if matches!(e.kind, ElementKind::Tri3 | ElementKind::Quad4) => {
-                return refuse(
-                    &at,
-                    format!("element {} (TYPE={ty}): shells and membranes are not modelled by abut", e.label),
-                )
-            }
-            Some(Role::Deformable(..)) if e.kind == ElementKind::Hex8 => {
-                return refuse(
-                    &at,
-                    format!("element {} (TYPE={ty}): deformable hexahedra are not modelled by abut yet (C3D4 tetrahedra are)", e.label),
-                )
-            }
-            _ => {}
-        }
-    }
-    if let Some(&e) = a
-        .plane_stress
-        .iter()
-        .find(|&&e| matches!(role[e as usize], Some(Role::Deformable(..))))
-    {
-        return refuse(
-            &at_element(e as usize).1,
-            format!("element {}: plane stress (CPS3, CPS4(R)) is not modelled by abut (its plane elements are plane strain, CPE, or axisymmetric, CAX)", mesh.elements[e as usize].label),
-        );
-    }
-    if mesh
-        .elements
-        .iter()
-        .zip(&role)
-        .any(|(e, r)| e.kind == ElementKind::Quad4In2d && matches!(r, Some(Role::Deformable(..))))
-    {
-        notes.push(
-            "plane quadrilaterals (CPE4(R), CAX4(R)) run as two linear triangles each".into(),
-        );
-    }
-    // pieces: deformable elements joined by shared nodes; each rigid body one piece
-    let mut parent: Vec<u32> = (0..n_nodes as u32).collect();
-    let mut in_element = vec![false; n_nodes];
-    for e in &mesh.elements {
-        for &n in &e.nodes {
-            in_element[n as usize] = true;
-        }
-        for w in e.nodes.windows(2) {
-            let (x, y) = (root(&mut parent, w[0]), root(&mut parent, w[1]));
-            parent[x.max(y) as usize] = x.min(y);
-        }
-    }
-    let ref_nodes: BTreeMap<u32, usize> = a
-        .rigid_bodies
-        .iter()
-        .enumerate()
-        .map(|(k, r)| (r.ref_node, k))
-        .collect();
-    for r in &a.rigid_bodies {
-        if in_element[r.ref_node as usize] {
-            return refuse(
-                &r.at,
-                "*RIGID BODY: its REF NODE is a node of an element (give it a node of its own)",
-            );
-        }
-        let mut members: Vec<u32> = r
-            .elements
-            .iter()
-            .flat_map(|&e| mesh.elements[e as usize].nodes.clone())
-            .collect();
-        members.extend(&r.nodes);
-        for w in members.windows(2) {
-            let (x, y) = (root(&mut parent, w[0]), root(&mut parent, w[1]));
-            parent[x.max(y) as usize] = x.min(y);
-        }
-    }
-    let point_mass: BTreeMap<u32, f64> = {
-        let mut m = BTreeMap::new();
-        for (n, v, _) in &a.point_masses {
-            *m.entry(*n).or_insert(0.0) += v;
-        }
-        m
-    };
-    // a piece per root, in the order of their first node; free point masses together
-    let mut piece_of_root: BTreeMap<u32, usize> = BTreeMap::new();
-    let mut piece_nodes: Vec<Vec<u32>> = Vec::new();
-    let mut free_points = Vec::new();
-    let mut piece_of = vec![usize::MAX; n_nodes];
-    for n in 0..n_nodes as u32 {
-        let member = in_element[n as usize] || a.rigid_bodies.iter().any(|r| r.nodes.contains(&n));
-        if !member {
-            if point_mass.contains_key(&n) && !ref_nodes.contains_key(&n) {
-                free_points.push(n);
-            }
-            continue;
-        }
-        let r = root(&mut parent, n);
-        let k = *piece_of_root.entry(r).or_insert_with(|| {
-            piece_nodes.push(Vec::new());
-            piece_nodes.len() - 1
-        });
-        piece_nodes[k].push(n);
-        piece_of[n as usize] = k;
-    }
-    if !free_points.is_empty() {
-        piece_nodes.push(free_points);
-    }
-    // in the order of their first node: a deck written part by part keeps its parts' order
-    piece_nodes.sort_by_key(|nodes| nodes[0]);
-    for (k, nodes) in piece_nodes.iter().enumerate() {
-        for &n in nodes {
-            piece_of[n as usize] = k;
-        }
-    }
-    // the rigid body of each piece
-    let mut rigid_of_piece: Vec<Option<usize>> = vec![None; piece_nodes.len()];
-    for (k, r) in a.rigid_bodies.iter().enumerate() {
-        let first = r
-            .elements
-            .first()
-            .map(|&e| mesh.elements[e as usize].nodes[0])
-            .or(r.nodes.first().copied());
-        let Some(first) = first else { continue };
-        let p = piece_of[first as usize];
-        if rigid_of_piece[p].is_some_and(|o| o != k) {
-            return refuse(&r.at, "two *RIGID BODY definitions share nodes");
-        }
-        rigid_of_piece[p] = Some(k);
-    }
-    let mut pieces: Vec<DeckPiece> = Vec::new();
-    let mut local = vec![u32::MAX; n_nodes];
-    for (k, nodes) in piece_nodes.iter().enumerate() {
-        for (i, &n) in nodes.iter().enumerate() {
-            local[n as usize] = i as u32;
-        }
-        let mut piece = DeckPiece {
-            deck_nodes: nodes.clone(),
-            velocity: vec![[0.0; 3]; nodes.len()],
-            point_mass: nodes
-                .iter()
-                .map(|n| point_mass.get(n).copied().unwrap_or(0.0))
-                .collect(),
-            loads: vec![[0.0; 3]; nodes.len()],
-            fixed: vec![[false; 3]; nodes.len()],
-            ..Default::default()
-        };
-        piece.mesh.positions = nodes.iter().map(|&n| mesh.positions[n as usize]).collect();
-        piece.mesh.node_labels = nodes
-            .iter()
-            .map(|&n| mesh.node_labels[n as usize])
-            .collect();
-        let mut element_local = BTreeMap::new();
-        for (e, el) in mesh.elements.iter().enumerate() {
-            if piece_of[el.nodes[0] as usize] != k {
-                continue;
-            }
-            element_local.insert(e as u32, piece.mesh.elements.len() as u32);
-            piece.mesh.elements.push(MeshElement {
-                kind: el.kind,
-                nodes: el.nodes.iter().map(|&n| local[n as usize]).collect(),
-                label: el.label,
-                axisymmetric: el.axisymmetric,
-            });
-            piece
-                .deformable
-                .push(matches!(role[e], Some(Role::Deformable(..))));
-            match role[e] {
-                Some(Role::Deformable(m, t)) => {
-                    piece.materials.push(materials[m].1);
-                    piece.thickness.push(t);
-                }
-                _ => {
-                    piece.materials.push(Material {
-                        young: 0.0,
-                        poisson: 0.0,
-                        density: 0.0,
-                    });
-                    piece.thickness.push(1.0);
-                }
-            }
-        }
-        for (name, set) in &mesh.node_sets {
-            let s: Vec<u32> = set
-                .iter()
-                .filter(|&&n| piece_of[n as usize] == k)
-                .map(|&n| local[n as usize])
-                .collect();
-            if !s.is_empty() {
-                piece.mesh.node_sets.insert(name.clone(), s);
-            }
-        }
-        for (name, set) in &mesh.element_sets {
-            let s: Vec<u32> = set
-                .iter()
-                .filter_map(|e| element_local.get(e).copied())
-                .collect();
-            if !s.is_empty() {
-                piece.mesh.element_sets.insert(name.clone(), s);
-            }
-        }
-        for (name, def) in &deck.surfaces {
-            let inside = |n: &u32| piece_of[*n as usize] == k;
-            let mapped = match def {
-                SurfaceDef::Faces(f) => {
-                    let f: Vec<Facet> = f
-                        .iter()
-                        .filter(|f| f.nodes().iter().all(inside))
-                        .map(|f| map_facet(f, &local))
-                        .collect();
-                    (!f.is_empty()).then_some(SurfaceDef::Faces(f))
-                }
-                SurfaceDef::Nodes(n, ar) => {
-                    let (n, ar): (Vec<u32>, Vec<f64>) = n
-                        .iter()
-                        .zip(ar)
-                        .filter(|(n, _)| inside(n))
-                        .map(|(n, a)| (local[*n as usize], *a))
-                        .unzip();
-                    (!n.is_empty()).then_some(SurfaceDef::Nodes(n, ar))
-                }
-            };
-            if let Some(s) = mapped {
-                piece.surfaces.insert(name.clone(), s);
-            }
-        }
-        pieces.push(piece);
-    }
+    let role = roles::roles(deck, &material_index, &whole, &mut notes)?;
+    let pieces::Split {
+        mut pieces,
+        piece_of,
+        local,
+        rigid_of_piece,
+        ref_nodes,
+        point_mass,
+    } = pieces::split(deck, &role, &materials)?;
     // rigid bodies: mass, inertia, motion from the reference node
     let quasi_static = if static_step {
-        Some(quasi_static(
+        Some(quasi_static::quasi_static(
             deck,
             &role,
             &materials,
@@ -814,60 +540,4 @@ fn from_deck(deck: &Deck, file: &str) -> Result<Scene> {
     };
     scene.check_deck()?;
     Ok(scene)
-}
-
-/// How a `*STATIC` step runs: the fundamental period estimated as 4·L/c over the deformable
-/// elements' extent L and the slowest bar wave c = √(E/ρ), the ramp ten of them, the hold five,
-/// damping α = 2π/period.
-fn quasi_static(
-    deck: &Deck,
-    role: &[Option<Role>],
-    materials: &[(String, Material, f64)],
-    step_period: f64,
-    step: &crate::io::inp::StepDef,
-) -> Result<QuasiStatic> {
-    let mesh = &deck.mesh;
-    let mut lo = [f64::INFINITY; 3];
-    let mut hi = [f64::NEG_INFINITY; 3];
-    let mut slowest = f64::INFINITY;
-    for (e, r) in mesh.elements.iter().zip(role) {
-        let Some(Role::Deformable(m, _)) = r else {
-            continue;
-        };
-        let mat = materials[*m].1;
-        slowest = slowest.min((mat.young / mat.density).sqrt());
-        for &n in &e.nodes {
-            for d in 0..3 {
-                lo[d] = lo[d].min(mesh.positions[n as usize][d]);
-                hi[d] = hi[d].max(mesh.positions[n as usize][d]);
-            }
-        }
-    }
-    let extent = (0..3).map(|d| hi[d] - lo[d]).fold(0.0, f64::max);
-    if !(extent > 0.0 && slowest.is_finite() && slowest > 0.0) {
-        return refuse(
-            &step.at,
-            "a *STATIC step needs deformable elements (their extent and wave speed set its pace)",
-        );
-    }
-    if !(step_period.is_finite() && step_period > 0.0) {
-        return refuse(&step.at, "*STATIC: the time period must be positive");
-    }
-    let period = 4.0 * extent / slowest;
-    Ok(QuasiStatic {
-        step_period,
-        fundamental_period: period,
-        ramp_time: 10.0 * period,
-        hold_time: 5.0 * period,
-        damping: 2.0 * std::f64::consts::PI / period,
-    })
-}
-
-fn map_facet(f: &Facet, local: &[u32]) -> Facet {
-    let m = |n: u32| local[n as usize];
-    match *f {
-        Facet::Segment(s) => Facet::Segment(s.map(m)),
-        Facet::Triangle(t) => Facet::Triangle(t.map(m)),
-        Facet::Quad(q) => Facet::Quad(q.map(m)),
-    }
 }

@@ -3,6 +3,9 @@
 
 mod analysis;
 mod interaction;
+mod lists;
+mod loads;
 mod mesh;
+mod step;
 
-pub(super) use analysis::{ignored, not_modelled};
+pub(super) use lists::{ignored, not_modelled};

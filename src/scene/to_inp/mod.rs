@@ -12,8 +12,11 @@ use crate::error::{Error, Result};
 use crate::explicit::Element;
 use crate::model::Facet;
 
-use super::build::{Face, PartNodes};
 use super::spec::Scene;
+
+mod bodies;
+mod contact;
+mod faces;
 
 fn unsupported<T>(what: String) -> Result<T> {
     Err(Error::BadParameter {
@@ -111,83 +114,8 @@ impl Scene {
         for e in &built.solver.elements {
             by_part[part_of_element(e)].push(e);
         }
-        // the faces each contact uses, to write as surfaces
+        // the faces each contact uses, written as surfaces
         let mut surfaces = String::new();
-        let mut surface_name = |part: &PartNodes,
-                                face: &str,
-                                f: &Face,
-                                out: &mut String,
-                                label: &mut usize,
-                                rigid_set: Option<&str>|
-         -> Result<String> {
-            let name = format!("{}-{}", deck_name(&part.name), deck_name(face));
-            if f.facets.is_empty() {
-                writeln!(surfaces, "*SURFACE, NAME={name}, TYPE=NODE").ok();
-                for (n, a) in f.nodes.iter().zip(&f.areas) {
-                    writeln!(surfaces, "{}, {a:?}", n + 1).ok();
-                }
-                return Ok(name);
-            }
-            if let Some(set) = rigid_set {
-                writeln!(surfaces, "*SURFACE, NAME={name}\n{set}, SPOS").ok();
-                return Ok(name);
-            }
-            if f.facets.iter().all(|f| matches!(f, Facet::Segment(_))) {
-                // a plane part's edges: its triangles' faces
-                writeln!(surfaces, "*SURFACE, NAME={name}").ok();
-                for facet in &f.facets {
-                    let [a, b] = match *facet {
-                        Facet::Segment(s) => s,
-                        _ => [u32::MAX; 2],
-                    };
-                    let found = built.solver.elements.iter().enumerate().find_map(|(k, e)| {
-                        let n = e.nodes();
-                        (n.len() == 3)
-                            .then(|| {
-                                (0..3)
-                                    .find(|&s| n[s] == a && n[(s + 1) % 3] == b)
-                                    .map(|s| (k, s))
-                            })
-                            .flatten()
-                    });
-                    let Some((k, s)) = found else {
-                        return unsupported(format!(
-                            "face {face} of part {}: an edge that is no element's face",
-                            part.name
-                        ));
-                    };
-                    writeln!(surfaces, "{}, S{}", k + 1, s + 1).ok();
-                }
-                return Ok(name);
-            }
-            // a solid's or bar's face: surface elements on its nodes, in the face's order
-            let set = format!("{name}-SFM");
-            for (kind, arity) in [("SFM3D3", 3), ("SFM3D4", 4)] {
-                let facets: Vec<&Facet> = f
-                    .facets
-                    .iter()
-                    .filter(|f| f.nodes().len() == arity)
-                    .collect();
-                if facets.is_empty() {
-                    continue;
-                }
-                writeln!(out, "*ELEMENT, TYPE={kind}, ELSET={set}").ok();
-                for facet in facets {
-                    *label += 1;
-                    let nodes: Vec<String> =
-                        facet.nodes().iter().map(|n| (n + 1).to_string()).collect();
-                    writeln!(out, "{label}, {}", nodes.join(", ")).ok();
-                }
-            }
-            if f.facets.iter().any(|f| f.nodes().len() == 3)
-                && f.facets.iter().any(|f| f.nodes().len() == 4)
-            {
-                return unsupported(format!("face {face} of part {}: triangles and quadrilaterals together (their order would not survive)", part.name));
-            }
-            writeln!(out, "*SURFACE SECTION, ELSET={set}").ok();
-            writeln!(surfaces, "*SURFACE, NAME={name}\n{set}, SPOS").ok();
-            Ok(name)
-        };
         let mut rigid_sets: Vec<Option<String>> = vec![None; built.parts.len()];
         for (k, (spec, part)) in self.part.iter().zip(&built.parts).enumerate() {
             let set = deck_name(&spec.name);
@@ -231,16 +159,8 @@ impl Scene {
                         writeln!(model_bc, "{r}, ENCASTRE").ok();
                     }
                     Some(m) => {
-                        label += 1;
-                        writeln!(elements, "*ELEMENT, TYPE=MASS, ELSET={set}-MASS\n{label}, {r}\n*MASS, ELSET={set}-MASS\n{:?}", spec.mass).ok();
-                        label += 1;
-                        let i = inertia;
-                        writeln!(
-                            elements,
-                            "*ELEMENT, TYPE=ROTARYI, ELSET={set}-INERTIA\n{label}, {r}\n*ROTARY INERTIA, ELSET={set}-INERTIA\n{:?}, {:?}, {:?}, {:?}, {:?}, {:?}",
-                            i[0][0], i[1][1], i[2][2], i[0][1], i[0][2], i[1][2]
-                        )
-                        .ok();
+                        elements +=
+                            &bodies::mass_and_inertia(&mut label, r, &set, spec.mass, inertia);
                         let v = spec.velocity;
                         if m == "velocity" {
                             writeln!(model_bc, "{r}, 4, 6").ok();
@@ -368,93 +288,14 @@ impl Scene {
             }
         }
         // analytical spheres: a reference node at the centre, the surface of revolution about it
-        let mut analytical = String::new();
-        for r in &self.rigid {
-            extra_nodes.push(r.point);
-            let node = x.len() + extra_nodes.len();
-            let name = deck_name(&r.name);
-            let p = r.point;
-            let rad = r.radius;
-            writeln!(
-                analytical,
-                "*SURFACE, TYPE=REVOLUTION, NAME={name}\n{:?}, {:?}, {:?}, {:?}, {:?}, {:?}\nSTART, 0.0, {rad:?}\nCIRCL, {rad:?}, 0.0, 0.0, 0.0\nCIRCL, 0.0, {:?}, 0.0, 0.0",
-                p[0], p[1], p[2], p[0], p[1], p[2] + 1.0, -rad
-            )
-            .ok();
-            writeln!(
-                analytical,
-                "*RIGID BODY, REF NODE={node}, ANALYTICAL SURFACE={name}"
-            )
-            .ok();
-            let i = r.inertia.unwrap_or_else(|| {
-                let i = 0.4 * r.mass * r.radius * r.radius;
-                [[i, 0.0, 0.0], [0.0, i, 0.0], [0.0, 0.0, i]]
-            });
-            label += 1;
-            writeln!(analytical, "*ELEMENT, TYPE=MASS, ELSET={name}-MASS\n{label}, {node}\n*MASS, ELSET={name}-MASS\n{:?}", r.mass).ok();
-            label += 1;
-            writeln!(
-                analytical,
-                "*ELEMENT, TYPE=ROTARYI, ELSET={name}-INERTIA\n{label}, {node}\n*ROTARY INERTIA, ELSET={name}-INERTIA\n{:?}, {:?}, {:?}, {:?}, {:?}, {:?}",
-                i[0][0], i[1][1], i[2][2], i[0][1], i[0][2], i[1][2]
-            )
-            .ok();
-            match r.motion.as_deref() {
-                Some("fixed") => {
-                    writeln!(model_bc, "{node}, ENCASTRE").ok();
-                }
-                Some("velocity") => {
-                    writeln!(model_bc, "{node}, 4, 6").ok();
-                    for (a, va) in r.velocity.iter().enumerate() {
-                        writeln!(
-                            step_bc,
-                            "*BOUNDARY, TYPE=VELOCITY\n{node}, {}, {}, {va:?}",
-                            a + 1,
-                            a + 1
-                        )
-                        .ok();
-                    }
-                }
-                _ => {
-                    for f in &r.fix {
-                        match super::spec::axis_of(f) {
-                            Some(a) => writeln!(model_bc, "{node}, {}, {}", a + 1, a + 1).ok(),
-                            None => writeln!(model_bc, "{node}, 4, 6").ok(),
-                        };
-                    }
-                    for (a, va) in r.velocity.iter().enumerate().filter(|(_, va)| **va != 0.0) {
-                        writeln!(
-                            analytical,
-                            "*INITIAL CONDITIONS, TYPE=VELOCITY\n{node}, {}, {va:?}",
-                            a + 1
-                        )
-                        .ok();
-                    }
-                    let mut loads = Vec::new();
-                    for (a, l) in r
-                        .load
-                        .unwrap_or_default()
-                        .iter()
-                        .enumerate()
-                        .filter(|(_, l)| **l != 0.0)
-                    {
-                        loads.push(format!("{node}, {}, {l:?}", a + 1));
-                    }
-                    for (a, m) in r
-                        .moment
-                        .unwrap_or_default()
-                        .iter()
-                        .enumerate()
-                        .filter(|(_, m)| **m != 0.0)
-                    {
-                        loads.push(format!("{node}, {}, {m:?}", a + 4));
-                    }
-                    if !loads.is_empty() {
-                        writeln!(step_bc, "*CLOAD\n{}", loads.join("\n")).ok();
-                    }
-                }
-            }
-        }
+        let analytical = bodies::spheres(
+            &self.rigid,
+            x.len(),
+            &mut extra_nodes,
+            &mut label,
+            &mut model_bc,
+            &mut step_bc,
+        );
         // held directions a [[boundary]] does not give (a bar's lateral ones) on parts with
         // boundaries: node by node
         for (spec, part) in self.part.iter().zip(&built.parts) {
@@ -578,135 +419,7 @@ impl Scene {
             out += &model_bc;
         }
         // contact: surfaces, interactions, pairs
-        let mut pairs = String::new();
-        let mut sfm = String::new();
-        for (k, c) in self.contact.iter().enumerate() {
-            if c.search_radius.is_some() {
-                return unsupported(format!(
-                    "[[contact]] {}: search_radius (no deck keyword)",
-                    k + 1
-                ));
-            }
-            let find = |name: &str| {
-                self.part
-                    .iter()
-                    .position(|p| p.name == name)
-                    .map(|i| (&built.parts[i], i))
-            };
-            let Some((sp, si)) = find(&c.slave) else {
-                return unsupported(format!("[[contact]] {}: slave {}", k + 1, c.slave));
-            };
-            let sface = sp.face(&c.slave_face, x)?;
-            if let Some(r) = self.rigid.iter().find(|r| r.name == c.master) {
-                // an analytical master: hard kinematic contact, as abut's rigid pairs are
-                let slave = surface_name(
-                    sp,
-                    &c.slave_face,
-                    &sface,
-                    &mut sfm,
-                    &mut label,
-                    rigid_sets[si].as_deref(),
-                )?;
-                writeln!(
-                    pairs,
-                    "*SURFACE INTERACTION, NAME=I{n}\n*SURFACE BEHAVIOR, PRESSURE-OVERCLOSURE=HARD\n*CONTACT PAIR, INTERACTION=I{n}, MECHANICAL CONSTRAINT=KINEMATIC\n{slave}, {}",
-                    deck_name(&r.name),
-                    n = k + 1
-                )
-                .ok();
-                continue;
-            }
-            let Some((mp, mi)) = find(&c.master) else {
-                return unsupported(format!("[[contact]] {}: master {}", k + 1, c.master));
-            };
-            let master_face = c.master_face.as_deref().expect("checked");
-            let mface = mp.face(master_face, x)?;
-            let slave = surface_name(
-                sp,
-                &c.slave_face,
-                &sface,
-                &mut sfm,
-                &mut label,
-                rigid_sets[si].as_deref(),
-            )?;
-            let master = surface_name(
-                mp,
-                master_face,
-                &mface,
-                &mut sfm,
-                &mut label,
-                rigid_sets[mi].as_deref(),
-            )?;
-            let kinematic = c.enforce.as_deref() == Some("kinematic");
-            let inter = format!("I{}", k + 1);
-            writeln!(pairs, "*SURFACE INTERACTION, NAME={inter}").ok();
-            if c.friction > 0.0 {
-                writeln!(pairs, "*FRICTION\n{:?}", c.friction).ok();
-            }
-            let slope = match (c.stiffness, c.stiffness_per_area) {
-                (Some(kn), _) => {
-                    let a = sface.areas.first().copied().unwrap_or(1.0);
-                    if sface.areas.iter().any(|&x| x != a) || (kn / a) * a != kn {
-                        return unsupported(format!(
-                            "[[contact]] {}: an absolute stiffness on slaves of different areas",
-                            k + 1
-                        ));
-                    }
-                    Some(kn / a)
-                }
-                (_, Some(kp)) => Some(kp),
-                _ => None,
-            };
-            match slope {
-                Some(s) if !kinematic => writeln!(
-                    pairs,
-                    "*SURFACE BEHAVIOR, PRESSURE-OVERCLOSURE=LINEAR\n{s:?}"
-                )
-                .ok(),
-                _ => writeln!(pairs, "*SURFACE BEHAVIOR, PRESSURE-OVERCLOSURE=HARD").ok(),
-            };
-            if let Some(d) = c.damping {
-                writeln!(
-                    pairs,
-                    "*CONTACT DAMPING, DEFINITION=CRITICAL DAMPING FRACTION\n{d:?}"
-                )
-                .ok();
-            }
-            let mut options = format!(
-                "INTERACTION={inter}, MECHANICAL CONSTRAINT={}, CPSET=P{}",
-                if kinematic { "KINEMATIC" } else { "PENALTY" },
-                k + 1
-            );
-            match c.sliding.as_deref() {
-                None | Some("finite") => {}
-                Some(s) => {
-                    if (s == "small") != self.run.nlgeom {
-                        return unsupported(format!("[[contact]] {}: sliding = \"{s}\" with nlgeom = {} (a deck's small sliding is small with NLGEOM, infinitesimal without)", k + 1, self.run.nlgeom));
-                    }
-                    options += ", SMALL SLIDING";
-                }
-            }
-            if let Some(w) = c.balanced {
-                write!(options, ", WEIGHT={w:?}").ok();
-            }
-            writeln!(pairs, "*CONTACT PAIR, {options}\n{slave}, {master}").ok();
-            let mut controls = Vec::new();
-            if let Some(s) = c.penalty_scale.filter(|s| *s != 1.0) {
-                controls.push(format!("SCALE PENALTY={s:?}"));
-            }
-            if let Some(i) = c.search_interval {
-                controls.push(format!("GLOBTRKINC={i}"));
-            }
-            if !controls.is_empty() {
-                writeln!(
-                    pairs,
-                    "*CONTACT CONTROLS, CPSET=P{}, {}",
-                    k + 1,
-                    controls.join(", ")
-                )
-                .ok();
-            }
-        }
+        let (sfm, pairs) = contact::pairs(self, &built, &rigid_sets, &mut label, &mut surfaces)?;
         out += &sfm;
         out += &surfaces;
         out += &pairs;

@@ -1,0 +1,101 @@
+//! The keywords of a deck's step controls: `*BULK VISCOSITY`, `*FIXED MASS SCALING`,
+//! `*OUTPUT`.
+
+use super::super::*;
+use super::analysis::finite;
+
+impl Parser {
+    /// `*BULK VISCOSITY` in a step.
+    pub(in crate::io::inp) fn on_bulk_viscosity(
+        &mut self,
+        l: &Line,
+        kw: &str,
+        opts: &BTreeMap<String, String>,
+        data: &[Line],
+    ) -> Result<()> {
+        only(l, kw, opts, &[])?;
+        let Some(d) = data.first() else {
+            return Err(err(l, "*BULK VISCOSITY needs a data line (b1, b2)"));
+        };
+        let f = fields(d);
+        let b1 = finite(d, f.first().copied().unwrap_or("0.06"), "b1")?;
+        let b2 = finite(d, f.get(1).copied().unwrap_or("1.2"), "b2")?;
+        self.step_mut(l, kw)?.bulk_viscosity = Some((b1, b2));
+        Ok(())
+    }
+
+    /// `*FIXED MASS SCALING, FACTOR=` over the whole model.
+    pub(in crate::io::inp) fn on_fixed_mass_scaling(
+        &mut self,
+        l: &Line,
+        kw: &str,
+        opts: &BTreeMap<String, String>,
+        _data: &[Line],
+    ) -> Result<()> {
+        only(l, kw, opts, &["FACTOR"])?;
+        let Some(f) = opts.get("FACTOR") else {
+            return Err(err(
+                l,
+                "*FIXED MASS SCALING: abut takes FACTOR= over the whole model (not DT= or TYPE=)",
+            ));
+        };
+        let f = finite(l, f, "FACTOR")?;
+        if f <= 0.0 {
+            return Err(err(
+                l,
+                format!("*FIXED MASS SCALING: FACTOR={f} must be positive"),
+            ));
+        }
+        self.step_mut(l, kw)?.mass_scaling = Some(f);
+        Ok(())
+    }
+
+    /// `*OUTPUT, FIELD|HISTORY`: its frequency in increments; time-based output is listed as
+    /// not acted on.
+    pub(in crate::io::inp) fn on_output(
+        &mut self,
+        l: &Line,
+        kw: &str,
+        opts: &BTreeMap<String, String>,
+        _data: &[Line],
+    ) -> Result<()> {
+        only(
+            l,
+            kw,
+            opts,
+            &[
+                "FIELD",
+                "HISTORY",
+                "FREQUENCY",
+                "NUMBER INTERVAL",
+                "TIME INTERVAL",
+                "VARIABLE",
+                "OP",
+                "TIME MARKS",
+            ],
+        )?;
+        let field = opts.contains_key("FIELD");
+        let every = match opts.get("FREQUENCY") {
+            Some(f) => Some(num::<usize>(l, f, "FREQUENCY")?.max(1)),
+            None => None,
+        };
+        let step = self.step_mut(l, kw)?;
+        match (every, field) {
+            (Some(n), true) => step.field_every = Some(n),
+            (Some(n), false) => step.history_every = Some(n),
+            (None, _) => {
+                let what = if field {
+                    "FIELD without FREQUENCY=: no contact frames"
+                } else {
+                    "HISTORY without FREQUENCY=: a history row every increment"
+                };
+                self.on_ignored(
+                    l,
+                    &format!("OUTPUT, {what}"),
+                    "abut counts output in increments",
+                );
+            }
+        }
+        Ok(())
+    }
+}
