@@ -40,6 +40,24 @@ impl Amplitude {
         p[p.len() - 1].1
     }
 
+    /// The rate of [`Amplitude::value`] at time `t` (0 outside the points; at a point, the
+    /// segment's before it).
+    pub fn rate(&self, t: f64) -> f64 {
+        for w in self.points.windows(2) {
+            let ((ta, a), (tb, b)) = (w[0], w[1]);
+            if t > ta && t <= tb && tb > ta {
+                let xi = (t - ta) / (tb - ta);
+                let ds = if self.smooth {
+                    30.0 * xi * xi * (1.0 - xi) * (1.0 - xi)
+                } else {
+                    1.0
+                };
+                return (b - a) * ds / (tb - ta);
+            }
+        }
+        0.0
+    }
+
     fn shape(&self, xi: f64) -> f64 {
         if self.smooth {
             xi * xi * xi * (10.0 - 15.0 * xi + 6.0 * xi * xi)
@@ -137,9 +155,7 @@ impl Motion {
                 if velocity {
                     value * amplitude.value(t)
                 } else {
-                    // the rate of the displacement: central difference over a small step
-                    let h = 1e-6 * (1.0 + t.abs());
-                    value * (amplitude.value(t + h) - amplitude.value(t - h)) / (2.0 * h)
+                    value * amplitude.rate(t)
                 }
             }
         }

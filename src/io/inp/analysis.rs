@@ -95,14 +95,11 @@ pub struct BoundaryDef {
     pub at: At,
 }
 
-/// An `*AMPLITUDE` curve.
+/// An `*AMPLITUDE` curve (`DEFINITION=TABULAR` or `SMOOTH STEP`) and where it was defined.
 #[derive(Clone, Debug, PartialEq)]
 pub struct AmplitudeDef {
-    /// `DEFINITION=SMOOTH STEP` (a quintic between points, zero rate at each); tabular
-    /// (piecewise linear) otherwise.
-    pub smooth: bool,
-    /// (time, value) points, time increasing.
-    pub points: Vec<(f64, f64)>,
+    /// The curve, as the solver takes it.
+    pub curve: crate::explicit::Amplitude,
     /// Where it was defined.
     pub at: At,
 }
@@ -240,15 +237,5 @@ impl Analysis {
         self.element_blocks
             .get(k.checked_sub(1)?)
             .map(|b| (b.1.as_str(), &b.2))
-    }
-}
-
-impl AmplitudeDef {
-    /// The curve, for the solver.
-    pub fn curve(&self) -> crate::explicit::Amplitude {
-        crate::explicit::Amplitude {
-            smooth: self.smooth,
-            points: self.points.clone(),
-        }
     }
 }

@@ -296,10 +296,6 @@ struct Parser {
     node_index: BTreeMap<u64, u32>,
     /// Element label → index.
     element_index: BTreeMap<u64, u32>,
-    /// Materials: name → density.
-    densities: BTreeMap<String, f64>,
-    /// (elset, material, thickness) of each *SOLID SECTION.
-    sections: Vec<(String, String, f64, Line)>,
     /// Whether the deck's plane elements are axisymmetric (set by the first one).
     plane_axisymmetric: Option<bool>,
     /// The nodes of the `TYPE=MASS` and `TYPE=ROTARYI` elements of each `ELSET=`.
@@ -383,8 +379,6 @@ fn parse_lines(lines: &[Line]) -> Result<Deck> {
         },
         node_index: BTreeMap::new(),
         element_index: BTreeMap::new(),
-        densities: BTreeMap::new(),
-        sections: Vec::new(),
         plane_axisymmetric: None,
         point_sets: BTreeMap::new(),
         current_material: None,
@@ -464,18 +458,26 @@ fn parse_lines(lines: &[Line]) -> Result<Deck> {
     }
     // lumped masses from the sections
     let mut masses = vec![0.0; p.deck.mesh.positions.len()];
-    for (elset, material, thickness, l) in &p.sections {
+    for sec in &p.deck.analysis.sections {
         // a material without density lumps no mass (Deck::to_model gives such nodes its
         // default; Scene::from_inp refuses it in a dynamic step)
-        let Some(&rho) = p.densities.get(material) else {
+        let Some(rho) = p
+            .deck
+            .analysis
+            .materials
+            .get(&sec.material)
+            .and_then(|m| m.density)
+        else {
             continue;
         };
-        let Some(els) = p.deck.mesh.element_sets.get(elset) else {
-            return Err(err(
-                l,
-                format!("*SOLID SECTION: element set {elset} is not defined"),
-            ));
+        let Some(els) = p.deck.mesh.element_sets.get(&sec.elset) else {
+            return Err(Error::Parse {
+                file: sec.at.file.clone(),
+                line: sec.at.line,
+                message: format!("*SOLID SECTION: element set {} is not defined", sec.elset),
+            });
         };
+        let thickness = &sec.thickness;
         for &e in els {
             let el = &p.deck.mesh.elements[e as usize];
             // an axisymmetric element's mass is per radian: its area times its centroid's radius

@@ -236,7 +236,7 @@ fn from_deck(deck: &Deck, file: &str) -> Result<Scene> {
             .map_or(1.0, |q| q.ramp_time / q.step_period);
         Arc::new(match (name, &quasi_static) {
             (Some(n), _) => {
-                let mut c = a.amplitudes[n].curve();
+                let mut c = a.amplitudes[n].curve.clone();
                 for p in &mut c.points {
                     p.0 *= scale;
                 }

@@ -55,7 +55,6 @@ impl Parser {
             return Err(err(d, format!("*{kw}: {v} must be positive")));
         }
         if kw == "DENSITY" {
-            self.densities.insert(m.clone(), v);
             self.material_mut(&m, l).density = Some(v);
         } else {
             let nu: f64 = num(d, f.get(1).copied().unwrap_or("0"), "Poisson's ratio")?;
@@ -89,8 +88,6 @@ impl Parser {
             Some((d, s)) => num(d, &s, "thickness")?,
             None => 1.0,
         };
-        self.sections
-            .push((e.to_uppercase(), m.to_uppercase(), t, l.clone()));
         let at = self.at(l);
         self.deck.analysis.sections.push(SectionDef {
             elset: e.to_uppercase(),

@@ -199,10 +199,13 @@ impl Parser {
             ));
         }
         let at = self.at(l);
-        self.deck
-            .analysis
-            .amplitudes
-            .insert(name.to_uppercase(), AmplitudeDef { smooth, points, at });
+        self.deck.analysis.amplitudes.insert(
+            name.to_uppercase(),
+            AmplitudeDef {
+                curve: crate::explicit::Amplitude { smooth, points },
+                at,
+            },
+        );
         Ok(())
     }
 
