@@ -1,6 +1,6 @@
-//! Elements of the small explicit solver: 2-node bars, 3-node plane-strain triangles and 4-node
-//! tetrahedra, linear elastic in forms that stay right under large rotation: bars are
-//! corotational (engineering strain (l − L0)/L0 along the current axis, so a 1D wave is exactly
+//! Elements of the small explicit solver: 2-node bars, 3-node plane-strain triangles, 4-node
+//! tetrahedra and 8-node hexahedra (their own module, [`super::hexahedron`]), linear elastic in
+//! forms that stay right under large rotation: bars are corotational (engineering strain (l − L0)/L0 along the current axis, so a 1D wave is exactly
 //! the linear one whatever its amplitude), triangles and tetrahedra St Venant–Kirchhoff
 //! (Green–Lagrange strain, second Piola–Kirchhoff stress).
 //!
@@ -8,6 +8,7 @@
 //! stable lengths; internal forces with bulk viscosity) match on every kind, so each formula
 //! sits beside the other kinds' and beside the shared strain and stress helpers at the end.
 
+use super::hexahedron::Hex8;
 use crate::geometry::V3;
 
 /// Linear elastic material.
@@ -81,6 +82,9 @@ pub enum Element {
         /// Material.
         material: Material,
     },
+    /// 8-node hexahedron, selectively reduced (C3D8) or one-point with hourglass stiffness
+    /// (C3D8R): see [`Hex8`].
+    Hex8(Box<Hex8>),
 }
 
 fn sub(a: [f64; 3], b: [f64; 3]) -> V3<f64> {
@@ -202,6 +206,7 @@ impl Element {
             Element::Bar { nodes, .. } => nodes,
             Element::Tri3 { nodes, .. } => nodes,
             Element::Tet4 { nodes, .. } => nodes,
+            Element::Hex8(h) => &h.nodes,
         }
     }
 
@@ -223,6 +228,7 @@ impl Element {
             Element::Tet4 {
                 volume0, material, ..
             } => material.density * volume0,
+            Element::Hex8(h) => h.material.density * h.volume0,
         }
     }
 
@@ -258,6 +264,7 @@ impl Element {
                     .sum();
                 1.0 / (s.sqrt() * material.p_wave_speed())
             }
+            Element::Hex8(h) => h.stable_increment(),
         }
     }
 
@@ -277,6 +284,9 @@ impl Element {
         f: &mut [[f64; 3]],
         nlgeom: bool,
     ) -> f64 {
+        if let Element::Hex8(h) = self {
+            return h.add_internal_forces(x, f, nlgeom);
+        }
         if (!nlgeom || self.is_axisymmetric()) && !matches!(self, Element::Bar { .. }) {
             let (sigma, w) = self.small_strain_stress(x);
             let (grad, vol): (Vec<[f64; 3]>, f64) = match self {
@@ -290,7 +300,7 @@ impl Element {
                     area0 * thickness,
                 ),
                 Element::Tet4 { grad, volume0, .. } => (grad.to_vec(), *volume0),
-                Element::Bar { .. } => unreachable!(),
+                Element::Bar { .. } | Element::Hex8(_) => unreachable!(),
             };
             let dims = if matches!(self, Element::Tri3 { .. }) {
                 2
@@ -392,6 +402,7 @@ impl Element {
                 }
                 w * volume0
             }
+            Element::Hex8(_) => unreachable!("hexahedra returned above"),
         }
     }
 }
@@ -423,6 +434,7 @@ impl Element {
                     }
                 }
             }
+            Element::Hex8(h) => ff = h.centroid_deformation(x),
         }
         ff
     }
@@ -432,6 +444,7 @@ impl Element {
         let ff = self.deformation_gradient(x);
         let m = match self {
             Element::Tri3 { material, .. } | Element::Tet4 { material, .. } => material,
+            Element::Hex8(h) => &h.material,
             Element::Bar { .. } => unreachable!("bars are corotational"),
         };
         let mut eps = [[0.0; 3]; 3];
@@ -471,6 +484,7 @@ impl Element {
     pub fn small_strain_stress_at(&self, x: &[[f64; 3]]) -> [[f64; 3]; 3] {
         match self {
             Element::Bar { .. } => self.stress(x),
+            Element::Hex8(h) => h.stress(x, false),
             _ => self.small_strain_stress(x).0,
         }
     }
@@ -478,6 +492,9 @@ impl Element {
     /// Cauchy stress at positions `x` (model stress units, model frame). Plane-strain
     /// triangles include σ_zz; a bar's stress is uniaxial along its current axis.
     pub fn stress(&self, x: &[[f64; 3]]) -> [[f64; 3]; 3] {
+        if let Element::Hex8(h) = self {
+            return h.stress(x, true);
+        }
         if self.is_axisymmetric() {
             return self.small_strain_stress(x).0;
         }
@@ -505,6 +522,7 @@ impl Element {
         let ff = self.deformation_gradient(x);
         let m = match self {
             Element::Tri3 { material, .. } | Element::Tet4 { material, .. } => material,
+            Element::Hex8(h) => &h.material,
             Element::Bar { .. } => unreachable!(),
         };
         // S from the full 3D St Venant–Kirchhoff law (E_zz = 0 in plane strain)
@@ -544,6 +562,12 @@ impl Element {
             Element::Tet4 { nodes, grad, .. } => nodes
                 .iter()
                 .zip(grad)
+                .map(|(&n, g)| (0..3).map(|r| v[n as usize][r] * g[r]).sum::<f64>())
+                .sum(),
+            Element::Hex8(h) => h
+                .nodes
+                .iter()
+                .zip(&h.grad0)
                 .map(|(&n, g)| (0..3).map(|r| v[n as usize][r] * g[r]).sum::<f64>())
                 .sum(),
         }
@@ -602,6 +626,11 @@ impl Element {
                 let c = material.p_wave_speed();
                 let p = viscous_pressure(material.density, c, c_len * c, rate, b1, b2);
                 volumetric_dashpot(nodes, grad, *volume0, p, rate, f)
+            }
+            Element::Hex8(h) => {
+                let c = h.material.p_wave_speed();
+                let p = viscous_pressure(h.material.density, c, c_len * c, rate, b1, b2);
+                volumetric_dashpot(&h.nodes, &h.grad0, h.volume0, p, rate, f)
             }
         }
     }

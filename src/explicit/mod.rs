@@ -6,12 +6,14 @@
 
 mod diagnostics;
 pub mod elements;
+pub mod hexahedron;
 mod prescribed;
 mod rigid;
 
 pub use prescribed::{Amplitude, Motion, Prescribed};
 
 pub use elements::{Element, Material};
+pub use hexahedron::{Hex8, Integration};
 pub use rigid::{BodyMotion, SolverBody};
 
 use crate::contact::Contact;
@@ -92,6 +94,11 @@ pub struct Solver {
     /// its analytical surface). Free bodies only: a fixed or moving body's kinematic reaction
     /// is not seen here (the contact model holds it immovable); its slaves' contact forces give it.
     pub body_contact_force: Vec<[f64; 3]>,
+    /// The force the supports put on each node in the last increment (Abaqus' RF): at a held
+    /// degree of freedom the opposite of every other force on it (internal, bulk viscosity,
+    /// loads, gravity, penalty contact), at a prescribed one the force that makes the motion;
+    /// zero at free ones.
+    pub reaction: Vec<[f64; 3]>,
     started: bool,
     /// Increments taken.
     increments: u64,
@@ -172,6 +179,7 @@ impl Solver {
             energy: Energy::default(),
             contact_force: vec![[0.0; 3]; n],
             body_contact_force: Vec::new(),
+            reaction: vec![[0.0; 3]; n],
             started: false,
             increments: 0,
             worst_overclosure: (0.0, 0),
@@ -364,6 +372,10 @@ impl Solver {
             for a in 0..3 {
                 if self.fixed[i][a] {
                     self.v[i][a] = 0.0;
+                    self.reaction[i][a] = -(f_int[i][a]
+                        + factor * self.loads[i][a]
+                        + self.mass[i] * self.gravity[a]
+                        + penalty[i][a]);
                     continue;
                 }
                 ext[i][a] = factor * self.loads[i][a] + self.mass[i] * self.gravity[a];
@@ -377,7 +389,9 @@ impl Solver {
         for p in &self.prescribed {
             let (i, a) = (p.node as usize, p.dof);
             let u = (p.motion.displacement(self.time + dt) - p.motion.displacement(self.time)) / dt;
-            ext[i][a] += self.mass[i] * (u - self.v[i][a]) / dv_scale;
+            let support = self.mass[i] * (u - self.v[i][a]) / dv_scale;
+            ext[i][a] += support;
+            self.reaction[i][a] = support;
             self.v[i][a] = u;
         }
         for i in 0..n {

@@ -72,6 +72,7 @@ fn renumbered(e: &Element, local_of: &[u32]) -> Element {
         Element::Bar { nodes, .. } => nodes,
         Element::Tri3 { nodes, .. } => nodes,
         Element::Tet4 { nodes, .. } => nodes,
+        Element::Hex8(h) => &mut h.nodes,
     };
     for n in nodes {
         *n = local_of[*n as usize];
@@ -467,6 +468,13 @@ fn run_into(
              process for them)"
                 .into(),
         );
+    }
+    for o in &scene.node_outputs {
+        warnings.push(format!(
+            "{}: a distributed run writes no deck node output (run the deck in one process \
+             for it)",
+            o.file
+        ));
     }
     let [kinetic, internal, external_work, contact_work, _] = energy;
     let ends = Ends {

@@ -79,6 +79,7 @@ mod check;
 mod distributed;
 mod from_inp;
 mod increments;
+pub mod node_output;
 mod run;
 mod spec;
 mod summary;
@@ -101,7 +102,7 @@ use serde::Serialize;
 
 use crate::device::Device;
 use crate::error::{Error, Result};
-use crate::explicit::{Element, Solver};
+use crate::explicit::{Element, Integration, Solver};
 use build::PartNodes;
 pub use summary::{
     BodySummary, ContactNode, CurveSample, PartSummary, QuasiStaticSummary, RankSummary, Summary,
@@ -252,6 +253,10 @@ fn built_list(scene: &Scene, solver: &Solver, slaves: &[Vec<u32>]) -> Vec<String
                 Element::Tri3 { hoop: Some(_), .. } => "axisymmetric triangle",
                 Element::Tri3 { .. } => "plane-strain triangle",
                 Element::Tet4 { .. } => "tetrahedron",
+                Element::Hex8(h) => match h.integration {
+                    Integration::Selective => "hexahedron (C3D8)",
+                    Integration::Reduced => "reduced hexahedron (C3D8R)",
+                },
             })
             .or_default() += 1;
     }

@@ -102,6 +102,8 @@ pub(super) fn run_into(
     );
     let summary = account.summary(scene, device, ends);
     if let (Some(dir), Some(f)) = (output, history) {
+        super::node_output::write(dir, &scene.node_outputs, &built.parts, &solver, &x0)
+            .map_err(io)?;
         finish_outputs(dir, f, &summary).map_err(io)?;
         if series.is_some() {
             let _ = std::fs::remove_dir_all(dir.join("vtk"));

@@ -42,6 +42,9 @@ pub struct Scene {
     /// A curve of time scaling every load (a deck's `*CLOAD` amplitude); none: constant.
     #[serde(skip)]
     pub load_factor: Option<std::sync::Arc<crate::explicit::Amplitude>>,
+    /// A deck's node output requests, written at the end under the output directory.
+    #[serde(skip)]
+    pub node_outputs: Vec<super::node_output::NodeOutput>,
 }
 
 /// How a deck's `*STATIC` step runs: as Abaqus/Explicit users run quasi-static problems, its
@@ -178,8 +181,9 @@ pub struct PartSpec {
     /// (2-node bars along one axis). Rigid and fixed: "plate" (quads in the x–y plane, normal
     /// +z), "line" (2D segments along x, normal +y), "arc" (2D segments of a circle, normals
     /// outward), "sphere" (triangles, normals outward). "points": point masses. "mesh": read
-    /// from `file` (Gmsh `.msh` or Abaqus `.inp`), deformable (its tetrahedra, or plane
-    /// triangles in a 2D scene) or, with `rigid = true`, fixed.
+    /// from `file` (Gmsh `.msh` or Abaqus `.inp`), deformable (its tetrahedra and hexahedra —
+    /// C3D8, selectively reduced —, or plane triangles in a 2D scene) or, with `rigid = true`,
+    /// fixed.
     pub shape: String,
     /// Material (deformable shapes).
     #[serde(default)]

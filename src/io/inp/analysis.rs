@@ -135,8 +135,11 @@ pub struct GravityDef {
 pub struct StepDef {
     /// `NAME=`, when given.
     pub name: Option<String>,
-    /// `NLGEOM=` (Abaqus/Explicit's default is YES).
+    /// `NLGEOM=` (Abaqus/Explicit's default is YES; a `*STATIC` step's, as in Abaqus/Standard
+    /// and CalculiX, NO).
     pub nlgeom: bool,
+    /// Whether the step wrote `NLGEOM=` (else the default for its procedure).
+    pub nlgeom_written: bool,
     /// The procedure: `DYNAMIC EXPLICIT` or `STATIC`.
     pub procedure: Option<String>,
     /// The step's time period.
@@ -153,7 +156,22 @@ pub struct StepDef {
     pub history_every: Option<usize>,
     /// `*OUTPUT, FIELD, FREQUENCY=`: a contact frame every this many increments.
     pub field_every: Option<usize>,
+    /// `*NODE PRINT`, `*NODE OUTPUT`, `*NODE FILE`: node variables asked for, in order.
+    pub node_outputs: Vec<NodeOutputDef>,
     /// Where the step began.
+    pub at: At,
+}
+
+/// A request for node variables (`*NODE PRINT`, `*NODE OUTPUT`, `*NODE FILE`).
+#[derive(Clone, Debug, PartialEq)]
+pub struct NodeOutputDef {
+    /// The keyword, as written (`NODE PRINT`, …).
+    pub keyword: String,
+    /// `NSET=`: the nodes (none: every node of the model).
+    pub nset: Option<String>,
+    /// The variables asked for (upper case: `U`, `V`, `A`, `RF`, `CF`, `COORD`, …).
+    pub variables: Vec<String>,
+    /// Where it is.
     pub at: At,
 }
 

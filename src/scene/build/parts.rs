@@ -3,6 +3,7 @@
 //! velocities and held directions; and the rigid parts that move, as bodies carrying their nodes.
 
 use super::*;
+use crate::explicit::{Hex8, Integration};
 
 /// What the parts give the solver: positions, elements, point masses, velocities, held
 /// directions (per node), each part's node range, and the rigid parts that move (part index,
@@ -218,11 +219,16 @@ impl Scene {
                         };
                         for (k, e) in mesh.elements.iter().enumerate() {
                             if e.kind == ElementKind::Hex8 {
-                                return Err(Error::BadParameter {
-                                    name: "part.file",
-                                    value: format!("{file} (part {}) has hexahedra", p.name),
-                                    expected: "tetrahedra for a deformable mesh part (the solver's 3D element); hexahedra can be rigid or give surfaces",
-                                });
+                                // a mesh file's hexahedra: C3D8, selectively reduced
+                                let n: [u32; 8] = std::array::from_fn(|i| e.nodes[i] + base as u32);
+                                let mirrored = [n[4], n[5], n[6], n[7], n[0], n[1], n[2], n[3]];
+                                let hex = Hex8::new(n, &x, mat, Integration::Selective)
+                                    .or_else(|| {
+                                        Hex8::new(mirrored, &x, mat, Integration::Selective)
+                                    })
+                                    .ok_or_else(|| bad_el(k))?;
+                                elements.push(Element::Hex8(Box::new(hex)));
+                                continue;
                             }
                             if !matches!(
                                 e.kind,
@@ -238,7 +244,7 @@ impl Scene {
                             return Err(Error::BadParameter {
                                 name: "part.file",
                                 value: format!("{file} (part {})", p.name),
-                                expected: "a deformable mesh part needs tetrahedra (3D) or plane triangles or quadrilaterals (2D)",
+                                expected: "a deformable mesh part needs tetrahedra or hexahedra (3D) or plane triangles or quadrilaterals (2D)",
                             });
                         }
                     }
@@ -383,7 +389,8 @@ impl Scene {
 
 /// The deformable elements of a deck's part (first node `base`, positions `x`): each with its
 /// section's material, thickness (plane elements) or cross-section area (trusses); a plane
-/// quadrilateral as two triangles.
+/// quadrilateral as two triangles; a hexahedron selectively reduced or, its type asking,
+/// reduced with hourglass stiffness.
 fn deck_elements(
     piece: &super::super::from_inp::DeckPiece,
     base: usize,
@@ -411,6 +418,20 @@ fn deck_elements(
             ElementKind::Tet4 | ElementKind::Tri3In2d | ElementKind::Quad4In2d => {
                 let els = continuum(e, base, x, mat, t, e.axisymmetric).ok_or_else(bad)?;
                 elements.extend(els);
+            }
+            ElementKind::Hex8 => {
+                let integration = if piece.reduced[k] {
+                    Integration::Reduced
+                } else {
+                    Integration::Selective
+                };
+                let n: [u32; 8] = std::array::from_fn(|i| e.nodes[i] + base as u32);
+                // nodes 1–4 and 5–8 swapped when the deck numbers the element inside out
+                let mirrored = [n[4], n[5], n[6], n[7], n[0], n[1], n[2], n[3]];
+                let hex = Hex8::new(n, x, mat, integration)
+                    .or_else(|| Hex8::new(mirrored, x, mat, integration))
+                    .ok_or_else(bad)?;
+                elements.push(Element::Hex8(Box::new(hex)));
             }
             _ => return Err(bad()),
         }

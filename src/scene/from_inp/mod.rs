@@ -37,6 +37,9 @@ pub struct DeckPiece {
     pub deformable: Vec<bool>,
     /// Each element's thickness (plane elements) or cross-section area (trusses).
     pub thickness: Vec<f64>,
+    /// Whether each element's type asks for reduced integration (C3D8R: one point with
+    /// hourglass control; C3D8 is selectively reduced).
+    pub reduced: Vec<bool>,
     /// Each node's initial velocity.
     pub velocity: Vec<[f64; 3]>,
     /// Each node's point mass (`*MASS`).
@@ -394,6 +397,32 @@ fn from_deck(deck: &Deck, file: &str) -> Result<Scene> {
             })
             .map_or_else(|| "POINT-MASSES".to_string(), |s| s.elset.clone())
     };
+    // a section's elements in several unconnected pieces: one part each, numbered
+    let mut part_names: Vec<String> = (0..pieces.len()).map(names).collect();
+    for p in 0..part_names.len() {
+        let same: Vec<usize> = (0..part_names.len())
+            .filter(|&q| part_names[q] == part_names[p])
+            .collect();
+        if same.len() > 1 {
+            for (k, q) in same.into_iter().enumerate() {
+                part_names[q] = format!("{}-{}", part_names[q], k + 1);
+            }
+        }
+    }
+    // where each deck node went: its part and index there (node output requests)
+    let mut home = vec![None; mesh.positions.len()];
+    for (p, piece) in pieces.iter().enumerate() {
+        for (k, &d) in piece.deck_nodes.iter().enumerate() {
+            home[d as usize] = Some((p, k));
+        }
+    }
+    let node_outputs = super::node_output::requests(
+        &step.node_outputs,
+        &mesh.node_sets,
+        &home,
+        &mesh.node_labels,
+        &mut notes,
+    );
     let mut parts = Vec::new();
     for (p, piece) in pieces.into_iter().enumerate() {
         let rigid = piece.rigid.is_some();
@@ -416,7 +445,7 @@ fn from_deck(deck: &Deck, file: &str) -> Result<Scene> {
             .zip(&piece.thickness)
             .find(|(e, _)| e.kind.is_planar())
             .map_or(1.0, |(_, t)| *t);
-        let mut spec = PartSpec::deck_part(names(p), file, Arc::new(piece));
+        let mut spec = PartSpec::deck_part(part_names[p].clone(), file, Arc::new(piece));
         spec.thickness = thickness;
         spec.material = material;
         spec.rigid = rigid;
@@ -505,6 +534,12 @@ fn from_deck(deck: &Deck, file: &str) -> Result<Scene> {
         run.bulk_viscosity_quadratic = b2;
     }
     run.nlgeom = step.nlgeom;
+    if quasi_static.is_some() && !step.nlgeom_written {
+        notes.push(format!(
+            "{}: *STEP without NLGEOM=: the *STATIC step is small-strain (NLGEOM=NO, Abaqus/Standard's and CalculiX's default; write NLGEOM=YES for large strain)",
+            step.at
+        ));
+    }
     run.output_every = step.history_every.unwrap_or(1);
     run.vtk_every = step.field_every.unwrap_or(0);
     run.damping = damping + quasi_static.as_ref().map_or(0.0, |q| q.damping);
@@ -537,6 +572,7 @@ fn from_deck(deck: &Deck, file: &str) -> Result<Scene> {
         deck_notes: notes,
         quasi_static,
         load_factor,
+        node_outputs,
     };
     scene.check_deck()?;
     Ok(scene)

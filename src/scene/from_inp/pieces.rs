@@ -181,6 +181,11 @@ pub(super) fn split(
             piece
                 .deformable
                 .push(matches!(role[e], Some(Role::Deformable(..))));
+            // C3D8R and the like: the type's trailing R (reduced integration)
+            piece.reduced.push(
+                a.element_block(e as u32)
+                    .is_some_and(|(ty, _)| ty.to_ascii_uppercase().ends_with('R')),
+            );
             match role[e] {
                 Some(Role::Deformable(m, t)) => {
                     piece.materials.push(materials[m].1);

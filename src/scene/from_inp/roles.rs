@@ -77,10 +77,13 @@ pub(super) fn roles(
                     format!("element {} (TYPE={ty}): shells and membranes are not modelled by abut", e.label),
                 )
             }
-            Some(Role::Deformable(..)) if e.kind == ElementKind::Hex8 => {
+            Some(Role::Deformable(..))
+                if e.kind == ElementKind::Hex8
+                    && !matches!(ty.to_ascii_uppercase().as_str(), "C3D8" | "C3D8R") =>
+            {
                 return refuse(
                     &at,
-                    format!("element {} (TYPE={ty}): deformable hexahedra are not modelled by abut yet (C3D4 tetrahedra are)", e.label),
+                    format!("element {} (TYPE={ty}): incompatible modes are not modelled by abut (its deformable hexahedra are C3D8, selectively reduced, and C3D8R, one point with hourglass stiffness)", e.label),
                 )
             }
             _ => {}

@@ -9,7 +9,7 @@
 use std::fmt::Write as _;
 
 use crate::error::{Error, Result};
-use crate::explicit::Element;
+use crate::explicit::{Element, Integration};
 use crate::model::Facet;
 
 use super::spec::Scene;
@@ -198,7 +198,15 @@ impl Scene {
             } else {
                 // deformable elements as the scene built them, and their section
                 let mut section = None;
-                for (kind, group) in [("bar", 0), ("tri", 1), ("axi", 2), ("tet", 3)] {
+                let groups = [
+                    ("bar", 0),
+                    ("tri", 1),
+                    ("axi", 2),
+                    ("tet", 3),
+                    ("hex", 4),
+                    ("hexr", 5),
+                ];
+                for (kind, group) in groups {
                     let els: Vec<&&Element> = by_part[k]
                         .iter()
                         .filter(|e| match e {
@@ -206,6 +214,10 @@ impl Scene {
                             Element::Tri3 { hoop: None, .. } => group == 1,
                             Element::Tri3 { hoop: Some(_), .. } => group == 2,
                             Element::Tet4 { .. } => group == 3,
+                            Element::Hex8(h) => match h.integration {
+                                Integration::Selective => group == 4,
+                                Integration::Reduced => group == 5,
+                            },
                         })
                         .collect();
                     if els.is_empty() {
@@ -216,6 +228,8 @@ impl Scene {
                         "bar" => "T3D2",
                         "tri" => "CPE3",
                         "axi" => "CAX3",
+                        "hex" => "C3D8",
+                        "hexr" => "C3D8R",
                         _ => "C3D4",
                     };
                     writeln!(elements, "*ELEMENT, TYPE={ty}, ELSET={set}").ok();

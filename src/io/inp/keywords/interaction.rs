@@ -413,6 +413,7 @@ impl Parser {
         self.deck.analysis.steps.push(StepDef {
             name: opts.get("NAME").cloned(),
             nlgeom: self.deck.nlgeom,
+            nlgeom_written: opts.contains_key("NLGEOM"),
             procedure: None,
             time_period: None,
             fixed_increment: None,
@@ -421,6 +422,7 @@ impl Parser {
             mass_scaling: None,
             history_every: None,
             field_every: None,
+            node_outputs: Vec::new(),
             at,
         });
         Ok(())
@@ -450,6 +452,12 @@ impl Parser {
             let step = self.step_mut(l, kw)?;
             step.procedure = Some("STATIC".into());
             step.time_period = period.or(Some(1.0));
+            // a static step without NLGEOM= is small-strain (Abaqus/Standard's and CalculiX's
+            // default; Abaqus/Explicit's YES is for its own dynamic steps)
+            if !step.nlgeom_written {
+                step.nlgeom = false;
+                self.deck.nlgeom = false;
+            }
             return Ok(());
         }
         only(

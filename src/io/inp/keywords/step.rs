@@ -1,5 +1,5 @@
 //! The keywords of a deck's step controls: `*BULK VISCOSITY`, `*FIXED MASS SCALING`,
-//! `*OUTPUT`.
+//! `*OUTPUT`, and the node output requests (`*NODE PRINT`, `*NODE OUTPUT`, `*NODE FILE`).
 
 use super::super::*;
 use super::analysis::finite;
@@ -96,6 +96,51 @@ impl Parser {
                 );
             }
         }
+        Ok(())
+    }
+
+    /// `*NODE PRINT`, `*NODE OUTPUT`, `*NODE FILE`: the node set and the variables (one or
+    /// more data lines of names); frequency and print layout options are read and left to
+    /// abut (it writes the variables at the step's end).
+    pub(in crate::io::inp) fn on_node_output(
+        &mut self,
+        l: &Line,
+        kw: &str,
+        opts: &BTreeMap<String, String>,
+        data: &[Line],
+    ) -> Result<()> {
+        only(
+            l,
+            kw,
+            opts,
+            &[
+                "NSET",
+                "FREQUENCY",
+                "FREQUENCYF",
+                "TOTALS",
+                "GLOBAL",
+                "OUTPUT",
+                "TIME INTERVAL",
+                "NUMBER INTERVAL",
+                "TIME MARKS",
+                "SUMMARY",
+                "VARIABLE",
+            ],
+        )?;
+        let variables: Vec<String> = data
+            .iter()
+            .flat_map(fields)
+            .filter(|f| !f.is_empty())
+            .map(|f| f.to_ascii_uppercase())
+            .collect();
+        let at = self.at(l);
+        let nset = opts.get("NSET").map(|s| s.to_ascii_uppercase());
+        self.step_mut(l, kw)?.node_outputs.push(NodeOutputDef {
+            keyword: kw.to_string(),
+            nset,
+            variables,
+            at,
+        });
         Ok(())
     }
 }
