@@ -5,17 +5,11 @@
 //! uniform stress passes the patch test) and for the linear pressure–overclosure law, so the
 //! displacements and reactions are checked against it.
 
-use abut::scene::{run, Scene};
-use abut::Device;
+mod common;
 
-/// Writes `text` as `name` in a directory of this test's own and reads it as a scene.
-fn deck(name: &str, text: &str) -> abut::Result<Scene> {
-    let dir = std::env::temp_dir().join(format!("abut-inp-hex-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
-    let path = dir.join(name);
-    std::fs::write(&path, text).unwrap();
-    Scene::load(&path)
-}
+use abut::scene::run;
+use abut::Device;
+use common::scene_toml::{boundary, deck, fixed, part_of, SceneToml};
 
 /// Young's moduli of the blocks and the contact's pressure–overclosure slope (per area).
 const E_LOWER: f64 = 2000.0;
@@ -157,7 +151,11 @@ fn read_csv(path: &std::path::Path) -> (Vec<String>, Vec<Vec<f64>>) {
 #[test]
 fn hexahedral_blocks_pressed_together_reach_the_static_answer_and_print_it() {
     for (lower, upper) in [("C3D8", "C3D8"), ("C3D8R", "C3D8R"), ("C3D8", "C3D8R")] {
-        let scene = deck("hex-blocks.inp", &blocks_deck(3, lower, upper, "")).unwrap();
+        let scene = deck(
+            "hex-blocks.inp",
+            &blocks_deck(3, lower, upper, "*EL PRINT, ELSET=UPPER\nS, ELSE, E\n"),
+        )
+        .unwrap();
         let dir = std::env::temp_dir().join(format!(
             "abut-inp-hex-out-{lower}-{upper}-{}",
             std::process::id()
@@ -203,6 +201,31 @@ fn hexahedral_blocks_pressed_together_reach_the_static_answer_and_print_it() {
             "{:?}",
             summary.deck_notes
         );
+        // the upper block's elements: the uniform stress −LOAD (unit area) along z, and their
+        // strain energies adding up to σ²/(2E)·V; E (strain) is not written, and says so
+        let (header, rows) = read_csv(&dir.join("el-print-UPPER.csv"));
+        assert_eq!(
+            header,
+            ["time", "element", "S11", "S22", "S33", "S12", "S13", "S23", "ELSE"]
+        );
+        assert_eq!(rows.len(), 27);
+        for r in &rows {
+            approx::assert_relative_eq!(r[4], -LOAD, max_relative = 1e-4);
+            for k in [2, 3, 5, 6, 7] {
+                assert!(r[k].abs() < 1e-4 * LOAD, "{lower}/{upper}: {r:?}");
+            }
+        }
+        let energy: f64 = rows.iter().map(|r| r[8]).sum();
+        let exact_energy = LOAD * LOAD / (2.0 * E_UPPER) * 0.5;
+        approx::assert_relative_eq!(energy, exact_energy, max_relative = 1e-3);
+        assert!(
+            summary
+                .deck_notes
+                .iter()
+                .any(|n| n.contains("EL PRINT: E not written")),
+            "{:?}",
+            summary.deck_notes
+        );
         let qs = summary.quasi_static.clone().unwrap();
         assert!(qs.kinetic_to_internal_at_end < 1e-3, "{qs:?}");
         eprintln!(
@@ -239,4 +262,71 @@ fn a_node_print_of_an_undefined_set_is_said_not_silently_dropped() {
         scene.deck_notes
     );
     assert_eq!(scene.node_outputs.len(), 2);
+}
+
+/// A scene file's mesh part of hexahedra (an Abaqus mesh file, one C3D8 block of 2 × 2 × 2
+/// with its second layer numbered inside out) runs them as selectively reduced C3D8: pressed by
+/// a ramped displacement of its top and damped to rest, its stress is the static one.
+#[test]
+fn a_mesh_files_hexahedra_run_as_c3d8() {
+    let text = blocks_deck(2, "C3D8", "C3D8", "");
+    // the lower block's nodes and elements only, its second layer's nodes 1–4 and 5–8 swapped
+    let mut mesh = String::from("*NODE\n");
+    let lines: Vec<&str> = text.lines().collect();
+    let node_start = lines.iter().position(|l| l.starts_with("*NODE")).unwrap() + 1;
+    for l in lines[node_start..node_start + 27].iter() {
+        mesh += l;
+        mesh.push('\n');
+    }
+    mesh += "*ELEMENT, TYPE=C3D8, ELSET=BLOCK\n";
+    let el_start = lines
+        .iter()
+        .position(|l| l.starts_with("*ELEMENT"))
+        .unwrap()
+        + 1;
+    for (k, l) in lines[el_start..el_start + 8].iter().enumerate() {
+        let f: Vec<&str> = l.split(", ").collect();
+        let order: Vec<usize> = if k >= 4 {
+            vec![0, 5, 6, 7, 8, 1, 2, 3, 4]
+        } else {
+            (0..9).collect()
+        };
+        mesh += &order.iter().map(|&i| f[i]).collect::<Vec<_>>().join(", ");
+        mesh.push('\n');
+    }
+    mesh += "*NSET, NSET=BASE\n1, 2, 3, 4, 5, 6, 7, 8, 9\n*NSET, NSET=TOP\n19, 20, 21, 22, 23, 24, 25, 26, 27\n";
+    let dir = std::env::temp_dir().join(format!("abut-hex-mesh-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    std::fs::write(dir.join("block.inp"), &mesh).unwrap();
+    let (young, delta) = (1000.0, 0.01);
+    let mut scene = SceneToml::new("a mesh file of hexahedra", 2.0)
+        .run("damping", 20.0)
+        .material("soft", young, 0.0, 1.0)
+        .part(
+            part_of("block", "mesh")
+                .with("file", "block.inp")
+                .with("material", "soft"),
+        )
+        .boundary(fixed("block", "BASE", ["z"]))
+        .boundary(
+            boundary("block", "TOP")
+                .with("displacement", [0.0, 0.0, -delta])
+                .with("ramp", 0.5),
+        )
+        .scene();
+    scene.base_dir = Some(dir.clone());
+    let s = run(&scene, &Device::cpu(), None).unwrap();
+    assert!(
+        s.built.iter().any(|b| b == "8 hexahedron (C3D8) elements"),
+        "{:?}",
+        s.built
+    );
+    // St Venant–Kirchhoff (the scene's large-strain default) in uniaxial stretch λ: the Cauchy
+    // stress λ·E·(λ² − 1)/2, the same in every element
+    let lam = 1.0 - delta;
+    let exact = lam * young * 0.5 * (lam * lam - 1.0);
+    for sigma in [s.parts[0].stress_min[2], s.parts[0].stress_max[2]] {
+        approx::assert_relative_eq!(sigma, exact, max_relative = 1e-3);
+    }
+    let _ = std::fs::remove_dir_all(&dir);
 }

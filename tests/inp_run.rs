@@ -7,16 +7,7 @@ mod common;
 
 use abut::scene::{run, Scene, Summary};
 use abut::Device;
-use common::scene_toml::{contact, part, part_of, SceneToml};
-
-/// Writes `text` as `name` in a directory of this test's own and reads it as a scene.
-fn deck(name: &str, text: &str) -> abut::Result<Scene> {
-    let dir = std::env::temp_dir().join(format!("abut-inp-run-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
-    let path = dir.join(name);
-    std::fs::write(&path, text).unwrap();
-    Scene::load(&path)
-}
+use common::scene_toml::{contact, deck, part, part_of, SceneToml};
 
 /// The history's rows without the header (the columns are named after the parts, which a
 /// deck names by its sets).
@@ -167,7 +158,8 @@ fn boundary_amplitudes_move_nodes_as_they_say() {
 }
 
 /// What abut does not model is refused before anything runs, naming the keyword, the file and
-/// the line; a deck without a step, or with two, is refused by name.
+/// the line; a deck without a step, or with a static step after a dynamic one, is refused by
+/// name.
 #[test]
 fn what_abut_does_not_model_is_refused_by_name_and_line() {
     let base = drop_deck(1.0, 0.05, -1.0, 1e4, "");
@@ -199,10 +191,10 @@ fn what_abut_does_not_model_is_refused_by_name_and_line() {
         (
             base.replace(
                 "*END STEP\n",
-                "*END STEP\n*STEP\n*DYNAMIC, EXPLICIT\n, 0.1\n*END STEP\n",
+                "*END STEP\n*STEP\n*STATIC\n0.1, 1.0\n*END STEP\n",
             ),
             "second *STEP",
-            "one step",
+            "several *DYNAMIC, EXPLICIT steps",
         ),
         (
             base.replace(

@@ -10,7 +10,7 @@ pub mod hexahedron;
 mod prescribed;
 mod rigid;
 
-pub use prescribed::{Amplitude, Motion, Prescribed};
+pub use prescribed::{Amplitude, LoadCurve, Motion, Prescribed};
 
 pub use elements::{Element, Material};
 pub use hexahedron::{Hex8, Integration};
@@ -68,6 +68,8 @@ pub struct Solver {
     pub gravity: [f64; 3],
     /// Constant external forces per node.
     pub loads: Vec<[f64; 3]>,
+    /// Loads on single degrees of freedom, each on its own curve and window (added to `loads`).
+    pub load_curves: Vec<LoadCurve>,
     /// A curve of time scaling `loads` and the bodies' loads and moments (a quasi-static run's
     /// smooth ramp); none: the loads as they are.
     pub load_factor: Option<std::sync::Arc<Amplitude>>,
@@ -165,6 +167,7 @@ impl Solver {
             prescribed: Vec::new(),
             bodies: Vec::new(),
             loads: vec![[0.0; 3]; n],
+            load_curves: Vec::new(),
             load_factor: None,
             x,
             mass,
@@ -365,6 +368,7 @@ impl Solver {
             .load_factor
             .as_ref()
             .map_or(1.0, |f| f.value(self.time));
+        let curves = self.curve_loads(dt);
         for i in 0..n {
             if self.carried[i].is_some() {
                 continue;
@@ -374,11 +378,15 @@ impl Solver {
                     self.v[i][a] = 0.0;
                     self.reaction[i][a] = -(f_int[i][a]
                         + factor * self.loads[i][a]
+                        + curves.get(i).map_or(0.0, |c| c[a])
                         + self.mass[i] * self.gravity[a]
                         + penalty[i][a]);
                     continue;
                 }
                 ext[i][a] = factor * self.loads[i][a] + self.mass[i] * self.gravity[a];
+                if let Some(c) = curves.get(i) {
+                    ext[i][a] += c[a];
+                }
                 damp[i][a] = -self.damping * self.mass[i] * self.v[i][a];
                 self.v[i][a] += dv_scale * (f_int[i][a] + ext[i][a] + penalty[i][a] + damp[i][a])
                     / self.mass[i];
@@ -387,8 +395,21 @@ impl Solver {
         // prescribed degrees of freedom: the velocity that reaches the prescribed displacement
         // exactly; the force that makes it counts as external
         for p in &self.prescribed {
+            // a window that has ended leaves no reaction behind
+            self.reaction[p.node as usize][p.dof] = 0.0;
+        }
+        for p in &self.prescribed {
+            if !p.acts(self.time, dt) {
+                continue;
+            }
             let (i, a) = (p.node as usize, p.dof);
-            let u = (p.motion.displacement(self.time + dt) - p.motion.displacement(self.time)) / dt;
+            let target = p.motion.displacement(self.time + dt);
+            let u = match p.origin {
+                // the total displacement from the reference, from where the node is at the
+                // increment's start
+                Some(x0) => (x0 + target - self.x[i][a]) / dt,
+                None => (target - p.motion.displacement(self.time)) / dt,
+            };
             let support = self.mass[i] * (u - self.v[i][a]) / dv_scale;
             ext[i][a] += support;
             self.reaction[i][a] = support;

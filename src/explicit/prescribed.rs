@@ -1,4 +1,5 @@
-//! Prescribed motion: a node's velocity or displacement along an axis as a function of time.
+//! Prescribed motion: a node's velocity or displacement along an axis as a function of time;
+//! loads on their own curves.
 
 /// A curve of time scaling a prescribed value: Abaqus' `*AMPLITUDE`, tabular (linear between
 /// points) or smooth step (a quintic between points, zero rate at each). Before the first point
@@ -201,4 +202,97 @@ pub struct Prescribed {
     pub dof: usize,
     /// The motion.
     pub motion: Motion,
+    /// When it acts (total time): an increment whose midpoint lies in `[from, until)`; the
+    /// degree of freedom is free outside (a deck step's boundary condition, removed or
+    /// replaced in a later step). `(−∞, ∞)`: always.
+    pub active: (f64, f64),
+    /// `Some(x0)`: the motion is the total displacement from the reference coordinate `x0`
+    /// (Abaqus' displacement boundary condition in a later step), each increment reaching
+    /// `x0 + displacement(t + dt)` from where the node is; `None`: the motion's own increments.
+    pub origin: Option<f64>,
+}
+
+impl Prescribed {
+    /// `motion` on direction `dof` of `node`, always, by its own increments.
+    pub fn new(node: u32, dof: usize, motion: Motion) -> Self {
+        Self {
+            node,
+            dof,
+            motion,
+            active: (f64::NEG_INFINITY, f64::INFINITY),
+            origin: None,
+        }
+    }
+
+    /// Whether it acts over the increment of `dt` from `t`.
+    pub fn acts(&self, t: f64, dt: f64) -> bool {
+        let mid = t + 0.5 * dt;
+        mid >= self.active.0 && mid < self.active.1
+    }
+}
+
+/// A concentrated load on one degree of freedom following its own curve over a window of
+/// time (a deck's `*CLOAD` of one step, or one of several amplitudes).
+#[derive(Clone, Debug, PartialEq)]
+pub struct LoadCurve {
+    /// Node index.
+    pub node: u32,
+    /// Direction: 0 = x, 1 = y, 2 = z.
+    pub dof: usize,
+    /// The magnitude (force) the curve scales.
+    pub value: f64,
+    /// The curve, in total time.
+    pub amplitude: std::sync::Arc<Amplitude>,
+    /// When it acts (total time, as [`Prescribed::active`]).
+    pub active: (f64, f64),
+}
+
+impl LoadCurve {
+    /// The load as it acted up to time `t` (the end of an increment or a step: 0 unless
+    /// `from < t ≤ until`).
+    pub fn until(&self, t: f64) -> f64 {
+        if t > self.active.0 && t <= self.active.1 {
+            self.value * self.amplitude.value(t)
+        } else {
+            0.0
+        }
+    }
+
+    /// The load at the start `t` of an increment of `dt` (0 outside its window).
+    pub fn at(&self, t: f64, dt: f64) -> f64 {
+        let mid = t + 0.5 * dt;
+        if mid >= self.active.0 && mid < self.active.1 {
+            self.value * self.amplitude.value(t)
+        } else {
+            0.0
+        }
+    }
+}
+
+impl super::Solver {
+    /// The curve loads at the start of an increment of `dt`, per node (empty when there are
+    /// none).
+    pub fn curve_loads(&self, dt: f64) -> Vec<[f64; 3]> {
+        if self.load_curves.is_empty() {
+            return Vec::new();
+        }
+        let mut f = vec![[0.0; 3]; self.x.len()];
+        for c in &self.load_curves {
+            f[c.node as usize][c.dof] += c.at(self.time, dt);
+        }
+        f
+    }
+
+    /// The curve loads as they acted up to now (a step's, at its end), per node (empty when
+    /// there are none).
+    pub fn curve_loads_until_now(&self) -> Vec<[f64; 3]> {
+        if self.load_curves.is_empty() {
+            return Vec::new();
+        }
+        let mut f = vec![[0.0; 3]; self.x.len()];
+        for c in &self.load_curves {
+            f[c.node as usize][c.dof] += c.until(self.time);
+        }
+        f
+    }
 }

@@ -105,7 +105,15 @@ impl<'a> Account<'a> {
     /// The next increment from `time` (the last one shortened to end on time), noting where
     /// contact has lowered it below the elements' limit.
     pub fn step(&mut self, time: f64) -> f64 {
-        let step = self.dt.min(self.run.end_time - time);
+        // the next end: a deck step's, else the run's
+        let end = self
+            .run
+            .step_ends
+            .iter()
+            .copied()
+            .find(|&t| t > time + 1e-12 * self.run.end_time)
+            .unwrap_or(self.run.end_time);
+        let step = self.dt.min(end - time);
         // (round-off of the combined formula aside)
         if self.run.dt.is_none() && self.dt < self.element_dt * (1.0 - 1e-12) {
             self.lowest_ratio = self.lowest_ratio.min(self.dt / self.element_dt);

@@ -6,7 +6,7 @@ use std::collections::BTreeMap;
 
 use crate::error::{Error, Result};
 use crate::explicit::{
-    Amplitude, BodyMotion, Element, Material, Motion, Prescribed, Solver, SolverBody,
+    Amplitude, BodyMotion, Element, LoadCurve, Material, Motion, Prescribed, Solver, SolverBody,
 };
 use crate::io::inp::SurfaceDef;
 use crate::io::{ElementKind, MeshData};
@@ -40,6 +40,9 @@ pub struct PartNodes {
     pub count: usize,
     /// Element count.
     pub elements: usize,
+    /// A deck's part: each of its elements' solver elements (first index, count; none for a
+    /// surface element), in the part's element order.
+    pub deck_elements: Vec<(usize, usize)>,
     grid: Grid,
 }
 
@@ -355,20 +358,17 @@ impl Scene {
                 };
                 for &n in &face.nodes {
                     for &a in &dirs {
-                        solver.prescribe(Prescribed {
-                            node: n,
-                            dof: a,
-                            // Abaqus' smooth step from 0 to 1 over the ramp time, as a deck's
-                            // *AMPLITUDE, DEFINITION=SMOOTH STEP gives it
-                            motion: Motion::Amplitude {
-                                value: u[a],
-                                amplitude: std::sync::Arc::new(Amplitude {
-                                    smooth: true,
-                                    points: vec![(0.0, 0.0), (b.ramp, 1.0)],
-                                }),
-                                velocity: false,
-                            },
-                        })?;
+                        // Abaqus' smooth step from 0 to 1 over the ramp time, as a deck's
+                        // *AMPLITUDE, DEFINITION=SMOOTH STEP gives it
+                        let motion = Motion::Amplitude {
+                            value: u[a],
+                            amplitude: std::sync::Arc::new(Amplitude {
+                                smooth: true,
+                                points: vec![(0.0, 0.0), (b.ramp, 1.0)],
+                            }),
+                            velocity: false,
+                        };
+                        solver.prescribe(Prescribed::new(n, a, motion))?;
                     }
                 }
             }
@@ -389,12 +389,17 @@ impl Scene {
                     solver.loads[nodes.base + i][d] += l[d];
                 }
             }
-            for (i, axis, motion) in &piece.prescribed {
+            for p in &piece.prescribed {
                 solver.prescribe(Prescribed {
-                    node: nodes.base as u32 + i,
-                    dof: *axis,
-                    motion: motion.clone(),
+                    node: nodes.base as u32 + p.node,
+                    ..p.clone()
                 })?;
+            }
+            for c in &piece.load_curves {
+                solver.load_curves.push(LoadCurve {
+                    node: nodes.base as u32 + c.node,
+                    ..c.clone()
+                });
             }
         }
         let mut model = if two_d {

@@ -40,7 +40,7 @@ use crate::distributed::{
     RankPair, NO_GLOBAL_NODE,
 };
 use crate::error::{Error, Result};
-use crate::explicit::{Element, Prescribed, Solver};
+use crate::explicit::{Element, LoadCurve, Prescribed, Solver};
 use crate::model::Schedule;
 use crate::model::{Enforce, Facet, Model, Sliding};
 
@@ -235,6 +235,15 @@ fn run_into(
         .map(|p| Prescribed {
             node: local_of[p.node as usize],
             ..p.clone()
+        })
+        .collect();
+    solver.load_curves = g
+        .load_curves
+        .iter()
+        .filter(|c| is_local[c.node as usize])
+        .map(|c| LoadCurve {
+            node: local_of[c.node as usize],
+            ..c.clone()
         })
         .collect();
     solver.gravity = g.gravity;
@@ -469,11 +478,11 @@ fn run_into(
                 .into(),
         );
     }
-    for o in &scene.node_outputs {
+    let files = scene.node_outputs.iter().map(|o| &o.file);
+    for file in files.chain(scene.element_outputs.iter().map(|o| &o.file)) {
         warnings.push(format!(
-            "{}: a distributed run writes no deck node output (run the deck in one process \
-             for it)",
-            o.file
+            "{file}: a distributed run writes no deck node or element output (run the deck in \
+             one process for it)"
         ));
     }
     let [kinetic, internal, external_work, contact_work, _] = energy;

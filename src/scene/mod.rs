@@ -75,11 +75,11 @@
 mod account;
 mod build;
 mod check;
+pub mod deck_output;
 #[cfg(feature = "mpi")]
 mod distributed;
 mod from_inp;
 mod increments;
-pub mod node_output;
 mod run;
 mod spec;
 mod summary;
@@ -240,6 +240,31 @@ fn clean_run(output: Option<&Path>, run: impl FnOnce() -> Result<Summary>) -> Re
         remove_all(dir, &PARTIALS);
     }
     result
+}
+
+impl Scene {
+    /// Reads and parses the scene file at `path`; mesh files are then relative to its
+    /// directory. An Abaqus deck (`.inp`) is read by [`Scene::from_inp`]. Errors name the
+    /// file, and the key or line.
+    pub fn load(path: &std::path::Path) -> Result<Self> {
+        if path
+            .extension()
+            .is_some_and(|e| e.eq_ignore_ascii_case("inp"))
+        {
+            return Self::from_inp(path);
+        }
+        let text = std::fs::read_to_string(path).map_err(|e| Error::Io {
+            file: path.display().to_string(),
+            message: e.to_string(),
+        })?;
+        let mut s = Self::parse_located(&text).map_err(|(e, line)| Error::Parse {
+            file: path.display().to_string(),
+            line: line.unwrap_or(0),
+            message: e.to_string(),
+        })?;
+        s.base_dir = path.parent().map(|p| p.to_path_buf());
+        Ok(s)
+    }
 }
 
 /// What a run built, in words: elements by kind, rigid bodies, each contact pair.

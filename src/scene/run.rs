@@ -76,6 +76,8 @@ pub(super) fn run_into(
         bodies: &built.bodies,
         history,
         series,
+        node_files: Vec::new(),
+        outputs_done: (0, 0),
     };
     increments::run(&mut account, &mut one, device, progress)?;
     let OneProcess {
@@ -84,6 +86,7 @@ pub(super) fn run_into(
         history,
         series,
         at_peak,
+        node_files,
         ..
     } = one;
     let ends = ends(
@@ -102,8 +105,7 @@ pub(super) fn run_into(
     );
     let summary = account.summary(scene, device, ends);
     if let (Some(dir), Some(f)) = (output, history) {
-        super::node_output::write(dir, &scene.node_outputs, &built.parts, &solver, &x0)
-            .map_err(io)?;
+        super::deck_output::write(dir, &node_files).map_err(io)?;
         finish_outputs(dir, f, &summary).map_err(io)?;
         if series.is_some() {
             let _ = std::fs::remove_dir_all(dir.join("vtk"));
@@ -129,6 +131,10 @@ struct OneProcess<'a> {
     bodies: &'a [(String, usize)],
     history: Option<std::io::BufWriter<std::fs::File>>,
     series: Option<crate::io::vtk::Series>,
+    /// A deck's node and element output files as their steps ended (name, text).
+    node_files: Vec<(String, String)>,
+    /// How many of the deck's node and element requests are written.
+    outputs_done: (usize, usize),
 }
 
 impl Ranks for OneProcess<'_> {
@@ -199,6 +205,25 @@ impl Ranks for OneProcess<'_> {
         if let (Some(f), true) = (self.history.as_mut(), row) {
             let line = history_row(s, self.x0, self.bodies0, self.parts, self.bodies, force);
             writeln!(f, "{line}").map_err(output_error)?;
+        }
+        if self.history.is_some() {
+            let nodes = super::deck_output::due(
+                &self.scene.node_outputs,
+                self.outputs_done.0,
+                self.parts,
+                s,
+                self.x0,
+            );
+            let elements = super::deck_output::elements_due(
+                &self.scene.element_outputs,
+                self.outputs_done.1,
+                self.parts,
+                s,
+            );
+            self.outputs_done.0 += nodes.len();
+            self.outputs_done.1 += elements.len();
+            self.node_files.extend(nodes);
+            self.node_files.extend(elements);
         }
         Ok(())
     }

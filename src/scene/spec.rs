@@ -44,7 +44,10 @@ pub struct Scene {
     pub load_factor: Option<std::sync::Arc<crate::explicit::Amplitude>>,
     /// A deck's node output requests, written at the end under the output directory.
     #[serde(skip)]
-    pub node_outputs: Vec<super::node_output::NodeOutput>,
+    pub node_outputs: Vec<super::deck_output::NodeOutput>,
+    /// A deck's element output requests, written at the end under the output directory.
+    #[serde(skip)]
+    pub element_outputs: Vec<super::deck_output::ElementOutput>,
 }
 
 /// How a deck's `*STATIC` step runs: as Abaqus/Explicit users run quasi-static problems, its
@@ -117,6 +120,10 @@ pub struct RunSpec {
     /// launches the nodes (default false).
     #[serde(default)]
     pub adjust_overclosure: bool,
+    /// A deck's step ends before the last (total time): increments land on them, so each
+    /// step's boundary conditions and loads start on its first increment.
+    #[serde(skip)]
+    pub step_ends: Vec<f64>,
 }
 
 pub(super) fn default_safety() -> f64 {
@@ -526,7 +533,7 @@ impl Scene {
     }
 
     /// As [`Scene::parse`], with the line the error points at when one is known.
-    fn parse_located(text: &str) -> std::result::Result<Self, (Error, Option<usize>)> {
+    pub(super) fn parse_located(text: &str) -> std::result::Result<Self, (Error, Option<usize>)> {
         let scene: Scene = toml::from_str(text).map_err(|e| {
             let line = e.span().map(|s| line_of(text, s.start));
             let error = Error::BadParameter {
@@ -571,29 +578,6 @@ impl Scene {
     /// Checks a scene built from a deck as a scene file is checked.
     pub(super) fn check_deck(&self) -> Result<()> {
         self.check().map_err(Located::named)
-    }
-
-    /// Reads and parses the scene file at `path`; mesh files are then relative to its
-    /// directory. An Abaqus deck (`.inp`) is read by [`Scene::from_inp`]. Errors name the
-    /// file, and the key or line.
-    pub fn load(path: &std::path::Path) -> Result<Self> {
-        if path
-            .extension()
-            .is_some_and(|e| e.eq_ignore_ascii_case("inp"))
-        {
-            return Self::from_inp(path);
-        }
-        let text = std::fs::read_to_string(path).map_err(|e| Error::Io {
-            file: path.display().to_string(),
-            message: e.to_string(),
-        })?;
-        let mut s = Self::parse_located(&text).map_err(|(e, line)| Error::Parse {
-            file: path.display().to_string(),
-            line: line.unwrap_or(0),
-            message: e.to_string(),
-        })?;
-        s.base_dir = path.parent().map(|p| p.to_path_buf());
-        Ok(s)
     }
 
     /// Whether the scene is plane strain (2D).

@@ -216,3 +216,13 @@ impl SceneToml {
         Scene::parse(&text).unwrap_or_else(|e| panic!("{e}\n{text}"))
     }
 }
+
+/// Writes the deck `text` as `name` in this test binary's own directory and reads it as a scene
+/// (`Scene::load`: errors name the file and line).
+pub fn deck(name: &str, text: &str) -> abut::Result<Scene> {
+    let dir = std::env::temp_dir().join(format!("abut-decks-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let path = dir.join(name);
+    std::fs::write(&path, text).unwrap();
+    Scene::load(&path)
+}

@@ -89,8 +89,8 @@ pub struct BoundaryDef {
     pub kind: BoundaryKind,
     /// `AMPLITUDE=` (upper case); none: Abaqus/Explicit's default, applied at once.
     pub amplitude: Option<String>,
-    /// Given in a step (history data) rather than before the first (model data).
-    pub in_step: bool,
+    /// The step it was given in (1 for the first `*STEP`), or 0 before the first (model data).
+    pub step: usize,
     /// Where it was given.
     pub at: At,
 }
@@ -115,6 +115,8 @@ pub struct CloadDef {
     pub value: f64,
     /// `AMPLITUDE=` (upper case).
     pub amplitude: Option<String>,
+    /// The step it was given in (1 for the first `*STEP`).
+    pub step: usize,
     /// Where it was given.
     pub at: At,
 }
@@ -126,6 +128,8 @@ pub struct GravityDef {
     pub elset: String,
     /// The acceleration vector (magnitude times the direction given).
     pub acceleration: [f64; 3],
+    /// The step it was given in (1 for the first `*STEP`).
+    pub step: usize,
     /// Where it was given.
     pub at: At,
 }
@@ -158,16 +162,23 @@ pub struct StepDef {
     pub field_every: Option<usize>,
     /// `*NODE PRINT`, `*NODE OUTPUT`, `*NODE FILE`: node variables asked for, in order.
     pub node_outputs: Vec<NodeOutputDef>,
+    /// `*EL PRINT`, `*ELEMENT OUTPUT`, `*EL FILE`: element variables asked for, in order.
+    pub element_outputs: Vec<NodeOutputDef>,
+    /// A `*BOUNDARY, OP=NEW` in the step: the boundary conditions of earlier steps removed.
+    pub boundary_new: bool,
+    /// A `*CLOAD, OP=NEW` in the step: the loads of earlier steps removed.
+    pub cload_new: bool,
     /// Where the step began.
     pub at: At,
 }
 
-/// A request for node variables (`*NODE PRINT`, `*NODE OUTPUT`, `*NODE FILE`).
+/// A request for node variables (`*NODE PRINT`, `*NODE OUTPUT`, `*NODE FILE`) or element ones
+/// (`*EL PRINT`, `*ELEMENT OUTPUT`, `*EL FILE`).
 #[derive(Clone, Debug, PartialEq)]
 pub struct NodeOutputDef {
     /// The keyword, as written (`NODE PRINT`, …).
     pub keyword: String,
-    /// `NSET=`: the nodes (none: every node of the model).
+    /// `NSET=` (`ELSET=` for elements): the set (none: the whole model).
     pub nset: Option<String>,
     /// The variables asked for (upper case: `U`, `V`, `A`, `RF`, `CF`, `COORD`, …).
     pub variables: Vec<String>,

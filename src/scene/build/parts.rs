@@ -39,6 +39,7 @@ impl Scene {
         for p in &self.part {
             let base = x.len();
             let n_el = elements.len();
+            let mut deck_map = Vec::new();
             let mut rigid = false;
             let grid = match p.shape.as_str() {
                 "block" => {
@@ -196,7 +197,7 @@ impl Scene {
                         });
                     }
                     if let (Some(piece), false) = (&p.deck, rigid) {
-                        deck_elements(piece, base, &x, &mut elements, &p.name)?;
+                        deck_map = deck_elements(piece, base, &x, &mut elements, &p.name)?;
                     } else if !rigid {
                         let mat = material(self, p);
                         let bad_el = |k: usize| Error::BadParameter {
@@ -290,6 +291,7 @@ impl Scene {
                     base,
                     count,
                     elements: elements.len() - n_el,
+                    deck_elements: std::mem::take(&mut deck_map),
                     grid,
                 });
                 continue;
@@ -326,6 +328,7 @@ impl Scene {
                 base,
                 count,
                 elements: elements.len() - n_el,
+                deck_elements: Vec::new(),
                 grid,
             });
         }
@@ -387,7 +390,8 @@ impl Scene {
     }
 }
 
-/// The deformable elements of a deck's part (first node `base`, positions `x`): each with its
+/// The deformable elements of a deck's part (first node `base`, positions `x`), and where each
+/// of the part's elements went among them (first, count): each with its
 /// section's material, thickness (plane elements) or cross-section area (trusses); a plane
 /// quadrilateral as two triangles; a hexahedron selectively reduced or, its type asking,
 /// reduced with hourglass stiffness.
@@ -397,9 +401,12 @@ fn deck_elements(
     x: &[[f64; 3]],
     elements: &mut Vec<Element>,
     name: &str,
-) -> Result<()> {
+) -> Result<Vec<(usize, usize)>> {
+    let mut map = Vec::with_capacity(piece.mesh.elements.len());
     for (k, e) in piece.mesh.elements.iter().enumerate() {
+        let first = elements.len();
         if !piece.deformable[k] {
+            map.push((first, 0));
             continue;
         }
         let (mat, t) = (piece.materials[k], piece.thickness[k]);
@@ -435,8 +442,9 @@ fn deck_elements(
             }
             _ => return Err(bad()),
         }
+        map.push((first, elements.len() - first));
     }
-    Ok(())
+    Ok(map)
 }
 
 /// The solver's elements of mesh element `e` (its nodes from `base`): a tetrahedron, a plane

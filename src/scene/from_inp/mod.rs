@@ -1,27 +1,30 @@
 //! An Abaqus deck as a scene ([`Scene::from_inp`]): its sections' elements as deformable parts
 //! (elements that share nodes in one part), each `*RIGID BODY` as a rigid part moving as its
 //! reference node's boundary conditions say, the point masses not on an element as a part of
-//! their own; boundary conditions, initial velocities, loads and amplitudes on the parts' nodes;
-//! the contact pairs as the deck defines them; the step's controls as the run's. What abut does
-//! not model is refused here, naming the definition's file and line; what it reads and does not
-//! act on is listed in [`Scene::deck_notes`].
+//! their own; boundary conditions, initial velocities, loads and amplitudes on the parts' nodes
+//! (`placing.rs`), through the steps in order (`steps.rs`); the contact pairs as the deck
+//! defines them; the steps' controls as the run's; the node output requests. What abut does not
+//! model is refused here, naming the definition's file and line; what it reads and does not act
+//! on is listed in [`Scene::deck_notes`].
 
 use std::collections::{BTreeMap, BTreeSet};
 use std::path::Path;
 use std::sync::Arc;
 
 use crate::error::{Error, Result};
-use crate::explicit::{Amplitude, BodyMotion, Material, Motion};
-use crate::io::inp::{At, BoundaryKind, Deck, PairSettings, SurfaceDef};
+use crate::explicit::{Amplitude, BodyMotion, LoadCurve, Material, Prescribed};
+use crate::io::inp::{At, Deck, PairSettings, SurfaceDef};
 use crate::io::MeshData;
 
 use super::spec::{ContactSpec, MaterialSpec, PartSpec, RunSpec, Scene};
 
 mod pieces;
+mod placing;
 mod quasi_static;
 mod rigid;
 mod roles;
 mod specs;
+mod steps;
 
 /// A part of a deck: its mesh (node indices local to the part) and what the deck says about
 /// its elements and nodes.
@@ -48,8 +51,10 @@ pub struct DeckPiece {
     pub loads: Vec<[f64; 3]>,
     /// Each node's held translations.
     pub fixed: Vec<[bool; 3]>,
-    /// Prescribed motions: local node, axis, motion.
-    pub prescribed: Vec<(u32, usize, Motion)>,
+    /// Prescribed motions (node indices local to the part).
+    pub prescribed: Vec<Prescribed>,
+    /// Loads on their own curves (node indices local to the part).
+    pub load_curves: Vec<LoadCurve>,
     /// A rigid part: its body.
     pub rigid: Option<DeckRigid>,
     /// Each node's deck index (for messages and the history).
@@ -123,15 +128,8 @@ fn from_deck(deck: &Deck, file: &str) -> Result<Scene> {
             "the deck has no *STEP: abut runs a deck's *DYNAMIC, EXPLICIT step",
         );
     };
-    if let Some(second) = a.steps.get(1) {
-        return refuse(
-            &second.at,
-            format!(
-                "a second *STEP: abut runs decks of one step so far ({} here)",
-                a.steps.len()
-            ),
-        );
-    }
+    steps::check_controls(&a.steps)?;
+    let several = a.steps.len() > 1;
     let static_step = match step.procedure.as_deref() {
         Some("DYNAMIC EXPLICIT") => false,
         Some("STATIC") => true,
@@ -143,12 +141,16 @@ fn from_deck(deck: &Deck, file: &str) -> Result<Scene> {
         }
         None => return refuse(&step.at, "*STEP without a procedure (*DYNAMIC, EXPLICIT or *STATIC)"),
     };
-    let Some(end_time) = step.time_period.filter(|t| t.is_finite() && *t > 0.0) else {
-        return refuse(
-            &step.at,
-            "*DYNAMIC, EXPLICIT needs a positive time period (the data line's second value)",
-        );
-    };
+    for s in &a.steps {
+        if !s.time_period.is_some_and(|t| t.is_finite() && t > 0.0) {
+            return refuse(
+                &s.at,
+                "*DYNAMIC, EXPLICIT needs a positive time period (the data line's second value)",
+            );
+        }
+    }
+    let timeline = steps::Timeline::new(&a.steps);
+    let end_time = timeline.end;
     let scaling = step.mass_scaling.unwrap_or(1.0);
     // materials (densities scaled)
     let mut materials: Vec<(String, Material, f64)> = Vec::new();
@@ -252,25 +254,24 @@ fn from_deck(deck: &Deck, file: &str) -> Result<Scene> {
             (None, None) => Amplitude::step(),
         })
     };
-    // every load follows one curve
+    // loads of one step on one curve scale the solver's loads; else each has its own curve
     let load_amplitudes: BTreeSet<&Option<String>> =
         a.cloads.iter().map(|c| &c.amplitude).collect();
-    if load_amplitudes.len() > 1 {
-        return refuse(
-            &a.cloads[0].at,
-            "*CLOAD with different amplitudes: abut scales every load by one curve",
-        );
-    }
+    let load_curves = several || load_amplitudes.len() > 1;
     let load_factor = match load_amplitudes.first() {
+        _ if load_curves => None,
         Some(name) if name.is_some() || static_step => Some(amplitude(name)),
         _ => None,
     };
+    steps::refuse_across_steps(a, &ref_nodes)?;
+    if several {
+        notes.push(steps::note(a.steps.len(), &timeline));
+    }
     // plane continuum elements, or plane trusses and rigid segments
     let two_d = mesh.elements.iter().any(|e| e.kind.is_planar())
         || a.element_blocks
             .iter()
             .any(|(_, t, _)| matches!(t.as_str(), "T2D2" | "R2D2" | "RAX2"));
-    let mut dropped_rotations = false;
     for (p, rigid) in rigid_of_piece.iter().enumerate() {
         if let Some(k) = *rigid {
             pieces[p].rigid = Some(rigid::body(
@@ -288,73 +289,20 @@ fn from_deck(deck: &Deck, file: &str) -> Result<Scene> {
         rigid_specs.push(rigid::analytical(a, r, &body, mesh)?);
     }
     // boundary conditions, initial velocities and loads on the deformable parts' nodes
-    for b in &a.boundaries {
-        for &n in &b.nodes {
-            if ref_nodes.contains_key(&n) {
-                continue;
-            }
-            let p = piece_of[n as usize];
-            if p == usize::MAX {
-                continue;
-            }
-            if pieces[p].rigid.is_some() {
-                return refuse(
-                    &b.at,
-                    format!(
-                        "*BOUNDARY on node {} of a rigid body: hold or move its reference node",
-                        mesh.node_labels[n as usize]
-                    ),
-                );
-            }
-            let i = local[n as usize] as usize;
-            for d in b.first..=b.last {
-                if d > 3 || (two_d && d == 3) {
-                    dropped_rotations = true;
-                    continue;
-                }
-                let axis = d - 1;
-                let zero = b.value == 0.0 && b.kind == BoundaryKind::Displacement;
-                if zero {
-                    pieces[p].fixed[i][axis] = true;
-                } else {
-                    pieces[p].prescribed.push((
-                        i as u32,
-                        axis,
-                        Motion::Amplitude {
-                            value: b.value,
-                            amplitude: amplitude(&b.amplitude),
-                            velocity: b.kind == BoundaryKind::Velocity,
-                        },
-                    ));
-                }
-            }
-        }
-    }
-    if dropped_rotations {
-        notes.push("*BOUNDARY on degrees of freedom a solid node does not have (rotations, or z in a plane model): not applied, as Abaqus does".into());
-    }
-    for (n, d, v, at) in &a.initial_velocities {
-        let p = piece_of[*n as usize];
-        if ref_nodes.contains_key(n) || p == usize::MAX {
-            continue;
-        }
-        if pieces[p].rigid.is_some() {
-            return refuse(at, "*INITIAL CONDITIONS on a node of a rigid body: give its reference node the velocity");
-        }
-        pieces[p].velocity[local[*n as usize] as usize][d - 1] = *v;
-    }
-    for c in &a.cloads {
-        for &n in &c.nodes {
-            let p = piece_of[n as usize];
-            if ref_nodes.contains_key(&n) || p == usize::MAX {
-                continue;
-            }
-            if pieces[p].rigid.is_some() || c.dof > 3 {
-                return refuse(&c.at, format!("*CLOAD on node {}: loads go on deformable nodes' translations or a rigid body's reference node", mesh.node_labels[n as usize]));
-            }
-            pieces[p].loads[local[n as usize] as usize][c.dof - 1] += c.value;
-        }
-    }
+    let place = placing::Place {
+        a,
+        mesh,
+        piece_of: &piece_of,
+        local: &local,
+        ref_nodes: &ref_nodes,
+        timeline: &timeline,
+        two_d,
+        several,
+        load_curves,
+    };
+    place.boundaries(&mut pieces, &amplitude, &mut notes)?;
+    place.initial_velocities(&mut pieces)?;
+    place.loads(&mut pieces, &amplitude)?;
     // gravity: on every deformable element
     let mut gravity = [0.0; 3];
     for g in &a.gravity {
@@ -416,13 +364,47 @@ fn from_deck(deck: &Deck, file: &str) -> Result<Scene> {
             home[d as usize] = Some((p, k));
         }
     }
-    let node_outputs = super::node_output::requests(
-        &step.node_outputs,
-        &mesh.node_sets,
-        &home,
-        &mesh.node_labels,
-        &mut notes,
-    );
+    // … and each deformable deck element (by label: labels are unique in a deck)
+    let mut by_label = BTreeMap::new();
+    for (p, piece) in pieces.iter().enumerate() {
+        for (k, e) in piece.mesh.elements.iter().enumerate() {
+            if piece.deformable[k] {
+                by_label.insert(e.label, (p, k));
+            }
+        }
+    }
+    let element_home: Vec<Option<(usize, usize)>> = mesh
+        .elements
+        .iter()
+        .map(|e| by_label.get(&e.label).copied())
+        .collect();
+    let element_labels: Vec<u64> = mesh.elements.iter().map(|e| e.label).collect();
+    let (mut node_outputs, mut element_outputs) = (Vec::new(), Vec::new());
+    for (k, s) in a.steps.iter().enumerate() {
+        // a quasi-static step's answer: at the end of its hold
+        let at = quasi_static
+            .as_ref()
+            .map_or(timeline.end_of(k + 1), |q| q.ramp_time + q.hold_time);
+        let step = several.then_some(k + 1);
+        node_outputs.extend(super::deck_output::requests(
+            &s.node_outputs,
+            step,
+            at,
+            &mesh.node_sets,
+            &home,
+            &mesh.node_labels,
+            &mut notes,
+        ));
+        element_outputs.extend(super::deck_output::element_requests(
+            &s.element_outputs,
+            step,
+            at,
+            &mesh.element_sets,
+            &element_home,
+            &element_labels,
+            &mut notes,
+        ));
+    }
     let mut parts = Vec::new();
     for (p, piece) in pieces.into_iter().enumerate() {
         let rigid = piece.rigid.is_some();
@@ -525,6 +507,7 @@ fn from_deck(deck: &Deck, file: &str) -> Result<Scene> {
         .as_ref()
         .map_or(end_time, |q| q.ramp_time + q.hold_time);
     let mut run = RunSpec::for_deck(end_time);
+    run.step_ends = timeline.starts.iter().skip(1).copied().collect();
     run.dt = step.fixed_increment;
     if let Some(s) = step.scale_factor {
         run.safety = s;
@@ -573,6 +556,7 @@ fn from_deck(deck: &Deck, file: &str) -> Result<Scene> {
         quasi_static,
         load_factor,
         node_outputs,
+        element_outputs,
     };
     scene.check_deck()?;
     Ok(scene)

@@ -76,6 +76,7 @@ impl RunSpec {
     pub(in crate::scene) fn for_deck(end_time: f64) -> Self {
         Self {
             end_time,
+            step_ends: Vec::new(),
             safety: default_safety(),
             contact_safety: default_contact_safety(),
             dt: None,

@@ -259,6 +259,12 @@ impl Parser {
         opts: &BTreeMap<String, String>,
         data: &[Line],
     ) -> Result<()> {
+        if self.in_step && self.deck.analysis.steps.len() > 1 {
+            return Err(err(
+                l,
+                "*CONTACT PAIR in a later step: abut's contact pairs act from the start of the run (define them in the model data or the first step)",
+            ));
+        }
         only(
             l,
             kw,
@@ -423,6 +429,9 @@ impl Parser {
             history_every: None,
             field_every: None,
             node_outputs: Vec::new(),
+            element_outputs: Vec::new(),
+            boundary_new: false,
+            cload_new: false,
             at,
         });
         Ok(())

@@ -27,13 +27,8 @@ impl Parser {
                 ))
             }
         };
-        if let Some(op) = opts.get("OP").map(|s| s.to_uppercase()) {
-            if op != "MOD" {
-                return Err(err(
-                    l,
-                    format!("*BOUNDARY: OP={op} is not supported by abut (OP=MOD, the default)"),
-                ));
-            }
+        if self.op_new(l, kw, opts)? {
+            self.step_mut(l, kw)?.boundary_new = true;
         }
         let amplitude = opts.get("AMPLITUDE").map(|s| s.to_uppercase());
         if let Some(a) = &amplitude {
@@ -63,7 +58,7 @@ impl Parser {
                     value,
                     kind,
                     amplitude: amplitude.clone(),
-                    in_step: self.in_step,
+                    step: self.step_number(),
                     at: at.clone(),
                 });
             };
@@ -218,12 +213,16 @@ impl Parser {
         data: &[Line],
     ) -> Result<()> {
         only(l, kw, opts, &["AMPLITUDE", "OP"])?;
+        if self.op_new(l, kw, opts)? {
+            self.step_mut(l, kw)?.cload_new = true;
+        }
         let amplitude = opts.get("AMPLITUDE").map(|s| s.to_uppercase());
         if let Some(a) = &amplitude {
             if !self.deck.analysis.amplitudes.contains_key(a) {
                 return Err(err(l, format!("*CLOAD: amplitude {a} is not defined")));
             }
         }
+        let step = self.step_number();
         for d in data {
             let f = fields(d);
             if f.len() != 3 {
@@ -238,6 +237,7 @@ impl Parser {
                 dof,
                 value,
                 amplitude: amplitude.clone(),
+                step,
                 at,
             });
         }
@@ -285,9 +285,33 @@ impl Parser {
             self.deck.analysis.gravity.push(GravityDef {
                 elset: f[0].to_uppercase(),
                 acceleration: [g * (n[0] * scale), g * (n[1] * scale), g * (n[2] * scale)],
+                step: self.step_number(),
                 at,
             });
         }
         Ok(())
+    }
+
+    /// The step being read (1 for the first `*STEP`), or 0 in the model data.
+    pub(in crate::io::inp) fn step_number(&self) -> usize {
+        if self.in_step {
+            self.deck.analysis.steps.len()
+        } else {
+            0
+        }
+    }
+
+    /// `OP=`: whether it is `NEW` (in a step: what earlier steps gave is removed); `MOD`, the
+    /// default, is false; anything else an error.
+    fn op_new(&self, l: &Line, kw: &str, opts: &BTreeMap<String, String>) -> Result<bool> {
+        match opts.get("OP").map(|s| s.to_uppercase()).as_deref() {
+            None | Some("MOD") => Ok(false),
+            Some("NEW") if self.in_step => Ok(true),
+            Some("NEW") => Err(err(l, format!("*{kw}: OP=NEW belongs in a step"))),
+            Some(op) => Err(err(
+                l,
+                format!("*{kw}: OP={op} is not supported by abut (MOD, the default, or NEW)"),
+            )),
+        }
     }
 }

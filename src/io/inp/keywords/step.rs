@@ -99,9 +99,10 @@ impl Parser {
         Ok(())
     }
 
-    /// `*NODE PRINT`, `*NODE OUTPUT`, `*NODE FILE`: the node set and the variables (one or
-    /// more data lines of names); frequency and print layout options are read and left to
-    /// abut (it writes the variables at the step's end).
+    /// `*NODE PRINT`, `*NODE OUTPUT`, `*NODE FILE` and the element requests `*EL PRINT`,
+    /// `*ELEMENT OUTPUT`, `*EL FILE`: the set and the variables (one or more data lines of
+    /// names); frequency and print layout options are read and left to abut (it writes the
+    /// variables at the step's end).
     pub(in crate::io::inp) fn on_node_output(
         &mut self,
         l: &Line,
@@ -115,6 +116,9 @@ impl Parser {
             opts,
             &[
                 "NSET",
+                "ELSET",
+                "POSITION",
+                "DIRECTIONS",
                 "FREQUENCY",
                 "FREQUENCYF",
                 "TOTALS",
@@ -134,13 +138,22 @@ impl Parser {
             .map(|f| f.to_ascii_uppercase())
             .collect();
         let at = self.at(l);
-        let nset = opts.get("NSET").map(|s| s.to_ascii_uppercase());
-        self.step_mut(l, kw)?.node_outputs.push(NodeOutputDef {
+        let elements = kw.starts_with("EL");
+        let set = opts
+            .get(if elements { "ELSET" } else { "NSET" })
+            .map(|s| s.to_ascii_uppercase());
+        let def = NodeOutputDef {
             keyword: kw.to_string(),
-            nset,
+            nset: set,
             variables,
             at,
-        });
+        };
+        let step = self.step_mut(l, kw)?;
+        if elements {
+            step.element_outputs.push(def);
+        } else {
+            step.node_outputs.push(def);
+        }
         Ok(())
     }
 }
