@@ -1,6 +1,6 @@
 //! Issue 37: decks of deformable hexahedra (C3D8 selectively reduced, C3D8R one point with
-//! hourglass stiffness) run as they are, and their node output requests are written with
-//! Abaqus' names. Two blocks pressed together by loads on the upper one's top, as a `*STATIC`
+//! hourglass stiffness) run as they are, and their node, element and contact output requests
+//! are written with Abaqus' names. Two blocks pressed together by loads on the upper one's top, as a `*STATIC`
 //! deck, meshed with distorted hexahedra: the static answer is exact for the elements (a
 //! uniform stress passes the patch test) and for the linear pressure–overclosure law, so the
 //! displacements and reactions are checked against it.
@@ -153,7 +153,12 @@ fn hexahedral_blocks_pressed_together_reach_the_static_answer_and_print_it() {
     for (lower, upper) in [("C3D8", "C3D8"), ("C3D8R", "C3D8R"), ("C3D8", "C3D8R")] {
         let scene = deck(
             "hex-blocks.inp",
-            &blocks_deck(3, lower, upper, "*EL PRINT, ELSET=UPPER\nS, ELSE, E\n"),
+            &blocks_deck(
+                3,
+                lower,
+                upper,
+                "*EL PRINT, ELSET=UPPER\nS, ELSE, E\n*CONTACT PRINT\nCSTRESS, CDISP, CELS\n",
+            ),
         )
         .unwrap();
         let dir = std::env::temp_dir().join(format!(
@@ -223,6 +228,26 @@ fn hexahedral_blocks_pressed_together_reach_the_static_answer_and_print_it() {
                 .deck_notes
                 .iter()
                 .any(|n| n.contains("EL PRINT: E not written")),
+            "{:?}",
+            summary.deck_notes
+        );
+        // every slave node: the uniform pressure, and the overclosure p/k it takes (COPEN
+        // negative, to f32's resolution of the gap)
+        let (header, rows) = read_csv(&dir.join("contact-print-ALL.csv"));
+        assert_eq!(
+            header,
+            ["time", "node", "CPRESS", "CSHEAR1", "CSHEAR2", "COPEN"]
+        );
+        assert_eq!(rows.len(), 16);
+        for r in &rows {
+            approx::assert_relative_eq!(r[2], LOAD, max_relative = 1e-4);
+            approx::assert_relative_eq!(r[5], -LOAD / K_CONTACT, max_relative = 1e-3);
+        }
+        assert!(
+            summary
+                .deck_notes
+                .iter()
+                .any(|n| n.contains("CONTACT PRINT: CELS not written")),
             "{:?}",
             summary.deck_notes
         );

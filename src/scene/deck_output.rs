@@ -8,6 +8,9 @@
 //! - Elements (`*EL PRINT`, `*ELEMENT OUTPUT`, `*EL FILE`): `time,element,S11,…` — `S` (the
 //!   Cauchy stress, S11, S22, S33, S12, S13, S23; a plane quadrilateral's two triangles
 //!   averaged by mass) and `ELSE` (the element's strain energy).
+//! - Contact (`*CONTACT PRINT`, `*CONTACT OUTPUT`, `*CONTACT FILE`): `time,node,CPRESS,…` for
+//!   every slave node — `CSTRESS` (CPRESS, CSHEAR1, CSHEAR2), `CDISP` (COPEN), `CSTATUS`
+//!   (0 open, 1 stick, 2 slip).
 //!
 //! The variables abut does not write are named in the deck notes.
 
@@ -33,6 +36,24 @@ pub struct ElementOutput {
     /// label.
     pub elements: Vec<(usize, usize, u64)>,
     /// The variables, in the request's order (of [`ELEMENT_VARIABLES`]).
+    pub variables: Vec<String>,
+    /// When it is written: its step's end (total time).
+    pub at_time: f64,
+}
+
+/// The contact variables abut writes, with their columns.
+pub const CONTACT_VARIABLES: [(&str, &[&str]); 3] = [
+    ("CSTRESS", &["CPRESS", "CSHEAR1", "CSHEAR2"]),
+    ("CDISP", &["COPEN"]),
+    ("CSTATUS", &["CSTATUS"]),
+];
+
+/// One contact output request as the run writes it: every slave node.
+#[derive(Clone, Debug, PartialEq)]
+pub struct ContactOutput {
+    /// The file name under the output directory (`contact-print-ALL.csv`).
+    pub file: String,
+    /// The variables, in the request's order (of [`CONTACT_VARIABLES`]).
     pub variables: Vec<String>,
     /// When it is written: its step's end (total time).
     pub at_time: f64,
@@ -356,6 +377,97 @@ pub(super) fn elements_due(
                         })
                         .sum();
                     row.push(format!("{w:e}"));
+                }
+            }
+            text += &row.join(",");
+            text.push('\n');
+        }
+        files.push((o.file.clone(), text));
+    }
+    files
+}
+
+/// A step's contact requests as outputs written at `at_time` (every slave node; `pairs`:
+/// whether the deck has contact pairs, else nothing is written and the notes say so).
+pub(super) fn contact_requests(
+    defs: &[NodeOutputDef],
+    step: Option<usize>,
+    at_time: f64,
+    pairs: bool,
+    notes: &mut Vec<String>,
+) -> Vec<ContactOutput> {
+    let names: Vec<&str> = CONTACT_VARIABLES.iter().map(|(n, _)| *n).collect();
+    let mut outputs: Vec<ContactOutput> = Vec::new();
+    for d in defs {
+        let variables = written(d, &names, notes);
+        if !pairs {
+            notes.push(format!(
+                "{}: *{}: the deck has no contact pair; nothing written",
+                d.at, d.keyword
+            ));
+            continue;
+        }
+        if variables.is_empty() {
+            continue;
+        }
+        let file = file_name(d, step, outputs.iter().map(|o| &o.file));
+        notes.push(format!(
+            "{}: *{}: {} of every slave node at the step's end ({at_time:e}), in {file} (with --output)",
+            d.at,
+            d.keyword,
+            variables.join(", ")
+        ));
+        outputs.push(ContactOutput {
+            file,
+            variables,
+            at_time,
+        });
+    }
+    outputs
+}
+
+/// Whether a contact request after the first `done` falls due by `time`.
+pub(super) fn contact_due(outputs: &[ContactOutput], done: usize, time: f64) -> bool {
+    outputs
+        .get(done)
+        .is_some_and(|o| time >= o.at_time * (1.0 - 1e-12))
+}
+
+/// Each contact request due by `time` after the first `done`, from the contact `frame` of the
+/// last increment, as its file name and text; `label` gives a model node's deck label.
+pub(super) fn contact_files(
+    outputs: &[ContactOutput],
+    done: usize,
+    time: f64,
+    frame: &crate::io::vtk::Frame,
+    label: &dyn Fn(usize) -> u64,
+) -> Vec<(String, String)> {
+    let mut files = Vec::new();
+    for o in outputs.iter().skip(done) {
+        if time < o.at_time * (1.0 - 1e-12) {
+            break;
+        }
+        let mut header = vec!["time".to_string(), "node".to_string()];
+        for v in &o.variables {
+            let columns = CONTACT_VARIABLES
+                .iter()
+                .find(|(n, _)| n == v)
+                .map_or(&[][..], |(_, c)| *c);
+            header.extend(columns.iter().map(|c| c.to_string()));
+        }
+        let mut text = header.join(",") + "\n";
+        for &n in &frame.slaves {
+            let n = n as usize;
+            let mut row = vec![format!("{time:e}"), label(n).to_string()];
+            for v in &o.variables {
+                match v.as_str() {
+                    "CSTRESS" => row.extend(
+                        [frame.cpress[n], frame.cshear1[n], frame.cshear2[n]]
+                            .iter()
+                            .map(|x| format!("{x:e}")),
+                    ),
+                    "CDISP" => row.push(format!("{:e}", frame.copen[n])),
+                    _ => row.push(frame.cstatus[n].to_string()),
                 }
             }
             text += &row.join(",");

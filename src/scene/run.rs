@@ -77,7 +77,7 @@ pub(super) fn run_into(
         history,
         series,
         node_files: Vec::new(),
-        outputs_done: (0, 0),
+        outputs_done: (0, 0, 0),
     };
     increments::run(&mut account, &mut one, device, progress)?;
     let OneProcess {
@@ -133,8 +133,8 @@ struct OneProcess<'a> {
     series: Option<crate::io::vtk::Series>,
     /// A deck's node and element output files as their steps ended (name, text).
     node_files: Vec<(String, String)>,
-    /// How many of the deck's node and element requests are written.
-    outputs_done: (usize, usize),
+    /// How many of the deck's node, element and contact requests are written.
+    outputs_done: (usize, usize, usize),
 }
 
 impl Ranks for OneProcess<'_> {
@@ -146,7 +146,14 @@ impl Ranks for OneProcess<'_> {
         // the output variables only when a VTK frame or the final pressures need them
         if let Some(c) = self.contact.as_mut() {
             let frame = self.series.is_some() && (k + 1).is_multiple_of(self.scene.run.vtk_every);
-            c.request_outputs(last || frame);
+            // a deck's contact output falls due at the end of this increment
+            let printed = self.history.is_some()
+                && super::deck_output::contact_due(
+                    &self.scene.contact_outputs,
+                    self.outputs_done.2,
+                    self.solver.time + step,
+                );
+            c.request_outputs(last || frame || printed);
         }
         let t_start = self.solver.time;
         self.solver.step(step, self.contact.as_mut())?;
@@ -224,9 +231,39 @@ impl Ranks for OneProcess<'_> {
             self.outputs_done.1 += elements.len();
             self.node_files.extend(nodes);
             self.node_files.extend(elements);
+            let due = &self.scene.contact_outputs;
+            if let (true, Some(c)) = (
+                super::deck_output::contact_due(due, self.outputs_done.2, s.time),
+                self.contact.as_ref(),
+            ) {
+                let frame = crate::io::vtk::Frame::from_contact(self.model, c, &s.x)?;
+                let label = |n: usize| deck_label(self.scene, self.parts, n);
+                let files = super::deck_output::contact_files(
+                    due,
+                    self.outputs_done.2,
+                    s.time,
+                    &frame,
+                    &label,
+                );
+                self.outputs_done.2 += files.len();
+                self.node_files.extend(files);
+            }
         }
         Ok(())
     }
+}
+
+/// Model node `n`'s label in the deck its part came from (its index + 1 elsewhere).
+fn deck_label(scene: &Scene, parts: &[PartNodes], n: usize) -> u64 {
+    parts
+        .iter()
+        .zip(&scene.part)
+        .find(|(p, _)| n >= p.base && n < p.base + p.count)
+        .and_then(|(p, spec)| {
+            let piece = spec.deck.as_ref()?;
+            piece.mesh.node_labels.get(n - p.base).copied()
+        })
+        .unwrap_or(n as u64 + 1)
 }
 
 /// The error of a node that moved past its pair's search radius in the increment `k` from

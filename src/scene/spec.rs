@@ -48,6 +48,9 @@ pub struct Scene {
     /// A deck's element output requests, written at the end under the output directory.
     #[serde(skip)]
     pub element_outputs: Vec<super::deck_output::ElementOutput>,
+    /// A deck's contact output requests, written at the end under the output directory.
+    #[serde(skip)]
+    pub contact_outputs: Vec<super::deck_output::ContactOutput>,
 }
 
 /// How a deck's `*STATIC` step runs: as Abaqus/Explicit users run quasi-static problems, its

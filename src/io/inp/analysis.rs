@@ -164,6 +164,8 @@ pub struct StepDef {
     pub node_outputs: Vec<NodeOutputDef>,
     /// `*EL PRINT`, `*ELEMENT OUTPUT`, `*EL FILE`: element variables asked for, in order.
     pub element_outputs: Vec<NodeOutputDef>,
+    /// `*CONTACT PRINT`, `*CONTACT OUTPUT`, `*CONTACT FILE`: contact variables asked for.
+    pub contact_outputs: Vec<NodeOutputDef>,
     /// A `*BOUNDARY, OP=NEW` in the step: the boundary conditions of earlier steps removed.
     pub boundary_new: bool,
     /// A `*CLOAD, OP=NEW` in the step: the loads of earlier steps removed.

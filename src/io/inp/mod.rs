@@ -437,7 +437,9 @@ fn parse_lines(lines: &[Line]) -> Result<Deck> {
             "FIXED MASS SCALING" => p.on_fixed_mass_scaling(l, &kw, &opts, data)?,
             "OUTPUT" => p.on_output(l, &kw, &opts, data)?,
             "NODE PRINT" | "NODE OUTPUT" | "NODE FILE" | "EL PRINT" | "ELEMENT OUTPUT"
-            | "EL FILE" => p.on_node_output(l, &kw, &opts, data)?,
+            | "EL FILE" | "CONTACT PRINT" | "CONTACT OUTPUT" | "CONTACT FILE" => {
+                p.on_node_output(l, &kw, &opts, data)?
+            }
             "STEP" => p.on_step(l, &kw, &opts, data)?,
             "DYNAMIC" | "STATIC" => p.on_dynamic(l, &kw, &opts, data)?,
             "END STEP" => p.on_end_step(l, &kw, &opts, data)?,

@@ -380,6 +380,7 @@ fn from_deck(deck: &Deck, file: &str) -> Result<Scene> {
         .collect();
     let element_labels: Vec<u64> = mesh.elements.iter().map(|e| e.label).collect();
     let (mut node_outputs, mut element_outputs) = (Vec::new(), Vec::new());
+    let mut contact_outputs = Vec::new();
     for (k, s) in a.steps.iter().enumerate() {
         // a quasi-static step's answer: at the end of its hold
         let at = quasi_static
@@ -393,6 +394,13 @@ fn from_deck(deck: &Deck, file: &str) -> Result<Scene> {
             &mesh.node_sets,
             &home,
             &mesh.node_labels,
+            &mut notes,
+        ));
+        contact_outputs.extend(super::deck_output::contact_requests(
+            &s.contact_outputs,
+            step,
+            at,
+            !deck.pairs.is_empty(),
             &mut notes,
         ));
         element_outputs.extend(super::deck_output::element_requests(
@@ -557,6 +565,7 @@ fn from_deck(deck: &Deck, file: &str) -> Result<Scene> {
         load_factor,
         node_outputs,
         element_outputs,
+        contact_outputs,
     };
     scene.check_deck()?;
     Ok(scene)

@@ -430,6 +430,7 @@ impl Parser {
             field_every: None,
             node_outputs: Vec::new(),
             element_outputs: Vec::new(),
+            contact_outputs: Vec::new(),
             boundary_new: false,
             cload_new: false,
             at,

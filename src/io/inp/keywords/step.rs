@@ -99,10 +99,11 @@ impl Parser {
         Ok(())
     }
 
-    /// `*NODE PRINT`, `*NODE OUTPUT`, `*NODE FILE` and the element requests `*EL PRINT`,
-    /// `*ELEMENT OUTPUT`, `*EL FILE`: the set and the variables (one or more data lines of
-    /// names); frequency and print layout options are read and left to abut (it writes the
-    /// variables at the step's end).
+    /// `*NODE PRINT`, `*NODE OUTPUT`, `*NODE FILE`, the element requests `*EL PRINT`,
+    /// `*ELEMENT OUTPUT`, `*EL FILE` and the contact ones `*CONTACT PRINT`, `*CONTACT OUTPUT`,
+    /// `*CONTACT FILE`: the set and the variables (one or more data lines of names); frequency,
+    /// surface and print layout options are read and left to abut (it writes the variables at
+    /// the step's end, contact ones for every slave node).
     pub(in crate::io::inp) fn on_node_output(
         &mut self,
         l: &Line,
@@ -117,6 +118,10 @@ impl Parser {
             &[
                 "NSET",
                 "ELSET",
+                "SLAVE",
+                "MASTER",
+                "SURFACE",
+                "CPSET",
                 "POSITION",
                 "DIRECTIONS",
                 "FREQUENCY",
@@ -149,7 +154,9 @@ impl Parser {
             at,
         };
         let step = self.step_mut(l, kw)?;
-        if elements {
+        if kw.starts_with("CONTACT") {
+            step.contact_outputs.push(def);
+        } else if elements {
             step.element_outputs.push(def);
         } else {
             step.node_outputs.push(def);
