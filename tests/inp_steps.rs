@@ -297,3 +297,33 @@ fn what_cannot_run_across_steps_is_refused_by_name_and_line() {
     let e = deck("refused-steps.inp", &pair).unwrap_err().to_string();
     assert!(e.contains("*CONTACT PAIR in a later step"), "{e}");
 }
+
+#[test]
+fn a_node_output_under_history_output_is_a_time_series_of_its_step() {
+    // `*OUTPUT, HISTORY, FREQUENCY=10` in step 1: a row every 10 increments while it runs
+    let text = mass_deck("").replacen(
+        "*CLOAD\nP, 1",
+        "*OUTPUT, HISTORY, FREQUENCY=10\n*NODE OUTPUT, NSET=P\nU\n*CLOAD\nP, 1",
+        1,
+    );
+    // every step shares the first's output cadence
+    let text = text.replacen(
+        &format!("{DT:?}, {T2:?}\n"),
+        &format!("{DT:?}, {T2:?}\n*OUTPUT, HISTORY, FREQUENCY=10\n"),
+        1,
+    );
+    let scene = deck("history.inp", &text).unwrap();
+    let (_, files) = run_with_outputs(&scene, "history");
+    let rows = &files["node-output-P-step1.csv"];
+    assert_eq!(rows[0], ["time", "node", "U1", "U2", "U3"]);
+    assert_eq!(
+        rows.len() - 1,
+        10,
+        "one row per 10 increments of step 1's 100"
+    );
+    for r in &rows[1..] {
+        let t: f64 = r[0].parse().unwrap();
+        let u: f64 = r[2].parse().unwrap();
+        approx::assert_relative_eq!(u, 0.5 * F / M * t * t, max_relative = 1e-9);
+    }
+}

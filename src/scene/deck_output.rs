@@ -79,6 +79,21 @@ pub struct NodeOutput {
     pub variables: Vec<String>,
     /// When it is written: its step's end (total time).
     pub at_time: f64,
+    /// Its step's start (total time).
+    pub from_time: f64,
+    /// A history request (after `*OUTPUT, HISTORY`): a row at every history row of its step.
+    pub history: bool,
+}
+
+/// A step's place on the run's time line, for its requests.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(super) struct When {
+    /// The step's number, in the file names when the deck has several.
+    pub step: Option<usize>,
+    /// Its start (total time).
+    pub from: f64,
+    /// When its requests are written: its end (a quasi-static step's: the hold's end).
+    pub at: f64,
 }
 
 /// The variables of request `d` abut writes (of `names`); the others named in `notes`.
@@ -125,8 +140,7 @@ fn file_name<'a>(
 /// variables kept when abut writes them; what is left out is said in `notes`.
 pub(super) fn requests(
     defs: &[NodeOutputDef],
-    step: Option<usize>,
-    at_time: f64,
+    when: When,
     node_sets: &std::collections::BTreeMap<String, Vec<u32>>,
     home: &[Option<(usize, usize)>],
     labels: &[u64],
@@ -169,9 +183,14 @@ pub(super) fn requests(
         if variables.is_empty() || nodes.is_empty() {
             continue;
         }
-        let file = file_name(d, step, outputs.iter().map(|o| &o.file));
+        let file = file_name(d, when.step, outputs.iter().map(|o| &o.file));
+        let at = if d.history {
+            "at every history row of the step".to_string()
+        } else {
+            format!("at the step's end ({:e})", when.at)
+        };
         notes.push(format!(
-            "{}: *{}: {} of {} nodes at the step's end ({at_time:e}), in {file} (with --output)",
+            "{}: *{}: {} of {} nodes {at}, in {file} (with --output)",
             d.at,
             d.keyword,
             variables.join(", "),
@@ -181,7 +200,9 @@ pub(super) fn requests(
             file,
             nodes,
             variables,
-            at_time,
+            at_time: when.at,
+            from_time: when.from,
+            history: d.history,
         });
     }
     outputs
@@ -197,47 +218,61 @@ pub(super) fn due(
     solver: &Solver,
     x0: &[[f64; 3]],
 ) -> Vec<(String, String)> {
+    let mut files = Vec::new();
+    for o in outputs.iter().skip(done) {
+        if solver.time < o.at_time * (1.0 - 1e-12) {
+            break;
+        }
+        let text = header(o) + &rows(o, parts, solver, x0);
+        files.push((o.file.clone(), text));
+    }
+    files
+}
+
+/// A node request's header line.
+pub(super) fn header(o: &NodeOutput) -> String {
+    let mut header = vec!["time".to_string(), "node".to_string()];
+    for v in &o.variables {
+        header.extend((1..=3).map(|k| format!("{v}{k}")));
+    }
+    header.join(",") + "\n"
+}
+
+/// A node request's rows now: the solver's state, displacements from `x0`.
+pub(super) fn rows(
+    o: &NodeOutput,
+    parts: &[PartNodes],
+    solver: &Solver,
+    x0: &[[f64; 3]],
+) -> String {
     let factor = solver
         .load_factor
         .as_ref()
         .map_or(1.0, |f| f.value(solver.time));
     // the curves' loads as they acted up to now (a step's at its end)
     let curves = solver.curve_loads_until_now();
-    let mut files = Vec::new();
-    for o in outputs.iter().skip(done) {
-        if solver.time < o.at_time * (1.0 - 1e-12) {
-            break;
-        }
-        let mut text = String::new();
-        let mut header = vec!["time".to_string(), "node".to_string()];
+    let mut text = String::new();
+    for &(part, local, label) in &o.nodes {
+        let Some(n) = parts.get(part).map(|p| p.base + local) else {
+            continue;
+        };
+        let mut row = vec![format!("{:e}", solver.time), label.to_string()];
         for v in &o.variables {
-            header.extend((1..=3).map(|k| format!("{v}{k}")));
-        }
-        text += &header.join(",");
-        text.push('\n');
-        for &(part, local, label) in &o.nodes {
-            let Some(n) = parts.get(part).map(|p| p.base + local) else {
-                continue;
+            let value: [f64; 3] = match v.as_str() {
+                "U" => std::array::from_fn(|a| solver.x[n][a] - x0[n][a]),
+                "V" => solver.v[n],
+                "RF" => solver.reaction[n],
+                "CF" => std::array::from_fn(|a| {
+                    factor * solver.loads[n][a] + curves.get(n).map_or(0.0, |c| c[a])
+                }),
+                _ => solver.x[n],
             };
-            let mut row = vec![format!("{:e}", solver.time), label.to_string()];
-            for v in &o.variables {
-                let value: [f64; 3] = match v.as_str() {
-                    "U" => std::array::from_fn(|a| solver.x[n][a] - x0[n][a]),
-                    "V" => solver.v[n],
-                    "RF" => solver.reaction[n],
-                    "CF" => std::array::from_fn(|a| {
-                        factor * solver.loads[n][a] + curves.get(n).map_or(0.0, |c| c[a])
-                    }),
-                    _ => solver.x[n],
-                };
-                row.extend(value.iter().map(|x| format!("{x:e}")));
-            }
-            text += &row.join(",");
-            text.push('\n');
+            row.extend(value.iter().map(|x| format!("{x:e}")));
         }
-        files.push((o.file.clone(), text));
+        text += &row.join(",");
+        text.push('\n');
     }
-    files
+    text
 }
 
 /// Writes the kept files under `dir`.
@@ -255,8 +290,7 @@ pub(super) fn write(dir: &Path, files: &[(String, String)]) -> std::io::Result<(
 /// writes them.
 pub(super) fn element_requests(
     defs: &[NodeOutputDef],
-    step: Option<usize>,
-    at_time: f64,
+    when: When,
     element_sets: &std::collections::BTreeMap<String, Vec<u32>>,
     home: &[Option<(usize, usize)>],
     labels: &[u64],
@@ -298,19 +332,20 @@ pub(super) fn element_requests(
         if variables.is_empty() || elements.is_empty() {
             continue;
         }
-        let file = file_name(d, step, outputs.iter().map(|o| &o.file));
+        let file = file_name(d, when.step, outputs.iter().map(|o| &o.file));
         notes.push(format!(
-            "{}: *{}: {} of {} elements at the step's end ({at_time:e}), in {file} (with --output)",
+            "{}: *{}: {} of {} elements at the step's end ({:e}), in {file} (with --output)",
             d.at,
             d.keyword,
             variables.join(", "),
-            elements.len()
+            elements.len(),
+            when.at
         ));
         outputs.push(ElementOutput {
             file,
             elements,
             variables,
-            at_time,
+            at_time: when.at,
         });
     }
     outputs
@@ -391,8 +426,7 @@ pub(super) fn elements_due(
 /// whether the deck has contact pairs, else nothing is written and the notes say so).
 pub(super) fn contact_requests(
     defs: &[NodeOutputDef],
-    step: Option<usize>,
-    at_time: f64,
+    when: When,
     pairs: bool,
     notes: &mut Vec<String>,
 ) -> Vec<ContactOutput> {
@@ -410,17 +444,18 @@ pub(super) fn contact_requests(
         if variables.is_empty() {
             continue;
         }
-        let file = file_name(d, step, outputs.iter().map(|o| &o.file));
+        let file = file_name(d, when.step, outputs.iter().map(|o| &o.file));
         notes.push(format!(
-            "{}: *{}: {} of every slave node at the step's end ({at_time:e}), in {file} (with --output)",
+            "{}: *{}: {} of every slave node at the step's end ({:e}), in {file} (with --output)",
             d.at,
             d.keyword,
-            variables.join(", ")
+            variables.join(", "),
+            when.at
         ));
         outputs.push(ContactOutput {
             file,
             variables,
-            at_time,
+            at_time: when.at,
         });
     }
     outputs

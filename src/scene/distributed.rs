@@ -478,11 +478,14 @@ fn run_into(
                 .into(),
         );
     }
-    let files = scene.node_outputs.iter().map(|o| &o.file);
-    for file in files.chain(scene.element_outputs.iter().map(|o| &o.file)) {
+    let nodes = scene.node_outputs.iter().chain(&scene.node_histories);
+    let files = nodes
+        .map(|o| &o.file)
+        .chain(scene.element_outputs.iter().map(|o| &o.file));
+    for file in files.chain(scene.contact_outputs.iter().map(|o| &o.file)) {
         warnings.push(format!(
-            "{file}: a distributed run writes no deck node or element output (run the deck in \
-             one process for it)"
+            "{file}: a distributed run writes no deck output request (run the deck in one \
+             process for it)"
         ));
     }
     let [kinetic, internal, external_work, contact_work, _] = energy;

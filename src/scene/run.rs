@@ -78,6 +78,11 @@ pub(super) fn run_into(
         series,
         node_files: Vec::new(),
         outputs_done: (0, 0, 0),
+        history_texts: scene
+            .node_histories
+            .iter()
+            .map(super::deck_output::header)
+            .collect(),
     };
     increments::run(&mut account, &mut one, device, progress)?;
     let OneProcess {
@@ -86,9 +91,12 @@ pub(super) fn run_into(
         history,
         series,
         at_peak,
-        node_files,
+        mut node_files,
+        history_texts,
         ..
     } = one;
+    let histories = scene.node_histories.iter().map(|o| o.file.clone());
+    node_files.extend(histories.zip(history_texts));
     let ends = ends(
         device,
         built_list,
@@ -135,6 +143,8 @@ struct OneProcess<'a> {
     node_files: Vec<(String, String)>,
     /// How many of the deck's node, element and contact requests are written.
     outputs_done: (usize, usize, usize),
+    /// A deck's node history requests' text so far (header and rows).
+    history_texts: Vec<String>,
 }
 
 impl Ranks for OneProcess<'_> {
@@ -212,6 +222,20 @@ impl Ranks for OneProcess<'_> {
         if let (Some(f), true) = (self.history.as_mut(), row) {
             let line = history_row(s, self.x0, self.bodies0, self.parts, self.bodies, force);
             writeln!(f, "{line}").map_err(output_error)?;
+        }
+        if let (true, Some(_)) = (row, self.history.as_ref()) {
+            // a deck's history requests: rows while their step runs
+            for (o, text) in self
+                .scene
+                .node_histories
+                .iter()
+                .zip(&mut self.history_texts)
+            {
+                let t = s.time;
+                if t > o.from_time * (1.0 + 1e-12) && t <= o.at_time * (1.0 + 1e-12) {
+                    *text += &super::deck_output::rows(o, self.parts, s, self.x0);
+                }
+            }
         }
         if self.history.is_some() {
             let nodes = super::deck_output::due(

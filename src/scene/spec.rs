@@ -45,6 +45,9 @@ pub struct Scene {
     /// A deck's node output requests, written at the end under the output directory.
     #[serde(skip)]
     pub node_outputs: Vec<super::deck_output::NodeOutput>,
+    /// A deck's node history requests (after `*OUTPUT, HISTORY`): rows at every history row.
+    #[serde(skip)]
+    pub node_histories: Vec<super::deck_output::NodeOutput>,
     /// A deck's element output requests, written at the end under the output directory.
     #[serde(skip)]
     pub element_outputs: Vec<super::deck_output::ElementOutput>,

@@ -184,6 +184,9 @@ pub struct NodeOutputDef {
     pub nset: Option<String>,
     /// The variables asked for (upper case: `U`, `V`, `A`, `RF`, `CF`, `COORD`, …).
     pub variables: Vec<String>,
+    /// After `*OUTPUT, HISTORY` (a `*NODE OUTPUT` there): a row at every history output of
+    /// the step rather than once at its end.
+    pub history: bool,
     /// Where it is.
     pub at: At,
 }

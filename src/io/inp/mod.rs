@@ -292,6 +292,8 @@ struct Parser {
     current_interaction: Option<String>,
     /// Inside `*STEP` … `*END STEP`.
     in_step: bool,
+    /// The step's last `*OUTPUT` was `HISTORY` (the requests after it are history output).
+    output_history: bool,
     /// Node label → index.
     node_index: BTreeMap<u64, u32>,
     /// Element label → index.
@@ -384,6 +386,7 @@ fn parse_lines(lines: &[Line]) -> Result<Deck> {
         current_material: None,
         current_interaction: None,
         in_step: false,
+        output_history: false,
     };
     let mut i = 0;
     while i < lines.len() {

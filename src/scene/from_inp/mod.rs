@@ -382,15 +382,17 @@ fn from_deck(deck: &Deck, file: &str) -> Result<Scene> {
     let (mut node_outputs, mut element_outputs) = (Vec::new(), Vec::new());
     let mut contact_outputs = Vec::new();
     for (k, s) in a.steps.iter().enumerate() {
-        // a quasi-static step's answer: at the end of its hold
-        let at = quasi_static
-            .as_ref()
-            .map_or(timeline.end_of(k + 1), |q| q.ramp_time + q.hold_time);
-        let step = several.then_some(k + 1);
+        let when = super::deck_output::When {
+            step: several.then_some(k + 1),
+            from: timeline.start(k + 1),
+            // a quasi-static step's answer: at the end of its hold
+            at: quasi_static
+                .as_ref()
+                .map_or(timeline.end_of(k + 1), |q| q.ramp_time + q.hold_time),
+        };
         node_outputs.extend(super::deck_output::requests(
             &s.node_outputs,
-            step,
-            at,
+            when,
             &mesh.node_sets,
             &home,
             &mesh.node_labels,
@@ -398,15 +400,13 @@ fn from_deck(deck: &Deck, file: &str) -> Result<Scene> {
         ));
         contact_outputs.extend(super::deck_output::contact_requests(
             &s.contact_outputs,
-            step,
-            at,
+            when,
             !deck.pairs.is_empty(),
             &mut notes,
         ));
         element_outputs.extend(super::deck_output::element_requests(
             &s.element_outputs,
-            step,
-            at,
+            when,
             &mesh.element_sets,
             &element_home,
             &element_labels,
@@ -563,7 +563,8 @@ fn from_deck(deck: &Deck, file: &str) -> Result<Scene> {
         deck_notes: notes,
         quasi_static,
         load_factor,
-        node_outputs,
+        node_histories: node_outputs.iter().filter(|o| o.history).cloned().collect(),
+        node_outputs: node_outputs.into_iter().filter(|o| !o.history).collect(),
         element_outputs,
         contact_outputs,
     };

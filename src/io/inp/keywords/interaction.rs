@@ -408,6 +408,7 @@ impl Parser {
             return Err(err(l, "*STEP inside a step (missing *END STEP)"));
         }
         self.in_step = true;
+        self.output_history = false;
         self.deck.nlgeom = match opts.get("NLGEOM").map(|s| s.to_uppercase()) {
             None => true,
             // the option alone means YES

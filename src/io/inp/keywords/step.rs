@@ -79,6 +79,7 @@ impl Parser {
             Some(f) => Some(num::<usize>(l, f, "FREQUENCY")?.max(1)),
             None => None,
         };
+        self.output_history = !field;
         let step = self.step_mut(l, kw)?;
         match (every, field) {
             (Some(n), true) => step.field_every = Some(n),
@@ -151,6 +152,7 @@ impl Parser {
             keyword: kw.to_string(),
             nset: set,
             variables,
+            history: self.output_history && kw.ends_with("OUTPUT"),
             at,
         };
         let step = self.step_mut(l, kw)?;
