@@ -212,6 +212,18 @@ fn what_abut_does_not_model_is_refused_by_name_and_line() {
             "node 1 of a rigid body",
             "reference node",
         ),
+        (
+            base.replace(
+                "*STEP, NAME=DROP",
+                "*AMPLITUDE, NAME=RAMP\n0.0, 0.0, 0.3, 1.0\n*STEP, NAME=DROP",
+            )
+            .replace(
+                "*END STEP\n",
+                "*CLOAD, AMPLITUDE=RAMP\n10, 3, 1.0\n*CLOAD\n11, 1, 1.0\n*END STEP\n",
+            ),
+            "a rigid body's loads on another curve",
+            "scales a rigid body's loads by one curve",
+        ),
     ];
     for (text, what, why) in cases {
         let line = text

@@ -264,6 +264,17 @@ fn from_deck(deck: &Deck, file: &str) -> Result<Scene> {
         _ => None,
     };
     steps::refuse_across_steps(a, &ref_nodes)?;
+    // a rigid body's loads follow the one load curve (none here: they would act at once)
+    if let Some(c) = a.cloads.iter().find(|c| {
+        load_curves
+            && (c.amplitude.is_some() || static_step)
+            && c.nodes.iter().any(|n| ref_nodes.contains_key(n))
+    }) {
+        return refuse(
+            &c.at,
+            "*CLOAD on a rigid body's reference node with an amplitude, while other loads follow other curves (several steps or amplitudes): abut scales a rigid body's loads by one curve for the whole model",
+        );
+    }
     if several {
         notes.push(steps::note(a.steps.len(), &timeline));
     }
