@@ -12,7 +12,9 @@
 //!   every slave node — `CSTRESS` (CPRESS, CSHEAR1, CSHEAR2), `CDISP` (COPEN), `CSTATUS`
 //!   (0 open, 1 stick, 2 slip).
 //!
-//! The variables abut does not write are named in the deck notes.
+//! A `*NODE OUTPUT` after `*OUTPUT, HISTORY` is a time series instead: its rows at every history
+//! row of its step. The time column is the run's total time (a quasi-static step's: the explicit
+//! run's). The variables abut does not write are named in the deck notes.
 
 use std::io::Write as _;
 use std::path::Path;
