@@ -167,12 +167,15 @@ impl Contact {
                         v[i][a] += dx[i][a] / dt;
                     }
                 }
-                // the normal force of every pass (the friction limit's)
+                // the normal force every pass transmitted to the slave (the friction limit's):
+                // what the correction applied, not the push it aimed at, which the master's
+                // motion takes its share of
                 if normal_force.is_empty() {
                     normal_force = vec![0.0; c.len()];
                 }
                 for (f, ck) in normal_force.iter_mut().zip(&c) {
-                    *f += ck.force.max(0.0);
+                    let along: f64 = (0..3).map(|a| ck.applied[a] * ck.normal[a]).sum();
+                    *f += along.max(0.0);
                 }
                 first.get_or_insert(c);
             }

@@ -5,8 +5,9 @@
 //! For each penetrating slave node s (overclosure h along the master normal n, at load-transfer
 //! weights w_j), the resisting force that closes it over the increment is
 //! `f_s = m_s·(h − h_s)/dt²` with h_s = 0 (hard) or the overclosure at which the softened law
-//! balances it. Forces `−w_j·f_s·n` and masses `w_j·m_s` go to the master nodes, whose
-//! acceleration correction is `Δa_j = F_j/(m_j + Σ w_j m_s)`; the slave moves by
+//! balances the force the contact transmits (the master's motion takes a share of the push, so
+//! that force is the two-body one, `m*·(h − h_s)/dt²`, not `f_s`). Forces `−w_j·f_s·n` and
+//! masses `w_j·m_s` go to the master nodes, whose acceleration correction is `Δa_j = F_j/(m_j + Σ w_j m_s)`; the slave moves by
 //! `(h − h_s)·n + Σ_j w_j·Δa_j·dt²`, so it ends on the corrected master (to first order in the
 //! facet's rotation; the correction is repeated on the corrected geometry, [`PASSES`] times in
 //! all) and the momentum of slave and masters is unchanged. Positions and velocities are
@@ -16,10 +17,12 @@
 //! coarse slave mesh, master nodes can still penetrate between slave nodes. Balanced pairs run
 //! the correction both ways and weight the two.
 
-use crate::error::{Error, Result};
 use crate::geometry::{closest_on_facet, V3};
-use crate::model::{Analytical, MasterSurface, PressureOverclosure};
+use crate::model::{MasterSurface, PressureOverclosure};
 use crate::search::SearchResult;
+
+mod rigid;
+pub use rigid::{rigid_pass, to_body, to_model};
 
 /// Correction passes of a meshed pair per increment (the first from the search, the others
 /// re-projecting onto the same facets at the corrected positions).
@@ -88,8 +91,16 @@ pub fn softened_target(law: &PressureOverclosure, h: f64, mass: f64, area: f64, 
     0.5 * (lo + hi)
 }
 
+/// Whether a slave at overclosure `h` is pushed at all: past the law's start (softened) or
+/// penetrating (hard).
+fn pushed(law: Option<&PressureOverclosure>, h: f64) -> bool {
+    h > law.map_or(0.0, |l| l.start())
+}
+
 /// The overclosure a correction should leave for a slave at overclosure `h` (0 for hard
-/// contact, the softened law's balance otherwise), or `None` when it needs no push.
+/// contact, the softened law's balance otherwise), or `None` when it needs no push. `mass` is
+/// the slave's effective (two-body) mass: the force the contact transmits for a push of
+/// `h − h'` is `mass·(h − h')/dt²`.
 fn push_target(
     law: Option<&PressureOverclosure>,
     h: f64,
@@ -200,7 +211,49 @@ pub fn anchored_pass(
     correct(masses, &search.slaves, &geometry, areas, law, dt, dx)
 }
 
-/// The correction of the module docs for the slaves' geometry.
+/// The share of a slave's push that the contact transmits when the slaves around it push
+/// alike: the correction adds each pushed slave's mass to its master nodes (`S_j = Σ w_j·m_s`)
+/// and moves the slave onto the master's corrected position, so a push of `h − h'` leaves the
+/// slave `(h − h')·(1 − Σ_j w_j·S_j/(m_j + S_j))` and the contact transmits that times
+/// `m_s/Δt²`. 1 against a fixed master, `m_master/(m_master + m_s)` for one slave on one node.
+fn transmitted_shares(
+    masses: &[f64],
+    slaves: &[u32],
+    geometry: &[Option<SlaveGeometry>],
+    law: Option<&PressureOverclosure>,
+) -> Vec<f64> {
+    let mut added = std::collections::BTreeMap::<u32, f64>::new();
+    for (&s, g) in slaves.iter().zip(geometry) {
+        let Some(g) = g.as_ref().filter(|g| pushed(law, g.overclosure)) else {
+            continue;
+        };
+        for (j, &n) in g.nodes.iter().enumerate() {
+            *added.entry(n).or_insert(0.0) += g.weights[j] * masses[s as usize];
+        }
+    }
+    geometry
+        .iter()
+        .map(|g| {
+            let Some(g) = g.as_ref().filter(|g| pushed(law, g.overclosure)) else {
+                return 1.0;
+            };
+            let taken: f64 = g
+                .nodes
+                .iter()
+                .enumerate()
+                .map(|(j, &n)| {
+                    let s_j = added[&n];
+                    g.weights[j] * s_j / (masses[n as usize] + s_j)
+                })
+                .sum();
+            (1.0 - taken).max(f64::MIN_POSITIVE)
+        })
+        .collect()
+}
+
+/// The correction of the module docs for the slaves' geometry. A softened law is balanced
+/// with the force the contact transmits ([`transmitted_shares`]), so that at rest the law
+/// holds whatever the masses of slave and master.
 fn correct(
     masses: &[f64],
     slaves: &[u32],
@@ -213,11 +266,15 @@ fn correct(
     let mut force = std::collections::BTreeMap::<u32, (V3<f64>, f64)>::new();
     let mut out = vec![SlaveCorrection::default(); slaves.len()];
     let mut push_of = vec![0.0; slaves.len()];
+    let shares = match law {
+        Some(_) => transmitted_shares(masses, slaves, geometry, law),
+        None => vec![1.0; slaves.len()],
+    };
     for (k, (&s, g)) in slaves.iter().zip(geometry).enumerate() {
         let Some(g) = g else { continue };
         let h = g.overclosure;
         let ms = masses[s as usize];
-        let Some(target) = push_target(law, h, ms, areas[k], dt) else {
+        let Some(target) = push_target(law, h, ms * shares[k], areas[k], dt) else {
             continue;
         };
         let fs = ms * (h - target) / (dt * dt);
@@ -281,8 +338,8 @@ pub struct FrictionCorrection {
 /// Coulomb friction of a kinematic pair, after its normal correction (Abaqus' kinematic
 /// friction): each slave in contact gets the tangential force that would stop its relative slip
 /// within the increment, `m*·|v_t|/Δt` with the two-body mass `1/m* = 1/m_s + Σ w_j²/m_j`, but no
-/// more than `μ(|v_t|)·f_n` — `f_n` the normal corrections' force, over their passes — opposite to the slip on the
-/// slave and by the weights on its master facet's nodes. `v` (corrected for the normal) and `x`
+/// more than `μ(|v_t|)·f_n` — `f_n` the normal force the corrections transmitted to the slave,
+/// over their passes — opposite to the slip on the slave and by the weights on its master facet's nodes. `v` (corrected for the normal) and `x`
 /// move by the tangential velocity change (and its `Δt`). Stick is exact (no elastic pre-slip);
 /// the coefficient decays with slip rate as the penalty's does. Returns each slave's friction
 /// force and state and the energy dissipated.
@@ -380,190 +437,4 @@ pub fn facets_from(search: &SearchResult, behind: &mut [bool]) -> Vec<Option<u32
             Some(c.facet)
         })
         .collect()
-}
-
-/// Rotates a body-frame vector into the model frame.
-pub fn to_model(r: &[[f64; 3]; 3], v: V3<f64>) -> V3<f64> {
-    V3::new(
-        r[0][0] * v.x + r[0][1] * v.y + r[0][2] * v.z,
-        r[1][0] * v.x + r[1][1] * v.y + r[1][2] * v.z,
-        r[2][0] * v.x + r[2][1] * v.y + r[2][2] * v.z,
-    )
-}
-
-/// Rotates a model-frame vector into the body frame.
-pub fn to_body(r: &[[f64; 3]; 3], v: V3<f64>) -> V3<f64> {
-    V3::new(
-        r[0][0] * v.x + r[1][0] * v.y + r[2][0] * v.z,
-        r[0][1] * v.x + r[1][1] * v.y + r[2][1] * v.z,
-        r[0][2] * v.x + r[1][2] * v.y + r[2][2] * v.z,
-    )
-}
-
-/// Solves the 6×6 system `a·u = b` by Gaussian elimination with partial pivoting.
-fn solve6(mut a: [[f64; 6]; 6], mut b: [f64; 6]) -> Result<[f64; 6]> {
-    for col in 0..6 {
-        let piv = (col..6)
-            .max_by(|&i, &j| a[i][col].abs().total_cmp(&a[j][col].abs()))
-            .unwrap_or(col);
-        if a[piv][col].abs() == 0.0 {
-            return Err(Error::BadParameter {
-                name: "rigid body inertia",
-                value: "singular".into(),
-                expected: "a solvable generalized mass",
-            });
-        }
-        a.swap(col, piv);
-        b.swap(col, piv);
-        for r in col + 1..6 {
-            let f = a[r][col] / a[col][col];
-            for c in col..6 {
-                a[r][c] -= f * a[col][c];
-            }
-            b[r] -= f * b[col];
-        }
-    }
-    let mut u = [0.0; 6];
-    for r in (0..6).rev() {
-        let mut s = b[r];
-        for c in r + 1..6 {
-            s -= a[r][c] * u[c];
-        }
-        u[r] = s / a[r][r];
-    }
-    Ok(u)
-}
-
-/// The kinematic correction of slaves against a rigid body's analytical surface. Corrects
-/// `x`, `v` (slaves) and `body` in place and returns the per-slave corrections.
-#[allow(clippy::too_many_arguments)]
-pub fn rigid_pass(
-    surface: &Analytical,
-    mass: f64,
-    inertia: &[[f64; 3]; 3],
-    body: &mut BodyState,
-    masses: &[f64],
-    x: &mut [[f64; 3]],
-    v: &mut [[f64; 3]],
-    slaves: &[u32],
-    areas: &[f64],
-    law: Option<&PressureOverclosure>,
-    dt: f64,
-) -> Result<Vec<SlaveCorrection>> {
-    let xb = V3::from_array(body.position);
-    let r = body.rotation;
-    let mut out = vec![SlaveCorrection::default(); slaves.len()];
-    let (mut f, mut m) = (V3::zero(), V3::zero());
-    let mut m_add = 0.0;
-    let mut s1 = V3::zero(); // Σ m r
-    let mut i_add = [[0.0; 3]; 3];
-    let mut active = Vec::new();
-    for (k, &s) in slaves.iter().enumerate() {
-        let p = V3::from_array(x[s as usize]);
-        let (gap, nb) = surface.gap(to_body(&r, p - xb));
-        let h = -gap;
-        let ms = masses[s as usize];
-        let Some(target) = push_target(law, h, ms, areas[k], dt) else {
-            continue;
-        };
-        let n = to_model(&r, nb);
-        let fs = ms * (h - target) / (dt * dt);
-        let rs = p - xb;
-        f = f + n * fs;
-        m = m + rs.cross(n * fs);
-        m_add += ms;
-        s1 = s1 + rs * ms;
-        let r2 = rs.length2();
-        let ra = rs.to_array();
-        for a in 0..3 {
-            for b in 0..3 {
-                i_add[a][b] += ms * (if a == b { r2 } else { 0.0 } - ra[a] * ra[b]);
-            }
-        }
-        out[k] = SlaveCorrection {
-            overclosure: h,
-            target,
-            force: fs,
-            normal: n.to_array(),
-            energy: law.map_or(0.0, |l| law_energy(l, target) * areas[k]),
-            applied: [0.0; 3],
-        };
-        active.push((k, s, n, h - target, rs));
-    }
-    if active.is_empty() {
-        return Ok(out);
-    }
-    // generalized mass of the body with the slaves attached, about its reference point
-    let mut ib = [[0.0; 3]; 3];
-    for a in 0..3 {
-        for b in 0..3 {
-            // R I R^T
-            ib[a][b] = (0..3)
-                .map(|c| {
-                    (0..3)
-                        .map(|d| r[a][c] * inertia[c][d] * r[b][d])
-                        .sum::<f64>()
-                })
-                .sum::<f64>()
-                + i_add[a][b];
-        }
-    }
-    let mt = mass + m_add;
-    let sk = |v: V3<f64>| [[0.0, -v.z, v.y], [v.z, 0.0, -v.x], [-v.y, v.x, 0.0]];
-    let ss = sk(s1);
-    let mut a6 = [[0.0; 6]; 6];
-    for i in 0..3 {
-        a6[i][i] = mt;
-        for j in 0..3 {
-            a6[i][3 + j] = -ss[i][j];
-            a6[3 + i][j] = ss[i][j];
-            a6[3 + i][3 + j] = ib[i][j];
-        }
-    }
-    let u = solve6(a6, [f.x, f.y, f.z, m.x, m.y, m.z])?;
-    let (da, dal) = (V3::new(u[0], u[1], u[2]), V3::new(u[3], u[4], u[5]));
-    // reaction on the body is −f; the solve above is for the slaves' push; the body (with the
-    // slaves attached) accelerates by −da, −dal
-    let (da, dal) = (da * -1.0, dal * -1.0);
-    for (k, s, n, push, rs) in &active {
-        let d = *n * *push + (da + dal.cross(*rs)) * (dt * dt);
-        out[*k].applied = (d * (masses[*s as usize] / (dt * dt))).to_array();
-        for c in 0..3 {
-            x[*s as usize][c] += d.to_array()[c];
-            v[*s as usize][c] += d.to_array()[c] / dt;
-        }
-    }
-    let dxb = da * (dt * dt);
-    for c in 0..3 {
-        body.position[c] += dxb.to_array()[c];
-        body.velocity[c] += (da * dt).to_array()[c];
-        body.angular_velocity[c] += (dal * dt).to_array()[c];
-    }
-    body.rotation = rotate(dal * (dt * dt), body.rotation);
-    Ok(out)
-}
-
-/// `exp(skew(θ))·R` (Rodrigues).
-fn rotate(theta: V3<f64>, r: [[f64; 3]; 3]) -> [[f64; 3]; 3] {
-    let ang = theta.length2().sqrt();
-    if ang == 0.0 {
-        return r;
-    }
-    let k = theta * (1.0 / ang);
-    let (s, c) = ang.sin_cos();
-    let kk = [[0.0, -k.z, k.y], [k.z, 0.0, -k.x], [-k.y, k.x, 0.0]];
-    let ka = k.to_array();
-    let mut q = [[0.0; 3]; 3];
-    for i in 0..3 {
-        for j in 0..3 {
-            q[i][j] = if i == j { c } else { 0.0 } + s * kk[i][j] + (1.0 - c) * ka[i] * ka[j];
-        }
-    }
-    let mut out = [[0.0; 3]; 3];
-    for i in 0..3 {
-        for j in 0..3 {
-            out[i][j] = (0..3).map(|l| q[i][l] * r[l][j]).sum();
-        }
-    }
-    out
 }
