@@ -271,7 +271,7 @@ fn element_kind(l: &Line, t: &str) -> Result<(ElementKind, bool)> {
         | "STRI65" | "M3D8" | "M3D8R" | "M3D6") => {
             return Err(err(
                 l,
-                format!("*ELEMENT: TYPE={other} (a quadratic or wedge element) is not supported by abut: its elements are linear (C3D4, CPE3, CAX3, T3D2; Abaqus/Explicit has no C3D20 either)"),
+                format!("*ELEMENT: TYPE={other} (a quadratic or wedge element) is not supported by abut: its elements are linear (C3D4, C3D8(R), CPE3, CPE4(R), CAX3, T3D2; Abaqus/Explicit has no C3D20 either)"),
             ))
         }
         other => {
