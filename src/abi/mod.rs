@@ -15,3 +15,4 @@ pub mod search;
 pub mod shaders;
 pub mod stats;
 pub mod status;
+pub mod traffic;

@@ -15,6 +15,7 @@ use abut::CentralDifference;
 use abut::{Contact, Device, ResidentIo};
 
 use crate::bench::{copy_bandwidth, io_err, machine, scene, BenchArgs, Config};
+use crate::resident_share::{positions, state_buffer, velocities, wgpu_of};
 
 /// Increments timed per mode (after the first).
 const INCREMENTS: usize = 24;
@@ -23,12 +24,12 @@ const H100_BANDWIDTH: f64 = 3.35e12;
 /// Assumed cost of one dispatch (launch and the barrier after it) on such a GPU, seconds.
 const H100_DISPATCH: f64 = 2.0e-6;
 
-/// Compulsory bytes per slave of each compute pass of a local device-resident increment (the
-/// scene has 0.25 master nodes per slave; see `bench::kernel_bytes` for the shared passes).
-fn resident_bytes() -> abut::Result<Vec<(&'static str, f64)>> {
-    let kb = crate::bench::kernel_bytes();
-    let per_master = 0.25;
-    let nodes = 1.0 + per_master;
+/// Compulsory bytes per slave of each compute pass of a local device-resident increment, with
+/// the share `near` of the slaves within the search radius: the sum of each group's declared
+/// kernels (`abi::traffic`) on the bench's plate. The global search's dispatches get zero
+/// workgroups in a local increment.
+pub(crate) fn resident_bytes(near: f64) -> abut::Result<Vec<(&'static str, f64)>> {
+    let kb = crate::bench::kernel_bytes(near);
     let of = |g: &Group| {
         crate::bench::group_bytes(g, &kb).map_err(|value| abut::Error::BadParameter {
             name: "bench pass",
@@ -36,25 +37,19 @@ fn resident_bytes() -> abut::Result<Vec<(&'static str, f64)>> {
             expected: "compulsory bytes for every kernel of the group",
         })
     };
-    Ok(vec![
-        (
-            groups::TO_LOCAL_MOTION_SCHEDULE.label,
-            of(&groups::TO_LOCAL_MOTION_SCHEDULE)?,
-        ),
-        (groups::LOCAL.label, of(&groups::LOCAL)?),
-        // a local increment: every dispatch of the global search gets zero workgroups
-        (groups::GLOBAL_SEARCH.label, 0.0),
-        (groups::NORMALS_PENALTY.label, of(&groups::NORMALS_PENALTY)?),
-        (
-            groups::SCATTER_GATHER_ADD.label,
-            of(&groups::SCATTER_GATHER_ADD)?,
-        ),
-        (groups::STATS_PAIR.label, 0.0),
-        // bound_max: pair node and row per pair node
-        (groups::STATS_FINISH.label, 20.0 * nodes),
-        // integrate: position, velocity and force read and written, mass read, per node
-        (groups::INTEGRATOR.label, 100.0 * nodes),
-    ])
+    let mut out = vec![(groups::GLOBAL_SEARCH.label, 0.0)];
+    for g in [
+        &groups::TO_LOCAL_MOTION_SCHEDULE,
+        &groups::LOCAL,
+        &groups::NORMALS_PENALTY,
+        &groups::SCATTER_GATHER_ADD,
+        &groups::STATS_PAIR,
+        &groups::STATS_FINISH,
+        &groups::INTEGRATOR,
+    ] {
+        out.push((g.label, of(g)?));
+    }
+    Ok(out)
 }
 
 /// One mode's measurements at one size on one device.
@@ -171,37 +166,13 @@ fn host_arrays(device: &Device, c: &Config) -> abut::Result<Measured> {
 
 fn resident(device: &Device, c: &Config) -> abut::Result<Measured> {
     let sc = scene(c)?;
-    let Some((d, q)) = device.wgpu() else {
-        return Err(abut::Error::BadParameter {
-            name: "device",
-            value: "CPU path".into(),
-            expected: "a GPU adapter",
-        });
-    };
+    let (d, q) = wgpu_of(device)?;
     let n_nodes = sc.model.positions().len();
-    let x0: Vec<[f32; 4]> = sc
-        .model
-        .positions()
-        .iter()
-        .map(|p| [p[0] as f32, p[1] as f32, p[2] as f32, 0.0])
-        .collect();
-    let mut v0 = vec![[0.0f32; 4]; n_nodes];
-    for v in &mut v0[sc.first..] {
-        *v = [sc.u as f32, 0.0, -sc.v0 as f32, 0.0];
-    }
+    let (x0, v0) = (positions(&sc), velocities(&sc));
     let drops = sc.first as u32..n_nodes as u32;
     let run = |timed: bool| -> abut::Result<(f64, [f64; 7], abut::Traffic)> {
         device.enable_timestamps(timed);
-        let make = |data: &[[f32; 4]]| {
-            let b = d.create_buffer(&wgpu::BufferDescriptor {
-                label: Some("bench state"),
-                size: (n_nodes * 16) as u64,
-                usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST,
-                mapped_at_creation: false,
-            });
-            q.write_buffer(&b, 0, bytemuck::cast_slice(data));
-            b
-        };
+        let make = |data: &[[f32; 4]]| state_buffer(d, q, data);
         let (x, v, f) = (make(&x0), make(&v0), make(&vec![[0.0; 4]; n_nodes]));
         let mut contact = Contact::new(device, &sc.model)?;
         let mut integ = CentralDifference::new(device, sc.model.masses())?;
@@ -329,7 +300,12 @@ pub fn run(a: &BenchArgs) -> abut::Result<()> {
     } else {
         &[10_000, 100_000, 1_000_000]
     };
-    let bytes: std::collections::HashMap<&str, f64> = resident_bytes()?.into_iter().collect();
+    let share_sizes: &[usize] = if a.quick {
+        &[10_000]
+    } else {
+        &[100_000, 1_000_000]
+    };
+    let bytes: std::collections::HashMap<&str, f64> = resident_bytes(1.0)?.into_iter().collect();
     let mut md = String::new();
     let _ = writeln!(
         md,
@@ -435,6 +411,7 @@ pub fn run(a: &BenchArgs) -> abut::Result<()> {
         md.push_str(&detail);
         md.push('\n');
     }
+    md.push_str(&crate::resident_share::section(&devices, share_sizes)?);
     let _ = writeln!(
         md,
         "The H100 estimate is the compulsory bytes of a local increment (the table's passes, {:.0} B \

@@ -3,71 +3,32 @@
 
 use super::*;
 
+/// The bench scene's contact surface: a plate of quads with about four slaves per facet.
+pub(crate) const PLATE: abut::testing::abi::traffic::Topology =
+    abut::testing::abi::traffic::Topology {
+        masters_per_slave: 0.25,
+        facets_per_node: 4.0,
+        nodes_per_facet: 4.0,
+    };
+
 /// Bytes each kernel of a steady penalty increment (local search) reads and writes per slave
-/// node on this scene — the compulsory traffic of its storage bindings, from the layout types:
-/// a node is 16 B (vec4<f32>), a hit `GpuHit` (64 B), a facet 16 B (four u32), a contact output
-/// `ContactOut`, a quad facet touches 4 nodes; a plate node has 4 facets; there are about 4
-/// slaves per facet and per master node (the scene's ratio).
-pub(crate) fn kernel_bytes() -> Vec<(&'static str, f64)> {
-    use abut::testing::abi::passes;
-    // (kernel, bytes per slave); the groups that run them are in PASSES
-    let node = 16.0;
-    let hit = std::mem::size_of::<abut::testing::abi::search::GpuHit>() as f64;
-    let out = std::mem::size_of::<abut::testing::abi::penalty::ContactOut>() as f64;
-    let facet = 16.0;
-    let per_master = 0.25; // master nodes (or facets) per slave
-    let nodes = 1.0 + per_master; // slaves and master nodes, per slave
-    vec![
-        // the caller's positions in (16 B) and the frame's nodes out (16 B), per node
-        (passes::TO_LOCAL.entry, 32.0 * nodes),
-        // positions now and at the last global search, of slaves and master nodes
-        (
-            passes::MOTION.entry,
-            (2.0 * node) * (1.0 + per_master) + 4.0,
-        ),
-        // the hit in and out, the tracked node's 4 facets with their 4 nodes
-        (
-            passes::LOCAL_SEARCH.entry,
-            2.0 * hit + 4.0 * (facet + 4.0 * node) + 4.0,
-        ),
-        // per master node: its facets and their nodes, the normal out
-        (
-            passes::NODAL_NORMALS.entry,
-            per_master * (4.0 * (facet + 4.0 * node) + node),
-        ),
-        // hit, node, velocity, the facet's 4 nodes and normals, state in/out, output out
-        (
-            passes::PENALTY.entry,
-            hit + 2.0 * node + 8.0 * node + 2.0 * 32.0 + out,
-        ),
-        // each slave in contact: its output's force, status and bound shares (28 B), its hit's
-        // weights and facet (20 B) and the facet's pair nodes; the 32 B fixed-point sums of each
-        // master node read and written once (the atomics of the slaves sharing a node meet in
-        // cache)
-        (
-            passes::SCATTER_FORCES.entry,
-            28.0 + 20.0 + facet + per_master * 2.0 * 32.0,
-        ),
-        // each pair node: its pair-node record, its sums in and its force and bound row out;
-        // a slave node also reads its own output (28 B)
-        (
-            passes::GATHER.entry,
-            (node + 32.0 + node + 28.0) + per_master * (node + 32.0 + node),
-        ),
-        // each pair node: its record (16 B), its force (16 B), the caller's force read and
-        // written (32 B) and its bound row (8 B)
-        (passes::ADD_FORCES.entry, 72.0 * nodes),
-    ]
+/// node on the bench scene when the share `near` of the slaves is within the search radius —
+/// derived from the passes' declared traffic (`abi::traffic`), for every declared kernel.
+pub(crate) fn kernel_bytes(near: f64) -> Vec<(&'static str, f64)> {
+    use abut::testing::abi::traffic::{bytes_per_slave, DECLARED};
+    DECLARED
+        .iter()
+        .filter_map(|p| Some((p.entry, bytes_per_slave(p, &PLATE, near)?)))
+        .collect()
 }
 
-/// Compulsory bytes per slave of `group` in a steady local increment: the sum over its kernels,
-/// the schedule's one invocation counted as nothing. A kernel with no declared bytes is an error
-/// naming it (a group changed and this table did not).
+/// Compulsory bytes per slave of `group` in a steady local increment: the sum over its kernels.
+/// A kernel with no declared traffic is an error naming it (a group gained a pass whose traffic
+/// `abi::traffic` does not declare).
 pub(crate) fn group_bytes(group: &Group, kb: &[(&'static str, f64)]) -> Result<f64, String> {
     group
         .passes
         .iter()
-        .filter(|p| p.entry != abut::testing::abi::passes::SCHEDULE.entry)
         .map(|p| {
             kb.iter()
                 .find(|e| e.0 == p.entry)

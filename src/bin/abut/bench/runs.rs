@@ -18,10 +18,18 @@ pub(crate) fn scene(c: &Config) -> abut::Result<BenchScene> {
     let travel = u * dt * INCREMENTS as f64;
     let mut pos = Vec::with_capacity(c.slaves);
     let mut z0 = Vec::with_capacity(c.slaves);
-    for _ in 0..c.slaves {
+    let mut near = Vec::with_capacity(c.slaves);
+    for k in 0..c.slaves {
         let z = v0 * dt * rng.range(2.0, 10.0);
         pos.push([rng.range(0.02, 0.98 - travel), rng.range(0.02, 0.98), z]);
-        z0.push(z);
+        // the share c.near falls, spread evenly over the masses; the others hang at 1 + z,
+        // hundreds of facets above the plate
+        let falls = ((k + 1) as f64 * c.near).floor() > (k as f64 * c.near).floor();
+        if !falls {
+            pos[k][2] += 1.0;
+        }
+        near.push(falls);
+        z0.push(pos[k][2]);
     }
     let range = model.add_nodes(&pos, &vec![1.0; c.slaves])?;
     let set = model.add_node_set(&range.to_vec())?;
@@ -61,6 +69,7 @@ pub(crate) fn scene(c: &Config) -> abut::Result<BenchScene> {
         v0,
         u,
         z0,
+        near,
     })
 }
 

@@ -1,0 +1,386 @@
+//! What each pass of a local increment reads and writes per item, declared once beside the
+//! pass table: the records it touches (buffer, bytes from the layout types, how many per item,
+//! for which items) — from which the benchmarks derive each pass's compulsory bytes per slave,
+//! for slaves within the search radius and beyond it, instead of a table written by hand.
+//!
+//! Conventions (those of the compulsory-traffic estimate): a record a pass reads for one item is
+//! counted for that item, even where neighbouring items read the same one (a slave's facet and
+//! its nodes) — except the fixed-point sums of the gather, which the slaves sharing a master node
+//! update in cache and which are counted once per master node. The status and statistics words (a few
+//! atomics per workgroup) and the uniforms are not counted. A walk or loop is counted at its minimum
+//! (one step of the local search's walk). The global search's passes are not declared: their
+//! traffic follows the data (tree walks, chunks), and `abut bench --search` measures them.
+
+use crate::abi::passes::{self, Buf, Items, Pass};
+use crate::abi::penalty::ContactOut;
+use crate::abi::search::GpuHit;
+
+/// A `vec4<f32>` or `vec4<u32>` record (a node, a velocity, a normal, a facet), bytes.
+const VEC4: u32 = 16;
+/// A `u32`, bytes.
+const WORD: u32 = 4;
+/// A hit record, bytes.
+const HIT: u32 = std::mem::size_of::<GpuHit>() as u32;
+/// A contact output record, bytes.
+const OUT: u32 = std::mem::size_of::<ContactOut>() as u32;
+/// A slave's penalty state (friction force and area, history), bytes.
+const STATE: u32 = 2 * VEC4;
+/// The part of a contact output the gather reads (force and bound shares), bytes.
+const OUT_FORCE: u32 = 28;
+/// A pair node's fixed-point sums (four 64-bit words), bytes.
+const SUMS: u32 = 32;
+
+/// Which of a pass's items a record is touched for.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Of {
+    /// Every item of the pass.
+    Each,
+    /// Items that are slave nodes (every item of a slave pass).
+    Slave,
+    /// Slave nodes within the search radius (tracked: they have a master node to walk from).
+    NearSlave,
+    /// Slave nodes beyond the search radius.
+    FarSlave,
+    /// Items that are master nodes (of a pass over nodes, pair nodes or watched nodes).
+    Master,
+    /// Once per master node of the pair whatever the items (records shared by the items that
+    /// touch them, updated in cache).
+    EachMasterNode,
+}
+
+/// How many records an item touches.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Per {
+    /// One.
+    One,
+    /// One per node of its facet.
+    FacetNode,
+    /// One per facet around its node.
+    NodeFacet,
+    /// One per node of each facet around its node.
+    NodeFacetNode,
+}
+
+/// Read or written.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Dir {
+    /// Read.
+    Read,
+    /// Written.
+    Write,
+}
+
+/// One kind of record a pass touches.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Touch {
+    /// The buffer it lives in (one of the pass's bindings).
+    pub buf: Buf,
+    /// Read or written.
+    pub dir: Dir,
+    /// Bytes of the record (from the layout types).
+    pub bytes: u32,
+    /// How many per item.
+    pub per: Per,
+    /// For which items.
+    pub of: Of,
+}
+
+const fn t(buf: Buf, dir: Dir, bytes: u32, per: Per, of: Of) -> Touch {
+    Touch {
+        buf,
+        dir,
+        bytes,
+        per,
+        of,
+    }
+}
+
+use Buf::*;
+use Dir::{Read as R, Write as W};
+use Of::*;
+use Per::*;
+
+/// The records `pass` touches per item, or `None` for a pass whose traffic is not declared
+/// (the global search's).
+pub fn touches(pass: &Pass) -> Option<&'static [Touch]> {
+    let list: &'static [Touch] = match pass.entry {
+        // the caller's position in, the frame's node read (its mass) and written, the node's
+        // adjacency range (does it bound the master's box)
+        "to_local" => {
+            const {
+                &[
+                    t(Positions, R, VEC4, One, Each),
+                    t(Nodes, R, VEC4, One, Each),
+                    t(Nodes, W, VEC4, One, Each),
+                    t(Adjacency, R, 2 * WORD, One, Each),
+                ]
+            }
+        }
+        // the node's id; a slave's tracked node (tracked slaves stop there); the others' node
+        // now and at the reference
+        "motion" => {
+            const {
+                &[
+                    t(MotionNodes, R, WORD, One, Each),
+                    t(Hits, R, WORD, One, Slave),
+                    t(Nodes, R, VEC4, One, FarSlave),
+                    t(Reference, R, VEC4, One, FarSlave),
+                    t(Nodes, R, VEC4, One, Master),
+                    t(Reference, R, VEC4, One, Master),
+                ]
+            }
+        }
+        "schedule" | "pair_stats" | "finish_stats" => &[],
+        // the hit (a slave beyond the radius stops there); the slave's node and id, the tracked
+        // node's facet range and facets with their nodes; the hit written back
+        "local_search" => {
+            const {
+                &[
+                    t(Hits, R, HIT, One, Slave),
+                    t(Slaves, R, WORD, One, NearSlave),
+                    t(Nodes, R, VEC4, One, NearSlave),
+                    t(Adjacency, R, 2 * WORD, One, NearSlave),
+                    t(Adjacency, R, WORD, NodeFacet, NearSlave),
+                    t(Facets, R, VEC4, NodeFacet, NearSlave),
+                    t(Nodes, R, VEC4, NodeFacetNode, NearSlave),
+                    t(Hits, W, HIT, One, NearSlave),
+                ]
+            }
+        }
+        // the pair node; a master node's facets with their nodes, its normal out
+        "nodal_normals" => {
+            const {
+                &[
+                    t(PairNodes, R, VEC4, One, Each),
+                    t(PairAdjacency, R, WORD, NodeFacet, Master),
+                    t(Facets, R, VEC4, NodeFacet, Master),
+                    t(Nodes, R, VEC4, NodeFacetNode, Master),
+                    t(Normals, W, VEC4, One, Master),
+                ]
+            }
+        }
+        // the hit, the state in and out, the output out, the slave's velocity (its fast-node
+        // test); in contact, the facet, its nodes' positions, velocities and normals and the
+        // slave's position
+        "penalty" => {
+            const {
+                &[
+                    t(Hits, R, HIT, One, Slave),
+                    t(State, R, STATE, One, Slave),
+                    t(State, W, STATE, One, Slave),
+                    t(Out, W, OUT, One, Slave),
+                    t(Velocities, R, VEC4, One, Slave),
+                    t(Facets, R, VEC4, One, NearSlave),
+                    t(Nodes, R, VEC4, FacetNode, NearSlave),
+                    t(Velocities, R, VEC4, FacetNode, NearSlave),
+                    t(Normals, R, VEC4, FacetNode, NearSlave),
+                    t(Nodes, R, VEC4, One, NearSlave),
+                ]
+            }
+        }
+        // the output and the hit; in contact, the facet's pair nodes, and each master node's
+        // sums read and written (once per node: the slaves sharing it meet in cache)
+        "scatter_forces" => {
+            const {
+                &[
+                    t(Out, R, OUT, One, Slave),
+                    t(Hits, R, HIT, One, Slave),
+                    t(FacetNodes, R, VEC4, One, NearSlave),
+                    t(Acc, R, SUMS, One, EachMasterNode),
+                    t(Acc, W, SUMS, One, EachMasterNode),
+                ]
+            }
+        }
+        // the pair node, a slave's own output, the sums read and zeroed, the force out
+        "gather" => {
+            const {
+                &[
+                    t(PairNodes, R, VEC4, One, Each),
+                    t(Out, R, OUT_FORCE, One, Slave),
+                    t(Acc, R, SUMS, One, Each),
+                    t(Acc, W, SUMS, One, Each),
+                    t(Forces, W, VEC4, One, Each),
+                ]
+            }
+        }
+        // the pair node and its force; the caller's force read and written, the bound row
+        "add_forces" => {
+            const {
+                &[
+                    t(PairNodes, R, VEC4, One, Each),
+                    t(Forces, R, VEC4, One, Each),
+                    t(HostForces, R, VEC4, One, Each),
+                    t(HostForces, W, VEC4, One, Each),
+                    t(Rows, R, WORD, One, Each),
+                    t(Rows, W, WORD, One, Each),
+                ]
+            }
+        }
+        // the pair node and its bound row
+        "bound_max" => {
+            const {
+                &[
+                    t(PairNodes, R, VEC4, One, Each),
+                    t(Rows, R, WORD, One, Each),
+                ]
+            }
+        }
+        // position, velocity and force read and written, the mass read
+        "integrate" => {
+            const {
+                &[
+                    t(Positions, R, VEC4, One, Each),
+                    t(Positions, W, VEC4, One, Each),
+                    t(Velocities, R, VEC4, One, Each),
+                    t(Velocities, W, VEC4, One, Each),
+                    t(HostForces, R, VEC4, One, Each),
+                    t(HostForces, W, VEC4, One, Each),
+                    t(Masses, R, WORD, One, Each),
+                ]
+            }
+        }
+        _ => return None,
+    };
+    Some(list)
+}
+
+/// The shape of a contact surface the declared bytes are evaluated on.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Topology {
+    /// Master nodes per slave node.
+    pub masters_per_slave: f64,
+    /// Facets around a master node.
+    pub facets_per_node: f64,
+    /// Nodes of a facet.
+    pub nodes_per_facet: f64,
+}
+
+impl Topology {
+    /// How many records `per` is for one item.
+    fn count(&self, per: Per) -> f64 {
+        match per {
+            One => 1.0,
+            FacetNode => self.nodes_per_facet,
+            NodeFacet => self.facets_per_node,
+            NodeFacetNode => self.facets_per_node * self.nodes_per_facet,
+        }
+    }
+
+    /// Items of `of` per slave node for a pass over `items`, with `near` the share of slaves
+    /// within the search radius.
+    fn items(&self, items: Items, of: Of, near: f64) -> f64 {
+        let per_slave = match items {
+            Items::Slaves => 1.0,
+            // a pass over nodes, pair nodes or watched nodes: the slaves and the master nodes
+            Items::Nodes | Items::PairNodes | Items::MotionNodes => 1.0 + self.masters_per_slave,
+            _ => 0.0,
+        };
+        match of {
+            Each => per_slave,
+            Slave => per_slave.min(1.0),
+            NearSlave => per_slave.min(1.0) * near,
+            FarSlave => per_slave.min(1.0) * (1.0 - near),
+            Master => (per_slave - 1.0).max(0.0),
+            EachMasterNode => self.masters_per_slave,
+        }
+    }
+}
+
+/// Bytes `pass` reads and writes per slave node on `topology` when the share `near` of the
+/// slaves is within the search radius (0 to 1), or `None` when its traffic is not declared.
+pub fn bytes_per_slave(pass: &Pass, topology: &Topology, near: f64) -> Option<f64> {
+    let touches = touches(pass)?;
+    Some(
+        touches
+            .iter()
+            .map(|t| {
+                topology.items(pass.items, t.of, near) * topology.count(t.per) * t.bytes as f64
+            })
+            .sum(),
+    )
+}
+
+/// The passes whose traffic is declared (a local increment's and the integrator).
+pub const DECLARED: [&Pass; 13] = [
+    &passes::TO_LOCAL,
+    &passes::MOTION,
+    &passes::SCHEDULE,
+    &passes::LOCAL_SEARCH,
+    &passes::NODAL_NORMALS,
+    &passes::PENALTY,
+    &passes::SCATTER_FORCES,
+    &passes::GATHER,
+    &passes::ADD_FORCES,
+    &passes::PAIR_STATS,
+    &passes::BOUND_MAX,
+    &passes::FINISH_STATS,
+    &passes::INTEGRATE,
+];
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::abi::passes::Access;
+
+    /// Every declared record lives in one of the pass's bindings, a written one in a binding the
+    /// shader may write, and every storage binding but the status and statistics words is declared (a binding
+    /// added to a pass without its traffic fails here).
+    #[test]
+    fn declarations_follow_the_bindings() {
+        for pass in DECLARED {
+            let touches = touches(pass).unwrap();
+            for t in touches {
+                let b = pass
+                    .bindings
+                    .iter()
+                    .find(|b| b.buf == t.buf)
+                    .unwrap_or_else(|| panic!("{}: {:?} is not bound", pass.entry, t.buf));
+                assert!(t.dir == Dir::Read || b.access == Access::ReadWrite);
+                assert_ne!(
+                    b.access,
+                    Access::Uniform,
+                    "{}: uniforms are not counted",
+                    pass.entry
+                );
+                let slave_only = matches!(t.of, Of::Slave | Of::NearSlave | Of::FarSlave);
+                assert!(
+                    !slave_only || pass.items != Items::One,
+                    "{}: a one-invocation pass has no slave items",
+                    pass.entry
+                );
+            }
+            if pass.items == Items::One {
+                continue;
+            }
+            for b in pass.bindings {
+                if b.access == Access::Uniform || matches!(b.buf, Buf::Status | Buf::Stats) {
+                    continue;
+                }
+                assert!(
+                    touches.iter().any(|t| t.buf == b.buf),
+                    "{}: binding {:?} has no declared traffic",
+                    pass.entry,
+                    b.buf
+                );
+            }
+        }
+    }
+
+    /// A slave beyond the radius costs a slave pass only the records it reads to find that out
+    /// and what it must write for every slave; the share within the radius adds linearly.
+    #[test]
+    fn bytes_follow_the_share_within_the_radius() {
+        let topo = Topology {
+            masters_per_slave: 0.25,
+            facets_per_node: 4.0,
+            nodes_per_facet: 4.0,
+        };
+        let far = bytes_per_slave(&passes::LOCAL_SEARCH, &topo, 0.0).unwrap();
+        assert_eq!(far, HIT as f64);
+        let near = bytes_per_slave(&passes::LOCAL_SEARCH, &topo, 1.0).unwrap();
+        let half = bytes_per_slave(&passes::LOCAL_SEARCH, &topo, 0.5).unwrap();
+        assert!((half - 0.5 * (far + near)).abs() < 1e-9);
+        assert!(near > 4.0 * 4.0 * VEC4 as f64);
+        assert_eq!(bytes_per_slave(&passes::TREE_REFIT, &topo, 1.0), None);
+    }
+}

@@ -1,0 +1,222 @@
+//! `abut bench --resident`, second part: a local device-resident increment as the share of the
+//! slaves within the search radius falls (100 %, 20 %, 5 %, 1 %; the others hang still far above
+//! the plate), on the CPU path and every GPU adapter — the time per increment beside the
+//! compulsory bytes the passes declare (`abi::traffic`) for that share.
+
+use std::fmt::Write as _;
+use std::time::Instant;
+
+use abut::testing::abi::groups;
+use abut::CentralDifference;
+use abut::{Contact, Device, ResidentIo};
+
+use crate::bench::{scene, BenchScene, Config};
+use crate::resident_bench::resident_bytes;
+
+/// Shares of the slaves within the search radius.
+const SHARES: [f64; 4] = [1.0, 0.2, 0.05, 0.01];
+/// Local increments timed per run (after the first, global, one).
+const INCREMENTS: usize = 12;
+
+/// Compulsory bytes per slave of abut's passes in a local increment (the integrator left out)
+/// with the share `near` of the slaves within the radius.
+fn contact_bytes(near: f64) -> abut::Result<f64> {
+    Ok(resident_bytes(near)?
+        .iter()
+        .filter(|(label, _)| *label != groups::INTEGRATOR.label)
+        .map(|(_, b)| b)
+        .sum())
+}
+
+/// The wgpu device and queue of a GPU `device` (the CPU path is an error).
+pub(crate) fn wgpu_of(device: &Device) -> abut::Result<(&wgpu::Device, &wgpu::Queue)> {
+    device.wgpu().ok_or_else(|| abut::Error::BadParameter {
+        name: "device",
+        value: "CPU path".into(),
+        expected: "a GPU adapter",
+    })
+}
+
+/// Positions of the bench scene as `vec4<f32>` rows.
+pub(crate) fn positions(sc: &BenchScene) -> Vec<[f32; 4]> {
+    sc.model
+        .positions()
+        .iter()
+        .map(|p| [p[0] as f32, p[1] as f32, p[2] as f32, 0.0])
+        .collect()
+}
+
+/// A storage buffer on `d` holding `data` (the bench's state: one `vec4<f32>` per node).
+pub(crate) fn state_buffer(d: &wgpu::Device, q: &wgpu::Queue, data: &[[f32; 4]]) -> wgpu::Buffer {
+    let b = d.create_buffer(&wgpu::BufferDescriptor {
+        label: Some("bench state"),
+        size: std::mem::size_of_val(data) as u64,
+        usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST,
+        mapped_at_creation: false,
+    });
+    q.write_buffer(&b, 0, bytemuck::cast_slice(data));
+    b
+}
+
+/// Velocities of the bench scene: the falling masses move, the others hang still.
+pub(crate) fn velocities(sc: &BenchScene) -> Vec<[f32; 4]> {
+    let n = sc.model.positions().len();
+    let mut v = vec![[0.0f32; 4]; n];
+    for (k, &falls) in sc.near.iter().enumerate() {
+        if falls {
+            v[sc.first + k] = [sc.u as f32, 0.0, -sc.v0 as f32, 0.0];
+        }
+    }
+    v
+}
+
+/// Seconds per local increment of abut's passes on the CPU path (the host's integration left
+/// out), over `INCREMENTS` after the first.
+fn cpu_run(sc: &BenchScene) -> abut::Result<f64> {
+    let mut contact = Contact::new(&Device::cpu(), &sc.model)?;
+    let masses = sc.model.masses();
+    let mut x = positions(sc);
+    let mut v = velocities(sc);
+    let mut f = vec![[0.0f32; 4]; x.len()];
+    let mut spent = 0.0;
+    for inc in 0..=INCREMENTS {
+        let t = Instant::now();
+        contact.encode_increment(
+            ResidentIo::Cpu {
+                positions: &x,
+                velocities: &v,
+                forces: &mut f,
+            },
+            sc.dt,
+        )?;
+        if inc > 0 {
+            spent += t.elapsed().as_secs_f64();
+        }
+        let dt = sc.dt as f32;
+        for i in sc.first..x.len() {
+            for a in 0..3 {
+                v[i][a] += dt * f[i][a] / masses[i] as f32;
+                x[i][a] += dt * v[i][a];
+                f[i][a] = 0.0;
+            }
+        }
+    }
+    Ok(spent / INCREMENTS as f64)
+}
+
+/// Wall seconds per local increment (abut's passes and the integrator, device completion
+/// included) and, where the adapter has timestamps, the GPU seconds of abut's passes alone.
+fn gpu_run(device: &Device, sc: &BenchScene) -> abut::Result<(f64, Option<f64>)> {
+    let (d, q) = wgpu_of(device)?;
+    let n_nodes = sc.model.positions().len();
+    let (x0, v0) = (positions(sc), velocities(sc));
+    let run = |timed: bool| -> abut::Result<(f64, abut::Traffic)> {
+        device.enable_timestamps(timed);
+        let make = |data: &[[f32; 4]]| state_buffer(d, q, data);
+        let (x, v, f) = (make(&x0), make(&v0), make(&vec![[0.0; 4]; n_nodes]));
+        let mut contact = Contact::new(device, &sc.model)?;
+        let mut integ = CentralDifference::new(device, sc.model.masses())?;
+        let mut step = |contact: &mut Contact| -> abut::Result<()> {
+            let mut enc = d.create_command_encoder(&Default::default());
+            let io = ResidentIo::Gpu {
+                encoder: &mut enc,
+                positions: &x,
+                velocities: &v,
+                forces: &f,
+            };
+            contact.encode_increment(io, sc.dt)?;
+            let range = sc.first as u32..n_nodes as u32;
+            integ.encode(&mut enc, &x, &v, &f, sc.dt, [0.0; 3], range)?;
+            q.submit([enc.finish()]);
+            if timed {
+                // through abut, which reads the timestamps back
+                device.submit(d.create_command_encoder(&Default::default()))?;
+            }
+            contact.collect_stats()?;
+            Ok(())
+        };
+        step(&mut contact)?;
+        let _ = d.poll(wgpu::PollType::wait_indefinitely());
+        let before = device.traffic().unwrap_or_default();
+        let t = Instant::now();
+        for _ in 0..INCREMENTS {
+            step(&mut contact)?;
+        }
+        let _ = d.poll(wgpu::PollType::wait_indefinitely());
+        let wall = t.elapsed().as_secs_f64() / INCREMENTS as f64;
+        Ok((wall, device.traffic().unwrap_or_default().since(&before)))
+    };
+    let (wall, _) = run(false)?;
+    let (_, timed) = run(true)?;
+    device.enable_timestamps(false);
+    let gpu: f64 = timed
+        .pass_ns
+        .iter()
+        .filter(|(label, _)| label.as_str() != groups::INTEGRATOR.label)
+        .map(|(_, ns)| ns / INCREMENTS as f64 / 1e9)
+        .sum();
+    Ok((wall, (!timed.pass_ns.is_empty()).then_some(gpu)))
+}
+
+/// The section of resident.md: per device and size, a local increment at each share.
+pub(crate) fn section(devices: &[Device], sizes: &[usize]) -> abut::Result<String> {
+    let mut md = String::new();
+    let (near, far) = (contact_bytes(1.0)?, contact_bytes(0.0)?);
+    let _ = writeln!(
+        md,
+        "## A local increment against the share of slaves within the search radius\n\n\
+         The bench scene with only a share of the masses falling onto the plate; the others hang \
+         still a thousand facets above it (beyond the radius: no facet at the global search, so \
+         the local search and the penalty find nothing to do for them, but are still dispatched \
+         over them). Compulsory bytes of abut's passes in a local increment, derived from each \
+         pass's declared records (`abi::traffic`): {near:.0} B per slave within the radius, \
+         {far:.0} B per slave beyond it (the integrator left out). Time per local increment after \
+         the first (global) one, mean of {INCREMENTS}: on the CPU path abut's passes alone; on \
+         an adapter the wall time of the increment with its integrator, device completion \
+         included, and the GPU time of abut's passes from the timestamps where there are some.\n"
+    );
+    let _ = writeln!(
+        md,
+        "| device | slaves | within radius | compulsory bytes / slave | MB / incr. | time / incr. | GPU time of abut's passes | time against 100 % |\n|---|---|---|---|---|---|---|---|"
+    );
+    let mut all = vec![Device::cpu()];
+    all.extend(devices.iter().cloned());
+    for device in &all {
+        for &n in sizes {
+            let mut full = None;
+            for share in SHARES {
+                eprintln!(
+                    "{device}: {n} slaves, {:.0} % within the radius",
+                    share * 100.0
+                );
+                let mut config = Config::base(n);
+                config.near = share;
+                let sc = scene(&config)?;
+                let (time, gpu) = if device.wgpu().is_some() {
+                    gpu_run(device, &sc)?
+                } else {
+                    (cpu_run(&sc)?, None)
+                };
+                let key = gpu.unwrap_or(time);
+                let full = *full.get_or_insert(key);
+                let bytes = contact_bytes(share)?;
+                let _ = writeln!(
+                    md,
+                    "| {} | {n} | {:.0} % | {bytes:.0} | {:.1} | {:.2} ms | {} | {:.2} |",
+                    device.backend_name(),
+                    share * 100.0,
+                    bytes * n as f64 / 1e6,
+                    time * 1e3,
+                    gpu.map_or("–".into(), |g| format!("{:.2} ms", g * 1e3)),
+                    key / full
+                );
+            }
+        }
+    }
+    let _ = writeln!(
+        md,
+        "\nThe last column compares abut's passes (GPU time where there are timestamps, else the \
+         time column) with the same size at 100 %.\n"
+    );
+    Ok(md)
+}
