@@ -21,9 +21,15 @@ use crate::model::{
 
 use super::spec::{axis_of, bad, PartSpec, Scene};
 
-/// Mass given to the nodes of fixed rigid parts and to fixed or moving rigid bodies in the
-/// contact model, so that kinematic contact treats them as immovable.
-pub const IMMOVABLE_MASS: f64 = 1e12;
+/// How much heavier than the model's heaviest other node (or free body) the contact model makes
+/// the nodes of fixed rigid parts and fixed or moving rigid bodies, so that contact treats them
+/// as immovable whatever the unit system: a ratio, not a mass.
+pub const IMMOVABLE_RATIO: f64 = 1e12;
+
+/// A mass standing in for an immovable node or body until the model's own masses are known
+/// (and for the solver's body of a massless deck body, whose motion is prescribed): replaced
+/// by [`IMMOVABLE_RATIO`] times the heaviest other mass before contact sees it.
+pub(crate) const PLACEHOLDER_MASS: f64 = 1.0;
 
 mod parts;
 pub(crate) use parts::centroid_and_inertia;
@@ -318,6 +324,13 @@ impl Scene {
         let meshed: Meshed = self.mesh_parts()?;
         let (x, parts, moving_parts) = (meshed.x, meshed.parts, meshed.moving_parts);
         let mut solver = Solver::new(x.clone(), meshed.elements, &meshed.point)?;
+        // immovable nodes: the ratio times the heaviest other node or free body
+        let heaviest = self.heaviest_movable(&solver.mass, &meshed.immovable);
+        for (m, &still) in solver.mass.iter_mut().zip(&meshed.immovable) {
+            if still {
+                *m = IMMOVABLE_RATIO * heaviest;
+            }
+        }
         // the parts' held directions, beside what the solver holds itself (axis nodes)
         for (held, part) in solver.fixed.iter_mut().zip(&meshed.fixed) {
             for a in 0..3 {
@@ -450,10 +463,11 @@ impl Scene {
                 };
                 [[i, 0.0, 0.0], [0.0, i, 0.0], [0.0, 0.0, i]]
             });
+            // a fixed or moving body: the ratio times the heaviest of it and the rest
             let heavy = if motion == BodyMotion::Free {
                 1.0
             } else {
-                IMMOVABLE_MASS
+                IMMOVABLE_RATIO * heaviest.max(r.mass) / r.mass
             };
             model.add_rigid_body(RigidBody {
                 mass: r.mass * heavy,

@@ -12,6 +12,9 @@ pub(super) struct Meshed {
     pub x: Vec<[f64; 3]>,
     pub elements: Vec<Element>,
     pub point: Vec<f64>,
+    /// Nodes contact must treat as immovable (fixed rigid parts, massless deck bodies): their
+    /// point mass is a placeholder until the model's own masses are known.
+    pub immovable: Vec<bool>,
     pub velocity: Vec<[f64; 3]>,
     pub fixed: Vec<[bool; 3]>,
     pub parts: Vec<PartNodes>,
@@ -32,6 +35,7 @@ impl Scene {
         let mut x: Vec<[f64; 3]> = Vec::new();
         let mut elements = Vec::new();
         let mut point = Vec::new();
+        let mut immovable = Vec::new();
         let mut velocity = Vec::new();
         let mut fixed = Vec::new();
         let mut parts = Vec::new();
@@ -267,12 +271,20 @@ impl Scene {
             }
             if let Some(piece) = &p.deck {
                 // the deck's own masses, velocities and held directions, node by node
-                let body_mass = piece.rigid.as_ref().map(|r| r.mass);
-                point.extend(piece.point_mass.iter().map(|&m| match (body_mass, moving) {
-                    (Some(b), true) => b,
-                    (Some(_), false) => IMMOVABLE_MASS,
-                    (None, _) => m,
-                }));
+                // a fixed body, or one without a mass (its motion prescribed), is immovable
+                let body_mass = piece
+                    .rigid
+                    .as_ref()
+                    .map(|r| (moving && !r.massless).then_some(r.mass));
+                for &m in &piece.point_mass {
+                    let (mass, still) = match body_mass {
+                        Some(Some(b)) => (b, false),
+                        Some(None) => (PLACEHOLDER_MASS, true),
+                        None => (m, false),
+                    };
+                    point.push(mass);
+                    immovable.push(still);
+                }
                 velocity.extend(
                     piece
                         .velocity
@@ -301,7 +313,7 @@ impl Scene {
                     // the body's mass on every node: the effective mass contact sees
                     p.mass
                 } else if rigid {
-                    IMMOVABLE_MASS
+                    PLACEHOLDER_MASS
                 } else if p.shape == "points" {
                     p.mass
                 } else {
@@ -309,6 +321,7 @@ impl Scene {
                 },
                 count,
             ));
+            immovable.extend(std::iter::repeat_n(rigid && !moving, count));
             velocity.extend(std::iter::repeat_n(
                 if rigid { [0.0; 3] } else { p.velocity },
                 count,
@@ -336,6 +349,7 @@ impl Scene {
             x,
             elements,
             point,
+            immovable,
             velocity,
             fixed,
             parts,
@@ -347,6 +361,29 @@ impl Scene {
     /// carrying the part's nodes (after the analytical bodies, whose indices are the contact
     /// model's), and the free ones as rigid parts of the contact model too (springs on them see
     /// the body).
+    /// The heaviest node contact may move (`masses` of the model's nodes, those marked
+    /// `immovable` left out) or free analytical body: what an immovable mass is scaled from
+    /// ([`IMMOVABLE_RATIO`] times it), so that it is immovable in any unit system. 1 when there
+    /// is none.
+    pub(super) fn heaviest_movable(&self, masses: &[f64], immovable: &[bool]) -> f64 {
+        let nodes = masses
+            .iter()
+            .zip(immovable)
+            .filter(|(_, &still)| !still)
+            .map(|(&m, _)| m);
+        let bodies = self
+            .rigid
+            .iter()
+            .filter(|r| !matches!(r.motion.as_deref(), Some("fixed" | "velocity")))
+            .map(|r| r.mass);
+        let heaviest = nodes.chain(bodies).fold(0.0, f64::max);
+        if heaviest > 0.0 && heaviest.is_finite() {
+            heaviest
+        } else {
+            1.0
+        }
+    }
+
     pub(super) fn moving_bodies(
         &self,
         moving_parts: &[(usize, usize, usize)],

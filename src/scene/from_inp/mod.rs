@@ -66,8 +66,11 @@ pub struct DeckPiece {
 pub struct DeckRigid {
     /// Its reference node's position.
     pub reference: [f64; 3],
-    /// Mass (`*MASS` on the reference node).
+    /// Mass (`*MASS` on the reference node); a stand-in when it has none (`massless`).
     pub mass: f64,
+    /// The deck gives it no mass (a fixed body, or one whose motion is prescribed): contact
+    /// treats it as immovable.
+    pub massless: bool,
     /// Inertia about the reference node (`*ROTARY INERTIA`).
     pub inertia: [[f64; 3]; 3],
     /// How it moves, from its reference node's boundary conditions.

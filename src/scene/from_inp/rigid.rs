@@ -109,8 +109,9 @@ pub(super) fn body(
         mass: if mass > 0.0 {
             mass
         } else {
-            super::super::build::IMMOVABLE_MASS
+            super::super::build::PLACEHOLDER_MASS
         },
+        massless: mass <= 0.0,
         inertia,
         motion,
         locked: [held[0], held[1], held[2]],
