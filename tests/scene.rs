@@ -120,6 +120,11 @@ fn bad_scene_files_name_the_key_and_line() {
         assert_ne!(text, block, "{from}");
         let e = Scene::parse(&text).unwrap_err().to_string();
         assert!(e.contains(key), "{key}: {e}");
+        // a huge or tiny value is written as one, not as hundreds of digits
+        assert!(!e.contains(&"0".repeat(20)), "{key}: {e}");
+        if to.contains("1e300") {
+            assert!(e.contains("1e300"), "{key}: {e}");
+        }
     }
     let e = Scene::parse("title = \"x\"\n[run]\nend_time = \"soon\"\n")
         .unwrap_err()
@@ -140,6 +145,7 @@ fn bad_scene_files_name_the_key_and_line() {
             "run.safety",
         ),
         (format!("{base}divisions = [2,2,0]\nradius = \"big\"\n"), 14, "radius"),
+        (format!("{base}divisions = [2,2,0]\n[[contact]]\nslave = \"a\"\nslave_face = \"all\"\nmaster = \"b\"\nmaster_face = \"z+\"\nsearch_interval = 0\n"), 19, "contact.search_interval"),
     ] {
         let path = dir.join("bad.toml");
         std::fs::write(&path, &text).unwrap();

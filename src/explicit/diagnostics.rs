@@ -54,6 +54,75 @@ impl Solver {
         format!("check the increment in force, {dt:e}: {elements}{contact}")
     }
 
+    /// An error naming the first input of the increment about to run that is not finite (or
+    /// a damping that is negative): gravity, damping, bulk viscosity, a node's load, a load
+    /// curve's value, a body's load or moment — set through the library, say, mid-run. Caught
+    /// before the increment uses it, so the message names it and not what it would blow up.
+    pub(super) fn check_inputs(&self) -> Result<()> {
+        let when = format!(
+            "before increment {} (t = {:e})",
+            self.increments + 1,
+            self.time
+        );
+        let bad = |name: &'static str, value: String| {
+            Err(Error::BadParameter {
+                name,
+                value: format!("{value} {when}"),
+                expected: "finite (and a damping not negative)",
+            })
+        };
+        let finite = |v: &[f64; 3]| v.iter().all(|c| c.is_finite());
+        if !finite(&self.gravity) {
+            return bad("gravity", format!("{:?}", self.gravity));
+        }
+        for (name, v) in [
+            ("damping", self.damping),
+            ("bulk_viscosity", self.bulk_viscosity),
+            ("bulk_viscosity_quadratic", self.bulk_viscosity_quadratic),
+        ] {
+            if !(v.is_finite() && v >= 0.0) {
+                return bad(name, format!("{v:e}"));
+            }
+        }
+        if let Some((i, l)) = self.loads.iter().enumerate().find(|(_, l)| !finite(l)) {
+            return bad("loads", format!("{l:?} on node {i}"));
+        }
+        if let Some(c) = self.load_curves.iter().find(|c| !c.value.is_finite()) {
+            return bad(
+                "load_curves",
+                format!("{:e} on node {} direction {}", c.value, c.node, c.dof),
+            );
+        }
+        for (k, b) in self.bodies.iter().enumerate() {
+            if !(finite(&b.load) && finite(&b.moment)) {
+                return bad(
+                    "bodies",
+                    format!("body {k}: load {:?}, moment {:?}", b.load, b.moment),
+                );
+            }
+        }
+        Ok(())
+    }
+
+    /// The element that sets [`Solver::stable_increment`] (the first of the smallest) and that
+    /// increment, safety factor and bulk viscosity included; `None` without elements.
+    pub fn governing_element(&self) -> Option<(usize, f64)> {
+        let b = (self.bulk_viscosity, self.bulk_viscosity_quadratic);
+        self.elements
+            .iter()
+            .map(|e| {
+                let z = e.bulk_damping_ratio(&self.x, &self.v, b);
+                self.safety * (e.stable_increment() * ((1.0 + z * z).sqrt() - z))
+            })
+            .enumerate()
+            // f64::min's rule: a NaN increment is passed over
+            .fold(None, |best: Option<(usize, f64)>, (k, dt)| match best {
+                None if !dt.is_nan() => Some((k, dt)),
+                Some((_, d)) if dt < d => Some((k, dt)),
+                _ => best,
+            })
+    }
+
     /// Remembers the largest overclosure contact has resolved, and when.
     pub(super) fn note_overclosure(&mut self, h: f64) {
         if h > self.worst_overclosure.0 {

@@ -257,16 +257,7 @@ impl Solver {
     /// element's bulk viscosity reduction √(1+ξ²) − ξ, ξ = b1 − b2²·(L/c)·min(0, ε̇_vol) at the
     /// current velocities (Abaqus' form; ξ = b1 at rest) (∞ with no elements).
     pub fn stable_increment(&self) -> f64 {
-        let b = (self.bulk_viscosity, self.bulk_viscosity_quadratic);
-        self.safety
-            * self
-                .elements
-                .iter()
-                .map(|e| {
-                    let z = e.bulk_damping_ratio(&self.x, &self.v, b);
-                    e.stable_increment() * ((1.0 + z * z).sqrt() - z)
-                })
-                .fold(f64::INFINITY, f64::min)
+        self.governing_element().map_or(f64::INFINITY, |(_, dt)| dt)
     }
 
     /// The Cauchy stress of element `k` now (small-strain stress with `nlgeom` off).
@@ -331,6 +322,7 @@ impl Solver {
                 expected: "must be finite and positive",
             });
         }
+        self.check_inputs()?;
         let (mut f_int, internal) = self.internal_forces();
         let n = self.x.len();
         // bulk viscosity acts with the half-step velocities (the last ones known); its power is

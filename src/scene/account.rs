@@ -405,6 +405,37 @@ fn force_stats(forces: &[(f64, f64)], dt: f64) -> ForceStats {
     }
 }
 
+impl Account<'_> {
+    /// `e` with what the account knows of its cause: a fixed `run.dt` over the penalty
+    /// contact's stable increment (the warning a finished run would have printed) is named in a
+    /// divergence or a non-finite result before the hints about overclosures and elements, and
+    /// in a tunnelling node's error as what sped it up.
+    pub fn explain(&self, e: Error) -> Error {
+        if !(self.over_ratio > 1.0) {
+            return e;
+        }
+        let over = over_increment_warning(
+            self.run.dt.unwrap_or(f64::NAN),
+            self.over_ratio,
+            self.over_from,
+            self.run.contact_safety,
+        );
+        let mut e = e;
+        match &mut e {
+            Error::Diverged { cause, .. } => *cause = format!("; first, {over}. Also{cause}"),
+            Error::NonFiniteResult { cause, .. } => {
+                *cause = format!("first, {over}; also, {cause}");
+            }
+            Error::Tunnelling { more, .. } => *more = format!("; what sped it up: {over}{more}"),
+            Error::BadParameter {
+                name: "run", value, ..
+            } => *value = format!("{value}; first, {over}"),
+            _ => {}
+        }
+        e
+    }
+}
+
 /// The warning of a fixed `run_dt` that exceeded the penalty contact's stable increment by up
 /// to `over_ratio`, from `over_from`.
 fn over_increment_warning(run_dt: f64, over_ratio: f64, over_from: f64, safety: f64) -> String {

@@ -54,7 +54,7 @@ impl Scene {
         if !(r.end_time.is_finite() && r.end_time > 0.0) {
             return bad(
                 "run.end_time",
-                r.end_time.to_string(),
+                num(r.end_time),
                 "must be finite and positive",
             );
         }
@@ -63,12 +63,12 @@ impl Scene {
             ("run.contact_safety", r.contact_safety),
         ] {
             if !(v > 0.0 && v <= 1.0) {
-                return bad(key, v.to_string(), "must lie in (0, 1]");
+                return bad(key, num(v), "must lie in (0, 1]");
             }
         }
         if let Some(dt) = r.dt {
             if !(dt.is_finite() && dt > 0.0) {
-                return bad("run.dt", dt.to_string(), "must be finite and positive");
+                return bad("run.dt", num(dt), "must be finite and positive");
             }
         }
         for (key, v) in [
@@ -77,7 +77,7 @@ impl Scene {
             ("run.bulk_viscosity_quadratic", r.bulk_viscosity_quadratic),
         ] {
             if !(v.is_finite() && v >= 0.0) {
-                return bad(key, v.to_string(), "must be finite and not negative");
+                return bad(key, num(v), "must be finite and not negative");
             }
         }
         finite_values("run.gravity", &r.gravity, "run")?;
@@ -277,7 +277,7 @@ impl Scene {
         if !(m.poisson > -1.0 && m.poisson < 0.5) {
             return bad(
                 "material.poisson",
-                format!("{} ({what})", m.poisson),
+                format!("{} ({what})", num(m.poisson)),
                 "must lie in (−1, 0.5)",
             );
         }
@@ -387,7 +387,7 @@ impl Scene {
         if b.displacement.is_some() && !(b.ramp.is_finite() && b.ramp > 0.0) {
             return bad(
                 "boundary.ramp",
-                format!("{} (part {})", b.ramp, b.part),
+                format!("{} (part {})", num(b.ramp), b.part),
                 "a prescribed displacement needs a positive ramp time",
             );
         }
@@ -488,7 +488,7 @@ impl Scene {
             if !(f.is_finite() && (1e-8..=1e8).contains(&f)) {
                 return bad(
                     "contact.penalty_scale",
-                    format!("{f} ({what})"),
+                    format!("{} ({what})", num(f)),
                     "a factor on the default stiffness within 1e±8",
                 );
             }
@@ -497,15 +497,22 @@ impl Scene {
             if !(r.is_finite() && r > 0.0) {
                 return bad(
                     "contact.search_radius",
-                    format!("{r} (master {})", c.master),
+                    format!("{} (master {})", num(r), c.master),
                     "must be finite and positive",
                 );
             }
         }
+        if c.search_interval == Some(0) {
+            return bad(
+                "contact.search_interval",
+                format!("0 (master {})", c.master),
+                "increments from one global search to the next: at least 1",
+            );
+        }
         if !(c.friction.is_finite() && c.friction >= 0.0) {
             return bad(
                 "contact.friction",
-                c.friction.to_string(),
+                num(c.friction),
                 "must be finite and not negative",
             );
         }
@@ -513,18 +520,28 @@ impl Scene {
             if !(z.is_finite() && (0.0..=1.0).contains(&z)) {
                 return bad(
                     "contact.damping",
-                    format!("{z} (master {})", c.master),
+                    format!("{} (master {})", num(z), c.master),
                     "a fraction of critical damping in [0, 1]",
                 );
             }
             if c.enforce.as_deref() == Some("kinematic") {
                 return bad(
                     "contact.damping",
-                    format!("{z} (master {})", c.master),
+                    format!("{} (master {})", num(z), c.master),
                     "penalty contact only: kinematic contact has no springs to damp",
                 );
             }
         }
         Ok(())
+    }
+}
+
+/// A number for a message: as written where that is short (0, and magnitudes from 10⁻⁴ to
+/// 10¹⁵), else in scientific notation — never the 301 digits `{}` gives 1e300.
+pub(crate) fn num(v: f64) -> String {
+    if v == 0.0 || !v.is_finite() || (1e-4..1e15).contains(&v.abs()) {
+        format!("{v}")
+    } else {
+        format!("{v:e}")
     }
 }

@@ -69,7 +69,9 @@ pub(super) fn run(
         let last = account.is_last(ranks.time(), step);
         let t_step = Instant::now();
         let t_start = ranks.time();
-        let limits = ranks.advance(step, account.k, last)?;
+        let limits = ranks
+            .advance(step, account.k, last)
+            .map_err(|e| account.explain(e))?;
         account.counted(ranks.time(), t_step, device, progress);
         ranks.counted(account);
         if let Some((stable, overclosure)) = limits.penalty {
@@ -85,7 +87,9 @@ pub(super) fn run(
         if row {
             account.sample(time, sums.moved);
         }
-        account.energy(sums.drift, sums.scale, sums.balance, time)?;
+        account
+            .energy(sums.drift, sums.scale, sums.balance, time)
+            .map_err(|e| account.explain(e))?;
         account.kinetic_internal(time, sums.kinetic_internal);
         ranks.output(account.k, row, force, peak)?;
     }

@@ -17,6 +17,7 @@
 //! nlgeom = true            # false: small-strain kinematics (Abaqus' NLGEOM=NO)
 //! output_every = 10        # history rows every this many increments (default 1)
 //! vtk_every = 100          # a VTK frame of the contact state (vtk/contact.pvd) every 100
+//! # max_increments = 100000000  # a longer run is refused before it starts (default 10^8)
 //! [[material]]
 //! name = "rubber"
 //! young = 1.0

@@ -52,6 +52,7 @@ pub(super) fn run_into(
         _ => None,
     };
     let mut account = Account::new(&scene.run, solver.stable_increment())?;
+    check_length(scene, &solver, &built.parts, account.dt)?;
     account.ramp = scene
         .quasi_static
         .as_ref()
@@ -527,4 +528,45 @@ fn part_motion(
         }
     }
     (u, v)
+}
+
+/// Refuses a run that would take more than `run.max_increments` increments of `dt`, naming
+/// what sets the increment: `run.dt`, or the element with the smallest stable increment (its
+/// part and its index within it) — a sliver announces itself here, before the run, not as
+/// an estimate of 10¹¹ increments on a progress bar.
+fn check_length(scene: &Scene, solver: &Solver, parts: &[PartNodes], dt: f64) -> Result<()> {
+    let increments = scene.run.end_time / dt;
+    if !(increments > scene.run.max_increments as f64) {
+        return Ok(());
+    }
+    let cause = match (scene.run.dt, solver.governing_element()) {
+        (Some(fixed), _) => format!("run.dt = {}", super::check::num(fixed)),
+        (None, Some((k, _))) => {
+            let mut first = 0;
+            let part = parts.iter().find(|p| {
+                first += p.elements;
+                k < first
+            });
+            match part {
+                Some(p) => format!(
+                    "element {} of part {} (model element {k}) sets it",
+                    k + p.elements - first,
+                    p.name
+                ),
+                None => format!("model element {k} sets it"),
+            }
+        }
+        (None, None) => "no element sets it".into(),
+    };
+    Err(Error::BadParameter {
+        name: "run.end_time",
+        value: format!(
+            "{} over increments of {}: {} increments; {cause}",
+            super::check::num(scene.run.end_time),
+            super::check::num(dt),
+            super::check::num(increments.ceil()),
+        ),
+        expected: "a run of at most run.max_increments increments (10^8 by default): \
+                   remesh the element, or raise run.max_increments to run this long",
+    })
 }

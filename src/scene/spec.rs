@@ -126,6 +126,10 @@ pub struct RunSpec {
     /// launches the nodes (default false).
     #[serde(default)]
     pub adjust_overclosure: bool,
+    /// The most increments a run may take (default 10⁸): a longer one is refused before it
+    /// starts, naming the element that sets the increment. Raise it to run longer on purpose.
+    #[serde(default = "default_max_increments")]
+    pub max_increments: u64,
     /// A deck's step ends before the last (total time): increments land on them, so each
     /// step's boundary conditions and loads start on its first increment.
     #[serde(skip)]
@@ -151,6 +155,9 @@ pub(super) fn default_bulk_quadratic() -> f64 {
 }
 pub(super) fn default_every() -> usize {
     1
+}
+pub(super) fn default_max_increments() -> u64 {
+    100_000_000
 }
 fn default_true() -> bool {
     true
@@ -425,7 +432,7 @@ pub(super) fn finite_values(key: &'static str, values: &[f64], what: &str) -> Re
         None => Ok(()),
         Some(v) => bad(
             key,
-            format!("{v} in {values:?} ({what})"),
+            format!("{} in {values:?} ({what})", super::check::num(*v)),
             "must be finite, and where not zero within 1e±100 in the scene's units",
         ),
     }
@@ -438,7 +445,7 @@ pub(super) fn positive(key: &'static str, v: f64, what: &str) -> Result<()> {
     } else {
         bad(
             key,
-            format!("{v} ({what})"),
+            format!("{} ({what})", super::check::num(v)),
             "must be finite and positive, within 1e±100 in the scene's units",
         )
     }

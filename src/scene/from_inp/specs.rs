@@ -7,7 +7,8 @@ use super::DeckPiece;
 use crate::io::inp::PairSettings;
 use crate::scene::spec::{
     default_bulk_linear, default_bulk_quadratic, default_contact_safety, default_core,
-    default_every, default_grading, default_safety, ContactSpec, PartSpec, RunSpec,
+    default_every, default_grading, default_max_increments, default_safety, ContactSpec, PartSpec,
+    RunSpec,
 };
 
 impl PartSpec {
@@ -88,6 +89,7 @@ impl RunSpec {
             output_every: default_every(),
             vtk_every: 0,
             adjust_overclosure: false,
+            max_increments: default_max_increments(),
         }
     }
 }
