@@ -59,15 +59,15 @@ impl Solver {
     /// curve's value, a body's load or moment — set through the library, say, mid-run. Caught
     /// before the increment uses it, so the message names it and not what it would blow up.
     pub(super) fn check_inputs(&self) -> Result<()> {
-        let when = format!(
-            "before increment {} (t = {:e})",
-            self.increments + 1,
-            self.time
-        );
+        // the message is only made when there is one: nothing allocated per increment
         let bad = |name: &'static str, value: String| {
             Err(Error::BadParameter {
                 name,
-                value: format!("{value} {when}"),
+                value: format!(
+                    "{value} before increment {} (t = {:e})",
+                    self.increments + 1,
+                    self.time
+                ),
                 expected: "finite (and a damping not negative)",
             })
         };
