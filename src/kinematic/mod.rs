@@ -242,7 +242,7 @@ fn transmitted_shares(
                 .iter()
                 .enumerate()
                 .map(|(j, &n)| {
-                    let s_j = added[&n];
+                    let s_j = added.get(&n).copied().unwrap_or(0.0);
                     g.weights[j] * s_j / (masses[n as usize] + s_j)
                 })
                 .sum();
