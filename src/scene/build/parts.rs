@@ -357,10 +357,6 @@ impl Scene {
         })
     }
 
-    /// The rigid parts that move (`moving_parts` of [`Meshed`], at positions `x`): bodies
-    /// carrying the part's nodes (after the analytical bodies, whose indices are the contact
-    /// model's), and the free ones as rigid parts of the contact model too (springs on them see
-    /// the body).
     /// The heaviest node contact may move (`masses` of the model's nodes, those marked
     /// `immovable` left out) or free analytical body: what an immovable mass is scaled from
     /// ([`IMMOVABLE_RATIO`] times it), so that it is immovable in any unit system. 1 when there
@@ -384,6 +380,10 @@ impl Scene {
         }
     }
 
+    /// The rigid parts that move (`moving_parts` of [`Meshed`], at positions `x`): bodies
+    /// carrying the part's nodes (after the analytical bodies, whose indices are the contact
+    /// model's), and the free ones as rigid parts of the contact model too (springs on them see
+    /// the body).
     pub(super) fn moving_bodies(
         &self,
         moving_parts: &[(usize, usize, usize)],
