@@ -57,6 +57,7 @@ fn build(slaves: usize, facets: usize, friction: Friction) -> (Model, PairId, Ve
                     interval: 1,
                     budget: 0.5,
                     wide_local: false,
+                    visit_every_slave: false,
                 }),
         )
         .unwrap();

@@ -89,16 +89,19 @@ fn main() {
             interval: 1,
             budget: 0.5,
             wide_local: false,
+            visit_every_slave: false,
         });
         let (_, l_fast, total_fast, globals) = run(Schedule {
             interval: 100,
             budget: 0.5,
             wide_local: false,
+            visit_every_slave: false,
         });
         let (_, l_wide, total_wide, _) = run(Schedule {
             interval: 100,
             budget: 0.5,
             wide_local: true,
+            visit_every_slave: false,
         });
         let name = if d.is_gpu() {
             d.backend_name()

@@ -39,6 +39,7 @@ struct SearchParams {
 
 const FLAG_WIDE_LOCAL: u32 = 1u;
 const FLAG_SELF_CONTACT: u32 = 2u;
+const FLAG_EVERY_SLAVE: u32 = 4u;   // local increments visit every slave (no compaction)
 
 // Rust twin: GpuHit (src/abi/search.rs), 64 bytes. One per slave node.
 struct Hit {
@@ -72,6 +73,11 @@ const STATUS_FALLBACK: u32 = 18u;     // slaves whose tree walk hit its cap (the
 const STATUS_BOX: u32 = 20u;          // 6 words: order-preserving bits of the master box, min then max
 const STATUS_COLLAPSED: u32 = 19u;    // master facets collapsed at the global search's positions (skipped)
 const STATUS_NONFINITE: u32 = 26u;    // lowest node with a non-finite coordinate, NO_NODE if none
+// After the status words (STATUS_WORDS of them, reset each increment), the same buffer keeps the
+// active slaves from one global search to the next: their count, then their slave indices
+// (active.wgsl; Rust twin: ACTIVE_LIST). They share the status buffer because the penalty pass
+// already binds the eight storage buffers WebGPU's default limits allow.
+const ACTIVE_LIST: u32 = 28u;
 
 // The plan of a device-resident increment: one buffer per search, u32 words (Rust twins:
 // PLAN_* in src/abi/search.rs). Words 0..16 the schedule's state, 64..88 the SearchParams
@@ -87,6 +93,7 @@ const PLAN_TRIGGER: u32 = 5u;       // why (TRIGGER_*)
 const PLAN_INTERVAL: u32 = 6u;      // the schedule's interval
 const PLAN_N_SLOTS: u32 = 7u;       // dispatch slots in use
 const PLAN_FIT_FAILED: u32 = 9u;    // the master box could not be taken (the old one was kept)
+const PLAN_MAX_DIM: u32 = 10u;      // most workgroups per dispatch dimension (for folding)
 const PLAN_PARAMS: u32 = 64u;       // 24 words: the fitted SearchParams (byte 256: bound as the uniform)
 const PLAN_SLOTS: u32 = 88u;
 const PLAN_SLOT_WORDS: u32 = 8u;

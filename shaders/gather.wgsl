@@ -11,13 +11,16 @@
 //
 // Bindings: 0 pp (uniform PenaltyParams), 1 pair_nodes (node, slave index, adjacency start,
 //           end), 2 facet_nodes (pair-node index of each active facet's nodes, NO_NODE padded),
-//           3 hits, 4 out (ContactOut), 5 status (read: the two scale words), 6 acc (8 words per
+//           3 hits, 4 out (ContactOut), 5 status (read: the two scale words; from ACTIVE_LIST the
+//           active slaves, active.wgsl), 6 acc (8 words per
 //           pair node: fx, fy, fz, row as (low, high) pairs; zero before scatter_forces: the
 //           buffer starts zeroed and gather zeroes what it reads),
 //           7 forces (vec4 per pair node), 8 host_forces (the caller's force buffer: vec4<f32>
 //           per model node, xyz summed into, w left alone), 9 rows (f32 per model node: the
 //           node-wise bound's rows summed over the pairs of the increment).
-// Dispatch: scatter_forces one invocation per slave, gather and add_forces one per pair node
+// Dispatch: scatter_forces one invocation per slave (global increments, small sliding),
+//           scatter_forces_active one per active slave (local increments, indirect from the
+//           plan's ACTIVE_SLOT), gather and add_forces one per pair node
 //           (add_forces: device-resident increments, after gather); ITEM_WORKGROUP per
 //           workgroup, folded into 2D. Each invocation does at most 4 × 4 atomic pairs (scatter)
 //           or reads 8 words (gather): bounded whatever the number of slaves on one facet.
@@ -105,6 +108,21 @@ fn scatter_forces(@builtin(workgroup_id) wg: vec3<u32>,
                   @builtin(local_invocation_index) li: u32) {
     let i = folded_id(wg, nwg, li, ITEM_WORKGROUP);
     if (i >= pp.n_slaves) { return; }
+    scatter(i);
+}
+
+// Local increments: the active slaves only (an untracked slave is open: nothing to scatter).
+@compute @workgroup_size(64)
+fn scatter_forces_active(@builtin(workgroup_id) wg: vec3<u32>,
+                         @builtin(num_workgroups) nwg: vec3<u32>,
+                         @builtin(local_invocation_index) li: u32) {
+    let k = folded_id(wg, nwg, li, ITEM_WORKGROUP);
+    if (k >= status[ACTIVE_LIST]) { return; }
+    scatter(status[ACTIVE_LIST + 1u + k]);
+}
+
+// Slave i's reaction onto its facet's nodes.
+fn scatter(i: u32) {
     // the penalty pass did not run (the increment will run again): its outputs are stale
     if (status[STATUS_BUDGET_EXCEEDED] != 0u) { return; }
     let o = out[i];

@@ -5,8 +5,10 @@
 // Bindings: 0 params (uniform SearchParams), 1 nodes (in the frame of the last
 //           global search), 2 facets, 3 slaves, 4 adjacency (words 0..=n_nodes: start of each
 //           model node's active facets within this same buffer; then the lists, increasing),
-//           5 status (atomic words), 6 hits (read: the tracked node; written: the result).
-// Dispatch: one invocation per slave node, ITEM_WORKGROUP per workgroup, folded into 2D.
+//           5 status (atomic words; from ACTIVE_LIST the active slaves: active.wgsl),
+//           6 hits (read: the tracked node; written: the result).
+// Dispatch: one invocation per active slave (the slaves the last global search left tracked),
+//           ITEM_WORKGROUP per workgroup, folded into 2D, indirect from the plan's ACTIVE_SLOT.
 // Invariants: a slave looks only at the facets attached to its tracked master node (with
 //             FLAG_WIDE_LOCAL, also at the facets around every node of the nearest of those,
 //             which finds the nearest facet where it touches no node nearest the slave, as with
@@ -16,7 +18,9 @@
 //             max_local_iterations times; the most iterations taken and the number of slaves
 //             that hit the cap are reduced into the status words. A slave beyond the radius
 //             keeps its tracked node (facet = NO_FACET) so tracking resumes when it comes back;
-//             a slave with no tracked node waits for the next global search. Nothing runs when
+//             a slave with no tracked node (every slave is visited with FLAG_EVERY_SLAVE) keeps
+//             the global search's hit: it is beyond radius + budget, and the motion budget
+//             asks for a global search before it can come within the radius. Nothing runs when
 //             the motion budget is exceeded (the increment is run again with a global search).
 //             A slave nearest to a free edge or corner of the master and off to its side gets
 //             HIT_BESIDE_FREE_EDGE in its candidates word (as in nearest_facet.wgsl). A facet
@@ -53,23 +57,21 @@ fn consider(b: ptr<function, Best>, s: u32, p: vec3<f32>, f: u32) {
 fn local_search(@builtin(workgroup_id) wg: vec3<u32>,
                 @builtin(num_workgroups) nwg: vec3<u32>,
                 @builtin(local_invocation_index) li: u32) {
-    let i = folded_id(wg, nwg, li, ITEM_WORKGROUP);
-    if (i >= params.n_slaves) { return; }
+    let k = folded_id(wg, nwg, li, ITEM_WORKGROUP);
+    if (k >= atomicLoad(&status[ACTIVE_LIST])) { return; }
     if (atomicLoad(&status[STATUS_BUDGET_EXCEEDED]) != 0u) { return; }
+    let i = atomicLoad(&status[ACTIVE_LIST + 1u + k]);
     var hit = hits[i];
+    var tracked = hit.node;
+    if (tracked == NO_NODE) { return; }
     let s = slaves[i];
     let p = nodes[s].xyz;
-    var tracked = hit.node;
     hit.facet = NO_FACET;
     hit.candidates = 0u;
     hit.slave = s;
     hit.point_gap = vec4<f32>(0.0);
     hit.normal_dist = vec4<f32>(0.0);
     hit.weights = vec4<f32>(0.0);
-    if (tracked == NO_NODE) {
-        hits[i] = hit;
-        return;
-    }
     var b: Best;
     var it = 0u;
     var settled = false;

@@ -60,6 +60,11 @@
 //             force's: the nearest facet within the radius, ties to the lowest facet id,
 //             decided by comparison; the tracked node is the facet node nearest the slave
 //             node, ties to the lowest node id. No facet within the radius: facet = NO_FACET.
+//             The walks look as far as the tracking radius, radius + budget
+//             (`track_radius2`): a slave whose nearest facet lies beyond the radius but within
+//             it is tracked (hit.node set, facet = NO_FACET), so that the local search finds it
+//             the increment it comes within the radius — the motion budget asks for a global
+//             search before an untracked slave can come that far (active.wgsl).
 //             The walk's visits follow the slave's gap, not the radius. With FLAG_SELF_CONTACT
 //             a slave's own facets and the facets touching them are skipped, and a slave with
 //             another facet within the radius that shares no node with its nearest and faces it
@@ -106,6 +111,13 @@ const BEST_WORDS: u32 = 8u;
 // A subtree is skipped when its box's distance² exceeds the bound by this factor: more than
 // the round-off of a distance² computed in f32 (Rust twin: PRUNE_SLACK).
 const PRUNE_SLACK: f32 = 1.0001;
+
+// The square of the tracking radius, radius + budget: how far the walks look (Rust twin:
+// `cpu::nearest_facet::track_radius2`).
+fn track_radius2() -> f32 {
+    let r = params.radius + params.budget;
+    return r * r;
+}
 // Workgroups per dimension of the indirect dispatch before folding into y (WebGPU's default).
 const MAX_GROUPS_PER_DIM: u32 = 65535u;
 
@@ -179,7 +191,7 @@ fn walk(t: u32, start: u32) -> Walk {
     var pending = 0u;
     var last = 1u;
     var w: Walk;
-    w.d2 = params.radius * params.radius;
+    w.d2 = track_radius2();
     w.f = NO_FACET;
     w.next = 0u;
     w.projections = 0u;
@@ -296,7 +308,7 @@ fn chunk_best(i: u32, t: u32) -> ChunkBest {
     let j0 = atomicLoad(&best[BEST_WORDS * i + 5u]) + (t - work[i]) * CANDIDATE_CHUNK;
     let j1 = min(leaves, j0 + CANDIDATE_CHUNK);
     var b: ChunkBest;
-    b.d2 = params.radius * params.radius;
+    b.d2 = track_radius2();
     b.f = NO_FACET;
     for (var j = j0; j < j1; j++) {
         let k = leaves + j;
@@ -346,7 +358,7 @@ fn walk_start(@builtin(workgroup_id) wg: vec3<u32>,
         glo = min(glo, q);
         ghi = max(ghi, q);
     }
-    let bound = params.radius * params.radius * PRUNE_SLACK;
+    let bound = track_radius2() * PRUNE_SLACK;
     let leaves = 1u << params.tree_levels;
     var k = select(0u, 1u, group_near(1u, glo, ghi, bound, step));
     for (var s = 0u; s < 32u && k != 0u && k < leaves; s++) {
@@ -518,13 +530,15 @@ fn nearest_facet(@builtin(workgroup_id) wg: vec3<u32>,
             let d3 = dot(x.x3 - p, x.x3 - p);
             if (d3 < best_nd2 || (d3 == best_nd2 && fac.w < best_node)) { best_node = fac.w; best_nd2 = d3; }
         }
-        hit.facet = best_f;
         hit.node = best_node;
-        hit.point_gap = vec4<f32>(pr.point, dot(p - pr.point, pr.normal));
-        hit.normal_dist = vec4<f32>(pr.normal, sqrt(pr.dist2));
-        hit.weights = pr.weights;
-        if (beside_free_edge(best_f, fac, pr.weights, p, pr.point, pr.normal)) {
-            hit.candidates |= HIT_BESIDE_FREE_EDGE;
+        if (pr.dist2 <= params.radius * params.radius) {
+            hit.facet = best_f;
+            hit.point_gap = vec4<f32>(pr.point, dot(p - pr.point, pr.normal));
+            hit.normal_dist = vec4<f32>(pr.normal, sqrt(pr.dist2));
+            hit.weights = pr.weights;
+            if (beside_free_edge(best_f, fac, pr.weights, p, pr.point, pr.normal)) {
+                hit.candidates |= HIT_BESIDE_FREE_EDGE;
+            }
         }
     }
     hits[slaves[params.n_slaves + i]] = hit;

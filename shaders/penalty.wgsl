@@ -5,8 +5,10 @@
 //           3 facets, 4 hits (the search's results), 5 normals (smoothed nodal normals, per
 //           model node, from nodal_normals), 6 state (SlaveState per slave, read-write),
 //           7 out (ContactOut per slave), 8 status (atomic words: overflow read, increments
-//           and counts reduced).
-// Dispatch: one invocation per slave node, ITEM_WORKGROUP per workgroup, folded into 2D.
+//           and counts reduced; from ACTIVE_LIST the active slaves, active.wgsl).
+// Dispatch: penalty one invocation per slave node (global increments, small sliding),
+//           penalty_active one per active slave (local increments, indirect from the plan's
+//           ACTIVE_SLOT); ITEM_WORKGROUP per workgroup, folded into 2D.
 // Invariants: the contact normal N is the smoothed normal interpolated with the load-transfer
 //             weights (continuous across facet edges) and the gap is measured along it; the
 //             force on the slave is F_n·N + F_t and the master nodes get −w_j times it (gather),
@@ -137,7 +139,28 @@ fn penalty(@builtin(workgroup_id) wg: vec3<u32>,
     let i = folded_id(wg, nwg, li, ITEM_WORKGROUP);
     if (i >= pp.n_slaves) { return; }
     if (atomicLoad(&status[STATUS_BUDGET_EXCEEDED]) != 0u) { return; }
+    spring(i, hits[i]);
+}
+
+// Local increments: the active slaves only. An untracked one (visited with FLAG_EVERY_SLAVE)
+// is left as the global increment's penalty pass left it: no facet, open, its state and
+// output the same bits this pass would write again (its fast-node test is the global
+// increment's: the motion budget asks for one before it can come within the radius).
+@compute @workgroup_size(64)
+fn penalty_active(@builtin(workgroup_id) wg: vec3<u32>,
+                  @builtin(num_workgroups) nwg: vec3<u32>,
+                  @builtin(local_invocation_index) li: u32) {
+    let k = folded_id(wg, nwg, li, ITEM_WORKGROUP);
+    if (k >= atomicLoad(&status[ACTIVE_LIST])) { return; }
+    if (atomicLoad(&status[STATUS_BUDGET_EXCEEDED]) != 0u) { return; }
+    let i = atomicLoad(&status[ACTIVE_LIST + 1u + k]);
     let hit = hits[i];
+    if (hit.node == NO_NODE) { return; }
+    spring(i, hit);
+}
+
+// Slave i's spring from its hit.
+fn spring(i: u32, hit: Hit) {
     var o: ContactOut;
     o.force = vec4<f32>(0.0);
     o.tangential = vec4<f32>(0.0);

@@ -4,9 +4,9 @@
 // src/cpu/schedule.rs.
 //
 // Bindings: 1 plan (the search's plan words, PLAN_* in common.wgsl; its SearchParams words are
-//           what every later pass binds as its uniform), 2 status (read: the motion budget and
-//           the master box; written: the budget flag is cleared once this increment searches
-//           globally), 3 args (the nearest-facet chunk dispatch, emptied in a local increment).
+//           what every later pass binds as its uniform), 2 status (read: the motion budget,
+//           the master box and the active slaves' count; written: the budget flag is cleared
+//           once this increment searches globally), 3 args (the nearest-facet chunk dispatch, emptied in a local increment).
 // Dispatch: one invocation, after to_local and motion and before every pass it sizes (in the
 //           same compute pass: WebGPU's usage scopes are per dispatch).
 // Invariants: global when no global search has run yet, when the host asked for one, when the
@@ -14,8 +14,10 @@
 //             motion budget is used up (the motion pass ran just before). A global increment
 //             takes the master box to_local raised (STATUS_BOX) and the tree's box margin from
 //             it; a box that cannot be taken (no finite master node) keeps the last one and is
-//             counted in PLAN_FIT_FAILED. Each dispatch slot gets its full size when its kind
-//             matches the increment and zero workgroups otherwise. No loop runs past
+//             counted in PLAN_FIT_FAILED. ACTIVE_SLOT's full size is the active slaves' count
+//             (status[ACTIVE_LIST]) in workgroups, folded by PLAN_MAX_DIM. Each dispatch slot
+//             gets its full size when its kind matches the increment and zero workgroups
+//             otherwise. No loop runs past
 //             MAX_PLAN_SLOTS iterations.
 
 @group(0) @binding(1) var<storage, read_write> plan: array<u32>;
@@ -24,6 +26,8 @@
 
 // Most dispatch slots a plan has (Rust twin: MAX_PLAN_SLOTS).
 const MAX_PLAN_SLOTS: u32 = 48u;
+// The active slaves' slot, the plan's first (Rust twin: ACTIVE_SLOT).
+const ACTIVE_SLOT: u32 = 0u;
 // Words of SearchParams the schedule reads and writes (Rust twins: P_* in src/abi/search.rs,
 // from the struct's field offsets).
 const P_BOX_MARGIN: u32 = 1u;
@@ -89,6 +93,17 @@ fn schedule() {
     }
     plan[PLAN_GLOBAL] = select(0u, 1u, global);
     plan[PLAN_TRIGGER] = trigger;
+    // the active slaves' slot: the count the last global search left (active.wgsl), its
+    // workgroups folded as the host folds a dispatch (fold_dispatch), none for none
+    let count = status[ACTIVE_LIST];
+    let groups = (count + ITEM_WORKGROUP - 1u) / ITEM_WORKGROUP;
+    let max_dim = max(plan[PLAN_MAX_DIM], 1u);
+    var y = min(groups, 1u);
+    if (groups > max_dim) { y = (groups + max_dim - 1u) / max_dim; }
+    let a = PLAN_SLOTS + ACTIVE_SLOT * PLAN_SLOT_WORDS;
+    plan[a + 4u] = select(0u, (groups + y - 1u) / max(y, 1u), groups > 0u);
+    plan[a + 5u] = y;
+    plan[a + 6u] = min(groups, 1u);
     let n = min(plan[PLAN_N_SLOTS], MAX_PLAN_SLOTS);
     for (var k = 0u; k < n; k++) {
         let s = PLAN_SLOTS + k * PLAN_SLOT_WORDS;

@@ -548,10 +548,11 @@ fn a_mass_pressed_onto_a_free_rigid_master_runs_and_a_thrown_one_is_named() {
 
 /// Host arrays: the host leaves the global search's dispatches out only when it has proved the
 /// device's schedule will choose the local one, and it proves it with the device's own measure,
-/// motion relative to the reference master node. An untracked slave moving 0.45 of the budget
-/// towards the plate while the plate moves 0.1 of it towards the slave: each under half the
-/// budget on its own, 0.55 together, so the device searches globally — and the slave, now
-/// within the radius, is found, on every device.
+/// motion relative to the reference master node. An untracked slave (beyond the tracking
+/// radius, radius + budget) moving 0.45 of the budget towards the plate while the plate moves
+/// 0.1 of it towards the slave: each under half the budget on its own, 0.55 together, so the
+/// device searches globally — and the slave, within the tracking radius then, is tracked, and
+/// found when it comes within the radius, on every device.
 #[test]
 fn a_budget_search_from_relative_motion_is_not_left_out() {
     let radius = 0.2;
@@ -563,7 +564,7 @@ fn a_budget_search_from_relative_motion_is_not_left_out() {
         m.add_nodes(&p.positions, &vec![1.0; np]).unwrap();
         let s = m.add_surface(Surface::quads(&p.facets)).unwrap();
         let r = m
-            .add_nodes(&[[0.5, 0.4, radius + 0.4 * budget]], &[1.0])
+            .add_nodes(&[[0.5, 0.4, radius + 1.4 * budget]], &[1.0])
             .unwrap();
         let set = m.add_node_set(&r.to_vec()).unwrap();
         m.add_pair(Pair::new(set, s).search_radius(radius).enforce(penalty()))
@@ -596,6 +597,25 @@ fn a_budget_search_from_relative_motion_is_not_left_out() {
         }
         let rep = c.penalty_step(&x, &v, dt).unwrap();
         assert_eq!(rep.global_searches, 1, "{d}: the budget's global search");
+        assert!(c.outputs()[0]
+            .1
+            .search
+            .as_ref()
+            .unwrap()
+            .contact(0)
+            .is_none());
+        // then the slave alone, 0.45 budget down each increment: still out of contact after
+        // one (a local increment), within the radius after two (out of contact, it counts in
+        // the budget again: that increment searches globally) and found
+        for k in 1..=2 {
+            for (i, (xi, vi)) in x.iter_mut().zip(&mut v).enumerate() {
+                let dz = if i == n - 1 { -0.45 * budget } else { 0.0 };
+                xi[2] += dz;
+                vi[2] = dz / dt;
+            }
+            let rep = c.penalty_step(&x, &v, dt).unwrap();
+            assert_eq!(rep.global_searches, k - 1, "{d}: increment {k} after it");
+        }
         let hit = c.outputs()[0].1.search.as_ref().unwrap().contact(0);
         assert!(
             hit.is_some(),

@@ -78,6 +78,7 @@ fn scene_at(jump: usize, balanced: bool, interval: u32, shift: f64, travel: f64)
             interval,
             budget: 0.5,
             wide_local: false,
+            visit_every_slave: false,
         });
     if balanced {
         // the slave grid as a surface of its own (its nodes in quads), weighted 0.5

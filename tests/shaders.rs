@@ -255,6 +255,7 @@ fn resident_twins_match_rust() {
         ("PLAN_INTERVAL", l::PLAN_INTERVAL),
         ("PLAN_N_SLOTS", l::PLAN_N_SLOTS),
         ("PLAN_FIT_FAILED", l::PLAN_FIT_FAILED),
+        ("PLAN_MAX_DIM", l::PLAN_MAX_DIM),
         ("PLAN_PARAMS", l::PLAN_PARAMS),
         ("PLAN_SLOTS", l::PLAN_SLOTS),
         ("PLAN_SLOT_WORDS", l::PLAN_SLOT_WORDS),
@@ -283,9 +284,16 @@ fn resident_twins_match_rust() {
             "STATUS_FAST_RATIO",
             abut::testing::abi::status::STATUS_FAST_RATIO,
         ),
+        // the active slaves follow the status words
+        ("ACTIVE_LIST", abut::testing::abi::status::STATUS_WORDS),
     ] {
         assert_eq!(constant_u32(&m, name) as usize, v, "{name}");
     }
+    assert_eq!(
+        constant_u32(&m, "ACTIVE_SLOT") as usize,
+        l::ACTIVE_SLOT,
+        "ACTIVE_SLOT"
+    );
     for (name, v) in [
         ("SLOT_GLOBAL", l::SLOT_GLOBAL),
         ("SLOT_LOCAL", l::SLOT_LOCAL),
@@ -295,6 +303,9 @@ fn resident_twins_match_rust() {
         ("TRIGGER_BUDGET", l::TRIGGER_BUDGET),
         ("TRIGGER_CROWDED", l::TRIGGER_CROWDED),
         ("TRIGGER_REQUESTED", l::TRIGGER_REQUESTED),
+        ("FLAG_WIDE_LOCAL", l::FLAG_WIDE_LOCAL),
+        ("FLAG_SELF_CONTACT", l::FLAG_SELF_CONTACT),
+        ("FLAG_EVERY_SLAVE", l::FLAG_EVERY_SLAVE),
     ] {
         assert_eq!(constant_u32(&m, name), v, "{name}");
     }

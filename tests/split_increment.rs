@@ -77,6 +77,7 @@ fn scene() -> Scene {
                     interval: 50,
                     budget: 0.5,
                     wide_local: false,
+                    visit_every_slave: false,
                 })
                 .balanced(slave_surface, 0.5),
         )

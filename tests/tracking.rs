@@ -28,7 +28,9 @@ struct Tally {
 /// Drives `steps` increments of positions `at(k)` through a tracked search and, each
 /// increment, a fresh global search; counts the slaves the global search puts within
 /// (1 − budget)·radius of a facet for which tracking found no facet, or one that is not
-/// equally near (a tie).
+/// equally near (a tie). (Beyond that, a slave in contact may have a nearer facet that its
+/// walk cannot reach — across a hole, on the other half of a folding sheet — until the next
+/// global search: the local search's limit, as the seed's.)
 fn track(
     d: &Device,
     m: &Model,
@@ -69,6 +71,15 @@ fn track(
                 None => f64::INFINITY,
             };
             if excess > tol {
+                if std::env::var("ABUT_DEBUG_MISSES").is_ok() {
+                    eprintln!(
+                        "k {k} slave {i} {:?}: global {:?} d {:.4} tracked {:?}",
+                        r.stats.trigger,
+                        gc.facet,
+                        gc.distance / radius,
+                        r.contact(i).map(|c| (c.facet, c.distance / radius))
+                    );
+                }
                 t.discrepancies += 1;
                 t.worst_excess = t.worst_excess.max(excess / radius);
             }
@@ -102,6 +113,7 @@ fn schedule(interval: u32) -> Schedule {
         interval,
         budget: 0.5,
         wide_local: false,
+        visit_every_slave: false,
     }
 }
 
@@ -110,6 +122,7 @@ fn wide(interval: u32) -> Schedule {
         interval,
         budget: 0.5,
         wide_local: true,
+        visit_every_slave: false,
     }
 }
 
@@ -410,6 +423,7 @@ fn sheet_folding_onto_itself() {
                 interval: 4,
                 budget: 0.5,
                 wide_local: true,
+                visit_every_slave: false,
             },
             160,
             &at,

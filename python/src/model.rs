@@ -218,6 +218,7 @@ impl Model {
                 interval,
                 budget,
                 wide_local,
+                visit_every_slave: false,
             });
             p.balanced = balanced.map(|(s, w)| (SurfaceId(s), w));
             p.pass_weight = pass_weight;

@@ -32,7 +32,8 @@ pub const LOCAL: Group = Group {
     label: "local_search",
     passes: &[&LOCAL_SEARCH],
 };
-/// The global search (indirect: no workgroups in a local increment).
+/// The global search (indirect: no workgroups in a local increment), and the active slaves it
+/// leaves compacted for the local increments.
 pub const GLOBAL_SEARCH: Group = Group {
     label: "global search",
     passes: &[
@@ -47,17 +48,25 @@ pub const GLOBAL_SEARCH: Group = Group {
         &NEAREST_CROWDED,
         &NEAREST_FACET,
         &SET_REFERENCE,
+        &ACTIVE_MARK,
+        &ACTIVE_COMPACT,
     ],
 };
-/// Nodal normals of the master, then the penalty springs.
+/// Nodal normals of the master, then the penalty springs (every slave's in a global
+/// increment, the active slaves' in a local one).
 pub const NORMALS_PENALTY: Group = Group {
     label: "nodal_normals + penalty",
-    passes: &[&NODAL_NORMALS, &PENALTY],
+    passes: &[&NODAL_NORMALS, &PENALTY, &PENALTY_ACTIVE],
 };
 /// The forces summed per pair node in fixed point and added into the caller's buffer.
 pub const SCATTER_GATHER_ADD: Group = Group {
     label: "scatter_forces + gather + add_forces",
-    passes: &[&SCATTER_FORCES, &GATHER, &ADD_FORCES],
+    passes: &[
+        &SCATTER_FORCES,
+        &SCATTER_FORCES_ACTIVE,
+        &GATHER,
+        &ADD_FORCES,
+    ],
 };
 /// A pair's status words into the increment's statistics.
 pub const STATS_PAIR: Group = Group {

@@ -3,6 +3,8 @@
 //! declarations, the benchmark takes its pass names from them, and `tests/shaders.rs` checks each
 //! one against naga's reflection of its WGSL (binding numbers, address spaces, access, workgroup
 //! size), so a binding cannot be changed in one place and not in the other.
+//!
+//! Long file: one declaration per pass, read as a table; split, it would be a table in pieces.
 
 use crate::abi::search::{ITEM_WORKGROUP, SCAN_BLOCK};
 
@@ -35,7 +37,8 @@ pub enum Buf {
     Order,
     /// The search tree's boxes: one packed `vec4<u32>` per heap node.
     Boxes,
-    /// The status words (`STATUS_*`).
+    /// The status words (`STATUS_*`, reset each increment), then the active slaves kept from one
+    /// global search to the next (`ACTIVE_LIST`: their count, then their slave indices).
     Status,
     /// One `Hit` per slave.
     Hits,
@@ -84,6 +87,9 @@ pub enum Buf {
     IntegrateParams,
     /// Node masses (f32 per model node).
     Masses,
+    /// The active slaves: the words of the status buffer from `ACTIVE_LIST` (no pass binds it
+    /// by this name; a split increment hands it over as a role of its own).
+    Active,
 }
 
 /// How a shader declares a binding.
@@ -113,6 +119,9 @@ pub struct Binding {
 pub enum Items {
     /// One per slave node.
     Slaves,
+    /// One per active slave (indirect, from the plan's active slot: the slaves the last global
+    /// search left tracked).
+    ActiveSlaves,
     /// One per group of `WALK_GROUP` slave nodes (walk positions).
     SlaveGroups,
     /// One per active facet.
@@ -319,6 +328,7 @@ pub const MOTION: Pass = Pass {
         b(3, MotionNodes, R),
         b(4, Status, RW),
         b(5, Hits, R),
+        b(6, Adjacency, R),
     ],
     items: Items::MotionNodes,
     per_workgroup: ITEM_WORKGROUP,
@@ -348,7 +358,7 @@ pub const SCHEDULE: Pass = Pass {
     per_workgroup: 1,
 };
 
-/// `local_search.wgsl`: each slave's walk from its tracked node.
+/// `local_search.wgsl`: each active slave's walk from its tracked node.
 pub const LOCAL_SEARCH: Pass = Pass {
     stem: "local_search",
     entry: "local_search",
@@ -360,6 +370,31 @@ pub const LOCAL_SEARCH: Pass = Pass {
         b(4, Adjacency, R),
         b(5, Status, RW),
         b(6, Hits, RW),
+    ],
+    items: Items::ActiveSlaves,
+    per_workgroup: ITEM_WORKGROUP,
+};
+
+/// `active.wgsl`: each slave marked for the local increments (tracked, or every slave with
+/// `FLAG_EVERY_SLAVE`) into the work items' first level, to be scanned.
+pub const ACTIVE_MARK: Pass = Pass {
+    stem: "active",
+    entry: "active_mark",
+    bindings: &[b(0, SearchParams, U), b(1, Hits, R), b(2, Work, RW)],
+    items: Items::Slaves,
+    per_workgroup: ITEM_WORKGROUP,
+};
+
+/// `active.wgsl`: the marked slaves compacted in slave order into the active list (the schedule
+/// sizes the active slot from its count).
+pub const ACTIVE_COMPACT: Pass = Pass {
+    stem: "active",
+    entry: "active_compact",
+    bindings: &[
+        b(0, SearchParams, U),
+        b(1, Hits, R),
+        b(2, Work, RW),
+        b(3, Status, RW),
     ],
     items: Items::Slaves,
     per_workgroup: ITEM_WORKGROUP,
@@ -433,6 +468,13 @@ pub const PENALTY: Pass = Pass {
     per_workgroup: ITEM_WORKGROUP,
 };
 
+/// `penalty.wgsl`: the same for the active slaves only (local increments).
+pub const PENALTY_ACTIVE: Pass = Pass {
+    entry: "penalty_active",
+    items: Items::ActiveSlaves,
+    ..PENALTY
+};
+
 /// `gather.wgsl`: each contact's reaction onto its facet's nodes in fixed point.
 pub const SCATTER_FORCES: Pass = Pass {
     stem: "gather",
@@ -447,6 +489,13 @@ pub const SCATTER_FORCES: Pass = Pass {
     ],
     items: Items::Slaves,
     per_workgroup: ITEM_WORKGROUP,
+};
+
+/// `gather.wgsl`: the same for the active slaves only (local increments).
+pub const SCATTER_FORCES_ACTIVE: Pass = Pass {
+    entry: "scatter_forces_active",
+    items: Items::ActiveSlaves,
+    ..SCATTER_FORCES
 };
 
 /// `gather.wgsl`: each pair node's force from its own contact and its sums.
@@ -523,7 +572,7 @@ pub const INTEGRATE: Pass = Pass {
 };
 
 /// Every pass, in the order an increment may run them.
-pub const PASSES: [Pass; 25] = [
+pub const PASSES: [Pass; 29] = [
     TO_LOCAL,
     ANCHOR,
     MOTION,
@@ -539,9 +588,13 @@ pub const PASSES: [Pass; 25] = [
     NEAREST_TIES,
     NEAREST_CROWDED,
     NEAREST_FACET,
+    ACTIVE_MARK,
+    ACTIVE_COMPACT,
     NODAL_NORMALS,
     PENALTY,
+    PENALTY_ACTIVE,
     SCATTER_FORCES,
+    SCATTER_FORCES_ACTIVE,
     GATHER,
     SET_REFERENCE,
     ADD_FORCES,

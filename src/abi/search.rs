@@ -81,6 +81,10 @@ pub const FLAG_WIDE_LOCAL: u32 = 1;
 /// Flag: self-contact, a slave's own facets and their neighbours are skipped
 /// (WGSL: `FLAG_SELF_CONTACT`).
 pub const FLAG_SELF_CONTACT: u32 = 2;
+/// Flag: local increments visit every slave, tracked or not, instead of the active slaves the
+/// last global search compacted (the baseline the compaction is tested and measured against;
+/// the results are the same bits) (WGSL: `FLAG_EVERY_SLAVE`).
+pub const FLAG_EVERY_SLAVE: u32 = 4;
 /// Walk iterations of the local search before it gives up (WGSL default).
 pub const MAX_LOCAL_ITERATIONS: u32 = 16;
 
@@ -285,6 +289,13 @@ pub const PLAN_N_SLOTS: usize = 7;
 /// Plan word: global searches whose master box could not be taken (no finite master node; the
 /// last box and margin kept).
 pub const PLAN_FIT_FAILED: usize = 9;
+/// Plan word: the most workgroups per dispatch dimension (the schedule folds the active
+/// slaves' dispatch by it).
+pub const PLAN_MAX_DIM: usize = 10;
+/// The dispatch slot of the active slaves, the plan's first (`SLOT_LOCAL`: the local
+/// increments' slave passes), sized by the schedule from the count the last global search's
+/// `active_compact` left (WGSL: `ACTIVE_SLOT` in schedule.wgsl).
+pub const ACTIVE_SLOT: usize = 0;
 /// Plan words: the `SearchParams` of the increment (24 words, from byte 256: the search passes
 /// bind them as their uniform).
 pub const PLAN_PARAMS: usize = 64;

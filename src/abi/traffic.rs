@@ -116,13 +116,14 @@ pub fn touches(pass: &Pass) -> Option<&'static [Touch]> {
                 ]
             }
         }
-        // the node's id; a slave's tracked node (tracked slaves stop there); the others' node
-        // now and at the reference
+        // the node's id; a slave's facet, and for one within the radius its adjacency range (one
+        // that is no master node stops there); the others' node now and at the reference
         "motion" => {
             const {
                 &[
                     t(MotionNodes, R, WORD, One, Each),
                     t(Hits, R, WORD, One, Slave),
+                    t(Adjacency, R, 2 * WORD, One, NearSlave),
                     t(Nodes, R, VEC4, One, FarSlave),
                     t(Reference, R, VEC4, One, FarSlave),
                     t(Nodes, R, VEC4, One, Master),
@@ -131,11 +132,13 @@ pub fn touches(pass: &Pass) -> Option<&'static [Touch]> {
             }
         }
         "schedule" | "pair_stats" | "finish_stats" => &[],
-        // the hit (a slave beyond the radius stops there); the slave's node and id, the tracked
-        // node's facet range and facets with their nodes; the hit written back
+        // the active slave's index; its hit; the slave's node and id, the tracked node's facet
+        // range and facets with their nodes; the hit written back (its items are the active
+        // slaves: within the radius, or tracked from within the tracking radius)
         "local_search" => {
             const {
                 &[
+                    t(Status, R, WORD, One, Each),
                     t(Hits, R, HIT, One, Slave),
                     t(Slaves, R, WORD, One, NearSlave),
                     t(Nodes, R, VEC4, One, NearSlave),
@@ -159,12 +162,14 @@ pub fn touches(pass: &Pass) -> Option<&'static [Touch]> {
                 ]
             }
         }
-        // the hit, the state in and out, the output out, the slave's velocity (its fast-node
-        // test); in contact, the facet, its nodes' positions, velocities and normals and the
-        // slave's position
-        "penalty" => {
+        // the active slave's index (penalty_active; counted for both: a word), the hit, the
+        // state in and out, the output out, the slave's velocity (its fast-node test); in
+        // contact, the facet, its nodes' positions, velocities and normals and the slave's
+        // position
+        "penalty" | "penalty_active" => {
             const {
                 &[
+                    t(Status, R, WORD, One, Each),
                     t(Hits, R, HIT, One, Slave),
                     t(State, R, STATE, One, Slave),
                     t(State, W, STATE, One, Slave),
@@ -178,11 +183,13 @@ pub fn touches(pass: &Pass) -> Option<&'static [Touch]> {
                 ]
             }
         }
-        // the output and the hit; in contact, the facet's pair nodes, and each master node's
-        // sums read and written (once per node: the slaves sharing it meet in cache)
-        "scatter_forces" => {
+        // the active slave's index (scatter_forces_active; counted for both), the output and
+        // the hit; in contact, the facet's pair nodes, and each master node's sums read and
+        // written (once per node: the slaves sharing it meet in cache)
+        "scatter_forces" | "scatter_forces_active" => {
             const {
                 &[
+                    t(Status, R, WORD, One, Each),
                     t(Out, R, OUT, One, Slave),
                     t(Hits, R, HIT, One, Slave),
                     t(FacetNodes, R, VEC4, One, NearSlave),
@@ -269,6 +276,15 @@ impl Topology {
     /// Items of `of` per slave node for a pass over `items`, with `near` the share of slaves
     /// within the search radius.
     fn items(&self, items: Items, of: Of, near: f64) -> f64 {
+        if items == Items::ActiveSlaves {
+            // every item is a slave within the radius (the bench's active slaves are those),
+            // and the master nodes they touch are the share of the master under them
+            return match of {
+                Each | Slave | NearSlave => near,
+                FarSlave | Master => 0.0,
+                EachMasterNode => self.masters_per_slave * near,
+            };
+        }
         let per_slave = match items {
             Items::Slaves => 1.0,
             // a pass over nodes, pair nodes or watched nodes: the slaves and the master nodes
@@ -300,15 +316,16 @@ pub fn bytes_per_slave(pass: &Pass, topology: &Topology, near: f64) -> Option<f6
     )
 }
 
-/// The passes whose traffic is declared (a local increment's and the integrator).
+/// The passes whose traffic is declared: a local increment's (the slave passes over the active
+/// slaves) and the integrator.
 pub const DECLARED: [&Pass; 13] = [
     &passes::TO_LOCAL,
     &passes::MOTION,
     &passes::SCHEDULE,
     &passes::LOCAL_SEARCH,
     &passes::NODAL_NORMALS,
-    &passes::PENALTY,
-    &passes::SCATTER_FORCES,
+    &passes::PENALTY_ACTIVE,
+    &passes::SCATTER_FORCES_ACTIVE,
     &passes::GATHER,
     &passes::ADD_FORCES,
     &passes::PAIR_STATS,
@@ -366,8 +383,9 @@ mod tests {
         }
     }
 
-    /// A slave beyond the radius costs a slave pass only the records it reads to find that out
-    /// and what it must write for every slave; the share within the radius adds linearly.
+    /// A slave beyond the radius costs the passes over the active slaves nothing, and a pass
+    /// over every slave the records it reads to find that out and what it writes for every
+    /// slave; the share within the radius adds linearly.
     #[test]
     fn bytes_follow_the_share_within_the_radius() {
         let topo = Topology {
@@ -375,12 +393,23 @@ mod tests {
             facets_per_node: 4.0,
             nodes_per_facet: 4.0,
         };
-        let far = bytes_per_slave(&passes::LOCAL_SEARCH, &topo, 0.0).unwrap();
-        assert_eq!(far, HIT as f64);
-        let near = bytes_per_slave(&passes::LOCAL_SEARCH, &topo, 1.0).unwrap();
-        let half = bytes_per_slave(&passes::LOCAL_SEARCH, &topo, 0.5).unwrap();
-        assert!((half - 0.5 * (far + near)).abs() < 1e-9);
-        assert!(near > 4.0 * 4.0 * VEC4 as f64);
+        for pass in [
+            &passes::LOCAL_SEARCH,
+            &passes::PENALTY_ACTIVE,
+            &passes::SCATTER_FORCES_ACTIVE,
+        ] {
+            let far = bytes_per_slave(pass, &topo, 0.0).unwrap();
+            assert_eq!(far, 0.0, "{}", pass.entry);
+        }
+        let far = bytes_per_slave(&passes::PENALTY, &topo, 0.0).unwrap();
+        assert_eq!(far, (WORD + HIT + 2 * STATE + OUT + VEC4) as f64);
+        for pass in [&passes::LOCAL_SEARCH, &passes::PENALTY] {
+            let far = bytes_per_slave(pass, &topo, 0.0).unwrap();
+            let near = bytes_per_slave(pass, &topo, 1.0).unwrap();
+            let half = bytes_per_slave(pass, &topo, 0.5).unwrap();
+            assert!((half - 0.5 * (far + near)).abs() < 1e-9);
+            assert!(near > 4.0 * VEC4 as f64);
+        }
         assert_eq!(bytes_per_slave(&passes::TREE_REFIT, &topo, 1.0), None);
     }
 }

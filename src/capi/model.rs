@@ -338,6 +338,7 @@ pub(crate) fn pair_from(
             interval: o.schedule_interval,
             budget: o.schedule_budget,
             wide_local: o.schedule_wide_local != 0,
+            visit_every_slave: false,
         });
     }
     if o.balanced != 0 {

@@ -76,7 +76,9 @@ fn row_share(o: &ContactOut, bit: u32) -> f32 {
 }
 
 /// One "invocation" per slave in contact: −w_j·f and the bound share onto each facet node's
-/// fixed-point sums (WGSL: `scatter_forces`). `acc` must be zeroed first.
+/// fixed-point sums (WGSL: `scatter_forces`); with `active` (the count, then the slave
+/// indices: `cpu::active`) the active slaves only (WGSL: `scatter_forces_active`). `acc` must
+/// be zeroed first.
 pub fn scatter_forces(
     pp: &PenaltyParams,
     facet_nodes: &[[u32; 4]],
@@ -84,6 +86,7 @@ pub fn scatter_forces(
     out: &[ContactOut],
     status: &[u32],
     acc: &mut [u32],
+    active: Option<&[u32]>,
 ) {
     let sf = pow2(fixed_exponent(status[STATUS_FORCE_SCALE], pp.n_slaves));
     let sr = pow2(fixed_exponent(status[STATUS_ROW_SCALE], pp.n_slaves));
@@ -91,7 +94,19 @@ pub fn scatter_forces(
     if status[STATUS_BUDGET_EXCEEDED] != 0 {
         return;
     }
-    for i in 0..pp.n_slaves as usize {
+    let all: Vec<u32>;
+    let list: &[u32] = match active {
+        Some(active) => {
+            let count = active.first().map_or(0, |&c| c as usize);
+            active.get(1..1 + count).unwrap_or(&[])
+        }
+        None => {
+            all = (0..pp.n_slaves).collect();
+            &all
+        }
+    };
+    for &i in list {
+        let i = i as usize;
         let o = &out[i];
         let hit = &hits[i];
         if o.status & CSTATUS_MASK == CSTATUS_OPEN || hit.facet >= pp.n_facets {

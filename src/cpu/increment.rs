@@ -5,8 +5,8 @@
 
 use super::resident::SearchArrays;
 use super::{
-    anchor, gather, hits_mut, local_search, motion, nearest_facet, nodal_normals, penalty, scan,
-    schedule, stats, to_local, tree, CpuPenalty,
+    active, anchor, gather, hits_mut, local_search, motion, nearest_facet, nodal_normals, penalty,
+    scan, schedule, stats, to_local, tree, CpuPenalty,
 };
 use crate::abi::penalty::{PenaltyParams, ACC_WORDS_PER_NODE};
 use crate::abi::search::{
@@ -117,8 +117,12 @@ pub(crate) fn run_entry(
             &prep.motion_nodes,
             status,
             &ws.hits,
+            &prep.adjacency,
         ),
-        Kernel::Schedule => schedule::schedule(s.plan, status, s.args),
+        Kernel::Schedule => {
+            let count = ws.active.first().copied().unwrap_or(0);
+            schedule::schedule(s.plan, status, s.args, count)
+        }
         Kernel::LocalSearch => local_search::local_search(
             &params,
             &prep.nodes,
@@ -127,6 +131,7 @@ pub(crate) fn run_entry(
             &prep.adjacency,
             status,
             hits_mut(&mut ws.hits),
+            &ws.active,
         ),
         Kernel::TreeRefit => {
             if let Some(tp) = tree_passes(params.tree_levels).get(e.level) {
@@ -197,6 +202,11 @@ pub(crate) fn run_entry(
         Kernel::SetReference => {
             motion::set_reference(&params, &prep.nodes, &mut ws.reference, &prep.motion_nodes)
         }
+        Kernel::ActiveMark => active::active_mark(&params, &ws.hits, &mut ws.work),
+        Kernel::ActiveCompact => {
+            ws.active.resize(params.n_slaves as usize + 1, 0);
+            active::active_compact(&params, &ws.hits, &ws.work, &mut ws.active)
+        }
         Kernel::NodalNormals => {
             let p = pen.ok_or_else(missing)?;
             nodal_normals::nodal_normals(
@@ -208,8 +218,9 @@ pub(crate) fn run_entry(
                 &mut p.penalty.normals,
             )
         }
-        Kernel::Penalty => {
+        Kernel::Penalty | Kernel::PenaltyActive => {
             let p = pen.ok_or_else(missing)?;
+            let active = (e.kernel == Kernel::PenaltyActive).then_some(&ws.active[..]);
             p.penalty
                 .out
                 .resize(p.params.n_slaves as usize, bytemuck::Zeroable::zeroed());
@@ -224,10 +235,12 @@ pub(crate) fn run_entry(
                 &mut p.penalty.state,
                 &mut p.penalty.out,
                 status,
+                active,
             );
         }
-        Kernel::ScatterForces => {
+        Kernel::ScatterForces | Kernel::ScatterForcesActive => {
             let p = pen.ok_or_else(missing)?;
+            let active = (e.kernel == Kernel::ScatterForcesActive).then_some(&ws.active[..]);
             let acc = &mut p.penalty.acc;
             acc.clear();
             acc.resize(p.setup.pair_nodes.len() * ACC_WORDS_PER_NODE, 0);
@@ -238,6 +251,7 @@ pub(crate) fn run_entry(
                 &p.penalty.out,
                 status,
                 acc,
+                active,
             );
         }
         Kernel::Gather => {

@@ -9,6 +9,7 @@
 //! to f32 round-off (exactly for the tree's boxes). It is also the backend used where no
 //! adapter exists.
 
+pub mod active;
 pub mod anchor;
 pub mod common;
 pub mod gather;
@@ -154,6 +155,9 @@ pub struct CpuWorkspace {
     pub best: Vec<u32>,
     /// The slaves' positions and node ids in walk order (`nearest_facet::walk_start`).
     pub walk_points: Vec<[u32; 4]>,
+    /// The active slaves the last global search left (count, then slave indices:
+    /// `active::active_compact`; on a GPU the status buffer's words from `ACTIVE_LIST`).
+    pub active: Vec<u32>,
 }
 
 /// The CPU executor of the global search.

@@ -1,12 +1,12 @@
 //! CPU mirror of `shaders/motion.wgsl`: the motion budget since the last global search.
 
 use super::common::node;
-use crate::abi::search::{GpuHit, SearchParams};
+use crate::abi::search::{GpuHit, SearchParams, NO_FACET};
 use crate::abi::status::{STATUS_BUDGET_EXCEEDED, STATUS_MOTION};
-use crate::model::NO_NODE;
 
-/// One "invocation" per motion node; tracked slaves are skipped. Each displacement since the
-/// reference is taken relative to the pair's reference master node's (`params.ref_node`).
+/// One "invocation" per motion node; slaves with a facet within the radius at the last
+/// increment that are not master nodes (no active facet in `adjacency`) are skipped. Each displacement since the reference is taken relative
+/// to the pair's reference master node's (`params.ref_node`).
 pub fn motion(
     params: &SearchParams,
     nodes: &[[f32; 4]],
@@ -14,12 +14,14 @@ pub fn motion(
     motion_nodes: &[u32],
     status: &mut [u32],
     hits: &[GpuHit],
+    adjacency: &[u32],
 ) {
     for (k, &id) in motion_nodes[..params.n_motion_nodes as usize]
         .iter()
         .enumerate()
     {
-        if k < params.n_slaves as usize && hits[k].node != NO_NODE {
+        let master = adjacency[id as usize + 1] > adjacency[id as usize];
+        if k < params.n_slaves as usize && hits[k].facet != NO_FACET && !master {
             continue;
         }
         let base = node(nodes, params.ref_node) - node(reference, params.ref_node);

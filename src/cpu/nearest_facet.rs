@@ -194,6 +194,14 @@ fn ancestor(at: u32, d: u32) -> u32 {
     at >> (depth(at) - d)
 }
 
+/// The square of the tracking radius, radius + budget: how far the walks look (WGSL:
+/// `track_radius2`). A slave whose nearest facet lies beyond the radius but within it is
+/// tracked (its hit has the node, no facet).
+pub fn track_radius2(params: &SearchParams) -> f32 {
+    let r = params.radius + params.budget;
+    r * r
+}
+
 /// The nearest facet of the slave at walk position t a depth-first walk finds within
 /// `WALK_VISITS` nodes, the nearer child first, the pending siblings one bit per depth
 /// (WGSL: `walk`).
@@ -205,7 +213,7 @@ fn walk(c: &Candidates<'_>, t: usize, start: u32) -> Walk {
     // the node the walk was last at: its ancestors are the walk's path
     let mut last = 1u32;
     let mut w = Walk {
-        d2: c.params.radius * c.params.radius,
+        d2: track_radius2(c.params),
         f: NO_FACET,
         next: 0,
         projections: 0,
@@ -306,7 +314,7 @@ fn chunk_best(c: &Candidates<'_>, work: &[u32], b: &[u32], i: usize, t: u32) -> 
     let leaves = c.leaves();
     let j0 = b[5] + (t - work[i]) * CANDIDATE_CHUNK;
     let j1 = leaves.min(j0 + CANDIDATE_CHUNK);
-    let mut best = (c.params.radius * c.params.radius, NO_FACET);
+    let mut best = (track_radius2(c.params), NO_FACET);
     for j in j0..j1 {
         let k = (leaves + j) as usize;
         if boxes::is_empty(c.boxes[k]) {
@@ -339,7 +347,7 @@ pub fn walk_start(
 ) {
     let n = params.n_slaves as usize;
     let leaves = 1u32 << params.tree_levels;
-    let bound = params.radius * params.radius * PRUNE_SLACK;
+    let bound = track_radius2(params) * PRUNE_SLACK;
     let step = boxes::box_step(params.box_margin).0;
     // whether node k's box is within the bound of the box [glo, ghi] (WGSL: `group_near`)
     let near = |k: u32, glo: glam::Vec4, ghi: glam::Vec4| {
@@ -584,6 +592,13 @@ pub fn nearest_facet(c: &Candidates<'_>, status: &mut [u32], hits: &mut [GpuHit]
                 best_node = id;
                 best_nd2 = d2;
             }
+        }
+        if best_pr.dist2 > params.radius * params.radius {
+            // beyond the radius, within the tracking radius: tracked, no facet
+            let mut hit = GpuHit::miss(slave, candidates);
+            hit.node = best_node;
+            store(i, hit);
+            return (fallback, u32::from(b[2] != 0));
         }
         let q = best_pr.point;
         let beside = super::common::beside_free_edge(

@@ -139,7 +139,9 @@ fn facet_velocity(vel: &[[f32; 4]], fac: [u32; 4], w: [f32; 4]) -> V3<f32> {
     vm
 }
 
-/// One "invocation" per slave node (WGSL: `penalty`); `friction` is the FRICTION override.
+/// One "invocation" per slave node (WGSL: `penalty`), or with `active` (the count, then the
+/// slave indices: `cpu::active`) one per active slave (WGSL: `penalty_active`); `friction` is
+/// the FRICTION override.
 #[allow(clippy::too_many_arguments)]
 pub fn penalty(
     pp: &PenaltyParams,
@@ -152,6 +154,7 @@ pub fn penalty(
     state: &mut [SlaveState],
     out: &mut [ContactOut],
     status: &mut [u32],
+    active: Option<&[u32]>,
 ) {
     if status[STATUS_BUDGET_EXCEEDED] != 0 {
         return;
@@ -173,171 +176,195 @@ pub fn penalty(
                 .fetch_max((reach / pp.search_radius).to_bits(), Ordering::Relaxed);
         }
     };
-    state[..n]
-        .par_iter_mut()
-        .zip(out[..n].par_iter_mut())
-        .enumerate()
-        .with_min_len(super::PAR_MIN)
-        .for_each(|(i, (slave_state, slot))| {
-            let hit = hits[i];
-            let mut o = ContactOut {
-                force: [0.0; 4],
-                tangential: [0.0; 4],
-                normal_gap: [0.0; 4],
-                status: CSTATUS_OPEN,
-                dissipation: 0.0,
-                bound_light: 0.0,
-                bound_heavy: 0.0,
+    let spring = |i: usize, slave_state: &mut SlaveState, slot: &mut ContactOut| {
+        let hit = hits[i];
+        let mut o = ContactOut {
+            force: [0.0; 4],
+            tangential: [0.0; 4],
+            normal_gap: [0.0; 4],
+            status: CSTATUS_OPEN,
+            dissipation: 0.0,
+            bound_light: 0.0,
+            bound_heavy: 0.0,
+        };
+        let (mut dt_stable, mut dt_approach) = (NO_LIMIT, NO_LIMIT);
+        let area = slave_state.tangential_area[3];
+        o.dissipation = slave_state.history[0];
+        let beside = hit.candidates & crate::abi::search::HIT_BESIDE_FREE_EDGE != 0;
+        if hit.facet == NO_FACET || beside {
+            if hit.facet != NO_FACET {
+                let fac = facets[hit.facet as usize];
+                count_fast(hit.slave, facet_velocity(vel, fac, hit.weights));
+            } else if pp.ref_node != NO_NODE {
+                count_fast(hit.slave, node(vel, pp.ref_node));
+            }
+            slave_state.tangential_area = [0.0, 0.0, 0.0, area];
+            let behind = if beside && hit.point_gap[3] < 0.0 {
+                1.0
+            } else {
+                0.0
             };
-            let (mut dt_stable, mut dt_approach) = (NO_LIMIT, NO_LIMIT);
-            let area = slave_state.tangential_area[3];
-            o.dissipation = slave_state.history[0];
-            let beside = hit.candidates & crate::abi::search::HIT_BESIDE_FREE_EDGE != 0;
-            if hit.facet == NO_FACET || beside {
-                if hit.facet != NO_FACET {
-                    let fac = facets[hit.facet as usize];
-                    count_fast(hit.slave, facet_velocity(vel, fac, hit.weights));
-                } else if pp.ref_node != NO_NODE {
-                    count_fast(hit.slave, node(vel, pp.ref_node));
-                }
-                slave_state.tangential_area = [0.0, 0.0, 0.0, area];
-                let behind = if beside && hit.point_gap[3] < 0.0 {
-                    1.0
-                } else {
-                    0.0
-                };
-                slave_state.history = [o.dissipation, behind, 0.0, 0.0];
-                *slot = o;
-                return;
-            }
-            let s = hit.slave;
-            let fac = facets[hit.facet as usize];
-            let n = facet_node_count(fac);
-            let (mut nsum, mut vm) = (V3::<f32>::zero(), V3::<f32>::zero());
-            let (mut inv_mm, mut h_facet) = (0.0f32, 0.0f32);
-            let mut share = [0.0f32; 4];
-            for j in 0..n {
-                let w = hit.weights[j];
-                let id = fac[j];
-                let nn = normals[id as usize];
-                nsum = nsum + V3::new(nn[0], nn[1], nn[2]) * w;
-                let v = vel[id as usize];
-                vm = vm + V3::new(v[0], v[1], v[2]) * w;
-                inv_mm += w * w / nodes[id as usize][3];
-                share[j] = w.abs() / nodes[id as usize][3].sqrt();
-                h_facet = h_facet.max(
-                    (node(nodes, fac[(j + 1) % n]) - node(nodes, id))
-                        .length2()
-                        .sqrt(),
-                );
-            }
-            count_fast(s, vm);
-            let mut nrm = nsum.normalize_or_zero();
-            if nrm.length2() == 0.0 {
-                nrm = V3::new(hit.normal_dist[0], hit.normal_dist[1], hit.normal_dist[2]);
-            }
-            let p = node(nodes, s);
-            let c = V3::new(hit.point_gap[0], hit.point_gap[1], hit.point_gap[2]);
-            let mut gap = (p - c).dot(nrm);
-            if pp.flags & PENALTY_ANCHORED != 0 {
-                nrm = V3::new(hit.normal_dist[0], hit.normal_dist[1], hit.normal_dist[2]);
-                gap = hit.point_gap[3];
-            }
-            if slave_state.history[1] != 0.0 && gap < 0.0 {
-                slave_state.tangential_area = [0.0, 0.0, 0.0, area];
-                *slot = o;
-                return;
-            }
-            let mut inv_ms = 1.0 / nodes[s as usize][3];
-            if pp.master_body[3] > 0.0 {
-                inv_mm = body_compliance(pp.master_body, &pp.master_inv_inertia, c, nrm);
-                share = [inv_mm.sqrt(), 0.0, 0.0, 0.0];
-            }
-            if pp.slave_body[3] > 0.0 {
-                inv_ms = body_compliance(pp.slave_body, &pp.slave_inv_inertia, p, nrm);
-            }
-            let m_eff = 1.0 / (inv_ms + inv_mm);
-            let mut k = pp.stiffness;
-            if pp.stiffness_mode == STIFFNESS_AUTO {
-                let m_auto = 1.0 / (inv_ms * pp.slave_share + inv_mm);
-                k = pp.stiffness * m_auto / (pp.dt_ref * pp.dt_ref);
-            } else if pp.stiffness_mode == STIFFNESS_MODULUS {
-                k = pp.stiffness * pp.modulus * area / h_facet;
-            } else if pp.stiffness_mode == STIFFNESS_PER_AREA {
-                k = pp.stiffness * area;
-            }
-            let lv = law(pp, -gap, k, area);
-            let vs = vel[s as usize];
-            let v_rel = V3::new(vs[0], vs[1], vs[2]) - vm;
-            let v_close = -v_rel.dot(nrm);
-            let omega = (lv.stiffness / m_eff).sqrt();
-            let z = pp.damping;
-            if omega > 0.0 {
-                dt_stable = 2.0 / omega * ((1.0 + z * z).sqrt() - z);
-            }
-            if gap > 0.0 && v_close > 0.0 {
-                dt_approach = 0.5 * gap / v_close;
-            }
-            let mut k_row = pp.weight * lv.stiffness;
-            if friction {
-                k_row *= pp.stick_stiffness.max(1.0);
-            }
-            let (bound, mask) = row_shares(k_row, inv_ms.sqrt(), &share[..n]);
-            o.bound_light = bound[0];
-            o.bound_heavy = bound[1];
-            o.normal_gap = [nrm.x, nrm.y, nrm.z, gap];
-            let mut f_t = V3::<f32>::zero();
-            if lv.force > 0.0 {
-                let cdamp = 2.0 * z * (lv.stiffness * m_eff).sqrt();
-                let f_n = (lv.force + cdamp * v_close).max(0.0);
-                o.status = CSTATUS_SLIP;
-                if friction {
-                    let st = slave_state.tangential_area;
-                    let mut t_prev = V3::new(st[0], st[1], st[2]);
-                    let mag = t_prev.length2().sqrt();
-                    t_prev = (t_prev - nrm * t_prev.dot(nrm)).normalize_or_zero() * mag;
-                    let v_t = v_rel - nrm * v_rel.dot(nrm);
-                    let k_t = pp.stick_stiffness * lv.stiffness;
-                    let trial = t_prev - v_t * (k_t * pp.dt);
-                    let mu = pp.mu_kinetic
-                        + (pp.mu - pp.mu_kinetic) * (-pp.decay * v_t.length2().sqrt()).exp();
-                    let limit = mu * f_n;
-                    let t_len = trial.length2().sqrt();
-                    if t_len <= limit {
-                        f_t = trial;
-                        o.status = CSTATUS_STICK;
-                    } else {
-                        f_t = trial * (limit / t_len);
-                        if k_t > 0.0 {
-                            o.dissipation += pp.weight * limit * (t_len - limit) / k_t;
-                        }
-                    }
-                    if k_t > 0.0 {
-                        o.tangential[3] = 0.5 * f_t.dot(f_t) / k_t;
-                    }
-                }
-                let w = pp.weight;
-                let f = (nrm * f_n + f_t) * w;
-                o.force = [f.x, f.y, f.z, w * f_n];
-                let ft = f_t * w;
-                o.tangential = [ft.x, ft.y, ft.z, w * (o.tangential[3] + lv.energy)];
-                status[STATUS_ACTIVE].fetch_add(1, Ordering::Relaxed);
-                if o.status == CSTATUS_SLIP {
-                    status[STATUS_SLIPPING].fetch_add(1, Ordering::Relaxed);
-                }
-                max_word(STATUS_MAX_OVERCLOSURE, (-gap).max(0.0).to_bits());
-            }
-            slave_state.tangential_area = [f_t.x, f_t.y, f_t.z, area];
-            slave_state.history = [o.dissipation, 0.0, 0.0, 0.0];
-            min_word(STATUS_DT_STABLE, dt_stable);
-            min_word(STATUS_DT_APPROACH, dt_approach);
-            o.status |= mask;
-            if o.status & CSTATUS_MASK != CSTATUS_OPEN {
-                // the fixed-point scales of the gather: the largest magnitudes it will sum
-                let a = o.force[0].abs().max(o.force[1].abs().max(o.force[2].abs()));
-                max_word(STATUS_FORCE_SCALE, a.to_bits());
-                max_word(STATUS_ROW_SCALE, o.bound_light.max(o.bound_heavy).to_bits());
-            }
+            slave_state.history = [o.dissipation, behind, 0.0, 0.0];
             *slot = o;
-        });
+            return;
+        }
+        let s = hit.slave;
+        let fac = facets[hit.facet as usize];
+        let n = facet_node_count(fac);
+        let (mut nsum, mut vm) = (V3::<f32>::zero(), V3::<f32>::zero());
+        let (mut inv_mm, mut h_facet) = (0.0f32, 0.0f32);
+        let mut share = [0.0f32; 4];
+        for j in 0..n {
+            let w = hit.weights[j];
+            let id = fac[j];
+            let nn = normals[id as usize];
+            nsum = nsum + V3::new(nn[0], nn[1], nn[2]) * w;
+            let v = vel[id as usize];
+            vm = vm + V3::new(v[0], v[1], v[2]) * w;
+            inv_mm += w * w / nodes[id as usize][3];
+            share[j] = w.abs() / nodes[id as usize][3].sqrt();
+            h_facet = h_facet.max(
+                (node(nodes, fac[(j + 1) % n]) - node(nodes, id))
+                    .length2()
+                    .sqrt(),
+            );
+        }
+        count_fast(s, vm);
+        let mut nrm = nsum.normalize_or_zero();
+        if nrm.length2() == 0.0 {
+            nrm = V3::new(hit.normal_dist[0], hit.normal_dist[1], hit.normal_dist[2]);
+        }
+        let p = node(nodes, s);
+        let c = V3::new(hit.point_gap[0], hit.point_gap[1], hit.point_gap[2]);
+        let mut gap = (p - c).dot(nrm);
+        if pp.flags & PENALTY_ANCHORED != 0 {
+            nrm = V3::new(hit.normal_dist[0], hit.normal_dist[1], hit.normal_dist[2]);
+            gap = hit.point_gap[3];
+        }
+        if slave_state.history[1] != 0.0 && gap < 0.0 {
+            slave_state.tangential_area = [0.0, 0.0, 0.0, area];
+            *slot = o;
+            return;
+        }
+        let mut inv_ms = 1.0 / nodes[s as usize][3];
+        if pp.master_body[3] > 0.0 {
+            inv_mm = body_compliance(pp.master_body, &pp.master_inv_inertia, c, nrm);
+            share = [inv_mm.sqrt(), 0.0, 0.0, 0.0];
+        }
+        if pp.slave_body[3] > 0.0 {
+            inv_ms = body_compliance(pp.slave_body, &pp.slave_inv_inertia, p, nrm);
+        }
+        let m_eff = 1.0 / (inv_ms + inv_mm);
+        let mut k = pp.stiffness;
+        if pp.stiffness_mode == STIFFNESS_AUTO {
+            let m_auto = 1.0 / (inv_ms * pp.slave_share + inv_mm);
+            k = pp.stiffness * m_auto / (pp.dt_ref * pp.dt_ref);
+        } else if pp.stiffness_mode == STIFFNESS_MODULUS {
+            k = pp.stiffness * pp.modulus * area / h_facet;
+        } else if pp.stiffness_mode == STIFFNESS_PER_AREA {
+            k = pp.stiffness * area;
+        }
+        let lv = law(pp, -gap, k, area);
+        let vs = vel[s as usize];
+        let v_rel = V3::new(vs[0], vs[1], vs[2]) - vm;
+        let v_close = -v_rel.dot(nrm);
+        let omega = (lv.stiffness / m_eff).sqrt();
+        let z = pp.damping;
+        if omega > 0.0 {
+            dt_stable = 2.0 / omega * ((1.0 + z * z).sqrt() - z);
+        }
+        if gap > 0.0 && v_close > 0.0 {
+            dt_approach = 0.5 * gap / v_close;
+        }
+        let mut k_row = pp.weight * lv.stiffness;
+        if friction {
+            k_row *= pp.stick_stiffness.max(1.0);
+        }
+        let (bound, mask) = row_shares(k_row, inv_ms.sqrt(), &share[..n]);
+        o.bound_light = bound[0];
+        o.bound_heavy = bound[1];
+        o.normal_gap = [nrm.x, nrm.y, nrm.z, gap];
+        let mut f_t = V3::<f32>::zero();
+        if lv.force > 0.0 {
+            let cdamp = 2.0 * z * (lv.stiffness * m_eff).sqrt();
+            let f_n = (lv.force + cdamp * v_close).max(0.0);
+            o.status = CSTATUS_SLIP;
+            if friction {
+                let st = slave_state.tangential_area;
+                let mut t_prev = V3::new(st[0], st[1], st[2]);
+                let mag = t_prev.length2().sqrt();
+                t_prev = (t_prev - nrm * t_prev.dot(nrm)).normalize_or_zero() * mag;
+                let v_t = v_rel - nrm * v_rel.dot(nrm);
+                let k_t = pp.stick_stiffness * lv.stiffness;
+                let trial = t_prev - v_t * (k_t * pp.dt);
+                let mu = pp.mu_kinetic
+                    + (pp.mu - pp.mu_kinetic) * (-pp.decay * v_t.length2().sqrt()).exp();
+                let limit = mu * f_n;
+                let t_len = trial.length2().sqrt();
+                if t_len <= limit {
+                    f_t = trial;
+                    o.status = CSTATUS_STICK;
+                } else {
+                    f_t = trial * (limit / t_len);
+                    if k_t > 0.0 {
+                        o.dissipation += pp.weight * limit * (t_len - limit) / k_t;
+                    }
+                }
+                if k_t > 0.0 {
+                    o.tangential[3] = 0.5 * f_t.dot(f_t) / k_t;
+                }
+            }
+            let w = pp.weight;
+            let f = (nrm * f_n + f_t) * w;
+            o.force = [f.x, f.y, f.z, w * f_n];
+            let ft = f_t * w;
+            o.tangential = [ft.x, ft.y, ft.z, w * (o.tangential[3] + lv.energy)];
+            status[STATUS_ACTIVE].fetch_add(1, Ordering::Relaxed);
+            if o.status == CSTATUS_SLIP {
+                status[STATUS_SLIPPING].fetch_add(1, Ordering::Relaxed);
+            }
+            max_word(STATUS_MAX_OVERCLOSURE, (-gap).max(0.0).to_bits());
+        }
+        slave_state.tangential_area = [f_t.x, f_t.y, f_t.z, area];
+        slave_state.history = [o.dissipation, 0.0, 0.0, 0.0];
+        min_word(STATUS_DT_STABLE, dt_stable);
+        min_word(STATUS_DT_APPROACH, dt_approach);
+        o.status |= mask;
+        if o.status & CSTATUS_MASK != CSTATUS_OPEN {
+            // the fixed-point scales of the gather: the largest magnitudes it will sum
+            let a = o.force[0].abs().max(o.force[1].abs().max(o.force[2].abs()));
+            max_word(STATUS_FORCE_SCALE, a.to_bits());
+            max_word(STATUS_ROW_SCALE, o.bound_light.max(o.bound_heavy).to_bits());
+        }
+        *slot = o;
+    };
+    match active {
+        None => state[..n]
+            .par_iter_mut()
+            .zip(out[..n].par_iter_mut())
+            .enumerate()
+            .with_min_len(super::PAR_MIN)
+            .for_each(|(i, (slave_state, slot))| spring(i, slave_state, slot)),
+        Some(active) => {
+            // the active slaves (WGSL: `penalty_active`): an untracked one is left as it is
+            let count = active.first().map_or(0, |&c| c as usize);
+            let list = active.get(1..1 + count).unwrap_or(&[]);
+            let (state_in, out_in): (&[SlaveState], &[ContactOut]) = (state, out);
+            let done: Vec<(usize, SlaveState, ContactOut)> = list
+                .par_iter()
+                .with_min_len(super::PAR_MIN)
+                .filter(|&&i| hits[i as usize].node != NO_NODE)
+                .map(|&i| {
+                    let i = i as usize;
+                    let (mut st, mut o) = (state_in[i], out_in[i]);
+                    spring(i, &mut st, &mut o);
+                    (i, st, o)
+                })
+                .collect();
+            for (i, st, o) in done {
+                state[i] = st;
+                out[i] = o;
+            }
+        }
+    }
 }

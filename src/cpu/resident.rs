@@ -69,6 +69,9 @@ impl CpuSearch {
         );
         super::hits_mut(&mut self.ws.hits).resize(prep.slaves.len(), GpuHit::miss(0, 0));
         self.ws.reference = prep.nodes.clone();
+        // no active slave until the first global search
+        self.ws.active.clear();
+        self.ws.active.resize(prep.slaves.len() + 1, 0);
         self.resident = Some(Box::new(CpuResident {
             prep: prep.clone(),
             frame: FrameParams {
@@ -133,6 +136,7 @@ impl CpuSearch {
             .resize(ScanLevels::new(n as u32 + 1).words as usize, 0);
         ws.best.resize(n * BEST_WORDS, 0);
         ws.walk_points.resize(n, [0; 4]);
+        ws.active.resize(n + 1, 0);
         Some(match buf {
             Buf::Nodes => bytemuck::cast_slice_mut(&mut r.prep.nodes),
             Buf::Status => bytemuck::cast_slice_mut(&mut ws.status),
@@ -144,6 +148,7 @@ impl CpuSearch {
             Buf::Work => bytemuck::cast_slice_mut(&mut ws.work),
             Buf::Best => bytemuck::cast_slice_mut(&mut ws.best),
             Buf::WalkPoints => bytemuck::cast_slice_mut(&mut ws.walk_points),
+            Buf::Active => bytemuck::cast_slice_mut(&mut ws.active),
             _ => return None,
         })
     }

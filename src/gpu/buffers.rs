@@ -81,14 +81,14 @@ fn create(
     })
 }
 
-/// Reads the first `len` bytes of each of `sources` back, in order, concatenated: one staging
-/// buffer, one encoder of copies, one submit, one wait.
+/// Reads `len` bytes from byte `from` of each of `sources` `(buffer, from, len)` back, in
+/// order, concatenated: one staging buffer, one encoder of copies, one submit, one wait.
 pub(crate) fn copy_back(
     ctx: &crate::device::GpuContext,
-    sources: &[(&wgpu::Buffer, u64)],
+    sources: &[(&wgpu::Buffer, u64, u64)],
     during: &str,
 ) -> Result<Vec<u8>> {
-    let total: u64 = sources.iter().map(|s| s.1).sum();
+    let total: u64 = sources.iter().map(|s| s.2).sum();
     if total == 0 {
         return Ok(Vec::new());
     }
@@ -104,9 +104,9 @@ pub(crate) fn copy_back(
             label: Some(during),
         });
     let mut offset = 0;
-    for &(b, len) in sources {
+    for &(b, from, len) in sources {
         if len > 0 {
-            enc.copy_buffer_to_buffer(b, 0, &staging, offset, len);
+            enc.copy_buffer_to_buffer(b, from, &staging, offset, len);
         }
         offset += len;
     }

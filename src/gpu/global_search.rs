@@ -28,8 +28,10 @@ pub struct SharedBuffers<'a> {
     pub facets: &'a wgpu::Buffer,
     /// One hit per slave.
     pub hits: &'a wgpu::Buffer,
-    /// Status words.
+    /// Status words (then the active slaves).
     pub status: &'a wgpu::Buffer,
+    /// The plan words (the indirect sizes of the passes over the slaves).
+    pub plan: &'a wgpu::Buffer,
 }
 
 /// Uniform offsets must be multiples of this (WebGPU's default alignment).
@@ -64,7 +66,9 @@ struct Buffers {
     order: GrowBuffer,
     /// The search tree's boxes.
     boxes: GrowBuffer,
-    status: wgpu::Buffer,
+    /// The status words, then the active slaves (`ACTIVE_LIST`: count, slave indices).
+    status: GrowBuffer,
+    /// The status words' reset image (copied over the status words, not the active slaves).
     status_reset: wgpu::Buffer,
     hits: GrowBuffer,
     readback: GrowBuffer,
@@ -149,12 +153,7 @@ impl GpuSearch {
             walk_points: GrowBuffer::new(device, "walk points", 0, storage | U::COPY_SRC),
             order: GrowBuffer::new(device, "tree order", 0, storage),
             boxes: GrowBuffer::new(device, "tree boxes", 0, storage | U::COPY_SRC),
-            status: device.create_buffer(&wgpu::BufferDescriptor {
-                label: Some("status"),
-                size: STATUS_BYTES,
-                usage: storage | U::COPY_SRC,
-                mapped_at_creation: false,
-            }),
+            status: GrowBuffer::new(device, "status", STATUS_BYTES, storage | U::COPY_SRC),
             status_reset: device.create_buffer(&wgpu::BufferDescriptor {
                 label: Some("status reset image"),
                 size: STATUS_BYTES,
@@ -249,6 +248,9 @@ impl GpuSearch {
         replaced |= b.order.ensure(d, l, (prep.order.len() * 4).max(4) as u64)?;
         replaced |= b.boxes.ensure(d, l, box_words(levels) as u64 * 16)?;
         replaced |= b.hits.ensure(d, l, hits_bytes)?;
+        replaced |= b
+            .status
+            .ensure(d, l, STATUS_BYTES + 4 * (prep.slaves.len() as u64 + 1))?;
         replaced |= b.reference.ensure(d, l, (prep.n_nodes * 16) as u64)?;
         replaced |= b.anchors.ensure(
             d,
@@ -281,7 +283,7 @@ impl GpuSearch {
         let b = &self.buffers;
         Some(match buf {
             Buf::Nodes => &b.nodes.buffer,
-            Buf::Status => &b.status,
+            Buf::Status | Buf::Active => &b.status.buffer,
             Buf::Hits => &b.hits.buffer,
             Buf::Reference => &b.reference.buffer,
             Buf::Plan => &b.plan,
@@ -292,6 +294,16 @@ impl GpuSearch {
             Buf::WalkPoints => &b.walk_points.buffer,
             _ => return None,
         })
+    }
+
+    /// Where role `buf` starts in its [`Self::role_buffer`], bytes: the active slaves follow the
+    /// status words.
+    pub(crate) fn role_offset(buf: Buf) -> u64 {
+        if buf == Buf::Active {
+            STATUS_BYTES
+        } else {
+            0
+        }
     }
 
     fn resource(&self, buf: Buf) -> Option<wgpu::BindingResource<'_>> {
@@ -305,7 +317,7 @@ impl GpuSearch {
             Buf::Adjacency => b.adjacency.buffer.as_entire_binding(),
             Buf::Order => b.order.buffer.as_entire_binding(),
             Buf::Boxes => b.boxes.buffer.as_entire_binding(),
-            Buf::Status => b.status.as_entire_binding(),
+            Buf::Status => b.status.buffer.as_entire_binding(),
             Buf::Hits => b.hits.buffer.as_entire_binding(),
             Buf::Reference => b.reference.buffer.as_entire_binding(),
             Buf::MotionNodes => b.motion_nodes.buffer.as_entire_binding(),
@@ -380,7 +392,8 @@ impl GpuSearch {
             nodes: &self.buffers.nodes.buffer,
             facets: &self.buffers.facets.buffer,
             hits: &self.buffers.hits.buffer,
-            status: &self.buffers.status,
+            status: &self.buffers.status.buffer,
+            plan: &self.buffers.plan,
         }
     }
 

@@ -17,7 +17,9 @@ use wgpu::BufferUsages as U;
 struct Pipelines {
     nodal_normals: wgpu::ComputePipeline,
     penalty: wgpu::ComputePipeline,
+    penalty_active: wgpu::ComputePipeline,
     scatter: wgpu::ComputePipeline,
+    scatter_active: wgpu::ComputePipeline,
     gather: wgpu::ComputePipeline,
     add_forces: wgpu::ComputePipeline,
 }
@@ -25,7 +27,9 @@ struct Pipelines {
 struct Groups {
     nodal_normals: wgpu::BindGroup,
     penalty: wgpu::BindGroup,
+    penalty_active: wgpu::BindGroup,
     scatter: wgpu::BindGroup,
+    scatter_active: wgpu::BindGroup,
     gather: wgpu::BindGroup,
 }
 
@@ -55,6 +59,8 @@ struct ResidentGroups {
     key: (u64, wgpu::Buffer, wgpu::Buffer, wgpu::Buffer),
     groups: Groups,
     add_forces: wgpu::BindGroup,
+    /// The search's plan: the indirect sizes of the passes over every slave or the active ones.
+    plan: wgpu::Buffer,
 }
 
 fn storage(
@@ -113,7 +119,9 @@ impl GpuPenalty {
         let pipelines = Pipelines {
             nodal_normals: ctx.pipeline(&passes::NODAL_NORMALS, &[])?,
             penalty: ctx.pipeline(&passes::PENALTY, &friction)?,
+            penalty_active: ctx.pipeline(&passes::PENALTY_ACTIVE, &friction)?,
             scatter: ctx.pipeline(&passes::SCATTER_FORCES, &[])?,
+            scatter_active: ctx.pipeline(&passes::SCATTER_FORCES_ACTIVE, &[])?,
             gather: ctx.pipeline(&passes::GATHER, &[])?,
             add_forces: ctx.pipeline(&passes::ADD_FORCES, &[])?,
         };
@@ -251,6 +259,7 @@ impl GpuPenalty {
                 key,
                 groups,
                 add_forces,
+                plan: search.plan.clone(),
             });
         }
         Ok(())
@@ -278,12 +287,21 @@ impl GpuPenalty {
         let (pipe, group) = match e.kernel {
             Kernel::NodalNormals => (&p.nodal_normals, &g.nodal_normals),
             Kernel::Penalty => (&p.penalty, &g.penalty),
+            Kernel::PenaltyActive => (&p.penalty_active, &g.penalty_active),
             Kernel::ScatterForces => (&p.scatter, &g.scatter),
+            Kernel::ScatterForcesActive => (&p.scatter_active, &g.scatter_active),
             Kernel::Gather => (&p.gather, &g.gather),
             Kernel::AddForces => (&p.add_forces, &r.add_forces),
             _ => return None,
         };
-        super::direct_dispatch(pipe, group, e.size)
+        match e.size {
+            // the search's slot: every slave after a global search, the active ones after a
+            // local one, zero workgroups otherwise
+            crate::plan::increment::Size::Slot(offset) => {
+                Some(super::Dispatch::Indirect(pipe, group, &r.plan, offset))
+            }
+            size => super::direct_dispatch(pipe, group, size),
+        }
     }
 
     fn build_resident_groups(
@@ -312,7 +330,8 @@ impl GpuPenalty {
         Ok((groups, add_forces))
     }
 
-    /// The bind groups of the four passes, velocities from the caller's `velocities`.
+    /// The bind groups of the slave and pair-node passes, velocities from the caller's
+    /// `velocities`.
     fn groups_with(&self, s: &SharedBuffers<'_>, velocities: &wgpu::Buffer) -> Result<Groups> {
         let d = &self.ctx.device;
         let p = &self.pipelines;
@@ -342,7 +361,9 @@ impl GpuPenalty {
         Ok(Groups {
             nodal_normals: group(&p.nodal_normals, &passes::NODAL_NORMALS)?,
             penalty: group(&p.penalty, &passes::PENALTY)?,
+            penalty_active: group(&p.penalty_active, &passes::PENALTY_ACTIVE)?,
             scatter: group(&p.scatter, &passes::SCATTER_FORCES)?,
+            scatter_active: group(&p.scatter_active, &passes::SCATTER_FORCES_ACTIVE)?,
             gather: group(&p.gather, &passes::GATHER)?,
         })
     }

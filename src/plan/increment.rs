@@ -7,8 +7,9 @@
 use crate::abi::groups::{self, Group};
 use crate::abi::passes::{self, Pass};
 use crate::abi::search::{
-    fold_dispatch, fresh_plan, ScanLevels, SearchParams, ITEM_WORKGROUP, MAX_PLAN_SLOTS,
-    PLAN_N_SLOTS, PLAN_SLOTS, PLAN_SLOT_WORDS, SLOT_GLOBAL, SLOT_LOCAL, TREE_WORKGROUP, WALK_GROUP,
+    fold_dispatch, fresh_plan, ScanLevels, SearchParams, ACTIVE_SLOT, ITEM_WORKGROUP,
+    MAX_PLAN_SLOTS, PLAN_MAX_DIM, PLAN_N_SLOTS, PLAN_SLOTS, PLAN_SLOT_WORDS, SLOT_GLOBAL,
+    SLOT_LOCAL, TREE_WORKGROUP, WALK_GROUP,
 };
 use crate::abi::search::{tree_passes, SCAN_BLOCK};
 use crate::error::{Error, Result};
@@ -46,14 +47,22 @@ pub(crate) enum Kernel {
     NearestCrowded,
     /// Each slave's hit.
     NearestFacet,
+    /// The slaves the local increments visit, marked for the scan.
+    ActiveMark,
+    /// The marked slaves compacted into the active list; the active slot sized.
+    ActiveCompact,
     /// The motion budget's reference positions.
     SetReference,
     /// The master's nodal normals.
     NodalNormals,
     /// The penalty springs.
     Penalty,
+    /// The active slaves' penalty springs.
+    PenaltyActive,
     /// Forces into the fixed-point sums.
     ScatterForces,
+    /// The active slaves' forces into the fixed-point sums.
+    ScatterForcesActive,
     /// The sums per pair node.
     Gather,
     /// The pair's forces added into the caller's array, and its bound rows.
@@ -70,7 +79,7 @@ impl Kernel {
     /// Every kernel, in the order `abi::passes::PASSES` declares their passes (for the tests
     /// that go over them all).
     #[cfg(test)]
-    pub(crate) const ALL: [Kernel; 24] = [
+    pub(crate) const ALL: [Kernel; 28] = [
         Kernel::ToLocal,
         Kernel::Anchor,
         Kernel::Motion,
@@ -86,9 +95,13 @@ impl Kernel {
         Kernel::NearestTies,
         Kernel::NearestCrowded,
         Kernel::NearestFacet,
+        Kernel::ActiveMark,
+        Kernel::ActiveCompact,
         Kernel::NodalNormals,
         Kernel::Penalty,
+        Kernel::PenaltyActive,
         Kernel::ScatterForces,
+        Kernel::ScatterForcesActive,
         Kernel::Gather,
         Kernel::SetReference,
         Kernel::AddForces,
@@ -115,10 +128,14 @@ impl Kernel {
             Kernel::NearestTies => &passes::NEAREST_TIES,
             Kernel::NearestCrowded => &passes::NEAREST_CROWDED,
             Kernel::NearestFacet => &passes::NEAREST_FACET,
+            Kernel::ActiveMark => &passes::ACTIVE_MARK,
+            Kernel::ActiveCompact => &passes::ACTIVE_COMPACT,
             Kernel::SetReference => &passes::SET_REFERENCE,
             Kernel::NodalNormals => &passes::NODAL_NORMALS,
             Kernel::Penalty => &passes::PENALTY,
+            Kernel::PenaltyActive => &passes::PENALTY_ACTIVE,
             Kernel::ScatterForces => &passes::SCATTER_FORCES,
+            Kernel::ScatterForcesActive => &passes::SCATTER_FORCES_ACTIVE,
             Kernel::Gather => &passes::GATHER,
             Kernel::AddForces => &passes::ADD_FORCES,
             Kernel::PairStats => &passes::PAIR_STATS,
@@ -159,13 +176,16 @@ pub(crate) struct Entry {
 /// arguments in the plan words.
 #[derive(Clone, Debug, Default, PartialEq, Eq)]
 pub(crate) struct Slots {
-    /// Local increments: one invocation per slave (local_search).
-    pub local_slaves: u64,
+    /// Local increments: one invocation per active slave (local_search, penalty_active,
+    /// scatter_forces_active), sized by active_compact at each global search (the plan's
+    /// `ACTIVE_SLOT`, empty until the first).
+    pub active: u64,
     /// Global: one per node of each refit pass's bottom level (tree_refit).
     pub tree_passes: Vec<u64>,
     /// Global: one per block of each level of the work-item scan.
     pub work_levels: Vec<u64>,
-    /// Global: one per slave (nearest_walk, nearest_crowded, nearest_facet).
+    /// Global: one per slave (nearest_walk, nearest_crowded, nearest_facet, active_mark,
+    /// active_compact, penalty, scatter_forces).
     pub slaves: u64,
     /// Global: one per group of `WALK_GROUP` slaves (walk_start).
     pub slave_groups: u64,
@@ -202,10 +222,19 @@ pub(crate) fn initial_plan(
 ) -> Result<(Vec<u32>, Slots)> {
     let work_levels = ScanLevels::new(params.n_slaves + 1);
     let mut plan = fresh_plan(params, interval);
+    plan[PLAN_MAX_DIM] = max_dim;
     let (g, l) = (SLOT_GLOBAL, SLOT_LOCAL);
     let iw = ITEM_WORKGROUP;
+    // the active slaves' slot, empty until a global search sizes it
+    let active = add_slot(&mut plan, 0, iw, l, max_dim)?;
+    debug_assert_eq!(
+        active,
+        4 * (PLAN_SLOTS + ACTIVE_SLOT * PLAN_SLOT_WORDS) as u64
+    );
+    let s = PLAN_SLOTS + ACTIVE_SLOT * PLAN_SLOT_WORDS;
+    plan[s + 4..s + 7].copy_from_slice(&[0, 0, 0]);
     let mut slots = Slots {
-        local_slaves: add_slot(&mut plan, params.n_slaves, iw, l, max_dim)?,
+        active,
         ..Default::default()
     };
     for tp in tree_passes(params.tree_levels) {
@@ -287,12 +316,7 @@ pub(crate) fn search(k: usize, p: &PairShape) -> Vec<Entry> {
     push(g, Kernel::ToLocal, 0, Size::Items(p.n_nodes, iw));
     push(g, Kernel::Motion, 0, Size::Items(p.n_motion_nodes, iw));
     push(g, Kernel::Schedule, 0, Size::Items(1, 1));
-    push(
-        &groups::LOCAL,
-        Kernel::LocalSearch,
-        0,
-        Size::Slot(s.local_slaves),
-    );
+    push(&groups::LOCAL, Kernel::LocalSearch, 0, Size::Slot(s.active));
     if p.local_only {
         return out;
     }
@@ -316,6 +340,16 @@ pub(crate) fn search(k: usize, p: &PairShape) -> Vec<Entry> {
     }
     push(g, Kernel::NearestFacet, 0, Size::Slot(s.slaves));
     push(g, Kernel::SetReference, 0, Size::Slot(s.motion_nodes));
+    // the active slaves for the local increments that follow: marked, scanned in the work
+    // items' levels (free once the chunks are done), compacted
+    push(g, Kernel::ActiveMark, 0, Size::Slot(s.slaves));
+    for (i, &slot) in s.work_levels.iter().enumerate() {
+        push(g, Kernel::ScanBlocks, i, Size::Slot(slot));
+    }
+    for i in (0..s.work_levels.len().saturating_sub(1)).rev() {
+        push(g, Kernel::ScanAdd, i, Size::Slot(s.work_levels[i]));
+    }
+    push(g, Kernel::ActiveCompact, 0, Size::Slot(s.slaves));
     out
 }
 
@@ -378,14 +412,38 @@ pub(crate) fn penalty(k: usize, p: &PairShape) -> Vec<Entry> {
     };
     let (np, ns) = (p.n_pair_nodes, p.n_slaves);
     let (g, s) = (&groups::NORMALS_PENALTY, &groups::SCATTER_GATHER_ADD);
-    vec![
-        entry(g, Kernel::NodalNormals, Size::Items(np, iw)),
-        entry(g, Kernel::Penalty, Size::Items(ns, iw)),
-        entry(s, Kernel::ScatterForces, Size::Items(ns, iw)),
+    let mut out = vec![entry(g, Kernel::NodalNormals, Size::Items(np, iw))];
+    if p.anchored {
+        // small sliding: every slave, every increment
+        out.push(entry(g, Kernel::Penalty, Size::Items(ns, iw)));
+        out.push(entry(s, Kernel::ScatterForces, Size::Items(ns, iw)));
+    } else {
+        // every slave after a global search, the active ones after a local one
+        let (all, active) = (Size::Slot(p.slots.slaves), Size::Slot(p.slots.active));
+        let (global, local) = (!p.local_only, !p.global_only);
+        for (on, kernel, size) in [
+            (global, Kernel::Penalty, all),
+            (local, Kernel::PenaltyActive, active),
+        ] {
+            if on {
+                out.push(entry(g, kernel, size));
+            }
+        }
+        for (on, kernel, size) in [
+            (global, Kernel::ScatterForces, all),
+            (local, Kernel::ScatterForcesActive, active),
+        ] {
+            if on {
+                out.push(entry(s, kernel, size));
+            }
+        }
+    }
+    out.extend([
         entry(s, Kernel::Gather, Size::Items(np, iw)),
         entry(s, Kernel::AddForces, Size::Items(np, iw)),
         entry(&groups::STATS_PAIR, Kernel::PairStats, Size::Items(1, 1)),
-    ]
+    ]);
+    out
 }
 
 /// The increment's finish: every pair's largest bound row, then the stable increment.

@@ -77,6 +77,10 @@ impl SearchStage {
             layout::FLAG_SELF_CONTACT
         } else {
             0
+        }) | (if self.schedule.visit_every_slave {
+            layout::FLAG_EVERY_SLAVE
+        } else {
+            0
         })
     }
 

@@ -86,6 +86,9 @@ pub(crate) struct Config {
     /// The share of the masses that fall onto the plate (0 to 1); the others hang still far
     /// above it, beyond the search radius.
     pub(crate) near: f64,
+    /// Local increments visit every slave instead of the active ones
+    /// (`Schedule::visit_every_slave`: the baseline of the compaction).
+    pub(crate) every_slave: bool,
 }
 
 impl Config {
@@ -97,6 +100,7 @@ impl Config {
             interval: Interval::Every(100),
             scale: 1.0,
             near: 1.0,
+            every_slave: false,
         }
     }
     fn label(&self) -> String {

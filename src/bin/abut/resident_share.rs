@@ -1,7 +1,8 @@
 //! `abut bench --resident`, second part: a local device-resident increment as the share of the
 //! slaves within the search radius falls (100 %, 20 %, 5 %, 1 %; the others hang still far above
 //! the plate), on the CPU path and every GPU adapter — the time per increment beside the
-//! compulsory bytes the passes declare (`abi::traffic`) for that share.
+//! compulsory bytes the passes declare (`abi::traffic`) for that share, and beside the same
+//! increment visiting every slave (`Schedule::visit_every_slave`: no active-slave compaction).
 
 use std::fmt::Write as _;
 use std::time::Instant;
@@ -158,7 +159,18 @@ fn gpu_run(device: &Device, sc: &BenchScene) -> abut::Result<(f64, Option<f64>)>
     Ok((wall, (!timed.pass_ns.is_empty()).then_some(gpu)))
 }
 
-/// The section of resident.md: per device and size, a local increment at each share.
+/// Time of abut's passes per local increment of `sc` on `device`: (wall or CPU time, GPU time
+/// from the timestamps where there are some).
+fn run(device: &Device, sc: &BenchScene) -> abut::Result<(f64, Option<f64>)> {
+    if device.wgpu().is_some() {
+        gpu_run(device, sc)
+    } else {
+        Ok((cpu_run(sc)?, None))
+    }
+}
+
+/// The section of resident.md: per device and size, a local increment at each share, with the
+/// active-slave compaction and visiting every slave.
 pub(crate) fn section(devices: &[Device], sizes: &[usize]) -> abut::Result<String> {
     let mut md = String::new();
     let (near, far) = (contact_bytes(1.0)?, contact_bytes(0.0)?);
@@ -166,18 +178,19 @@ pub(crate) fn section(devices: &[Device], sizes: &[usize]) -> abut::Result<Strin
         md,
         "## A local increment against the share of slaves within the search radius\n\n\
          The bench scene with only a share of the masses falling onto the plate; the others hang \
-         still a thousand facets above it (beyond the radius: no facet at the global search, so \
-         the local search and the penalty find nothing to do for them, but are still dispatched \
-         over them). Compulsory bytes of abut's passes in a local increment, derived from each \
-         pass's declared records (`abi::traffic`): {near:.0} B per slave within the radius, \
-         {far:.0} B per slave beyond it (the integrator left out). Time per local increment after \
-         the first (global) one, mean of {INCREMENTS}: on the CPU path abut's passes alone; on \
-         an adapter the wall time of the increment with its integrator, device completion \
-         included, and the GPU time of abut's passes from the timestamps where there are some.\n"
+         still a thousand facets above it (beyond the tracking radius: the local increments' \
+         slave passes do not visit them). Compulsory bytes of abut's passes in a local increment, \
+         derived from each pass's declared records (`abi::traffic`): {near:.0} B per slave within \
+         the radius, {far:.0} B per slave beyond it (the integrator left out). Time per local \
+         increment after the first (global) one, mean of {INCREMENTS}: on the CPU path abut's \
+         passes alone; on an adapter the wall time of the increment with its integrator, device \
+         completion included, and the GPU time of abut's passes from the timestamps where there \
+         are some. *Every slave*: the same increment visiting every slave \
+         (`Schedule::visit_every_slave`, the same results bit for bit), abut's passes.\n"
     );
     let _ = writeln!(
         md,
-        "| device | slaves | within radius | compulsory bytes / slave | MB / incr. | time / incr. | GPU time of abut's passes | time against 100 % |\n|---|---|---|---|---|---|---|---|"
+        "| device | slaves | within radius | compulsory bytes / slave | MB / incr. | time / incr. | GPU time of abut's passes | every slave | against every slave | against 100 % |\n|---|---|---|---|---|---|---|---|---|---|"
     );
     let mut all = vec![Device::cpu()];
     all.extend(devices.iter().cloned());
@@ -191,23 +204,23 @@ pub(crate) fn section(devices: &[Device], sizes: &[usize]) -> abut::Result<Strin
                 );
                 let mut config = Config::base(n);
                 config.near = share;
-                let sc = scene(&config)?;
-                let (time, gpu) = if device.wgpu().is_some() {
-                    gpu_run(device, &sc)?
-                } else {
-                    (cpu_run(&sc)?, None)
-                };
+                let (time, gpu) = run(device, &scene(&config)?)?;
+                config.every_slave = true;
+                let (e_time, e_gpu) = run(device, &scene(&config)?)?;
                 let key = gpu.unwrap_or(time);
+                let every = e_gpu.unwrap_or(e_time);
                 let full = *full.get_or_insert(key);
                 let bytes = contact_bytes(share)?;
                 let _ = writeln!(
                     md,
-                    "| {} | {n} | {:.0} % | {bytes:.0} | {:.1} | {:.2} ms | {} | {:.2} |",
+                    "| {} | {n} | {:.0} % | {bytes:.0} | {:.1} | {:.2} ms | {} | {:.2} ms | {:.2} | {:.2} |",
                     device.backend_name(),
                     share * 100.0,
                     bytes * n as f64 / 1e6,
                     time * 1e3,
                     gpu.map_or("–".into(), |g| format!("{:.2} ms", g * 1e3)),
+                    every * 1e3,
+                    key / every,
                     key / full
                 );
             }
@@ -215,8 +228,9 @@ pub(crate) fn section(devices: &[Device], sizes: &[usize]) -> abut::Result<Strin
     }
     let _ = writeln!(
         md,
-        "\nThe last column compares abut's passes (GPU time where there are timestamps, else the \
-         time column) with the same size at 100 %.\n"
+        "\nThe last two columns compare abut's passes (GPU time where there are timestamps, else \
+         the time column) with the same increment visiting every slave, and with the same size \
+         at 100 %.\n"
     );
     Ok(md)
 }

@@ -60,6 +60,7 @@ fn every_pair_option_reaches_the_rust_pair() {
             interval: 7,
             budget: 0.3,
             wide_local: true,
+            visit_every_slave: false,
         }),
         pass_weight: 0.9,
     };

@@ -410,7 +410,7 @@ impl IncrementExec for GpuExec {
     fn last_hits(&self, k: usize, n_slaves: usize) -> Result<Vec<GpuHit>> {
         let bytes = (n_slaves * std::mem::size_of::<GpuHit>()) as u64;
         let hits = self.pairs[k].search.resident_outputs().2;
-        let raw = crate::gpu::buffers::copy_back(&self.ctx, &[(hits, bytes)], "hits readback")?;
+        let raw = crate::gpu::buffers::copy_back(&self.ctx, &[(hits, 0, bytes)], "hits readback")?;
         Ok(bytemuck::pod_collect_to_vec(&raw))
     }
 

@@ -147,9 +147,10 @@ pub(crate) trait IncrementExec: wgpu::WasmNotSend {
 /// Every role a device-resident increment writes, per pair (`true`) or once (`false`): what a
 /// split increment hands from one executor to the other. `tests` check it against the passes'
 /// declared access.
-pub(crate) const HANDED_OVER: [(Buf, bool); 18] = [
+pub(crate) const HANDED_OVER: [(Buf, bool); 19] = [
     (Buf::Nodes, true),
     (Buf::Status, true),
+    (Buf::Active, true),
     (Buf::Hits, true),
     (Buf::Reference, true),
     (Buf::Plan, true),

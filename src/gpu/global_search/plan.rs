@@ -137,7 +137,7 @@ impl GpuSearch {
         b.readback
             .ensure(&self.ctx.device, &self.ctx.limits, total)?;
         let staging = &b.readback.buffer;
-        enc.copy_buffer_to_buffer(&b.status, 0, staging, 0, STATUS_BYTES);
+        enc.copy_buffer_to_buffer(&b.status.buffer, 0, staging, 0, STATUS_BYTES);
         enc.copy_buffer_to_buffer(&b.plan, 0, staging, STATUS_BYTES, PLAN_HEAD_BYTES);
         if hits_bytes > 0 {
             let at = STATUS_BYTES + PLAN_HEAD_BYTES;

@@ -2,7 +2,7 @@
 //! caller's command encoder, the choice between the local and the global search made on the
 //! device (`schedule.wgsl`) and carried out through indirect dispatches, nothing read back.
 
-use super::{scan_level, tree_pass, GpuSearch, UNIFORM_STRIDE};
+use super::{scan_level, tree_pass, GpuSearch, STATUS_BYTES, UNIFORM_STRIDE};
 use crate::abi::passes::{self, Buf};
 use crate::abi::search::*;
 use crate::error::{Error, Result};
@@ -14,6 +14,8 @@ use wgpu::BufferUsages as U;
 pub(crate) struct ResidentSearch {
     schedule: wgpu::ComputePipeline,
     set_reference: wgpu::ComputePipeline,
+    active_mark: wgpu::ComputePipeline,
+    active_compact: wgpu::ComputePipeline,
     /// Scan parameters of the work levels.
     work_scan_params: wgpu::Buffer,
     work_levels: ScanLevels,
@@ -49,6 +51,8 @@ struct Groups {
     nearest_crowded: wgpu::BindGroup,
     nearest_facet: wgpu::BindGroup,
     set_reference: wgpu::BindGroup,
+    active_mark: wgpu::BindGroup,
+    active_compact: wgpu::BindGroup,
     work_scan_blocks: Vec<wgpu::BindGroup>,
     work_scan_add: Vec<wgpu::BindGroup>,
     /// to_local on the caller's positions buffer.
@@ -73,6 +77,8 @@ impl GpuSearch {
         let d = &ctx.device;
         let schedule = ctx.pipeline(&passes::SCHEDULE, &[])?;
         let set_reference = ctx.pipeline(&passes::SET_REFERENCE, &[])?;
+        let active_mark = ctx.pipeline(&passes::ACTIVE_MARK, &[])?;
+        let active_compact = ctx.pipeline(&passes::ACTIVE_COMPACT, &[])?;
         let params = prep.params;
         let work_levels = ScanLevels::new(params.n_slaves + 1);
         let sized = prep.clone();
@@ -131,6 +137,8 @@ impl GpuSearch {
         self.resident = Some(Box::new(ResidentSearch {
             schedule,
             set_reference,
+            active_mark,
+            active_compact,
             work_scan_params,
             work_levels,
             tree_passes: tree_passes(params.tree_levels).len(),
@@ -159,7 +167,7 @@ impl GpuSearch {
     /// The status, plan and hits buffers (read back for the output variables).
     pub(crate) fn resident_outputs(&self) -> (&wgpu::Buffer, &wgpu::Buffer, &wgpu::Buffer) {
         (
-            &self.buffers.status,
+            &self.buffers.status.buffer,
             &self.buffers.plan,
             &self.buffers.hits.buffer,
         )
@@ -236,6 +244,8 @@ impl GpuSearch {
                 nearest_crowded: group(&p.nearest_crowded, &passes::NEAREST_CROWDED)?,
                 nearest_facet: group(&p.nearest_facet, &passes::NEAREST_FACET)?,
                 set_reference: group(&r.set_reference, &passes::SET_REFERENCE)?,
+                active_mark: group(&r.active_mark, &passes::ACTIVE_MARK)?,
+                active_compact: group(&r.active_compact, &passes::ACTIVE_COMPACT)?,
                 work_scan_blocks,
                 work_scan_add,
                 to_local: None,
@@ -293,7 +303,7 @@ impl GpuSearch {
     /// search's and the penalty passes' that follow it in the same increment), in one copy.
     pub(crate) fn resident_copies(&self, enc: &mut wgpu::CommandEncoder) {
         let b = &self.buffers;
-        enc.copy_buffer_to_buffer(&b.status_reset, 0, &b.status, 0, b.status.size());
+        enc.copy_buffer_to_buffer(&b.status_reset, 0, &b.status.buffer, 0, STATUS_BYTES);
     }
 
     /// The shape of this search's part of an increment (`None` before `make_resident`).
@@ -336,6 +346,8 @@ impl GpuSearch {
             Kernel::NearestCrowded => (&p.nearest_crowded, &g.nearest_crowded),
             Kernel::NearestFacet => (&p.nearest_facet, &g.nearest_facet),
             Kernel::SetReference => (&r.set_reference, &g.set_reference),
+            Kernel::ActiveMark => (&r.active_mark, &g.active_mark),
+            Kernel::ActiveCompact => (&r.active_compact, &g.active_compact),
             _ => return None,
         };
         Some(super::super::entry_dispatch(

@@ -40,15 +40,13 @@ pub(crate) fn scene(c: &Config) -> abut::Result<BenchScene> {
         }),
         Enf::Kinematic => Enforce::Kinematic(Kinematic::default()),
     };
-    let schedule = match c.interval {
-        Interval::Every(n) => Schedule {
-            interval: n,
-            ..Schedule::default_for(false)
+    let schedule = Schedule {
+        interval: match c.interval {
+            Interval::Every(n) => n,
+            Interval::Budget => u32::MAX,
         },
-        Interval::Budget => Schedule {
-            interval: u32::MAX,
-            ..Schedule::default_for(false)
-        },
+        visit_every_slave: c.every_slave,
+        ..Schedule::default_for(false)
     };
     model.add_pair(
         Pair::new(set, master)

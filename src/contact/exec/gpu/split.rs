@@ -52,15 +52,15 @@ impl GpuExec {
                 roles.push((None, buf));
             }
         }
-        let mut sources: Vec<(&wgpu::Buffer, u64)> = vec![(positions, n4 as u64)];
-        sources.extend([(velocities, n4 as u64), (forces, n4 as u64)]);
+        let mut sources: Vec<(&wgpu::Buffer, u64, u64)> = vec![(positions, 0, n4 as u64)];
+        sources.extend([(velocities, 0, n4 as u64), (forces, 0, n4 as u64)]);
         for &(pair, buf) in &roles {
             let setup = &inc.pairs[pair.unwrap_or(0)].setup;
             let len = twin.role_bytes(pair, buf, setup).map_or(0, |b| b.len());
             let gpu = self
                 .role_buffer(pair, buf, forces)
                 .ok_or_else(|| missing_role(buf))?;
-            sources.push((gpu, len as u64));
+            sources.push((gpu, GpuSearch::role_offset(buf), len as u64));
         }
         let bytes = crate::gpu::buffers::copy_back(&ctx, &sources, "split increment readback")?;
         let mut host: Vec<Vec<[f32; 4]>> = (0..3)
@@ -86,7 +86,7 @@ impl GpuExec {
                 .ok_or_else(|| missing_role(buf))?;
             if let Some(src) = twin.role_bytes(pair, buf, setup) {
                 if !src.is_empty() {
-                    crate::gpu::upload(&ctx, gpu, 0, src);
+                    crate::gpu::upload(&ctx, gpu, GpuSearch::role_offset(buf), src);
                 }
             }
         }

@@ -1,0 +1,470 @@
+//! Active slaves: the local increments visit only the slaves the last global search left
+//! tracked — those within the tracking radius, radius + budget — and that is invisible. A slave
+//! coming from beyond the radius is found the increment it comes within it (host positions,
+//! device positions, the CPU path; 2D, 3D, self-contact), and the results with and without the
+//! compaction (`Schedule::visit_every_slave`) are the same bits, on host arrays and in the
+//! device-resident increment.
+
+mod common;
+
+use abut::mesh::{plate_quads, polyline};
+use abut::model::Schedule;
+use abut::search::Trigger;
+use abut::testing::abi::stats::STATS_BYTES;
+use abut::*;
+use common::{devices, facet_distance, node_buffers, read_buffer, vec4};
+
+/// Positions of increment `k`.
+type Motion = dyn Fn(usize) -> Vec<[f64; 3]>;
+
+/// A model, its pair and prescribed motion.
+struct Scene {
+    what: &'static str,
+    model: Model,
+    pair: PairId,
+    at: Box<Motion>,
+    steps: usize,
+}
+
+/// Rounds to f32 and back: positions every path sees exactly.
+fn f32r(p: [f64; 3]) -> [f64; 3] {
+    p.map(|v| v as f32 as f64)
+}
+
+/// A small deterministic hash in [0, 1).
+fn unit(i: usize, salt: u64) -> f64 {
+    let mut z = (i as u64 + 1).wrapping_mul(0x9E37_79B9_7F4A_7C15) ^ salt;
+    z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
+    z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
+    ((z ^ (z >> 31)) >> 11) as f64 / (1u64 << 53) as f64
+}
+
+/// Slaves over a master (a 16×16 quad plate in 3D, a 40-segment polyline in 2D) at heights from
+/// half the radius to four radii, each closing on it at its own speed (up to a fifth of the
+/// radius per increment: well within the motion budget's half of half a radius over a few
+/// increments, so most approaches happen in local increments) and sliding along it; a few move
+/// away. The master ripples and travels a little, so its nodes use the budget too.
+fn approach(dim: u32, penalty: bool, every: bool) -> Scene {
+    let (mut model, master, h) = if dim == 3 {
+        let plate = plate_quads(16, 16, 1.0, 1.0, 0.0, 0, &|_, _| 0.0);
+        let mut m = Model::new_3d();
+        m.add_nodes(&plate.positions, &vec![2.0; plate.positions.len()])
+            .unwrap();
+        let s = m.add_surface(Surface::quads(&plate.facets)).unwrap();
+        (m, s, 1.0 / 16.0)
+    } else {
+        let line = polyline(40, 1.0, 0.0, 0, &|_| 0.0);
+        let mut m = Model::new_2d();
+        m.add_nodes(&line.positions, &vec![2.0; line.positions.len()])
+            .unwrap();
+        let s = m.add_surface(Surface::segments(&line.facets)).unwrap();
+        (m, s, 1.0 / 40.0)
+    };
+    let radius = 1.5 * h;
+    let n_master = model.positions().len();
+    let side = if dim == 3 { 24 } else { 300 };
+    let count = if dim == 3 { side * side } else { side };
+    let mut slaves = Vec::new();
+    let mut motion = Vec::new();
+    for i in 0..count {
+        let (x, y) = if dim == 3 {
+            (
+                0.1 + 0.8 * (i % side) as f64 / side as f64,
+                0.1 + 0.8 * (i / side) as f64 / side as f64,
+            )
+        } else {
+            (0.1 + 0.8 * i as f64 / side as f64, 0.0)
+        };
+        let height = radius * (0.5 + 3.5 * unit(i, 1));
+        let closing = radius * 0.2 * unit(i, 2) * if unit(i, 3) < 0.15 { -0.5 } else { 1.0 };
+        let slide = 0.3 * h * (unit(i, 4) - 0.5);
+        if dim == 3 {
+            slaves.push([x, y, height]);
+        } else {
+            slaves.push([x, height, 0.0]);
+        }
+        motion.push((closing, slide));
+    }
+    let r = model.add_nodes(&slaves, &vec![1.0; slaves.len()]).unwrap();
+    let set = model.add_node_set(&r.to_vec()).unwrap();
+    let pair = model
+        .add_pair(contact(
+            Pair::new(set, master).search_radius(radius),
+            penalty,
+            every,
+            false,
+        ))
+        .unwrap();
+    let x0 = model.positions().to_vec();
+    let up = if dim == 3 { 2 } else { 1 };
+    let at = move |k: usize| -> Vec<[f64; 3]> {
+        let t = k as f64;
+        x0.iter()
+            .enumerate()
+            .map(|(i, p)| {
+                let mut q = *p;
+                if i < n_master {
+                    q[up] = 0.002 * (7.0 * q[0] + 0.3 * t).sin();
+                } else {
+                    let (closing, slide) = motion[i - n_master];
+                    // down to a fifth of the radius below the master, then resting there
+                    q[up] = (q[up] - closing * t).max(-0.2 * radius);
+                    q[0] += slide * t / 60.0;
+                }
+                q[0] += 0.001 * t;
+                f32r(q)
+            })
+            .collect()
+    };
+    Scene {
+        what: if dim == 3 { "3D plate" } else { "2D polyline" },
+        model,
+        pair,
+        at: Box::new(at),
+        steps: 60,
+    }
+}
+
+/// A 2×1 sheet whose right half, already folded to 150°, folds over onto its left half
+/// (self-contact: every node a slave of the sheet itself), landing 0.4 h above it — or, with penalty contact, a twentieth
+/// of an element into it.
+fn folding_sheet(penalty: bool, every: bool) -> Scene {
+    let plate = plate_quads(24, 12, 2.0, 1.0, 0.0, 0, &|_, _| 0.0);
+    let h = 1.0 / 12.0;
+    let mut model = Model::new_3d();
+    let nodes = model
+        .add_nodes(&plate.positions, &vec![1.0; plate.positions.len()])
+        .unwrap();
+    let s = model.add_surface(Surface::quads(&plate.facets)).unwrap();
+    let set = model.add_node_set(&nodes.to_vec()).unwrap();
+    let pair = model
+        .add_pair(contact(
+            Pair::new(set, s).search_radius(1.5 * h),
+            penalty,
+            every,
+            true,
+        ))
+        .unwrap();
+    let base = model.positions().to_vec();
+    let land = if penalty { -0.05 * h } else { 0.4 * h };
+    let at = move |k: usize| -> Vec<[f64; 3]> {
+        // from 150° to 178° over 50 increments: the motion budget lets a few local increments
+        // run between global searches
+        let th = (150.0f64 + 28.0 * k as f64 / 50.0).min(178.0).to_radians();
+        base.iter()
+            .map(|q| {
+                if q[0] <= 1.0 {
+                    *q
+                } else {
+                    let r = q[0] - 1.0;
+                    f32r([
+                        1.0 + r * th.cos(),
+                        q[1],
+                        r * th.sin() + land * (th / std::f64::consts::PI),
+                    ])
+                }
+            })
+            .collect()
+    };
+    Scene {
+        what: "folding sheet (self-contact)",
+        model,
+        pair,
+        at: Box::new(at),
+        steps: 70,
+    }
+}
+
+/// `pair` with penalty contact and friction (or the default enforcement), its default
+/// schedule visiting every slave or not.
+fn contact(pair: Pair, penalty: bool, every: bool, self_contact: bool) -> Pair {
+    let pair = pair.schedule(Schedule {
+        visit_every_slave: every,
+        ..Schedule::default_for(self_contact)
+    });
+    if !penalty {
+        return pair;
+    }
+    pair.enforce(Enforce::Penalty(Penalty {
+        stiffness: Stiffness::Absolute(50.0),
+        damping: 0.05,
+        ..Default::default()
+    }))
+    .friction(Friction::coulomb(0.3))
+}
+
+fn scenes(penalty: bool, every: bool) -> Vec<Scene> {
+    vec![
+        approach(3, penalty, every),
+        approach(2, penalty, every),
+        folding_sheet(penalty, every),
+    ]
+}
+
+/// What a tracked run did against a fresh global search each increment.
+#[derive(Debug, Default)]
+struct Tally {
+    /// Slaves the global search put within the radius.
+    within: usize,
+    /// Of which the tracked search missed (no facet, or one not equally near).
+    missed: usize,
+    /// Slaves the tracked search found in a local increment that it had not found in the
+    /// increment before: arrivals from beyond the radius caught between global searches.
+    arrived_locally: usize,
+    locals: usize,
+}
+
+/// Runs `s` through a tracked search on `d` (positions from the host, or from a device buffer)
+/// and a fresh CPU global search every increment.
+fn track(d: &Device, s: &Scene, schedule: Option<Schedule>, device_positions: bool) -> Tally {
+    let mut tracked = GlobalSearch::new(d, &s.model, s.pair).unwrap();
+    if let Some(sc) = schedule {
+        tracked.set_schedule(sc).unwrap();
+    }
+    let mut global = GlobalSearch::new(&Device::cpu(), &s.model, s.pair).unwrap();
+    let radius = tracked.radius();
+    let master = s
+        .model
+        .surface(s.model.pair(s.pair).unwrap().master)
+        .unwrap();
+    let n = s.model.positions().len();
+    let buffers = device_positions.then(|| node_buffers(d, n));
+    let mut t = Tally::default();
+    let mut before: Vec<bool> = Vec::new();
+    for k in 0..s.steps {
+        let x = (s.at)(k);
+        let r = match &buffers {
+            // a search on device positions starts from host ones
+            Some([b, _, _]) if k > 0 => {
+                let (_, q) = d.wgpu().unwrap();
+                q.write_buffer(b, 0, bytemuck::cast_slice(&vec4(&x)));
+                tracked.step_device(b, true).unwrap()
+            }
+            _ => tracked.step(&x).unwrap(),
+        };
+        let g = global.run(&x).unwrap();
+        let local = r.stats.trigger == Trigger::Local;
+        t.locals += usize::from(local);
+        let found: Vec<bool> = (0..r.slaves.len())
+            .map(|i| r.contact(i).is_some())
+            .collect();
+        for (i, gc) in g.contacts().enumerate() {
+            let Some(gc) = gc else { continue };
+            // at the rim, f32 against f32 round-off may say either
+            if gc.distance > radius * (1.0 - 1e-5) {
+                continue;
+            }
+            t.within += 1;
+            let excess = match r.contact(i) {
+                Some(tc) if tc.facet == gc.facet => 0.0,
+                Some(tc) => facet_distance(master, &x, r.slaves[i], tc.facet) - gc.distance,
+                None => f64::INFINITY,
+            };
+            if excess > 1e-4 * radius {
+                t.missed += 1;
+                if std::env::var("ABUT_DEBUG_MISSES").is_ok() {
+                    eprintln!(
+                        "miss k {k} slave {i} {:?}: global {gc:?} tracked {:?} excess {excess}",
+                        r.stats.trigger,
+                        r.contact(i)
+                    );
+                }
+            } else if local && !before.get(i).copied().unwrap_or(true) {
+                t.arrived_locally += 1;
+            }
+        }
+        before = found;
+    }
+    t
+}
+
+/// Every slave within the radius is found, in local increments too: slaves that come from
+/// beyond the radius between global searches are caught the increment they arrive, on every
+/// device, from host positions and from device positions, with the compaction and without.
+#[test]
+fn slaves_entering_the_radius_are_caught_the_increment_they_arrive() {
+    for s in scenes(false, false) {
+        for d in devices() {
+            for every in [false, true] {
+                let mut sc = GlobalSearch::new(&d, &s.model, s.pair).unwrap().schedule();
+                sc.visit_every_slave = every;
+                for device_positions in [false, true] {
+                    if device_positions && !d.is_gpu() {
+                        continue;
+                    }
+                    let t = track(&d, &s, Some(sc), device_positions);
+                    let what = format!(
+                        "{} on {d} (every slave: {every}, device positions: {device_positions})",
+                        s.what
+                    );
+                    eprintln!("{what}: {t:?}");
+                    assert!(
+                        t.locals > s.steps / 3,
+                        "{what}: local increments ran: {t:?}"
+                    );
+                    assert!(
+                        t.arrived_locally > 0,
+                        "{what}: slaves arrived locally: {t:?}"
+                    );
+                    assert!(t.within > 1000, "{what}: contacts compared: {t:?}");
+                    assert_eq!(t.missed, 0, "{what}: {t:?}");
+                }
+            }
+        }
+    }
+}
+
+/// One increment of a `Contact`, as the caller sees it: forces, stable increment and count in
+/// contact, and every output variable of every pair with its search's contact points.
+#[derive(PartialEq, Debug)]
+struct Seen {
+    forces: Vec<[f64; 3]>,
+    stable_dt: f64,
+    active: usize,
+    outputs: Vec<String>,
+}
+
+/// The output variables of a pair, with its contact points, as text (every f64 to its bits).
+fn outputs_of(c: &Contact) -> Vec<String> {
+    c.outputs()
+        .iter()
+        .map(|(name, o)| {
+            let search = o.search.as_ref().map(|r| {
+                (
+                    r.stats.trigger,
+                    r.contacts().collect::<Vec<_>>(),
+                    r.stats.local_iterations,
+                )
+            });
+            format!(
+                "{name:?} {:?} {:?} {:?} {:?} {:?} {:?} {:?} {:?} {:?} {:?} {:?} {search:?}",
+                o.cstatus,
+                o.copen,
+                o.cpress,
+                o.cshear1,
+                o.cshear2,
+                o.normal,
+                o.force,
+                o.cfn,
+                o.cfs,
+                o.contact_energy,
+                o.frictional_dissipation
+            )
+        })
+        .collect()
+}
+
+/// Velocities of increment `k` (the half step before), from the positions.
+fn velocities(s: &Scene, k: usize, dt: f64) -> Vec<[f64; 3]> {
+    let (a, b) = ((s.at)(k.saturating_sub(1)), (s.at)(k));
+    a.iter()
+        .zip(&b)
+        .map(|(p, q)| [0, 1, 2].map(|c| ((q[c] - p[c]) / dt) as f32 as f64))
+        .collect()
+}
+
+/// With and without the compaction, a `Contact`'s increments give the same bits: forces,
+/// stable increment, outputs and contact points on host arrays (every device), and forces and
+/// statistics in the device-resident increment (every device).
+#[test]
+fn results_with_and_without_the_compaction_are_the_same_bits() {
+    let dt = 1.0e-3;
+    for (s, s_every) in scenes(true, false).into_iter().zip(scenes(true, true)) {
+        for d in devices() {
+            let host = |every: bool| -> Vec<Seen> {
+                let m = if every { &s_every.model } else { &s.model };
+                let mut c = Contact::new(&d, m).unwrap();
+                c.request_outputs(true);
+                (0..s.steps)
+                    .map(|k| {
+                        let r = c
+                            .penalty_step(&(s.at)(k), &velocities(&s, k, dt), dt)
+                            .unwrap()
+                            .clone();
+                        Seen {
+                            forces: r.forces,
+                            stable_dt: r.stable_dt,
+                            active: r.active,
+                            outputs: outputs_of(&c),
+                        }
+                    })
+                    .collect()
+            };
+            let (on, off) = (host(false), host(true));
+            assert!(
+                on.iter().any(|x| x.active > 0),
+                "{} on {d}: no contact at all",
+                s.what
+            );
+            for (k, (a, b)) in on.iter().zip(&off).enumerate() {
+                assert!(
+                    a == b,
+                    "{} on {d}: host arrays, increment {k} differ",
+                    s.what
+                );
+            }
+            let resident = |every: bool| -> Vec<(Vec<[f32; 4]>, Vec<u8>)> {
+                let m = if every { &s_every.model } else { &s.model };
+                let mut c = Contact::new(&d, m).unwrap();
+                let n = m.positions().len();
+                let mut out = Vec::new();
+                let bufs = d.is_gpu().then(|| node_buffers(&d, n));
+                for k in 0..s.steps {
+                    let (x, v) = ((s.at)(k), velocities(&s, k, dt));
+                    match &bufs {
+                        Some([bx, bv, bf]) => {
+                            let (dev, q) = d.wgpu().unwrap();
+                            q.write_buffer(bx, 0, bytemuck::cast_slice(&vec4(&x)));
+                            q.write_buffer(bv, 0, bytemuck::cast_slice(&vec4(&v)));
+                            let mut enc = dev.create_command_encoder(&Default::default());
+                            enc.clear_buffer(bf, 0, None);
+                            c.encode_increment(
+                                ResidentIo::Gpu {
+                                    encoder: &mut enc,
+                                    positions: bx,
+                                    velocities: bv,
+                                    forces: bf,
+                                },
+                                dt,
+                            )
+                            .unwrap();
+                            q.submit([enc.finish()]);
+                            let f =
+                                bytemuck::pod_collect_to_vec(&read_buffer(&d, bf, (n * 16) as u64));
+                            let st = read_buffer(&d, c.stats_buffer().unwrap(), STATS_BYTES);
+                            out.push((f, st));
+                        }
+                        None => {
+                            let mut f = vec![[0.0f32; 4]; n];
+                            c.encode_increment(
+                                ResidentIo::Cpu {
+                                    positions: &vec4(&x),
+                                    velocities: &vec4(&v),
+                                    forces: &mut f,
+                                },
+                                dt,
+                            )
+                            .unwrap();
+                            let st = c.collect_stats().unwrap();
+                            out.push((f, bytemuck::bytes_of(&st[0]).to_vec()));
+                        }
+                    }
+                }
+                out
+            };
+            let (on, off) = (resident(false), resident(true));
+            for (k, (a, b)) in on.iter().zip(&off).enumerate() {
+                assert!(
+                    a.0 == b.0,
+                    "{} on {d}: resident forces, increment {k}",
+                    s.what
+                );
+                assert!(
+                    a.1 == b.1,
+                    "{} on {d}: resident statistics, increment {k}",
+                    s.what
+                );
+            }
+        }
+    }
+}
