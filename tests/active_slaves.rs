@@ -468,3 +468,68 @@ fn results_with_and_without_the_compaction_are_the_same_bits() {
         }
     }
 }
+
+/// Past 65,536 active slaves (69,696 of 139,392; the others hang beyond the tracking radius),
+/// and with a cap of 3 workgroups per dispatch dimension, so that the schedule folds the active
+/// slaves' dispatch into 2D: the local increments give the same bytes folded and not, on every
+/// device, and find every near slave.
+#[test]
+fn active_slaves_past_65536_folded_give_the_same_bytes() {
+    let plate = plate_quads(64, 64, 1.0, 1.0, 0.0, 0, &|_, _| 0.0);
+    let h = 1.0 / 64.0;
+    let mut m = Model::new_3d();
+    m.add_nodes(&plate.positions, &vec![1.0; plate.positions.len()])
+        .unwrap();
+    let s = m.add_surface(Surface::quads(&plate.facets)).unwrap();
+    let side = 264;
+    let slaves: Vec<[f64; 3]> = (0..2 * side * side)
+        .map(|k| {
+            let (i, j) = (k % side, (k / side) % side);
+            let far = k >= side * side;
+            f32r([
+                (i as f64 + 0.5) / side as f64,
+                (j as f64 + 0.5) / side as f64,
+                if far { 10.0 } else { 0.3 * h },
+            ])
+        })
+        .collect();
+    let first = m.positions().len();
+    let r = m.add_nodes(&slaves, &vec![1.0; slaves.len()]).unwrap();
+    let set = m.add_node_set(&r.to_vec()).unwrap();
+    let p = m.add_pair(Pair::new(set, s).search_radius(h)).unwrap();
+    let base = m.positions().to_vec();
+    // the near slaves slide a tenth of a facet per increment: local increments throughout
+    let at = |k: usize| -> Vec<[f64; 3]> {
+        let mut x = base.clone();
+        for q in &mut x[first..first + side * side] {
+            q[0] += 0.1 * h * k as f64;
+            *q = f32r(*q);
+        }
+        x
+    };
+    for d in devices() {
+        let run = |cap: Option<u32>| -> Vec<Vec<u8>> {
+            let mut search = GlobalSearch::new(&d, &m, p).unwrap();
+            if let Some(c) = cap {
+                search.set_max_workgroups_per_dim(c);
+            }
+            (0..4)
+                .map(|k| {
+                    let r = search.step(&at(k)).unwrap();
+                    assert_eq!(
+                        r.stats.trigger == Trigger::Local,
+                        k > 0,
+                        "{d}: increment {k} searches locally"
+                    );
+                    let tracked = r.contacts().filter(|c| c.is_some()).count();
+                    assert_eq!(tracked, side * side, "{d}: increment {k}");
+                    bytemuck::cast_slice::<_, u8>(&r.raw).to_vec()
+                })
+                .collect()
+        };
+        let (plain, folded) = (run(None), run(Some(3)));
+        for (k, (a, b)) in plain.iter().zip(&folded).enumerate() {
+            assert!(a == b, "{d}: increment {k} folded differs");
+        }
+    }
+}

@@ -334,6 +334,11 @@ pub const DECLARED: [&Pass; 13] = [
     &passes::INTEGRATE,
 ];
 
+/// Passes of a local increment's groups that a local increment does not run: the penalty
+/// passes over every slave, which run after a global search (and for small sliding) in place of
+/// the active slaves' ones.
+pub const NOT_LOCAL: [&Pass; 2] = [&passes::PENALTY, &passes::SCATTER_FORCES];
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -49,6 +49,12 @@ pub struct BenchArgs {
     /// kernel's bandwidth, and an H100 estimate. Writes resident.md to --out.
     #[arg(long)]
     pub resident: bool,
+    /// Only --resident's second table: a local increment as the share of slaves within the
+    /// search radius falls (100, 20, 5, 1 %), with the active-slave compaction and visiting
+    /// every slave, on the CPU path and every adapter at 10^5 and 10^6 slaves (--quick: 10^4).
+    /// Writes share.md to --out.
+    #[arg(long)]
+    pub share: bool,
     /// Only the global search against parry3d (one thread and rayon), every device, 10^6
     /// slaves on 10^5 triangles within 0.5, 1 and 3 facet sizes, and the floor at 10^6 facets.
     /// Writes search.md and search.json to --out.
@@ -205,6 +211,9 @@ pub(crate) fn machine() -> String {
 pub fn bench(a: &BenchArgs) -> abut::Result<()> {
     if a.resident {
         return crate::resident_bench::run(a);
+    }
+    if a.share {
+        return crate::resident_share::run(a);
     }
     if a.search {
         return crate::search_bench::run(a);

@@ -159,9 +159,35 @@ fn gpu_run(device: &Device, sc: &BenchScene) -> abut::Result<(f64, Option<f64>)>
     Ok((wall, (!timed.pass_ns.is_empty()).then_some(gpu)))
 }
 
+/// `abut bench --share`: the section alone, written to share.md in `a.out`.
+pub(crate) fn run(a: &crate::bench::BenchArgs) -> abut::Result<()> {
+    let devices: Vec<Device> = Device::all_gpus()
+        .into_iter()
+        .filter_map(|d| d.ok())
+        .collect();
+    let sizes: &[usize] = if a.quick {
+        &[10_000]
+    } else {
+        &[100_000, 1_000_000]
+    };
+    let md = format!(
+        "# abut bench --share{} on {}\n\n{}",
+        if a.quick { " --quick" } else { "" },
+        crate::bench::machine(),
+        section(&devices, sizes)?
+    );
+    let io_err = crate::bench::io_err;
+    std::fs::create_dir_all(&a.out).map_err(|e| io_err(&a.out, e))?;
+    let path = a.out.join("share.md");
+    std::fs::write(&path, &md).map_err(|e| io_err(&path, e))?;
+    println!("{md}");
+    println!("written: {}", path.display());
+    Ok(())
+}
+
 /// Time of abut's passes per local increment of `sc` on `device`: (wall or CPU time, GPU time
 /// from the timestamps where there are some).
-fn run(device: &Device, sc: &BenchScene) -> abut::Result<(f64, Option<f64>)> {
+fn time_of(device: &Device, sc: &BenchScene) -> abut::Result<(f64, Option<f64>)> {
     if device.wgpu().is_some() {
         gpu_run(device, sc)
     } else {
@@ -204,9 +230,9 @@ pub(crate) fn section(devices: &[Device], sizes: &[usize]) -> abut::Result<Strin
                 );
                 let mut config = Config::base(n);
                 config.near = share;
-                let (time, gpu) = run(device, &scene(&config)?)?;
+                let (time, gpu) = time_of(device, &scene(&config)?)?;
                 config.every_slave = true;
-                let (e_time, e_gpu) = run(device, &scene(&config)?)?;
+                let (e_time, e_gpu) = time_of(device, &scene(&config)?)?;
                 let key = gpu.unwrap_or(time);
                 let every = e_gpu.unwrap_or(e_time);
                 let full = *full.get_or_insert(key);

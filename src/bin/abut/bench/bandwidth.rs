@@ -22,13 +22,16 @@ pub(crate) fn kernel_bytes(near: f64) -> Vec<(&'static str, f64)> {
         .collect()
 }
 
-/// Compulsory bytes per slave of `group` in a steady local increment: the sum over its kernels.
-/// A kernel with no declared traffic is an error naming it (a group gained a pass whose traffic
-/// `abi::traffic` does not declare).
+/// Compulsory bytes per slave of `group` in a steady local increment: the sum over the kernels
+/// a local increment runs (`abi::traffic::NOT_LOCAL` left out). A kernel with no declared
+/// traffic is an error naming it (a group gained a pass whose traffic `abi::traffic` does not
+/// declare).
 pub(crate) fn group_bytes(group: &Group, kb: &[(&'static str, f64)]) -> Result<f64, String> {
+    use abut::testing::abi::traffic::NOT_LOCAL;
     group
         .passes
         .iter()
+        .filter(|p| !NOT_LOCAL.contains(p))
         .map(|p| {
             kb.iter()
                 .find(|e| e.0 == p.entry)
