@@ -177,9 +177,13 @@ const _: () = assert!(std::mem::size_of::<ScanParams>() == 16);
 pub struct GpuHit {
     /// Index into the active facet list, [`NO_FACET`] when none lies within the radius.
     pub facet: u32,
-    /// Tracked master node (model node id), `u32::MAX` when none.
+    /// Tracked master node (model node id), `u32::MAX` when none: the nearest node of the
+    /// nearest facet within the tracking radius (radius + budget) at the last global search,
+    /// then where the local search's walk took it.
     pub node: u32,
-    /// Facets examined for this node, with [`HIT_BESIDE_FREE_EDGE`] in the top bit.
+    /// Facets examined for this node by the search that wrote the hit (an untracked slave's,
+    /// which the local increments do not visit, by the last global search), with
+    /// [`HIT_BESIDE_FREE_EDGE`] in the top bit.
     pub candidates: u32,
     /// The slave node (model node id).
     pub slave: u32,

@@ -75,7 +75,7 @@ pub struct SearchStats {
     /// device took it in the kernels' frame ([`SearchResult::frame`]).
     pub master_box: [[f64; 3]; 2],
     /// Facet–node distance evaluations in the nearest-facet step (the tree walks' projections
-    /// and the chunks' candidates).
+    /// and the chunks' candidates), or in a local increment the tracked slaves' walks.
     pub candidates: u64,
     /// Slaves whose tree walk reached its visit cap and was finished in chunks (global searches).
     pub fallbacks: u32,
@@ -524,8 +524,11 @@ impl SearchStage {
         trigger: Trigger,
         status: &[u32; STATUS_WORDS],
     ) -> SearchResult {
+        // a local increment's work is its tracked slaves' walks: an untracked slave's hit is
+        // still the last global search's, and so is its count
         let candidates = raw
             .iter()
+            .filter(|h| trigger != Trigger::Local || h.node != crate::model::NO_NODE)
             .map(|h| (h.candidates & !layout::HIT_BESIDE_FREE_EDGE) as u64)
             .sum();
         SearchResult {

@@ -24,6 +24,7 @@ use serde::Serialize;
 
 mod bandwidth;
 mod report;
+pub(crate) use report::{io_err, machine};
 mod runs;
 
 use bandwidth::PASSES;
@@ -183,29 +184,6 @@ pub(crate) struct BenchScene {
 const INCREMENTS: usize = 48;
 /// Search radius in facet sizes (the masses start at most 2.5 facets above the plate).
 const RADIUS: f64 = 3.0;
-
-pub(crate) fn machine() -> String {
-    let cpu = std::fs::read_to_string("/proc/cpuinfo")
-        .ok()
-        .and_then(|s| {
-            s.lines()
-                .find(|l| l.starts_with("model name"))
-                .map(|l| l.split(':').nth(1).unwrap_or("").trim().to_string())
-        })
-        .unwrap_or_else(|| "unknown CPU".into());
-    let cores = std::thread::available_parallelism().map_or(0, |n| n.get());
-    let mem = std::fs::read_to_string("/proc/meminfo")
-        .ok()
-        .and_then(|s| {
-            s.lines().next().and_then(|l| {
-                l.split_whitespace()
-                    .nth(1)
-                    .and_then(|k| k.parse::<f64>().ok())
-            })
-        })
-        .map_or(String::new(), |kb| format!(", {:.0} GiB", kb / 1048576.0));
-    format!("{cpu}, {cores} cores{mem}")
-}
 
 /// Runs the benchmark.
 pub fn bench(a: &BenchArgs) -> abut::Result<()> {
@@ -528,14 +506,6 @@ fn pass_err(value: String) -> abut::Error {
         name: "bench pass",
         value,
         expected: "the groups the increment records (abi::groups)",
-    }
-}
-
-pub(crate) fn io_err(p: &std::path::Path, e: std::io::Error) -> abut::Error {
-    abut::Error::BadParameter {
-        name: "bench output",
-        value: format!("{}: {e}", p.display()),
-        expected: "a writable directory",
     }
 }
 

@@ -1,4 +1,5 @@
-//! The speed-against-error report: the fitted exponent, the Pareto front and the plot.
+//! The speed-against-error report: the fitted exponent, the Pareto front and the plot; and
+//! what every bench report needs (the machine's description, the output's errors).
 
 use super::*;
 
@@ -103,4 +104,37 @@ pub(super) fn plot(
         .draw()
         .map_err(|e| e.to_string())?;
     root.present().map_err(|e| e.to_string())
+}
+
+/// The machine the bench runs on: CPU model, cores and memory, for the reports' headers.
+pub(crate) fn machine() -> String {
+    let cpu = std::fs::read_to_string("/proc/cpuinfo")
+        .ok()
+        .and_then(|s| {
+            s.lines()
+                .find(|l| l.starts_with("model name"))
+                .map(|l| l.split(':').nth(1).unwrap_or("").trim().to_string())
+        })
+        .unwrap_or_else(|| "unknown CPU".into());
+    let cores = std::thread::available_parallelism().map_or(0, |n| n.get());
+    let mem = std::fs::read_to_string("/proc/meminfo")
+        .ok()
+        .and_then(|s| {
+            s.lines().next().and_then(|l| {
+                l.split_whitespace()
+                    .nth(1)
+                    .and_then(|k| k.parse::<f64>().ok())
+            })
+        })
+        .map_or(String::new(), |kb| format!(", {:.0} GiB", kb / 1048576.0));
+    format!("{cpu}, {cores} cores{mem}")
+}
+
+/// A bench output file or directory that cannot be written, as abut's error.
+pub(crate) fn io_err(p: &std::path::Path, e: std::io::Error) -> abut::Error {
+    abut::Error::BadParameter {
+        name: "bench output",
+        value: format!("{}: {e}", p.display()),
+        expected: "a writable directory",
+    }
 }
