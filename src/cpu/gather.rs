@@ -94,23 +94,11 @@ pub fn scatter_forces(
     if status[STATUS_BUDGET_EXCEEDED] != 0 {
         return;
     }
-    let all: Vec<u32>;
-    let list: &[u32] = match active {
-        Some(active) => {
-            let count = active.first().map_or(0, |&c| c as usize);
-            active.get(1..1 + count).unwrap_or(&[])
-        }
-        None => {
-            all = (0..pp.n_slaves).collect();
-            &all
-        }
-    };
-    for &i in list {
-        let i = i as usize;
+    let mut scatter = |i: usize| {
         let o = &out[i];
         let hit = &hits[i];
         if o.status & CSTATUS_MASK == CSTATUS_OPEN || hit.facet >= pp.n_facets {
-            continue;
+            return;
         }
         let fac = facet_nodes[hit.facet as usize];
         let n = facet_node_count(fac);
@@ -136,6 +124,15 @@ pub fn scatter_forces(
             let slot = 4 * pp.body_slots[1] as usize + 3;
             add_fixed(acc, slot, to_fixed(row_share(o, HEAVY_SLAVE), sr));
         }
+    };
+    match active {
+        Some(active) => {
+            let count = active.first().map_or(0, |&c| c as usize);
+            for &i in active.get(1..1 + count).unwrap_or(&[]) {
+                scatter(i as usize);
+            }
+        }
+        None => (0..pp.n_slaves as usize).for_each(scatter),
     }
 }
 
