@@ -49,7 +49,8 @@ pub(crate) enum Kernel {
     NearestFacet,
     /// The slaves the local increments visit, marked for the scan.
     ActiveMark,
-    /// The marked slaves compacted into the active list; the active slot sized.
+    /// The marked slaves compacted into the active list (the schedule sizes the active slot
+    /// from its count).
     ActiveCompact,
     /// The motion budget's reference positions.
     SetReference,
@@ -177,8 +178,8 @@ pub(crate) struct Entry {
 #[derive(Clone, Debug, Default, PartialEq, Eq)]
 pub(crate) struct Slots {
     /// Local increments: one invocation per active slave (local_search, penalty_active,
-    /// scatter_forces_active), sized by active_compact at each global search (the plan's
-    /// `ACTIVE_SLOT`, empty until the first).
+    /// scatter_forces_active): the plan's `ACTIVE_SLOT`, sized by the schedule from the count
+    /// the last global search's active_compact left (empty until the first).
     pub active: u64,
     /// Global: one per node of each refit pass's bottom level (tree_refit).
     pub tree_passes: Vec<u64>,
