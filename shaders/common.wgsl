@@ -40,6 +40,7 @@ struct SearchParams {
 const FLAG_WIDE_LOCAL: u32 = 1u;
 const FLAG_SELF_CONTACT: u32 = 2u;
 const FLAG_EVERY_SLAVE: u32 = 4u;   // local increments visit every slave (no compaction)
+const FLAG_SLAVES_APART: u32 = 8u;  // no slave node is on an active master facet
 
 // Rust twin: GpuHit (src/abi/search.rs), 64 bytes. One per slave node.
 struct Hit {

@@ -33,6 +33,8 @@
 //             node heavy) of its own spring and of every spring in contact on its facets whose
 //             weight at the node is not zero (a node the contact point does not weigh is not in
 //             that spring; giving it a share would make the bound jump with round-off).
+//             A slave with no facet in a pair with PENALTY_SLAVES_APART is left by gather and
+//             add_forces (no_partner): the caller's force is not touched where nothing is added.
 //             Nothing is scattered when the search overflowed or the motion budget was used up
 //             (the penalty pass did not run, the increment runs again).
 
@@ -152,12 +154,20 @@ fn scatter(i: u32) {
     }
 }
 
+// Pair node i is a slave with no facet in a pair whose slaves are no master nodes: its own
+// spring wrote nothing but zeros (penalty.wgsl) and no spring scattered onto it, so its force and
+// row are zero and gather and add_forces leave it (its `forces` row is stale, and read by no
+// one): one word of its hit read instead of its records.
+fn no_partner(i: u32) -> bool {
+    return i < pp.n_slaves && (pp.flags & PENALTY_SLAVES_APART) != 0u && hits[i].facet == NO_FACET;
+}
+
 @compute @workgroup_size(64)
 fn gather(@builtin(workgroup_id) wg: vec3<u32>,
           @builtin(num_workgroups) nwg: vec3<u32>,
           @builtin(local_invocation_index) li: u32) {
     let i = folded_id(wg, nwg, li, ITEM_WORKGROUP);
-    if (i >= pp.n_pair_nodes + pp.body_slots.z) { return; }
+    if (i >= pp.n_pair_nodes + pp.body_slots.z || no_partner(i)) { return; }
     let pn = pair_nodes[i];
     var f = vec3<f32>(0.0);
     var row = 0.0;
@@ -188,7 +198,7 @@ fn add_forces(@builtin(workgroup_id) wg: vec3<u32>,
               @builtin(num_workgroups) nwg: vec3<u32>,
               @builtin(local_invocation_index) li: u32) {
     let i = folded_id(wg, nwg, li, ITEM_WORKGROUP);
-    if (i >= pp.n_pair_nodes + pp.body_slots.z) { return; }
+    if (i >= pp.n_pair_nodes + pp.body_slots.z || no_partner(i)) { return; }
     let node = pair_nodes[i].x;
     let f = forces[i];
     // a rigid part's slot (after the pair's nodes) carries no force, only its row, to the

@@ -5,7 +5,7 @@
 //           adjacency start, end), 4 adjacency (active facet indices, increasing per node),
 //           5 normals (vec4 per model node; only master nodes are written).
 // Dispatch: one invocation per pair node, ITEM_WORKGROUP per workgroup, folded into 2D.
-// Invariants: a node's normal is the normalised sum of the area-weighted normals of its active
+// Invariants: a slave of a pair with PENALTY_SLAVES_APART reads nothing (it is on no facet); a node's normal is the normalised sum of the area-weighted normals of its active
 //             facets, summed in increasing facet order (deterministic); nodes on no facet keep
 //             their previous value (never read).
 
@@ -38,6 +38,8 @@ fn nodal_normals(@builtin(workgroup_id) wg: vec3<u32>,
                  @builtin(local_invocation_index) li: u32) {
     let i = folded_id(wg, nwg, li, ITEM_WORKGROUP);
     if (i >= pp.n_pair_nodes) { return; }
+    // a pair whose slaves are no master nodes: the slaves (the first pair nodes) have no normal
+    if (i < pp.n_slaves && (pp.flags & PENALTY_SLAVES_APART) != 0u) { return; }
     let pn = pair_nodes[i];
     if (pn.z == pn.w) { return; }
     var sum = vec3<f32>(0.0);

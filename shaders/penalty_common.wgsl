@@ -18,6 +18,9 @@ const STIFFNESS_ABSOLUTE: u32 = 2u;
 const STIFFNESS_PER_AREA: u32 = 3u;
 const NO_LIMIT: f32 = 3.40282347e38;
 const PENALTY_ANCHORED: u32 = 1u;
+// no slave node is a master node: a slave with no facet is no one's partner (its force, row and
+// normal are nothing), so the per-node passes leave it at one hit word
+const PENALTY_SLAVES_APART: u32 = 2u;
 
 // Rust twin: PenaltyParams, 208 bytes.
 struct PenaltyParams {

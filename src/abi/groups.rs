@@ -22,21 +22,22 @@ pub const TO_LOCAL_ANCHOR: Group = Group {
     label: "to_local + anchor",
     passes: &[&TO_LOCAL, &ANCHOR],
 };
-/// Positions into the frame, the motion budget, and the schedule's choice of search.
-pub const TO_LOCAL_MOTION_SCHEDULE: Group = Group {
-    label: "to_local + motion + schedule",
-    passes: &[&TO_LOCAL, &MOTION, &SCHEDULE],
+/// Positions into the frame with the motion budget, and the schedule's choice of search.
+pub const MOTION_SCHEDULE: Group = Group {
+    label: "motion + schedule",
+    passes: &[&MOTION, &SCHEDULE],
 };
 /// The local search (indirect: no workgroups when the schedule chose a global search).
 pub const LOCAL: Group = Group {
     label: "local_search",
     passes: &[&LOCAL_SEARCH],
 };
-/// The global search (indirect: no workgroups in a local increment), and the active slaves it
-/// leaves compacted for the local increments.
+/// The global search (indirect: no workgroups in a local increment) on every motion node in
+/// the frame, and the active slaves it leaves compacted for the local increments.
 pub const GLOBAL_SEARCH: Group = Group {
     label: "global search",
     passes: &[
+        &FRAME_NODES,
         &TREE_REFIT,
         &WALK_START,
         &NEAREST_WALK,
@@ -87,7 +88,7 @@ pub const INTEGRATOR: Group = Group {
 /// Every group, each label once.
 pub const GROUPS: [Group; 9] = [
     TO_LOCAL_ANCHOR,
-    TO_LOCAL_MOTION_SCHEDULE,
+    MOTION_SCHEDULE,
     LOCAL,
     GLOBAL_SEARCH,
     NORMALS_PENALTY,

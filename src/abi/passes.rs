@@ -317,18 +317,38 @@ pub const NEAREST_FACET: Pass = Pass {
     per_workgroup: ITEM_WORKGROUP,
 };
 
-/// `motion.wgsl`: the largest motion since the last global search against the budget.
+/// `motion.wgsl`: every increment, the motion nodes into the frame where the local passes read
+/// them (the master's box raised, non-finite nodes named), and the largest motion since the
+/// last global search against the budget.
 pub const MOTION: Pass = Pass {
     stem: "motion",
     entry: "motion",
     bindings: &[
         b(0, SearchParams, U),
-        b(1, Nodes, R),
+        b(1, Nodes, RW),
         b(2, Reference, RW),
         b(3, MotionNodes, R),
         b(4, Status, RW),
         b(5, Hits, R),
         b(6, Adjacency, R),
+        b(7, FrameParams, U),
+        b(8, Positions, R),
+    ],
+    items: Items::MotionNodes,
+    per_workgroup: ITEM_WORKGROUP,
+};
+
+/// `motion.wgsl`: global increments, before the search: every motion node into the frame (the
+/// motion pass leaves the untracked slaves' nodes).
+pub const FRAME_NODES: Pass = Pass {
+    stem: "motion",
+    entry: "frame_nodes",
+    bindings: &[
+        b(0, SearchParams, U),
+        b(1, Nodes, RW),
+        b(3, MotionNodes, R),
+        b(7, FrameParams, U),
+        b(8, Positions, R),
     ],
     items: Items::MotionNodes,
     per_workgroup: ITEM_WORKGROUP,
@@ -341,7 +361,7 @@ pub const SET_REFERENCE: Pass = Pass {
     entry: "set_reference",
     bindings: &[
         b(0, SearchParams, U),
-        b(1, Nodes, R),
+        b(1, Nodes, RW),
         b(2, Reference, RW),
         b(3, MotionNodes, R),
     ],
@@ -400,16 +420,17 @@ pub const ACTIVE_COMPACT: Pass = Pass {
     per_workgroup: ITEM_WORKGROUP,
 };
 
-/// `to_local.wgsl`: the caller's positions into the search's frame; the master's box raised.
+/// `motion.wgsl`: small sliding, every model node into the search's frame; the master's box
+/// raised.
 pub const TO_LOCAL: Pass = Pass {
-    stem: "to_local",
+    stem: "motion",
     entry: "to_local",
     bindings: &[
-        b(1, FrameParams, U),
-        b(2, Positions, R),
-        b(3, Nodes, RW),
-        b(4, Adjacency, R),
-        b(5, Status, RW),
+        b(1, Nodes, RW),
+        b(4, Status, RW),
+        b(6, Adjacency, R),
+        b(7, FrameParams, U),
+        b(8, Positions, R),
     ],
     items: Items::Nodes,
     per_workgroup: ITEM_WORKGROUP,
@@ -505,6 +526,7 @@ pub const GATHER: Pass = Pass {
     bindings: &[
         b(0, PenaltyParams, U),
         b(1, PairNodes, R),
+        b(3, Hits, R),
         b(4, Out, R),
         b(5, Status, R),
         b(6, Acc, RW),
@@ -521,6 +543,7 @@ pub const ADD_FORCES: Pass = Pass {
     bindings: &[
         b(0, PenaltyParams, U),
         b(1, PairNodes, R),
+        b(3, Hits, R),
         b(7, Forces, RW),
         b(8, HostForces, RW),
         b(9, Rows, RW),
@@ -572,12 +595,13 @@ pub const INTEGRATE: Pass = Pass {
 };
 
 /// Every pass, in the order an increment may run them.
-pub const PASSES: [Pass; 29] = [
+pub const PASSES: [Pass; 30] = [
     TO_LOCAL,
     ANCHOR,
     MOTION,
     SCHEDULE,
     LOCAL_SEARCH,
+    FRAME_NODES,
     TREE_REFIT,
     SCAN_BLOCKS,
     SCAN_ADD,

@@ -43,6 +43,10 @@ pub const STIFFNESS_PER_AREA: u32 = 3;
 /// Flag: small sliding, the contact normal and gap are the hit's (the anchor's tangent plane),
 /// not the smoothed normal at the closest point (WGSL: `PENALTY_ANCHORED`).
 pub const PENALTY_ANCHORED: u32 = 1;
+/// Flag: no slave node is a node of the master surface, so a slave whose hit has no facet has
+/// no force, no bound row and no normal: `nodal_normals`, `gather` and `add_forces` leave it
+/// after reading one word of its hit (WGSL: `PENALTY_SLAVES_APART`).
+pub const PENALTY_SLAVES_APART: u32 = 2;
 /// "No limit" for increments (largest finite f32; WGSL: `NO_LIMIT`).
 pub const NO_LIMIT: f32 = f32::MAX;
 

@@ -85,6 +85,10 @@ pub const FLAG_SELF_CONTACT: u32 = 2;
 /// last global search compacted (the baseline the compaction is tested and measured against;
 /// the results are the same bits) (WGSL: `FLAG_EVERY_SLAVE`).
 pub const FLAG_EVERY_SLAVE: u32 = 4;
+/// Flag: no slave node is on an active master facet, so a slave the last global search left
+/// untracked is nobody's facet node: the motion pass reads its position for the budget and
+/// writes nothing (WGSL: `FLAG_SLAVES_APART`).
+pub const FLAG_SLAVES_APART: u32 = 8;
 /// Walk iterations of the local search before it gives up (WGSL default).
 pub const MAX_LOCAL_ITERATIONS: u32 = 16;
 
@@ -114,7 +118,7 @@ const _: () = assert!(std::mem::size_of::<Anchor>() == 64);
 /// (WGSL: `ANCHOR_FROZEN`).
 pub const ANCHOR_FROZEN: u32 = 1;
 
-/// The local frame of positions kept on the device. WGSL twin: `FrameParams` in to_local.wgsl.
+/// The local frame of positions kept on the device. WGSL twin: `FrameParams` in motion.wgsl.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, PartialEq, Pod, Zeroable)]
 pub struct FrameParams {
@@ -273,7 +277,7 @@ pub fn fold_dispatch(items: u32, per_group: u32, max_per_dim: u32) -> (u32, u32)
 }
 
 // The plan of a device-resident increment: one u32 buffer per search (WGSL twins: PLAN_* in
-// common.wgsl; the passes: schedule.wgsl, to_local.wgsl, stats.wgsl).
+// common.wgsl; the passes: schedule.wgsl, motion.wgsl, stats.wgsl).
 /// Plan word: increments since the last global search.
 pub const PLAN_SINCE_GLOBAL: usize = 0;
 /// Plan word: 1 once a global search has run.

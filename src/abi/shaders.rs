@@ -24,14 +24,13 @@ pub enum Prelude {
 
 /// (file stem, source, prelude) of every kernel file.
 #[rustfmt::skip]
-pub const KERNELS: [(&str, &str, Prelude); 14] = [
+pub const KERNELS: [(&str, &str, Prelude); 13] = [
     ("tree", include_str!("../../shaders/tree.wgsl"), Prelude::None),
     ("scan", include_str!("../../shaders/scan.wgsl"), Prelude::None),
     ("nearest_facet", include_str!("../../shaders/nearest_facet.wgsl"), Prelude::Search),
     ("local_search", include_str!("../../shaders/local_search.wgsl"), Prelude::Search),
     ("motion", include_str!("../../shaders/motion.wgsl"), Prelude::None),
     ("active", include_str!("../../shaders/active.wgsl"), Prelude::None),
-    ("to_local", include_str!("../../shaders/to_local.wgsl"), Prelude::None),
     ("anchor", include_str!("../../shaders/anchor.wgsl"), Prelude::None),
     ("nodal_normals", include_str!("../../shaders/nodal_normals.wgsl"), Prelude::Penalty),
     ("penalty", include_str!("../../shaders/penalty.wgsl"), Prelude::Penalty),

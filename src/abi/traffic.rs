@@ -43,6 +43,9 @@ pub enum Of {
     FarSlave,
     /// Items that are master nodes (of a pass over nodes, pair nodes or watched nodes).
     Master,
+    /// Items that are slave nodes within the search radius or master nodes (a pass over pair
+    /// nodes that leaves a slave with no facet after reading its hit).
+    NearOrMaster,
     /// Once per master node of the pair whatever the items (records shared by the items that
     /// touch them, updated in cache).
     EachMasterNode,
@@ -104,29 +107,22 @@ use Per::*;
 /// (the global search's).
 pub fn touches(pass: &Pass) -> Option<&'static [Touch]> {
     let list: &'static [Touch] = match pass.entry {
-        // the caller's position in, the frame's node read (its mass) and written, the node's
-        // adjacency range (does it bound the master's box)
-        "to_local" => {
-            const {
-                &[
-                    t(Positions, R, VEC4, One, Each),
-                    t(Nodes, R, VEC4, One, Each),
-                    t(Nodes, W, VEC4, One, Each),
-                    t(Adjacency, R, 2 * WORD, One, Each),
-                ]
-            }
-        }
-        // the node's id; a slave's facet, and for one within the radius its adjacency range (one
-        // that is no master node stops there); the others' node now and at the reference
+        // the node's id and the caller's position; a slave's hit (its tracked node, and for one
+        // tracked its facet); the node in the frame read (its mass) and written where the local
+        // passes read it (not for an untracked slave: FLAG_SLAVES_APART); a master node's
+        // adjacency range (the box); the reference of every node the budget counts (not a
+        // slave within the radius)
         "motion" => {
             const {
                 &[
                     t(MotionNodes, R, WORD, One, Each),
+                    t(Positions, R, VEC4, One, Each),
                     t(Hits, R, WORD, One, Slave),
-                    t(Adjacency, R, 2 * WORD, One, NearSlave),
-                    t(Nodes, R, VEC4, One, FarSlave),
+                    t(Hits, R, WORD, One, NearSlave),
+                    t(Nodes, R, VEC4, One, NearOrMaster),
+                    t(Nodes, W, VEC4, One, NearOrMaster),
+                    t(Adjacency, R, 2 * WORD, One, Master),
                     t(Reference, R, VEC4, One, FarSlave),
-                    t(Nodes, R, VEC4, One, Master),
                     t(Reference, R, VEC4, One, Master),
                 ]
             }
@@ -150,11 +146,12 @@ pub fn touches(pass: &Pass) -> Option<&'static [Touch]> {
                 ]
             }
         }
-        // the pair node; a master node's facets with their nodes, its normal out
+        // a master node's pair node, facets with their nodes, its normal out (the slaves of a
+        // pair whose slaves are no master nodes, PENALTY_SLAVES_APART, read nothing)
         "nodal_normals" => {
             const {
                 &[
-                    t(PairNodes, R, VEC4, One, Each),
+                    t(PairNodes, R, VEC4, One, Master),
                     t(PairAdjacency, R, WORD, NodeFacet, Master),
                     t(Facets, R, VEC4, NodeFacet, Master),
                     t(Nodes, R, VEC4, NodeFacetNode, Master),
@@ -198,28 +195,32 @@ pub fn touches(pass: &Pass) -> Option<&'static [Touch]> {
                 ]
             }
         }
-        // the pair node, a slave's own output, the sums read and zeroed, the force out
+        // a slave's hit word (one with no facet stops there: PENALTY_SLAVES_APART); the pair
+        // node, a slave's own output, the sums read and zeroed, the force out
         "gather" => {
             const {
                 &[
-                    t(PairNodes, R, VEC4, One, Each),
-                    t(Out, R, OUT_FORCE, One, Slave),
-                    t(Acc, R, SUMS, One, Each),
-                    t(Acc, W, SUMS, One, Each),
-                    t(Forces, W, VEC4, One, Each),
+                    t(Hits, R, WORD, One, Slave),
+                    t(PairNodes, R, VEC4, One, NearOrMaster),
+                    t(Out, R, OUT_FORCE, One, NearSlave),
+                    t(Acc, R, SUMS, One, NearOrMaster),
+                    t(Acc, W, SUMS, One, NearOrMaster),
+                    t(Forces, W, VEC4, One, NearOrMaster),
                 ]
             }
         }
-        // the pair node and its force; the caller's force read and written, the bound row
+        // a slave's hit word (as gather); the pair node and its force; the caller's force read
+        // and written, the bound row
         "add_forces" => {
             const {
                 &[
-                    t(PairNodes, R, VEC4, One, Each),
-                    t(Forces, R, VEC4, One, Each),
-                    t(HostForces, R, VEC4, One, Each),
-                    t(HostForces, W, VEC4, One, Each),
-                    t(Rows, R, WORD, One, Each),
-                    t(Rows, W, WORD, One, Each),
+                    t(Hits, R, WORD, One, Slave),
+                    t(PairNodes, R, VEC4, One, NearOrMaster),
+                    t(Forces, R, VEC4, One, NearOrMaster),
+                    t(HostForces, R, VEC4, One, NearOrMaster),
+                    t(HostForces, W, VEC4, One, NearOrMaster),
+                    t(Rows, R, WORD, One, NearOrMaster),
+                    t(Rows, W, WORD, One, NearOrMaster),
                 ]
             }
         }
@@ -282,6 +283,7 @@ impl Topology {
             return match of {
                 Each | Slave | NearSlave => near,
                 FarSlave | Master => 0.0,
+                NearOrMaster => near,
                 EachMasterNode => self.masters_per_slave * near,
             };
         }
@@ -297,6 +299,7 @@ impl Topology {
             NearSlave => per_slave.min(1.0) * near,
             FarSlave => per_slave.min(1.0) * (1.0 - near),
             Master => (per_slave - 1.0).max(0.0),
+            NearOrMaster => per_slave.min(1.0) * near + (per_slave - 1.0).max(0.0),
             EachMasterNode => self.masters_per_slave,
         }
     }
@@ -318,8 +321,7 @@ pub fn bytes_per_slave(pass: &Pass, topology: &Topology, near: f64) -> Option<f6
 
 /// The passes whose traffic is declared: a local increment's (the slave passes over the active
 /// slaves) and the integrator.
-pub const DECLARED: [&Pass; 13] = [
-    &passes::TO_LOCAL,
+pub const DECLARED: [&Pass; 12] = [
     &passes::MOTION,
     &passes::SCHEDULE,
     &passes::LOCAL_SEARCH,
@@ -364,7 +366,10 @@ mod tests {
                     "{}: uniforms are not counted",
                     pass.entry
                 );
-                let slave_only = matches!(t.of, Of::Slave | Of::NearSlave | Of::FarSlave);
+                let slave_only = matches!(
+                    t.of,
+                    Of::Slave | Of::NearSlave | Of::FarSlave | Of::NearOrMaster
+                );
                 assert!(
                     !slave_only || pass.items != Items::One,
                     "{}: a one-invocation pass has no slave items",

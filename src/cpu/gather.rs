@@ -4,7 +4,7 @@
 use super::common::facet_node_count;
 use crate::abi::penalty::{
     ContactOut, PairNode, PenaltyParams, CSTATUS_MASK, CSTATUS_OPEN, HEAVY_SHIFT, HEAVY_SLAVE,
-    NO_SLAVE,
+    NO_SLAVE, PENALTY_SLAVES_APART,
 };
 use crate::abi::search::GpuHit;
 use crate::abi::status::{STATUS_BUDGET_EXCEEDED, STATUS_FORCE_SCALE, STATUS_ROW_SCALE};
@@ -136,11 +136,20 @@ pub fn scatter_forces(
     }
 }
 
+/// Pair node `i` is a slave with no facet in a pair whose slaves are no master nodes: no force,
+/// no row, left by `gather` and `add_forces` (WGSL: `no_partner`).
+fn no_partner(pp: &PenaltyParams, hits: &[GpuHit], i: usize) -> bool {
+    i < pp.n_slaves as usize
+        && pp.flags & PENALTY_SLAVES_APART != 0
+        && hits[i].facet == crate::abi::search::NO_FACET
+}
+
 /// One "invocation" per pair node: its own contact force (a slave) plus the decoded sums of the
 /// springs on its facets (WGSL: `gather`).
 pub fn gather(
     pp: &PenaltyParams,
     pair_nodes: &[PairNode],
+    hits: &[GpuHit],
     out: &[ContactOut],
     status: &[u32],
     acc: &mut [u32],
@@ -150,6 +159,9 @@ pub fn gather(
     let inv_r = pow2(-fixed_exponent(status[STATUS_ROW_SCALE], pp.n_slaves));
     let total = (pp.n_pair_nodes + pp.body_slots[2]) as usize;
     for (i, pn) in pair_nodes[..total].iter().enumerate() {
+        if no_partner(pp, hits, i) {
+            continue;
+        }
         let mut f = [0.0f32; 3];
         let mut row = 0.0f32;
         if pn.slave != NO_SLAVE {
@@ -176,11 +188,15 @@ pub fn gather(
 pub fn add_forces(
     pp: &PenaltyParams,
     pair_nodes: &[PairNode],
+    hits: &[GpuHit],
     forces: &[[f32; 4]],
     host_forces: &mut [[f32; 4]],
     rows: &mut [f32],
 ) {
     for i in 0..(pp.n_pair_nodes + pp.body_slots[2]) as usize {
+        if no_partner(pp, hits, i) {
+            continue;
+        }
         let node = pair_nodes[i].node as usize;
         let f = forces[i];
         if i < pp.n_pair_nodes as usize {

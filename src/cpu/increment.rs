@@ -112,7 +112,9 @@ pub(crate) fn run_entry(
         ),
         Kernel::Motion => motion::motion(
             &params,
-            &prep.nodes,
+            s.frame,
+            positions,
+            &mut prep.nodes,
             &ws.reference,
             &prep.motion_nodes,
             status,
@@ -199,6 +201,13 @@ pub(crate) fn run_entry(
             let c = candidates(&params, prep, &ws.walk_points, &ws.boxes, &ws.corners);
             nearest_facet::nearest_facet(&c, &mut ws.status, hits_mut(&mut ws.hits), &ws.best);
         }
+        Kernel::FrameNodes => motion::frame_nodes(
+            &params,
+            s.frame,
+            positions,
+            &mut prep.nodes,
+            &prep.motion_nodes,
+        ),
         Kernel::SetReference => {
             motion::set_reference(&params, &prep.nodes, &mut ws.reference, &prep.motion_nodes)
         }
@@ -261,6 +270,7 @@ pub(crate) fn run_entry(
             gather::gather(
                 p.params,
                 &p.setup.pair_nodes,
+                &ws.hits,
                 &pn.out,
                 status,
                 &mut pn.acc,
@@ -272,6 +282,7 @@ pub(crate) fn run_entry(
             gather::add_forces(
                 p.params,
                 &p.setup.pair_nodes,
+                &ws.hits,
                 &p.penalty.forces,
                 p.forces,
                 p.rows,

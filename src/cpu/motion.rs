@@ -1,37 +1,92 @@
-//! CPU mirror of `shaders/motion.wgsl`: the motion budget since the last global search.
+//! CPU mirror of `shaders/motion.wgsl` (but `to_local`, in `to_local.rs`): the motion nodes
+//! into the frame and the motion budget since the last global search.
 
 use super::common::node;
-use crate::abi::search::{GpuHit, SearchParams, NO_FACET};
+use super::to_local::check_node;
+use crate::abi::search::{
+    FrameParams, GpuHit, SearchParams, FLAG_EVERY_SLAVE, FLAG_SLAVES_APART, NO_FACET,
+};
 use crate::abi::status::{STATUS_BUDGET_EXCEEDED, STATUS_MOTION};
+use crate::geometry::V3;
+use crate::model::NO_NODE;
 
-/// One "invocation" per motion node; slaves with a facet within the radius at the last
-/// increment that are not master nodes (no active facet in `adjacency`) are skipped. Each displacement since the reference is taken relative
-/// to the pair's reference master node's (`params.ref_node`).
+/// Model node `id`'s position in the frame (WGSL: `in_frame`).
+fn in_frame(frame: &FrameParams, positions: &[[f32; 4]], id: u32) -> V3<f32> {
+    let p = positions[id as usize];
+    V3::new(
+        p[0] - frame.origin[0],
+        p[1] - frame.origin[1],
+        p[2] - frame.origin[2],
+    )
+}
+
+/// One "invocation" per motion node (WGSL: `motion`): the node into the frame where the local
+/// passes read it (every master node, and every slave they visit: tracked, or all with
+/// `FLAG_EVERY_SLAVE`), named if not finite, boxed if a master node; then its motion against
+/// the budget, except for a slave with a facet within the radius at the last increment that is
+/// not a master node. Each displacement since the reference is taken relative to the pair's
+/// reference master node's (`params.ref_node`).
+#[allow(clippy::too_many_arguments)]
 pub fn motion(
     params: &SearchParams,
-    nodes: &[[f32; 4]],
+    frame: &FrameParams,
+    positions: &[[f32; 4]],
+    nodes: &mut [[f32; 4]],
     reference: &[[f32; 4]],
     motion_nodes: &[u32],
     status: &mut [u32],
     hits: &[GpuHit],
     adjacency: &[u32],
 ) {
+    let on_master = |id: u32| adjacency[id as usize + 1] > adjacency[id as usize];
+    let apart = params.flags & FLAG_SLAVES_APART != 0;
+    let every = params.flags & FLAG_EVERY_SLAVE != 0;
     for (k, &id) in motion_nodes[..params.n_motion_nodes as usize]
         .iter()
         .enumerate()
     {
-        let master = adjacency[id as usize + 1] > adjacency[id as usize];
-        if k < params.n_slaves as usize && hits[k].facet != NO_FACET && !master {
-            continue;
+        let x = in_frame(frame, positions, id);
+        let (master, write, counts) = if k < params.n_slaves as usize {
+            let master = !apart && on_master(id);
+            let tracked = hits[k].node != NO_NODE;
+            (
+                master,
+                master || tracked || every,
+                master || !tracked || hits[k].facet == NO_FACET,
+            )
+        } else {
+            (on_master(id), true, true)
+        };
+        if write {
+            let n = &mut nodes[id as usize];
+            *n = [x.x, x.y, x.z, n[3]];
         }
-        let base = node(nodes, params.ref_node) - node(reference, params.ref_node);
-        let d = ((node(nodes, id) - node(reference, id)) - base)
-            .length2()
-            .sqrt();
-        status[STATUS_MOTION] = status[STATUS_MOTION].max(d.to_bits());
-        if 2.0 * d >= params.budget {
-            status[STATUS_BUDGET_EXCEEDED] = 1;
+        check_node(status, id, [x.x, x.y, x.z], master);
+        if counts {
+            let r = params.ref_node;
+            let base = in_frame(frame, positions, r) - node(reference, r);
+            let d = ((x - node(reference, id)) - base).length2().sqrt();
+            status[STATUS_MOTION] = status[STATUS_MOTION].max(d.to_bits());
+            if 2.0 * d >= params.budget {
+                status[STATUS_BUDGET_EXCEEDED] = 1;
+            }
         }
+    }
+}
+
+/// One "invocation" per motion node (WGSL: `frame_nodes`): global increments, every motion
+/// node into the frame.
+pub fn frame_nodes(
+    params: &SearchParams,
+    frame: &FrameParams,
+    positions: &[[f32; 4]],
+    nodes: &mut [[f32; 4]],
+    motion_nodes: &[u32],
+) {
+    for &id in &motion_nodes[..params.n_motion_nodes as usize] {
+        let x = in_frame(frame, positions, id);
+        let n = &mut nodes[id as usize];
+        *n = [x.x, x.y, x.z, n[3]];
     }
 }
 

@@ -1,7 +1,7 @@
 //! CPU mirror of `shaders/nodal_normals.wgsl`: smoothed nodal normals of the master nodes.
 
 use super::common::{facet_node_count, node};
-use crate::abi::penalty::{PairNode, PenaltyParams};
+use crate::abi::penalty::{PairNode, PenaltyParams, PENALTY_SLAVES_APART};
 use crate::geometry::V3;
 
 /// Area vector of a facet (WGSL: `facet_area_normal`).
@@ -29,7 +29,13 @@ pub fn nodal_normals(
     adjacency: &[u32],
     normals: &mut [[f32; 4]],
 ) {
-    for pn in &pair_nodes[..pp.n_pair_nodes as usize] {
+    // a pair whose slaves are no master nodes: the slaves (the first pair nodes) have no normal
+    let first = if pp.flags & PENALTY_SLAVES_APART != 0 {
+        pp.n_slaves as usize
+    } else {
+        0
+    };
+    for pn in &pair_nodes[first.min(pp.n_pair_nodes as usize)..pp.n_pair_nodes as usize] {
         if pn.adj_start == pn.adj_end {
             continue;
         }

@@ -320,6 +320,7 @@ impl GpuPenalty {
                 Some(match buf {
                     Buf::PenaltyParams => self.params.as_entire_binding(),
                     Buf::PairNodes => self.pair_nodes.as_entire_binding(),
+                    Buf::Hits => s.hits.as_entire_binding(),
                     Buf::Forces => self.forces.as_entire_binding(),
                     Buf::HostForces => forces.as_entire_binding(),
                     Buf::Rows => rows.as_entire_binding(),

@@ -181,6 +181,14 @@ impl PenaltySetup {
         if pair.sliding != crate::model::Sliding::Finite {
             params.flags |= PENALTY_ANCHORED;
         }
+        // the slaves come first among the pair nodes; one on a master facet (self-contact, or
+        // surfaces sharing nodes) may be a master partner whatever its own hit
+        if pair_nodes[..slaves.len()]
+            .iter()
+            .all(|pn| pn.adj_start == pn.adj_end)
+        {
+            params.flags |= PENALTY_SLAVES_APART;
+        }
         Ok(Self {
             pair_nodes,
             n_nodes,

@@ -27,6 +27,8 @@ pub(crate) enum Kernel {
     Schedule,
     /// The local search.
     LocalSearch,
+    /// Global increments: every motion node into the frame.
+    FrameNodes,
     /// One refit pass of the search tree (`Entry::level`: which).
     TreeRefit,
     /// The tree walks' start: walk points and work counts.
@@ -80,12 +82,13 @@ impl Kernel {
     /// Every kernel, in the order `abi::passes::PASSES` declares their passes (for the tests
     /// that go over them all).
     #[cfg(test)]
-    pub(crate) const ALL: [Kernel; 28] = [
+    pub(crate) const ALL: [Kernel; 29] = [
         Kernel::ToLocal,
         Kernel::Anchor,
         Kernel::Motion,
         Kernel::Schedule,
         Kernel::LocalSearch,
+        Kernel::FrameNodes,
         Kernel::TreeRefit,
         Kernel::ScanBlocks,
         Kernel::ScanAdd,
@@ -119,6 +122,7 @@ impl Kernel {
             Kernel::Motion => &passes::MOTION,
             Kernel::Schedule => &passes::SCHEDULE,
             Kernel::LocalSearch => &passes::LOCAL_SEARCH,
+            Kernel::FrameNodes => &passes::FRAME_NODES,
             Kernel::TreeRefit => &passes::TREE_REFIT,
             Kernel::WalkStart => &passes::WALK_START,
             Kernel::NearestWalk => &passes::NEAREST_WALK,
@@ -192,7 +196,7 @@ pub(crate) struct Slots {
     pub slave_groups: u64,
     /// Global: one invocation (nearest_args).
     pub one: u64,
-    /// Global: one per watched node (set_reference).
+    /// Global: one per watched node (frame_nodes, set_reference).
     pub motion_nodes: u64,
 }
 
@@ -291,9 +295,10 @@ pub(crate) struct PairShape {
     pub slots: Slots,
 }
 
-/// The search's entries of pair `k` of shape `p`, in the order they run: positions into the
-/// frame, then the anchors' evaluation (small sliding) or the motion budget, the schedule, the
-/// local search and (unless `local_only`) the global search the schedule may choose.
+/// The search's entries of pair `k` of shape `p`, in the order they run: small sliding, every
+/// node into the frame and the anchors' evaluation; otherwise the motion nodes into the frame
+/// with the motion budget, the schedule, the local search and (unless `local_only`) the
+/// global search the schedule may choose, which puts every motion node into the frame first.
 pub(crate) fn search(k: usize, p: &PairShape) -> Vec<Entry> {
     let mut out = Vec::new();
     let mut push = |group: &'static Group, kernel: Kernel, level: usize, size: Size| {
@@ -313,8 +318,7 @@ pub(crate) fn search(k: usize, p: &PairShape) -> Vec<Entry> {
         push(g, Kernel::Anchor, 0, Size::Items(p.n_slaves, iw));
         return out;
     }
-    let g = &groups::TO_LOCAL_MOTION_SCHEDULE;
-    push(g, Kernel::ToLocal, 0, Size::Items(p.n_nodes, iw));
+    let g = &groups::MOTION_SCHEDULE;
     push(g, Kernel::Motion, 0, Size::Items(p.n_motion_nodes, iw));
     push(g, Kernel::Schedule, 0, Size::Items(1, 1));
     push(&groups::LOCAL, Kernel::LocalSearch, 0, Size::Slot(s.active));
@@ -322,6 +326,7 @@ pub(crate) fn search(k: usize, p: &PairShape) -> Vec<Entry> {
         return out;
     }
     let g = &groups::GLOBAL_SEARCH;
+    push(g, Kernel::FrameNodes, 0, Size::Slot(s.motion_nodes));
     for (i, &slot) in s.tree_passes.iter().enumerate() {
         push(g, Kernel::TreeRefit, i, Size::Slot(slot));
     }

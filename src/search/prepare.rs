@@ -81,6 +81,14 @@ impl SearchStage {
             layout::FLAG_EVERY_SLAVE
         } else {
             0
+        }) | (if self
+            .slave_ids
+            .iter()
+            .all(|&s| self.adjacency[s as usize] == self.adjacency[s as usize + 1])
+        {
+            layout::FLAG_SLAVES_APART
+        } else {
+            0
         })
     }
 

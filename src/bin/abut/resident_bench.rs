@@ -39,7 +39,7 @@ pub(crate) fn resident_bytes(near: f64) -> abut::Result<Vec<(&'static str, f64)>
     };
     let mut out = vec![(groups::GLOBAL_SEARCH.label, 0.0)];
     for g in [
-        &groups::TO_LOCAL_MOTION_SCHEDULE,
+        &groups::MOTION_SCHEDULE,
         &groups::LOCAL,
         &groups::NORMALS_PENALTY,
         &groups::SCATTER_GATHER_ADD,

@@ -14,6 +14,7 @@ use wgpu::BufferUsages as U;
 pub(crate) struct ResidentSearch {
     schedule: wgpu::ComputePipeline,
     set_reference: wgpu::ComputePipeline,
+    frame_nodes: wgpu::ComputePipeline,
     active_mark: wgpu::ComputePipeline,
     active_compact: wgpu::ComputePipeline,
     /// Scan parameters of the work levels.
@@ -39,7 +40,6 @@ struct Groups {
     /// The search's bind groups' generation these were built against.
     generation: u64,
     schedule: wgpu::BindGroup,
-    motion: wgpu::BindGroup,
     anchor: wgpu::BindGroup,
     local_search: wgpu::BindGroup,
     tree_refit: Vec<wgpu::BindGroup>,
@@ -55,8 +55,15 @@ struct Groups {
     active_compact: wgpu::BindGroup,
     work_scan_blocks: Vec<wgpu::BindGroup>,
     work_scan_add: Vec<wgpu::BindGroup>,
-    /// to_local on the caller's positions buffer.
-    to_local: Option<(wgpu::Buffer, wgpu::BindGroup)>,
+    /// The passes that read the caller's positions buffer, on that buffer.
+    positions: Option<(wgpu::Buffer, PositionGroups)>,
+}
+
+/// The bind groups of the passes that read the caller's positions (built once per buffer).
+struct PositionGroups {
+    to_local: wgpu::BindGroup,
+    motion: wgpu::BindGroup,
+    frame_nodes: wgpu::BindGroup,
 }
 
 impl GpuSearch {
@@ -77,6 +84,7 @@ impl GpuSearch {
         let d = &ctx.device;
         let schedule = ctx.pipeline(&passes::SCHEDULE, &[])?;
         let set_reference = ctx.pipeline(&passes::SET_REFERENCE, &[])?;
+        let frame_nodes = ctx.pipeline(&passes::FRAME_NODES, &[])?;
         let active_mark = ctx.pipeline(&passes::ACTIVE_MARK, &[])?;
         let active_compact = ctx.pipeline(&passes::ACTIVE_COMPACT, &[])?;
         let params = prep.params;
@@ -137,6 +145,7 @@ impl GpuSearch {
         self.resident = Some(Box::new(ResidentSearch {
             schedule,
             set_reference,
+            frame_nodes,
             active_mark,
             active_compact,
             work_scan_params,
@@ -232,7 +241,6 @@ impl GpuSearch {
             let groups = Groups {
                 generation,
                 schedule: group(&r.schedule, &passes::SCHEDULE)?,
-                motion: group(&p.motion, &passes::MOTION)?,
                 anchor: group(&p.anchor, &passes::ANCHOR)?,
                 local_search: group(&p.local_search, &passes::LOCAL_SEARCH)?,
                 tree_refit,
@@ -248,26 +256,28 @@ impl GpuSearch {
                 active_compact: group(&r.active_compact, &passes::ACTIVE_COMPACT)?,
                 work_scan_blocks,
                 work_scan_add,
-                to_local: None,
+                positions: None,
             };
             self.resident.as_mut().expect("resident").groups = Some(groups);
         }
         let r = self.resident.as_ref().expect("resident");
         let fresh =
-            matches!(&r.groups, Some(Groups { to_local: Some((b, _)), .. }) if b == positions);
+            matches!(&r.groups, Some(Groups { positions: Some((b, _)), .. }) if b == positions);
         if !fresh {
-            let group = super::super::bind(
-                d,
-                &self.pipelines.to_local,
-                &passes::TO_LOCAL,
-                |buf| match buf {
+            let group = |pipe: &wgpu::ComputePipeline, pass: &passes::Pass| {
+                super::super::bind(d, pipe, pass, |buf| match buf {
                     Buf::Positions => Some(positions.as_entire_binding()),
                     other => self.resident_resource(other),
-                },
-            )?;
+                })
+            };
+            let made = PositionGroups {
+                to_local: group(&self.pipelines.to_local, &passes::TO_LOCAL)?,
+                motion: group(&self.pipelines.motion, &passes::MOTION)?,
+                frame_nodes: group(&r.frame_nodes, &passes::FRAME_NODES)?,
+            };
             let r = self.resident.as_mut().expect("resident");
             if let Some(g) = r.groups.as_mut() {
-                g.to_local = Some((positions.clone(), group));
+                g.positions = Some((positions.clone(), made));
             }
         }
         Ok(())
@@ -330,9 +340,10 @@ impl GpuSearch {
         let g = r.groups.as_ref()?;
         let p = &self.pipelines;
         let (pipe, group) = match e.kernel {
-            Kernel::ToLocal => (&p.to_local, &g.to_local.as_ref()?.1),
+            Kernel::ToLocal => (&p.to_local, &g.positions.as_ref()?.1.to_local),
             Kernel::Anchor => (&p.anchor, &g.anchor),
-            Kernel::Motion => (&p.motion, &g.motion),
+            Kernel::Motion => (&p.motion, &g.positions.as_ref()?.1.motion),
+            Kernel::FrameNodes => (&r.frame_nodes, &g.positions.as_ref()?.1.frame_nodes),
             Kernel::Schedule => (&r.schedule, &g.schedule),
             Kernel::LocalSearch => (&p.local_search, &g.local_search),
             Kernel::TreeRefit => (&p.tree_refit, g.tree_refit.get(e.level)?),

@@ -48,7 +48,7 @@ pub(crate) fn group_bytes(group: &Group, kb: &[(&'static str, f64)]) -> Result<f
 
 /// The compute passes (groups, as the increment records them) of a steady penalty increment.
 pub(super) const PASSES: [&Group; 4] = [
-    &groups::TO_LOCAL_MOTION_SCHEDULE,
+    &groups::MOTION_SCHEDULE,
     &groups::LOCAL,
     &groups::NORMALS_PENALTY,
     &groups::SCATTER_GATHER_ADD,
