@@ -41,6 +41,9 @@ const FLAG_WIDE_LOCAL: u32 = 1u;
 const FLAG_SELF_CONTACT: u32 = 2u;
 const FLAG_EVERY_SLAVE: u32 = 4u;   // local increments visit every slave (no compaction)
 const FLAG_SLAVES_APART: u32 = 8u;  // no slave node is on an active master facet
+// The statistics' word of the node-wise bound on the springs' ω² (f32 bits; raised by add_forces,
+// read by finish_stats; the other STAT_* words: stats.wgsl; Rust twin: STAT_OMEGA2).
+const STAT_OMEGA2: u32 = 3u;
 
 // Rust twin: GpuHit (src/abi/search.rs), 64 bytes. One per slave node.
 struct Hit {

@@ -17,7 +17,8 @@
 //           buffer starts zeroed and gather zeroes what it reads),
 //           7 forces (vec4 per pair node), 8 host_forces (the caller's force buffer: vec4<f32>
 //           per model node, xyz summed into, w left alone), 9 rows (f32 per model node: the
-//           node-wise bound's rows summed over the pairs of the increment).
+//           node-wise bound's rows summed over the pairs of the increment), 10 stats (the
+//           increment's statistics: add_forces raises STAT_OMEGA2, the largest row).
 // Dispatch: scatter_forces one invocation per slave (global increments, small sliding),
 //           scatter_forces_active one per active slave (local increments, indirect from the
 //           plan's ACTIVE_SLOT), gather and add_forces one per pair node
@@ -48,6 +49,7 @@
 @group(0) @binding(7) var<storage, read_write> forces: array<vec4<f32>>;
 @group(0) @binding(8) var<storage, read_write> host_forces: array<vec4<f32>>;
 @group(0) @binding(9) var<storage, read_write> rows: array<f32>;
+@group(0) @binding(10) var<storage, read_write> stats: array<atomic<u32>>;
 
 // Bits below the sign that a fixed-point sum may use (2 bits of headroom for weights up to 4).
 const FIXED_BITS: i32 = 60;
@@ -207,6 +209,10 @@ fn add_forces(@builtin(workgroup_id) wg: vec3<u32>,
         host_forces[node] = host_forces[node] + vec4<f32>(f.xyz, 0.0);
     }
     if (f.w != 0.0) {
-        rows[node] = rows[node] + f.w;
+        let r = rows[node] + f.w;
+        rows[node] = r;
+        // the largest row: rows only grow within an increment (no share is negative), so the
+        // largest value written is the largest row once every pair has added its own
+        atomicMax(&stats[STAT_OMEGA2], bitcast<u32>(max(r, 0.0)));
     }
 }

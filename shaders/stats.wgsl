@@ -3,11 +3,9 @@
 // CPU mirror: src/cpu/stats.rs.
 //
 // Bindings: 0 status (a pair's status words), 1 plan (its search's plan), 2 stats (the
-//           increment's words, STAT_* below; Rust twin: IncrementStats), 3 pair_nodes (the pair's
-//           nodes), 4 rows (f32 per model node: the node-wise bound's rows, summed over pairs).
-// Dispatch: pair_stats one invocation per pair after its passes; bound_max one per pair node of
-//           each pair after every pair's add_forces (a workgroup reduces its 64 rows, then one
-//           atomicMax); finish_stats one invocation, last.
+//           increment's words, STAT_* below; Rust twin: IncrementStats).
+// Dispatch: pair_stats one invocation per pair after its passes; finish_stats one invocation,
+//           last (after every pair's add_forces, which raise the largest bound row).
 // Invariants: increments are positive f32 and overclosures and rows non-negative f32, so their
 //             minima and maxima are taken on the bits; every other word is an integer sum, so
 //             the words do not depend on the order of the invocations. pair_stats also keeps the
@@ -16,14 +14,13 @@
 @group(0) @binding(0) var<storage, read> status: array<u32>;
 @group(0) @binding(1) var<storage, read_write> plan: array<u32>;
 @group(0) @binding(2) var<storage, read_write> stats: array<atomic<u32>>;
-@group(0) @binding(3) var<storage, read> pair_nodes: array<vec4<u32>>;
-@group(0) @binding(4) var<storage, read> rows: array<f32>;
 
 // Words of the statistics (Rust twin: IncrementStats, 72 bytes).
 const STAT_STABLE_DT: u32 = 0u;      // f32: the largest stable increment the penalty springs allow
 const STAT_APPROACH_DT: u32 = 1u;    // f32: the approach limit
 const STAT_MAX_OVERCLOSURE: u32 = 2u; // f32: the largest overclosure of a spring in contact
-const STAT_OMEGA2: u32 = 3u;         // f32: the node-wise bound on the springs' ω²
+// STAT_OMEGA2 = 3 (f32: the node-wise bound on the springs' ω², raised by add_forces in
+// gather.wgsl): common.wgsl
 const STAT_ACTIVE: u32 = 4u;         // slaves in contact
 const STAT_SLIPPING: u32 = 5u;       // of which slipping
 const STAT_GLOBAL: u32 = 6u;         // searches that ran globally
@@ -60,29 +57,6 @@ fn pair_stats() {
         plan[PLAN_CROWDED] = status[STATUS_CROWDED];
     }
     plan[PLAN_GLOBAL] = 0u;
-}
-
-// The workgroup's largest row (bits of non-negative floats order as the values).
-var<workgroup> top: array<u32, 64>;
-
-@compute @workgroup_size(64)
-fn bound_max(@builtin(workgroup_id) wg: vec3<u32>,
-             @builtin(num_workgroups) nwg: vec3<u32>,
-             @builtin(local_invocation_index) li: u32) {
-    let i = folded_id(wg, nwg, li, ITEM_WORKGROUP);
-    var v = 0u;
-    if (i < arrayLength(&pair_nodes)) {
-        let node = pair_nodes[i].x;
-        if (node != NO_NODE) { v = bitcast<u32>(max(rows[node], 0.0)); }
-    }
-    // reduced in the workgroup first: one atomic per workgroup, not one per node on one word
-    top[li] = v;
-    workgroupBarrier();
-    for (var s = 32u; s > 0u; s = s >> 1u) {
-        if (li < s) { top[li] = max(top[li], top[li + s]); }
-        workgroupBarrier();
-    }
-    if (li == 0u) { atomicMax(&stats[STAT_OMEGA2], top[0]); }
 }
 
 @compute @workgroup_size(1)

@@ -76,8 +76,8 @@ pub const STATS_PAIR: Group = Group {
 };
 /// The bound's largest row and the stable increment.
 pub const STATS_FINISH: Group = Group {
-    label: "bound_max + finish_stats",
-    passes: &[&BOUND_MAX, &FINISH_STATS],
+    label: "finish_stats",
+    passes: &[&FINISH_STATS],
 };
 /// A host program's central-difference integrator on the device.
 pub const INTEGRATOR: Group = Group {

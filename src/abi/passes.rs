@@ -547,6 +547,7 @@ pub const ADD_FORCES: Pass = Pass {
         b(7, Forces, RW),
         b(8, HostForces, RW),
         b(9, Rows, RW),
+        b(10, Stats, RW),
     ],
     items: Items::PairNodes,
     per_workgroup: ITEM_WORKGROUP,
@@ -559,15 +560,6 @@ pub const PAIR_STATS: Pass = Pass {
     bindings: &[b(0, Status, R), b(1, Plan, RW), b(2, Stats, RW)],
     items: Items::One,
     per_workgroup: 1,
-};
-
-/// `stats.wgsl`: the largest row of the node-wise bound among a pair's nodes.
-pub const BOUND_MAX: Pass = Pass {
-    stem: "stats",
-    entry: "bound_max",
-    bindings: &[b(2, Stats, RW), b(3, PairNodes, R), b(4, Rows, R)],
-    items: Items::PairNodes,
-    per_workgroup: ITEM_WORKGROUP,
 };
 
 /// `stats.wgsl`: the stable increment from the bound, the increment counted.
@@ -595,7 +587,7 @@ pub const INTEGRATE: Pass = Pass {
 };
 
 /// Every pass, in the order an increment may run them.
-pub const PASSES: [Pass; 30] = [
+pub const PASSES: [Pass; 29] = [
     TO_LOCAL,
     ANCHOR,
     MOTION,
@@ -623,7 +615,6 @@ pub const PASSES: [Pass; 30] = [
     SET_REFERENCE,
     ADD_FORCES,
     PAIR_STATS,
-    BOUND_MAX,
     FINISH_STATS,
     INTEGRATE,
 ];

@@ -210,7 +210,7 @@ pub fn touches(pass: &Pass) -> Option<&'static [Touch]> {
             }
         }
         // a slave's hit word (as gather); the pair node and its force; the caller's force read
-        // and written, the bound row
+        // and written, the bound row (and with it the largest row, a statistics word)
         "add_forces" => {
             const {
                 &[
@@ -221,15 +221,6 @@ pub fn touches(pass: &Pass) -> Option<&'static [Touch]> {
                     t(HostForces, W, VEC4, One, NearOrMaster),
                     t(Rows, R, WORD, One, NearOrMaster),
                     t(Rows, W, WORD, One, NearOrMaster),
-                ]
-            }
-        }
-        // the pair node and its bound row
-        "bound_max" => {
-            const {
-                &[
-                    t(PairNodes, R, VEC4, One, Each),
-                    t(Rows, R, WORD, One, Each),
                 ]
             }
         }
@@ -321,7 +312,7 @@ pub fn bytes_per_slave(pass: &Pass, topology: &Topology, near: f64) -> Option<f6
 
 /// The passes whose traffic is declared: a local increment's (the slave passes over the active
 /// slaves) and the integrator.
-pub const DECLARED: [&Pass; 12] = [
+pub const DECLARED: [&Pass; 11] = [
     &passes::MOTION,
     &passes::SCHEDULE,
     &passes::LOCAL_SEARCH,
@@ -331,7 +322,6 @@ pub const DECLARED: [&Pass; 12] = [
     &passes::GATHER,
     &passes::ADD_FORCES,
     &passes::PAIR_STATS,
-    &passes::BOUND_MAX,
     &passes::FINISH_STATS,
     &passes::INTEGRATE,
 ];
@@ -421,5 +411,28 @@ mod tests {
             assert!(near > 4.0 * VEC4 as f64);
         }
         assert_eq!(bytes_per_slave(&passes::TREE_REFIT, &topo, 1.0), None);
+    }
+
+    /// A slave beyond the radius, in a pair whose slaves are no master nodes, costs the motion
+    /// pass its id, hit word, position and reference (40 bytes), the normals nothing, and the
+    /// gather and add_forces one hit word each; the master nodes' share is apart.
+    #[test]
+    fn a_slave_beyond_the_radius_costs_its_motion_and_two_hit_words() {
+        let no_master = Topology {
+            masters_per_slave: 0.0,
+            facets_per_node: 4.0,
+            nodes_per_facet: 4.0,
+        };
+        let far = |pass| bytes_per_slave(pass, &no_master, 0.0).unwrap();
+        assert_eq!(far(&passes::MOTION), (2 * WORD + 2 * VEC4) as f64);
+        assert_eq!(far(&passes::NODAL_NORMALS), 0.0);
+        assert_eq!(far(&passes::GATHER), WORD as f64);
+        assert_eq!(far(&passes::ADD_FORCES), WORD as f64);
+        let total: f64 = DECLARED
+            .iter()
+            .filter(|p| p.entry != "integrate")
+            .map(|p| far(p))
+            .sum();
+        assert_eq!(total, 48.0);
     }
 }

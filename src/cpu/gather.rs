@@ -7,6 +7,7 @@ use crate::abi::penalty::{
     NO_SLAVE, PENALTY_SLAVES_APART,
 };
 use crate::abi::search::GpuHit;
+use crate::abi::stats::{STATS_WORDS, STAT_OMEGA2};
 use crate::abi::status::{STATUS_BUDGET_EXCEEDED, STATUS_FORCE_SCALE, STATUS_ROW_SCALE};
 
 /// Bits below the sign that a fixed-point sum may use (WGSL: `FIXED_BITS`).
@@ -183,8 +184,22 @@ pub fn gather(
     }
 }
 
-/// One "invocation" per pair node: its force into the caller's array (xyz; w left alone) and
-/// its bound row into `rows` (WGSL: `add_forces`).
+/// One "invocation" per pair node: its force into the caller's array (xyz; w left alone), its
+/// bound row into `rows`, and the largest row so far into the statistics' `STAT_OMEGA2`
+/// (WGSL: `add_forces`).
+///
+/// The bound on the highest frequency of all penalty springs together (ω², 1/s²): each spring s
+/// adds k_s·(u_s·x)² to xᵀKx, where x are the nodes' mass-scaled displacements and u_s its
+/// nodes' shares: 1/√m for the slave, |w_j|/√m_j for a master node. Weighted Cauchy–Schwarz,
+/// (u·x)² ≤ (Σ_n u_n²/α_n)·(Σ_n α_n·|x_n|²) for any α > 0, with α = 1 at the spring's light
+/// nodes and α = u_n/cut at its heavy ones (share below `HEAVY_SHARE` of its largest, `cut`),
+/// gives xᵀKx ≤ Σ_n |x_n|²·Λ_n, Λ_n the sum over the springs at node n of k_s·q_s·α_n with
+/// q_s = Σ u²/α. So ω² ≤ max_n Λ_n. One spring alone gets its exact k·Σu² (to the heavy nodes'
+/// 1e-4 or less); a rigid node (u ≈ 1e-6 of the slave's) takes only ~1e-4 of each spring it
+/// carries, and a node a contact does not weigh (w = 0) none. The penalty pass computes each
+/// spring's share, the gather sums them per pair node, add_forces over the pairs per node; no
+/// share is negative, so a row only grows within an increment and the largest value written
+/// is max_n Λ_n once every pair has added its rows.
 pub fn add_forces(
     pp: &PenaltyParams,
     pair_nodes: &[PairNode],
@@ -192,6 +207,7 @@ pub fn add_forces(
     forces: &[[f32; 4]],
     host_forces: &mut [[f32; 4]],
     rows: &mut [f32],
+    stats: &mut [u32; STATS_WORDS],
 ) {
     for i in 0..(pp.n_pair_nodes + pp.body_slots[2]) as usize {
         if no_partner(pp, hits, i) {
@@ -206,6 +222,7 @@ pub fn add_forces(
         }
         if f[3] != 0.0 {
             rows[node] += f[3];
+            stats[STAT_OMEGA2] = stats[STAT_OMEGA2].max(rows[node].max(0.0).to_bits());
         }
     }
 }

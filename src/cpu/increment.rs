@@ -286,13 +286,10 @@ pub(crate) fn run_entry(
                 &p.penalty.forces,
                 p.forces,
                 p.rows,
+                p.stats,
             )
         }
         Kernel::PairStats => stats::pair_stats(status, s.plan, pen.ok_or_else(missing)?.stats),
-        Kernel::BoundMax => {
-            let p = pen.ok_or_else(missing)?;
-            stats::bound_max(&p.setup.pair_nodes, p.rows, p.stats)
-        }
         Kernel::FinishStats => stats::finish_stats(pen.ok_or_else(missing)?.stats),
     }
     Ok(())

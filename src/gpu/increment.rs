@@ -29,17 +29,15 @@ struct Slot {
     state: Arc<AtomicU8>,
 }
 
-/// One pair's bind groups of the statistics passes.
+/// One pair's bind group of the statistics pass.
 struct PairGroups {
     pair_stats: wgpu::BindGroup,
-    bound_max: wgpu::BindGroup,
 }
 
 /// Rows, statistics and their ring for the device-resident increments of one `Contact`.
 pub(crate) struct GpuIncrement {
     ctx: Arc<GpuContext>,
     pair_stats: wgpu::ComputePipeline,
-    bound_max: wgpu::ComputePipeline,
     finish_stats: wgpu::ComputePipeline,
     finish_group: wgpu::BindGroup,
     /// f32 per model node: the node-wise bound's rows, summed over the pairs of an increment.
@@ -56,19 +54,18 @@ pub(crate) struct GpuIncrement {
 
 impl GpuIncrement {
     /// The rows and statistics of a model of `n_nodes` nodes whose penalty pairs have the
-    /// largest damping ratio `damping`; each pair given as (status, plan, pair nodes, count).
+    /// largest damping ratio `damping`; each pair given as (status, plan).
     pub(crate) fn new(
         ctx: Arc<GpuContext>,
         n_nodes: usize,
         damping: f32,
-        pairs: &[(&wgpu::Buffer, &wgpu::Buffer, &wgpu::Buffer)],
+        pairs: &[(&wgpu::Buffer, &wgpu::Buffer)],
     ) -> Result<Self> {
         let d = &ctx.device;
         let scope = d.push_error_scope(wgpu::ErrorFilter::Validation);
         let made = (|| -> Result<Self> {
-            let (pair_stats, bound_max, finish_stats) = (
+            let (pair_stats, finish_stats) = (
                 ctx.pipeline(&passes::PAIR_STATS, &[])?,
-                ctx.pipeline(&passes::BOUND_MAX, &[])?,
                 ctx.pipeline(&passes::FINISH_STATS, &[])?,
             );
             let buffer = |label, size: u64, usage| {
@@ -102,20 +99,17 @@ impl GpuIncrement {
                 _ => None,
             })?;
             let mut groups = Vec::new();
-            for &(status, plan, pair_nodes) in pairs {
+            for &(status, plan) in pairs {
                 let resource = |b| {
                     Some(match b {
                         Buf::Status => status.as_entire_binding(),
                         Buf::Plan => plan.as_entire_binding(),
                         Buf::Stats => stats.as_entire_binding(),
-                        Buf::PairNodes => pair_nodes.as_entire_binding(),
-                        Buf::Rows => rows.as_entire_binding(),
                         _ => return None,
                     })
                 };
                 groups.push(PairGroups {
                     pair_stats: super::bind(d, &pair_stats, &passes::PAIR_STATS, resource)?,
-                    bound_max: super::bind(d, &bound_max, &passes::BOUND_MAX, resource)?,
                 });
             }
             let ring = (0..STATS_RING)
@@ -127,7 +121,6 @@ impl GpuIncrement {
             Ok(Self {
                 ctx: ctx.clone(),
                 pair_stats,
-                bound_max,
                 finish_stats,
                 finish_group,
                 rows,
@@ -184,11 +177,10 @@ impl GpuIncrement {
     }
 
     /// The dispatch of entry `e` if it is a statistics kernel: a pair's status words into the
-    /// statistics (after its passes), a pair's largest bound row, the stable increment.
+    /// statistics (after its passes), the stable increment.
     pub(crate) fn dispatch(&self, e: &Entry) -> Option<super::Dispatch<'_>> {
         let (pipe, group) = match e.kernel {
             Kernel::PairStats => (&self.pair_stats, &self.pairs.get(e.pair)?.pair_stats),
-            Kernel::BoundMax => (&self.bound_max, &self.pairs.get(e.pair)?.bound_max),
             Kernel::FinishStats => (&self.finish_stats, &self.finish_group),
             _ => return None,
         };

@@ -56,7 +56,7 @@ pub struct GpuPenalty {
 
 /// The bind groups of a pair's device-resident increments.
 struct ResidentGroups {
-    key: (u64, wgpu::Buffer, wgpu::Buffer, wgpu::Buffer),
+    key: (u64, wgpu::Buffer, wgpu::Buffer, wgpu::Buffer, wgpu::Buffer),
     groups: Groups,
     add_forces: wgpu::BindGroup,
     /// The search's plan: the indirect sizes of the passes over every slave or the active ones.
@@ -217,16 +217,11 @@ impl GpuPenalty {
         &self.out
     }
 
-    /// The pair nodes (node, slave index, adjacency start, end), for the increment's statistics.
-    pub(crate) fn pair_nodes_buffer(&self) -> &wgpu::Buffer {
-        &self.pair_nodes
-    }
-
     /// Readies the penalty part of a device-resident increment after its search (`search`,
     /// whose bind groups are at `generation`): `params` uploaded when they change, the bind groups
     /// on the caller's `velocities` (`vec4<f32>` per model node, the half step before) and
-    /// `forces` (`vec4<f32>` per model node, xyz summed into) and on `rows` built once per set of
-    /// buffers.
+    /// `forces` (`vec4<f32>` per model node, xyz summed into), on `rows` and on the increment's
+    /// `stats` (add_forces raises the largest row there) built once per set of buffers.
     #[allow(clippy::too_many_arguments)]
     pub(crate) fn prepare_resident(
         &mut self,
@@ -236,18 +231,25 @@ impl GpuPenalty {
         velocities: &wgpu::Buffer,
         forces: &wgpu::Buffer,
         rows: &wgpu::Buffer,
+        stats: &wgpu::Buffer,
     ) -> Result<()> {
         if self.resident_params.as_ref() != Some(params) {
             super::upload(&self.ctx, &self.params, 0, bytemuck::bytes_of(params));
             self.resident_params = Some(*params);
         }
-        let key = (generation, velocities.clone(), forces.clone(), rows.clone());
+        let key = (
+            generation,
+            velocities.clone(),
+            forces.clone(),
+            rows.clone(),
+            stats.clone(),
+        );
         if self.resident.as_ref().is_none_or(|r| r.key != key) {
             let scope = self
                 .ctx
                 .device
                 .push_error_scope(wgpu::ErrorFilter::Validation);
-            let made = self.build_resident_groups(search, velocities, forces, rows);
+            let made = self.build_resident_groups(search, velocities, forces, rows, stats);
             if let Some(e) = pollster::block_on(scope.pop()) {
                 return Err(Error::Gpu {
                     during: "binding the caller's buffers".into(),
@@ -310,6 +312,7 @@ impl GpuPenalty {
         velocities: &wgpu::Buffer,
         forces: &wgpu::Buffer,
         rows: &wgpu::Buffer,
+        stats: &wgpu::Buffer,
     ) -> Result<(Groups, wgpu::BindGroup)> {
         let groups = self.groups_with(s, velocities)?;
         let add_forces = super::bind(
@@ -324,6 +327,7 @@ impl GpuPenalty {
                     Buf::Forces => self.forces.as_entire_binding(),
                     Buf::HostForces => forces.as_entire_binding(),
                     Buf::Rows => rows.as_entire_binding(),
+                    Buf::Stats => stats.as_entire_binding(),
                     _ => return None,
                 })
             },

@@ -72,8 +72,6 @@ pub(crate) enum Kernel {
     AddForces,
     /// The pair's status words into the statistics.
     PairStats,
-    /// A pair's largest bound row (`Entry::pair`).
-    BoundMax,
     /// The stable increment and the statistics' last words.
     FinishStats,
 }
@@ -82,7 +80,7 @@ impl Kernel {
     /// Every kernel, in the order `abi::passes::PASSES` declares their passes (for the tests
     /// that go over them all).
     #[cfg(test)]
-    pub(crate) const ALL: [Kernel; 29] = [
+    pub(crate) const ALL: [Kernel; 28] = [
         Kernel::ToLocal,
         Kernel::Anchor,
         Kernel::Motion,
@@ -110,7 +108,6 @@ impl Kernel {
         Kernel::SetReference,
         Kernel::AddForces,
         Kernel::PairStats,
-        Kernel::BoundMax,
         Kernel::FinishStats,
     ];
 
@@ -144,7 +141,6 @@ impl Kernel {
             Kernel::Gather => &passes::GATHER,
             Kernel::AddForces => &passes::ADD_FORCES,
             Kernel::PairStats => &passes::PAIR_STATS,
-            Kernel::BoundMax => &passes::BOUND_MAX,
             Kernel::FinishStats => &passes::FINISH_STATS,
         }
     }
@@ -452,28 +448,16 @@ pub(crate) fn penalty(k: usize, p: &PairShape) -> Vec<Entry> {
     out
 }
 
-/// The increment's finish: every pair's largest bound row, then the stable increment.
-pub(crate) fn finish(pairs: &[PairShape]) -> Vec<Entry> {
-    let g = &groups::STATS_FINISH;
-    let mut out: Vec<Entry> = pairs
-        .iter()
-        .enumerate()
-        .map(|(k, p)| Entry {
-            group: g,
-            kernel: Kernel::BoundMax,
-            pair: k,
-            level: 0,
-            size: Size::Items(p.n_pair_nodes, ITEM_WORKGROUP),
-        })
-        .collect();
-    out.push(Entry {
-        group: g,
+/// The increment's finish: the stable increment from the largest bound row (which every pair's
+/// add_forces raised), the increment counted.
+pub(crate) fn finish() -> Vec<Entry> {
+    vec![Entry {
+        group: &groups::STATS_FINISH,
         kernel: Kernel::FinishStats,
         pair: 0,
         level: 0,
         size: Size::Items(1, 1),
-    });
-    out
+    }]
 }
 
 /// The entries of one device-resident increment of `pairs`, in the order they run: each
@@ -485,7 +469,7 @@ pub(crate) fn increment(pairs: &[PairShape]) -> Vec<Entry> {
         out.extend(search(k, p));
         out.extend(penalty(k, p));
     }
-    out.extend(finish(pairs));
+    out.extend(finish());
     out
 }
 

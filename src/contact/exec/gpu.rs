@@ -137,6 +137,7 @@ impl GpuExec {
                 velocities,
                 forces,
                 stats.rows(),
+                stats.stats(),
             )?;
         }
         Ok(max_dim)
@@ -347,7 +348,7 @@ impl IncrementExec for GpuExec {
             .iter()
             .map(|p| {
                 let (status, plan, _) = p.search.resident_outputs();
-                (status, plan, p.penalty.pair_nodes_buffer())
+                (status, plan)
             })
             .collect();
         self.inc = Some(Box::new(GpuIncrement::new(
