@@ -11,7 +11,8 @@
 //           FrameParams: the frame origin), 8 positions (the caller's buffer: one vec4<f32> per
 //           model node, model frame, w ignored).
 // Dispatch: one invocation per node, ITEM_WORKGROUP per workgroup, folded into 2D — to_local per
-//           model node (small sliding); motion per motion node, every increment; frame_nodes and
+//           model node (small sliding: every increment; otherwise global increments, indirect
+//           from the plan, before the search); motion per motion node, every increment;
 //           set_reference per motion node, indirect from the plan (global increments).
 // Invariants: nothing is read back; the subtraction is in f32 (the caller's positions are f32
 //             already, so a model far from its origin should keep them relative to a nearby
@@ -38,8 +39,9 @@
 // (tracked, or every slave with FLAG_EVERY_SLAVE) — the nodes the local search and the penalty
 // read. An untracked slave of a pair whose slaves are on no master facet (FLAG_SLAVES_APART) is
 // read for the budget (its position and reference: 40 bytes with its id and hit word) and not
-// written: nothing reads its node before the next global search, whose frame_nodes writes every
-// motion node first.
+// written: nothing reads its node before the next global search, whose to_local writes every
+// node first. A non-finite coordinate of a node that is no motion node is named by that to_local:
+// at the next global search.
 
 @group(0) @binding(0) var<uniform> params: SearchParams;
 @group(0) @binding(1) var<storage, read_write> nodes: array<vec4<f32>>;
@@ -102,7 +104,8 @@ fn box_finish(li: u32) {
     }
 }
 
-// Small sliding: every model node into the frame (the anchors read any of them).
+// Every model node into the frame: small sliding (the anchors read any of them), and global
+// increments before the search.
 @compute @workgroup_size(64)
 fn to_local(@builtin(workgroup_id) wg: vec3<u32>,
             @builtin(num_workgroups) nwg: vec3<u32>,
@@ -159,18 +162,6 @@ fn motion(@builtin(workgroup_id) wg: vec3<u32>,
     }
     workgroupBarrier();
     box_finish(li);
-}
-
-// Global increments, before the search: every motion node into the frame (motion left the
-// untracked slaves' nodes; the others get the same bits again).
-@compute @workgroup_size(64)
-fn frame_nodes(@builtin(workgroup_id) wg: vec3<u32>,
-               @builtin(num_workgroups) nwg: vec3<u32>,
-               @builtin(local_invocation_index) li: u32) {
-    let k = folded_id(wg, nwg, li, ITEM_WORKGROUP);
-    if (k >= params.n_motion_nodes) { return; }
-    let id = motion_nodes[k];
-    nodes[id] = vec4<f32>(in_frame(id), nodes[id].w);
 }
 
 @compute @workgroup_size(64)

@@ -32,12 +32,12 @@ pub const LOCAL: Group = Group {
     label: "local_search",
     passes: &[&LOCAL_SEARCH],
 };
-/// The global search (indirect: no workgroups in a local increment) on every motion node in
-/// the frame, and the active slaves it leaves compacted for the local increments.
+/// The global search (indirect: no workgroups in a local increment) on every node in the
+/// frame, and the active slaves it leaves compacted for the local increments.
 pub const GLOBAL_SEARCH: Group = Group {
     label: "global search",
     passes: &[
-        &FRAME_NODES,
+        &TO_LOCAL,
         &TREE_REFIT,
         &WALK_START,
         &NEAREST_WALK,

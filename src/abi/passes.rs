@@ -338,22 +338,6 @@ pub const MOTION: Pass = Pass {
     per_workgroup: ITEM_WORKGROUP,
 };
 
-/// `motion.wgsl`: global increments, before the search: every motion node into the frame (the
-/// motion pass leaves the untracked slaves' nodes).
-pub const FRAME_NODES: Pass = Pass {
-    stem: "motion",
-    entry: "frame_nodes",
-    bindings: &[
-        b(0, SearchParams, U),
-        b(1, Nodes, RW),
-        b(3, MotionNodes, R),
-        b(7, FrameParams, U),
-        b(8, Positions, R),
-    ],
-    items: Items::MotionNodes,
-    per_workgroup: ITEM_WORKGROUP,
-};
-
 /// `motion.wgsl`: the watched nodes' positions become the budget's reference (global
 /// increments of a device-resident increment).
 pub const SET_REFERENCE: Pass = Pass {
@@ -420,8 +404,9 @@ pub const ACTIVE_COMPACT: Pass = Pass {
     per_workgroup: ITEM_WORKGROUP,
 };
 
-/// `motion.wgsl`: small sliding, every model node into the search's frame; the master's box
-/// raised.
+/// `motion.wgsl`: every model node into the search's frame, the master's box raised and a
+/// non-finite node named (small sliding: every increment; otherwise global increments, before
+/// the search).
 pub const TO_LOCAL: Pass = Pass {
     stem: "motion",
     entry: "to_local",
@@ -587,13 +572,12 @@ pub const INTEGRATE: Pass = Pass {
 };
 
 /// Every pass, in the order an increment may run them.
-pub const PASSES: [Pass; 29] = [
+pub const PASSES: [Pass; 28] = [
     TO_LOCAL,
     ANCHOR,
     MOTION,
     SCHEDULE,
     LOCAL_SEARCH,
-    FRAME_NODES,
     TREE_REFIT,
     SCAN_BLOCKS,
     SCAN_ADD,

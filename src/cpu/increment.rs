@@ -201,13 +201,6 @@ pub(crate) fn run_entry(
             let c = candidates(&params, prep, &ws.walk_points, &ws.boxes, &ws.corners);
             nearest_facet::nearest_facet(&c, &mut ws.status, hits_mut(&mut ws.hits), &ws.best);
         }
-        Kernel::FrameNodes => motion::frame_nodes(
-            &params,
-            s.frame,
-            positions,
-            &mut prep.nodes,
-            &prep.motion_nodes,
-        ),
         Kernel::SetReference => {
             motion::set_reference(&params, &prep.nodes, &mut ws.reference, &prep.motion_nodes)
         }

@@ -74,22 +74,6 @@ pub fn motion(
     }
 }
 
-/// One "invocation" per motion node (WGSL: `frame_nodes`): global increments, every motion
-/// node into the frame.
-pub fn frame_nodes(
-    params: &SearchParams,
-    frame: &FrameParams,
-    positions: &[[f32; 4]],
-    nodes: &mut [[f32; 4]],
-    motion_nodes: &[u32],
-) {
-    for &id in &motion_nodes[..params.n_motion_nodes as usize] {
-        let x = in_frame(frame, positions, id);
-        let n = &mut nodes[id as usize];
-        *n = [x.x, x.y, x.z, n[3]];
-    }
-}
-
 /// One "invocation" per motion node: its position becomes the budget's reference
 /// (WGSL: `set_reference`).
 pub fn set_reference(

@@ -57,6 +57,7 @@ impl CpuSearch {
             &prep.params,
             interval,
             prep.motion_nodes.len() as u32,
+            prep.n_nodes as u32,
             max_dim,
         )?;
         self.ws.boxes.resize(

@@ -27,8 +27,6 @@ pub(crate) enum Kernel {
     Schedule,
     /// The local search.
     LocalSearch,
-    /// Global increments: every motion node into the frame.
-    FrameNodes,
     /// One refit pass of the search tree (`Entry::level`: which).
     TreeRefit,
     /// The tree walks' start: walk points and work counts.
@@ -80,13 +78,12 @@ impl Kernel {
     /// Every kernel, in the order `abi::passes::PASSES` declares their passes (for the tests
     /// that go over them all).
     #[cfg(test)]
-    pub(crate) const ALL: [Kernel; 28] = [
+    pub(crate) const ALL: [Kernel; 27] = [
         Kernel::ToLocal,
         Kernel::Anchor,
         Kernel::Motion,
         Kernel::Schedule,
         Kernel::LocalSearch,
-        Kernel::FrameNodes,
         Kernel::TreeRefit,
         Kernel::ScanBlocks,
         Kernel::ScanAdd,
@@ -119,7 +116,6 @@ impl Kernel {
             Kernel::Motion => &passes::MOTION,
             Kernel::Schedule => &passes::SCHEDULE,
             Kernel::LocalSearch => &passes::LOCAL_SEARCH,
-            Kernel::FrameNodes => &passes::FRAME_NODES,
             Kernel::TreeRefit => &passes::TREE_REFIT,
             Kernel::WalkStart => &passes::WALK_START,
             Kernel::NearestWalk => &passes::NEAREST_WALK,
@@ -192,8 +188,10 @@ pub(crate) struct Slots {
     pub slave_groups: u64,
     /// Global: one invocation (nearest_args).
     pub one: u64,
-    /// Global: one per watched node (frame_nodes, set_reference).
+    /// Global: one per watched node (set_reference).
     pub motion_nodes: u64,
+    /// Global: one per model node (to_local).
+    pub nodes: u64,
 }
 
 /// Appends a slot of `items` items, `per` per workgroup, of `kind` to the plan words; returns
@@ -214,11 +212,13 @@ fn add_slot(plan: &mut [u32], items: u32, per: u32, kind: u32, max_dim: u32) -> 
 }
 
 /// The words of a fresh plan for `params` (the device's grid, flags and capacities) and a
-/// schedule interval, with its dispatch slots (folded beyond `max_dim` workgroups).
+/// schedule interval, with its dispatch slots (folded beyond `max_dim` workgroups) for
+/// `n_nodes_watched` motion nodes of a model of `n_nodes` nodes.
 pub(crate) fn initial_plan(
     params: &SearchParams,
     interval: u32,
     n_nodes_watched: u32,
+    n_nodes: u32,
     max_dim: u32,
 ) -> Result<(Vec<u32>, Slots)> {
     let work_levels = ScanLevels::new(params.n_slaves + 1);
@@ -262,6 +262,7 @@ pub(crate) fn initial_plan(
     )?;
     slots.one = add_slot(&mut plan, 1, 1, g, max_dim)?;
     slots.motion_nodes = add_slot(&mut plan, n_nodes_watched, iw, g, max_dim)?;
+    slots.nodes = add_slot(&mut plan, n_nodes, iw, g, max_dim)?;
     Ok((plan, slots))
 }
 
@@ -294,7 +295,8 @@ pub(crate) struct PairShape {
 /// The search's entries of pair `k` of shape `p`, in the order they run: small sliding, every
 /// node into the frame and the anchors' evaluation; otherwise the motion nodes into the frame
 /// with the motion budget, the schedule, the local search and (unless `local_only`) the
-/// global search the schedule may choose, which puts every motion node into the frame first.
+/// global search the schedule may choose, which puts every model node into the frame first
+/// (and names a non-finite one).
 pub(crate) fn search(k: usize, p: &PairShape) -> Vec<Entry> {
     let mut out = Vec::new();
     let mut push = |group: &'static Group, kernel: Kernel, level: usize, size: Size| {
@@ -322,7 +324,7 @@ pub(crate) fn search(k: usize, p: &PairShape) -> Vec<Entry> {
         return out;
     }
     let g = &groups::GLOBAL_SEARCH;
-    push(g, Kernel::FrameNodes, 0, Size::Slot(s.motion_nodes));
+    push(g, Kernel::ToLocal, 0, Size::Slot(s.nodes));
     for (i, &slot) in s.tree_passes.iter().enumerate() {
         push(g, Kernel::TreeRefit, i, Size::Slot(slot));
     }
@@ -488,7 +490,7 @@ mod tests {
                 n_slaves: slaves,
                 ..bytemuck::Zeroable::zeroed()
             };
-            let (plan, slots) = initial_plan(&params, 100, slaves, 65_535)
+            let (plan, slots) = initial_plan(&params, 100, slaves, slaves, 65_535)
                 .unwrap_or_else(|e| panic!("{levels} levels, {slaves} slaves: {e}"));
             assert_eq!(slots.tree_passes.len(), levels as usize + 1);
             assert!(plan[PLAN_N_SLOTS] as usize <= MAX_PLAN_SLOTS);
@@ -519,6 +521,7 @@ mod tests {
             },
             100,
             1200,
+            2000,
             65_535,
         )
         .unwrap();

@@ -14,7 +14,6 @@ use wgpu::BufferUsages as U;
 pub(crate) struct ResidentSearch {
     schedule: wgpu::ComputePipeline,
     set_reference: wgpu::ComputePipeline,
-    frame_nodes: wgpu::ComputePipeline,
     active_mark: wgpu::ComputePipeline,
     active_compact: wgpu::ComputePipeline,
     /// Scan parameters of the work levels.
@@ -63,7 +62,6 @@ struct Groups {
 struct PositionGroups {
     to_local: wgpu::BindGroup,
     motion: wgpu::BindGroup,
-    frame_nodes: wgpu::BindGroup,
 }
 
 impl GpuSearch {
@@ -84,7 +82,6 @@ impl GpuSearch {
         let d = &ctx.device;
         let schedule = ctx.pipeline(&passes::SCHEDULE, &[])?;
         let set_reference = ctx.pipeline(&passes::SET_REFERENCE, &[])?;
-        let frame_nodes = ctx.pipeline(&passes::FRAME_NODES, &[])?;
         let active_mark = ctx.pipeline(&passes::ACTIVE_MARK, &[])?;
         let active_compact = ctx.pipeline(&passes::ACTIVE_COMPACT, &[])?;
         let params = prep.params;
@@ -134,6 +131,7 @@ impl GpuSearch {
             &params,
             interval,
             prep.motion_nodes.len() as u32,
+            prep.n_nodes as u32,
             self.max_workgroups_per_dim,
         )?;
         super::super::upload(
@@ -145,7 +143,6 @@ impl GpuSearch {
         self.resident = Some(Box::new(ResidentSearch {
             schedule,
             set_reference,
-            frame_nodes,
             active_mark,
             active_compact,
             work_scan_params,
@@ -273,7 +270,6 @@ impl GpuSearch {
             let made = PositionGroups {
                 to_local: group(&self.pipelines.to_local, &passes::TO_LOCAL)?,
                 motion: group(&self.pipelines.motion, &passes::MOTION)?,
-                frame_nodes: group(&r.frame_nodes, &passes::FRAME_NODES)?,
             };
             let r = self.resident.as_mut().expect("resident");
             if let Some(g) = r.groups.as_mut() {
@@ -343,7 +339,6 @@ impl GpuSearch {
             Kernel::ToLocal => (&p.to_local, &g.positions.as_ref()?.1.to_local),
             Kernel::Anchor => (&p.anchor, &g.anchor),
             Kernel::Motion => (&p.motion, &g.positions.as_ref()?.1.motion),
-            Kernel::FrameNodes => (&r.frame_nodes, &g.positions.as_ref()?.1.frame_nodes),
             Kernel::Schedule => (&r.schedule, &g.schedule),
             Kernel::LocalSearch => (&p.local_search, &g.local_search),
             Kernel::TreeRefit => (&p.tree_refit, g.tree_refit.get(e.level)?),
