@@ -18,7 +18,9 @@
 //           7 forces (vec4 per pair node), 8 host_forces (the caller's force buffer: vec4<f32>
 //           per model node, xyz summed into, w left alone), 9 rows (f32 per model node: the
 //           node-wise bound's rows summed over the pairs of the increment), 10 stats (the
-//           increment's statistics: add_forces raises STAT_OMEGA2, the largest row).
+//           increment's statistics: add_forces raises STAT_OMEGA2, the largest row),
+//           11 need (NEED_* bits per pair node and rigid slot: scatter sets NEED_FORCE where it
+//           adds, add_forces clears the word; nodal_normals.wgsl sets NEED_NORMAL).
 // Dispatch: scatter_forces one invocation per slave (global increments, small sliding),
 //           scatter_forces_active one per active slave (local increments, indirect from the
 //           plan's ACTIVE_SLOT), gather and add_forces one per pair node
@@ -34,8 +36,10 @@
 //             node heavy) of its own spring and of every spring in contact on its facets whose
 //             weight at the node is not zero (a node the contact point does not weigh is not in
 //             that spring; giving it a share would make the bound jump with round-off).
-//             A slave with no facet in a pair with PENALTY_SLAVES_APART is left by gather and
-//             add_forces (no_partner): the caller's force is not touched where nothing is added.
+//             A pair node with nothing to add is left by gather and add_forces after one word
+//             (no_force: a slave with no facet in a pair with PENALTY_SLAVES_APART, a master
+//             node or rigid slot no spring scattered onto): the caller's force is not touched
+//             where nothing is added, and a node far from every contact costs a word.
 //             Nothing is scattered when the search overflowed or the motion budget was used up
 //             (the penalty pass did not run, the increment runs again).
 
@@ -50,6 +54,7 @@
 @group(0) @binding(8) var<storage, read_write> host_forces: array<vec4<f32>>;
 @group(0) @binding(9) var<storage, read_write> rows: array<f32>;
 @group(0) @binding(10) var<storage, read_write> stats: array<atomic<u32>>;
+@group(0) @binding(11) var<storage, read_write> need: array<atomic<u32>>;
 
 // Bits below the sign that a fixed-point sum may use (2 bits of headroom for weights up to 4).
 const FIXED_BITS: i32 = 60;
@@ -140,6 +145,7 @@ fn scatter(i: u32) {
     for (var j = 0u; j < n; j++) {
         let w = hit.weights[j];
         let base = 4u * fac[j];
+        atomicOr(&need[fac[j]], NEED_FORCE);
         add_fixed(base, to_fixed(-w * o.force.x, sf));
         add_fixed(base + 1u, to_fixed(-w * o.force.y, sf));
         add_fixed(base + 2u, to_fixed(-w * o.force.z, sf));
@@ -149,19 +155,25 @@ fn scatter(i: u32) {
         add_fixed(base + 3u, to_fixed(share, sr));
     }
     if (rigid_master) {
+        atomicOr(&need[pp.body_slots.x], NEED_FORCE);
         add_fixed(4u * pp.body_slots.x + 3u, to_fixed(row_share(o, 1u << HEAVY_SHIFT), sr));
     }
     if (pp.body_slots.y != NO_SLAVE) {
+        atomicOr(&need[pp.body_slots.y], NEED_FORCE);
         add_fixed(4u * pp.body_slots.y + 3u, to_fixed(row_share(o, HEAVY_SLAVE), sr));
     }
 }
 
-// Pair node i is a slave with no facet in a pair whose slaves are no master nodes: its own
-// spring wrote nothing but zeros (penalty.wgsl) and no spring scattered onto it, so its force and
-// row are zero and gather and add_forces leave it (its `forces` row is stale, and read by no
-// one): one word of its hit read instead of its records.
-fn no_partner(i: u32) -> bool {
-    return i < pp.n_slaves && (pp.flags & PENALTY_SLAVES_APART) != 0u && hits[i].facet == NO_FACET;
+// Pair node i has no force and no row this increment, so gather and add_forces leave it (its
+// `forces` row is stale, and read by no one): a slave with no facet in a pair whose slaves are
+// no master nodes — its own spring wrote nothing but zeros (penalty.wgsl) and no spring
+// scattered onto it — for one word of its hit; a master node or rigid slot no spring scattered
+// onto (its sums are zero), for its need word. `need` is the word read (0 for a slave).
+fn no_force(i: u32, need_word: u32) -> bool {
+    if (i < pp.n_slaves) {
+        return (pp.flags & PENALTY_SLAVES_APART) != 0u && hits[i].facet == NO_FACET;
+    }
+    return (need_word & NEED_FORCE) == 0u;
 }
 
 @compute @workgroup_size(64)
@@ -169,7 +181,10 @@ fn gather(@builtin(workgroup_id) wg: vec3<u32>,
           @builtin(num_workgroups) nwg: vec3<u32>,
           @builtin(local_invocation_index) li: u32) {
     let i = folded_id(wg, nwg, li, ITEM_WORKGROUP);
-    if (i >= pp.n_pair_nodes + pp.body_slots.z || no_partner(i)) { return; }
+    if (i >= pp.n_pair_nodes + pp.body_slots.z) { return; }
+    var need_word = 0u;
+    if (i >= pp.n_slaves) { need_word = atomicLoad(&need[i]); }
+    if (no_force(i, need_word)) { return; }
     let pn = pair_nodes[i];
     var f = vec3<f32>(0.0);
     var row = 0.0;
@@ -200,7 +215,15 @@ fn add_forces(@builtin(workgroup_id) wg: vec3<u32>,
               @builtin(num_workgroups) nwg: vec3<u32>,
               @builtin(local_invocation_index) li: u32) {
     let i = folded_id(wg, nwg, li, ITEM_WORKGROUP);
-    if (i >= pp.n_pair_nodes + pp.body_slots.z || no_partner(i)) { return; }
+    if (i >= pp.n_pair_nodes + pp.body_slots.z) { return; }
+    // the need word read and cleared for the next increment (a slave of a pair whose slaves are
+    // no master nodes is never marked)
+    var need_word = 0u;
+    if (i >= pp.n_slaves || (pp.flags & PENALTY_SLAVES_APART) == 0u) {
+        need_word = atomicLoad(&need[i]);
+        if (need_word != 0u) { atomicStore(&need[i], 0u); }
+    }
+    if (no_force(i, need_word)) { return; }
     let node = pair_nodes[i].x;
     let f = forces[i];
     // a rigid part's slot (after the pair's nodes) carries no force, only its row, to the

@@ -21,6 +21,10 @@ const PENALTY_ANCHORED: u32 = 1u;
 // no slave node is a master node: a slave with no facet is no one's partner (its force, row and
 // normal are nothing), so the per-node passes leave it at one hit word
 const PENALTY_SLAVES_APART: u32 = 2u;
+// Bits of a pair node's need word (nodal_normals.wgsl, gather.wgsl): a spring reads its normal
+// this increment; a spring scattered onto it (its sums are not zero)
+const NEED_NORMAL: u32 = 1u;
+const NEED_FORCE: u32 = 2u;
 
 // Rust twin: PenaltyParams, 208 bytes.
 struct PenaltyParams {

@@ -53,11 +53,18 @@ pub const GLOBAL_SEARCH: Group = Group {
         &ACTIVE_COMPACT,
     ],
 };
-/// Nodal normals of the master, then the penalty springs (every slave's in a global
+/// Nodal normals of the master (of every master node for small sliding; otherwise of those
+/// the springs read, marked first), then the penalty springs (every slave's in a global
 /// increment, the active slaves' in a local one).
 pub const NORMALS_PENALTY: Group = Group {
     label: "nodal_normals + penalty",
-    passes: &[&NODAL_NORMALS, &PENALTY, &PENALTY_ACTIVE],
+    passes: &[
+        &NODAL_NORMALS,
+        &NEED_NORMALS,
+        &NODAL_NORMALS_NEEDED,
+        &PENALTY,
+        &PENALTY_ACTIVE,
+    ],
 };
 /// The forces summed per pair node in fixed point and added into the caller's buffer.
 pub const SCATTER_GATHER_ADD: Group = Group {

@@ -75,6 +75,9 @@ pub enum Buf {
     Acc,
     /// Contact force and bound row per pair node.
     Forces,
+    /// The need bits per pair node and rigid slot (`NEED_NORMAL`, `NEED_FORCE`): which nodes a
+    /// spring reads or scattered onto this increment.
+    Need,
     /// The device-resident plan of a search (schedule state, the fitted grid, dispatch slots).
     Plan,
     /// The caller's force buffer (`vec4<f32>` per model node) of a device-resident increment.
@@ -439,7 +442,7 @@ pub const ANCHOR: Pass = Pass {
     per_workgroup: ITEM_WORKGROUP,
 };
 
-/// `nodal_normals.wgsl`: smoothed normals of the pair's nodes.
+/// `nodal_normals.wgsl`: smoothed normals of every master node of the pair (small sliding).
 pub const NODAL_NORMALS: Pass = Pass {
     stem: "nodal_normals",
     entry: "nodal_normals",
@@ -450,6 +453,39 @@ pub const NODAL_NORMALS: Pass = Pass {
         b(3, PairNodes, R),
         b(4, PairAdjacency, R),
         b(5, Normals, RW),
+    ],
+    items: Items::PairNodes,
+    per_workgroup: ITEM_WORKGROUP,
+};
+
+/// `nodal_normals.wgsl`: the facet nodes of each active slave with a facet marked: the
+/// normals its spring reads.
+pub const NEED_NORMALS: Pass = Pass {
+    stem: "nodal_normals",
+    entry: "need_normals",
+    bindings: &[
+        b(0, PenaltyParams, U),
+        b(6, Need, RW),
+        b(7, Hits, R),
+        b(8, Status, R),
+        b(9, FacetNodes, R),
+    ],
+    items: Items::ActiveSlaves,
+    per_workgroup: ITEM_WORKGROUP,
+};
+
+/// `nodal_normals.wgsl`: smoothed normals of the master nodes marked needed.
+pub const NODAL_NORMALS_NEEDED: Pass = Pass {
+    stem: "nodal_normals",
+    entry: "nodal_normals_needed",
+    bindings: &[
+        b(0, PenaltyParams, U),
+        b(1, Nodes, R),
+        b(2, Facets, R),
+        b(3, PairNodes, R),
+        b(4, PairAdjacency, R),
+        b(5, Normals, RW),
+        b(6, Need, RW),
     ],
     items: Items::PairNodes,
     per_workgroup: ITEM_WORKGROUP,
@@ -492,6 +528,7 @@ pub const SCATTER_FORCES: Pass = Pass {
         b(4, Out, R),
         b(5, Status, R),
         b(6, Acc, RW),
+        b(11, Need, RW),
     ],
     items: Items::Slaves,
     per_workgroup: ITEM_WORKGROUP,
@@ -516,6 +553,7 @@ pub const GATHER: Pass = Pass {
         b(5, Status, R),
         b(6, Acc, RW),
         b(7, Forces, RW),
+        b(11, Need, RW),
     ],
     items: Items::PairNodes,
     per_workgroup: ITEM_WORKGROUP,
@@ -533,6 +571,7 @@ pub const ADD_FORCES: Pass = Pass {
         b(8, HostForces, RW),
         b(9, Rows, RW),
         b(10, Stats, RW),
+        b(11, Need, RW),
     ],
     items: Items::PairNodes,
     per_workgroup: ITEM_WORKGROUP,
@@ -572,7 +611,7 @@ pub const INTEGRATE: Pass = Pass {
 };
 
 /// Every pass, in the order an increment may run them.
-pub const PASSES: [Pass; 28] = [
+pub const PASSES: [Pass; 30] = [
     TO_LOCAL,
     ANCHOR,
     MOTION,
@@ -591,6 +630,8 @@ pub const PASSES: [Pass; 28] = [
     ACTIVE_MARK,
     ACTIVE_COMPACT,
     NODAL_NORMALS,
+    NEED_NORMALS,
+    NODAL_NORMALS_NEEDED,
     PENALTY,
     PENALTY_ACTIVE,
     SCATTER_FORCES,

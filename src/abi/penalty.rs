@@ -47,6 +47,13 @@ pub const PENALTY_ANCHORED: u32 = 1;
 /// no force, no bound row and no normal: `nodal_normals`, `gather` and `add_forces` leave it
 /// after reading one word of its hit (WGSL: `PENALTY_SLAVES_APART`).
 pub const PENALTY_SLAVES_APART: u32 = 2;
+/// Need bit of a pair node: a spring reads its normal this increment (`need_normals` sets it,
+/// `nodal_normals_needed` reads it; WGSL: `NEED_NORMAL`).
+pub const NEED_NORMAL: u32 = 1;
+/// Need bit of a pair node or rigid slot: a spring scattered onto it this increment, its sums
+/// are not zero (`scatter_forces` sets it, `gather` and `add_forces` read it, `add_forces`
+/// clears the word; WGSL: `NEED_FORCE`).
+pub const NEED_FORCE: u32 = 2;
 /// "No limit" for increments (largest finite f32; WGSL: `NO_LIMIT`).
 pub const NO_LIMIT: f32 = f32::MAX;
 

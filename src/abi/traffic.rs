@@ -46,6 +46,12 @@ pub enum Of {
     /// Items that are slave nodes within the search radius or master nodes (a pass over pair
     /// nodes that leaves a slave with no facet after reading its hit).
     NearOrMaster,
+    /// Items that are master nodes under the slaves within the search radius (the nodes of
+    /// their facets: a spring reads or scatters onto them).
+    NearMaster,
+    /// Items that are slave nodes within the search radius or master nodes under them (a pass
+    /// over pair nodes that leaves the others after one word).
+    Near,
     /// Once per master node of the pair whatever the items (records shared by the items that
     /// touch them, updated in cache).
     EachMasterNode,
@@ -159,6 +165,34 @@ pub fn touches(pass: &Pass) -> Option<&'static [Touch]> {
                 ]
             }
         }
+        // the active slave's index; the hit's facet word; for one with a facet, its pair nodes,
+        // and each master node's need word marked (once per node: the slaves sharing it meet
+        // in cache)
+        "need_normals" => {
+            const {
+                &[
+                    t(Status, R, WORD, One, Each),
+                    t(Hits, R, WORD, One, Slave),
+                    t(FacetNodes, R, VEC4, One, NearSlave),
+                    t(Need, R, WORD, One, EachMasterNode),
+                    t(Need, W, WORD, One, EachMasterNode),
+                ]
+            }
+        }
+        // a master node's need word; for one needed, as nodal_normals (the slaves of a pair
+        // whose slaves are no master nodes read nothing)
+        "nodal_normals_needed" => {
+            const {
+                &[
+                    t(Need, R, WORD, One, Master),
+                    t(PairNodes, R, VEC4, One, NearMaster),
+                    t(PairAdjacency, R, WORD, NodeFacet, NearMaster),
+                    t(Facets, R, VEC4, NodeFacet, NearMaster),
+                    t(Nodes, R, VEC4, NodeFacetNode, NearMaster),
+                    t(Normals, W, VEC4, One, NearMaster),
+                ]
+            }
+        }
         // the active slave's index (penalty_active; counted for both: a word), the hit, the
         // state in and out, the output out, the slave's velocity (its fast-node test); in
         // contact, the facet, its nodes' positions, velocities and normals and the slave's
@@ -192,35 +226,42 @@ pub fn touches(pass: &Pass) -> Option<&'static [Touch]> {
                     t(FacetNodes, R, VEC4, One, NearSlave),
                     t(Acc, R, SUMS, One, EachMasterNode),
                     t(Acc, W, SUMS, One, EachMasterNode),
+                    t(Need, R, WORD, One, EachMasterNode),
+                    t(Need, W, WORD, One, EachMasterNode),
                 ]
             }
         }
-        // a slave's hit word (one with no facet stops there: PENALTY_SLAVES_APART); the pair
-        // node, a slave's own output, the sums read and zeroed, the force out
+        // a slave's hit word (one with no facet stops there: PENALTY_SLAVES_APART), a master
+        // node's need word (one no spring scattered onto stops there); the pair node, a slave's
+        // own output, the sums read and zeroed, the force out
         "gather" => {
             const {
                 &[
                     t(Hits, R, WORD, One, Slave),
-                    t(PairNodes, R, VEC4, One, NearOrMaster),
+                    t(Need, R, WORD, One, Master),
+                    t(PairNodes, R, VEC4, One, Near),
                     t(Out, R, OUT_FORCE, One, NearSlave),
-                    t(Acc, R, SUMS, One, NearOrMaster),
-                    t(Acc, W, SUMS, One, NearOrMaster),
-                    t(Forces, W, VEC4, One, NearOrMaster),
+                    t(Acc, R, SUMS, One, Near),
+                    t(Acc, W, SUMS, One, Near),
+                    t(Forces, W, VEC4, One, Near),
                 ]
             }
         }
-        // a slave's hit word (as gather); the pair node and its force; the caller's force read
-        // and written, the bound row (and with it the largest row, a statistics word)
+        // a slave's hit word and a master node's need word (as gather; the need word cleared
+        // where it was set); the pair node and its force; the caller's force read and written,
+        // the bound row (and with it the largest row, a statistics word)
         "add_forces" => {
             const {
                 &[
                     t(Hits, R, WORD, One, Slave),
-                    t(PairNodes, R, VEC4, One, NearOrMaster),
-                    t(Forces, R, VEC4, One, NearOrMaster),
-                    t(HostForces, R, VEC4, One, NearOrMaster),
-                    t(HostForces, W, VEC4, One, NearOrMaster),
-                    t(Rows, R, WORD, One, NearOrMaster),
-                    t(Rows, W, WORD, One, NearOrMaster),
+                    t(Need, R, WORD, One, Master),
+                    t(Need, W, WORD, One, NearMaster),
+                    t(PairNodes, R, VEC4, One, Near),
+                    t(Forces, R, VEC4, One, Near),
+                    t(HostForces, R, VEC4, One, Near),
+                    t(HostForces, W, VEC4, One, Near),
+                    t(Rows, R, WORD, One, Near),
+                    t(Rows, W, WORD, One, Near),
                 ]
             }
         }
@@ -273,8 +314,8 @@ impl Topology {
             // and the master nodes they touch are the share of the master under them
             return match of {
                 Each | Slave | NearSlave => near,
-                FarSlave | Master => 0.0,
-                NearOrMaster => near,
+                FarSlave | Master | NearMaster => 0.0,
+                NearOrMaster | Near => near,
                 EachMasterNode => self.masters_per_slave * near,
             };
         }
@@ -291,6 +332,8 @@ impl Topology {
             FarSlave => per_slave.min(1.0) * (1.0 - near),
             Master => (per_slave - 1.0).max(0.0),
             NearOrMaster => per_slave.min(1.0) * near + (per_slave - 1.0).max(0.0),
+            NearMaster => (per_slave - 1.0).max(0.0) * near,
+            Near => per_slave.min(1.0) * near + (per_slave - 1.0).max(0.0) * near,
             EachMasterNode => self.masters_per_slave,
         }
     }
@@ -312,11 +355,12 @@ pub fn bytes_per_slave(pass: &Pass, topology: &Topology, near: f64) -> Option<f6
 
 /// The passes whose traffic is declared: a local increment's (the slave passes over the active
 /// slaves) and the integrator.
-pub const DECLARED: [&Pass; 11] = [
+pub const DECLARED: [&Pass; 12] = [
     &passes::MOTION,
     &passes::SCHEDULE,
     &passes::LOCAL_SEARCH,
-    &passes::NODAL_NORMALS,
+    &passes::NEED_NORMALS,
+    &passes::NODAL_NORMALS_NEEDED,
     &passes::PENALTY_ACTIVE,
     &passes::SCATTER_FORCES_ACTIVE,
     &passes::GATHER,
@@ -328,8 +372,12 @@ pub const DECLARED: [&Pass; 11] = [
 
 /// Passes of a local increment's groups that a local increment does not run: the penalty
 /// passes over every slave, which run after a global search (and for small sliding) in place of
-/// the active slaves' ones.
-pub const NOT_LOCAL: [&Pass; 2] = [&passes::PENALTY, &passes::SCATTER_FORCES];
+/// the active slaves' ones, and every master node's normals (small sliding).
+pub const NOT_LOCAL: [&Pass; 3] = [
+    &passes::PENALTY,
+    &passes::SCATTER_FORCES,
+    &passes::NODAL_NORMALS,
+];
 
 #[cfg(test)]
 mod tests {
@@ -358,7 +406,7 @@ mod tests {
                 );
                 let slave_only = matches!(
                     t.of,
-                    Of::Slave | Of::NearSlave | Of::FarSlave | Of::NearOrMaster
+                    Of::Slave | Of::NearSlave | Of::FarSlave | Of::NearOrMaster | Of::Near
                 );
                 assert!(
                     !slave_only || pass.items != Items::One,
@@ -415,7 +463,8 @@ mod tests {
 
     /// A slave beyond the radius, in a pair whose slaves are no master nodes, costs the motion
     /// pass its id, hit word, position and reference (40 bytes), the normals nothing, and the
-    /// gather and add_forces one hit word each; the master nodes' share is apart.
+    /// gather and add_forces one hit word each; a master node under no contact costs the
+    /// normals, gather and add_forces its need word each.
     #[test]
     fn a_slave_beyond_the_radius_costs_its_motion_and_two_hit_words() {
         let no_master = Topology {
@@ -425,7 +474,7 @@ mod tests {
         };
         let far = |pass| bytes_per_slave(pass, &no_master, 0.0).unwrap();
         assert_eq!(far(&passes::MOTION), (2 * WORD + 2 * VEC4) as f64);
-        assert_eq!(far(&passes::NODAL_NORMALS), 0.0);
+        assert_eq!(far(&passes::NODAL_NORMALS_NEEDED), 0.0);
         assert_eq!(far(&passes::GATHER), WORD as f64);
         assert_eq!(far(&passes::ADD_FORCES), WORD as f64);
         let total: f64 = DECLARED
@@ -434,5 +483,16 @@ mod tests {
             .map(|p| far(p))
             .sum();
         assert_eq!(total, 48.0);
+        // a master node under no contact: its need word in the normals, gather and add_forces
+        let plate = Topology {
+            masters_per_slave: 0.25,
+            ..no_master
+        };
+        let far_on_plate = |pass| bytes_per_slave(pass, &plate, 0.0).unwrap();
+        let need_word = 0.25 * WORD as f64;
+        assert_eq!(far_on_plate(&passes::NODAL_NORMALS_NEEDED), need_word);
+        assert_eq!(far_on_plate(&passes::GATHER), WORD as f64 + need_word);
+        assert_eq!(far_on_plate(&passes::ADD_FORCES), WORD as f64 + need_word);
+        assert_eq!(far_on_plate(&passes::NEED_NORMALS), 0.0);
     }
 }

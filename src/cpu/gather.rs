@@ -4,7 +4,7 @@
 use super::common::facet_node_count;
 use crate::abi::penalty::{
     ContactOut, PairNode, PenaltyParams, CSTATUS_MASK, CSTATUS_OPEN, HEAVY_SHIFT, HEAVY_SLAVE,
-    NO_SLAVE, PENALTY_SLAVES_APART,
+    NEED_FORCE, NO_SLAVE, PENALTY_SLAVES_APART,
 };
 use crate::abi::search::GpuHit;
 use crate::abi::stats::{STATS_WORDS, STAT_OMEGA2};
@@ -79,7 +79,8 @@ fn row_share(o: &ContactOut, bit: u32) -> f32 {
 /// One "invocation" per slave in contact: −w_j·f and the bound share onto each facet node's
 /// fixed-point sums (WGSL: `scatter_forces`); with `active` (the count, then the slave
 /// indices: `cpu::active`) the active slaves only (WGSL: `scatter_forces_active`). `acc` must
-/// be zeroed first.
+/// be zeroed first; each node or rigid slot added onto is marked `NEED_FORCE` in `need`.
+#[allow(clippy::too_many_arguments)]
 pub fn scatter_forces(
     pp: &PenaltyParams,
     facet_nodes: &[[u32; 4]],
@@ -87,6 +88,7 @@ pub fn scatter_forces(
     out: &[ContactOut],
     status: &[u32],
     acc: &mut [u32],
+    need: &mut [u32],
     active: Option<&[u32]>,
 ) {
     let sf = pow2(fixed_exponent(status[STATUS_FORCE_SCALE], pp.n_slaves));
@@ -107,6 +109,7 @@ pub fn scatter_forces(
         for (j, &node) in fac.iter().enumerate().take(n) {
             let w = hit.weights[j];
             let base = 4 * node as usize;
+            need[node as usize] |= NEED_FORCE;
             for c in 0..3 {
                 add_fixed(acc, base + c, to_fixed(-w * o.force[c], sf));
             }
@@ -118,10 +121,12 @@ pub fn scatter_forces(
             add_fixed(acc, base + 3, to_fixed(share, sr));
         }
         if rigid_master {
+            need[pp.body_slots[0] as usize] |= NEED_FORCE;
             let slot = 4 * pp.body_slots[0] as usize + 3;
             add_fixed(acc, slot, to_fixed(row_share(o, 1 << HEAVY_SHIFT), sr));
         }
         if pp.body_slots[1] != NO_SLAVE {
+            need[pp.body_slots[1] as usize] |= NEED_FORCE;
             let slot = 4 * pp.body_slots[1] as usize + 3;
             add_fixed(acc, slot, to_fixed(row_share(o, HEAVY_SLAVE), sr));
         }
@@ -137,16 +142,21 @@ pub fn scatter_forces(
     }
 }
 
-/// Pair node `i` is a slave with no facet in a pair whose slaves are no master nodes: no force,
-/// no row, left by `gather` and `add_forces` (WGSL: `no_partner`).
-fn no_partner(pp: &PenaltyParams, hits: &[GpuHit], i: usize) -> bool {
-    i < pp.n_slaves as usize
-        && pp.flags & PENALTY_SLAVES_APART != 0
-        && hits[i].facet == crate::abi::search::NO_FACET
+/// Pair node `i` has no force and no row this increment, left by `gather` and `add_forces`
+/// (WGSL: `no_force`): a slave with no facet in a pair whose slaves are no master nodes, or a
+/// master node or rigid slot no spring scattered onto (`need_word`, its need bits; 0 for a
+/// slave).
+fn no_force(pp: &PenaltyParams, hits: &[GpuHit], i: usize, need_word: u32) -> bool {
+    if i < pp.n_slaves as usize {
+        return pp.flags & PENALTY_SLAVES_APART != 0
+            && hits[i].facet == crate::abi::search::NO_FACET;
+    }
+    need_word & NEED_FORCE == 0
 }
 
 /// One "invocation" per pair node: its own contact force (a slave) plus the decoded sums of the
 /// springs on its facets (WGSL: `gather`).
+#[allow(clippy::too_many_arguments)]
 pub fn gather(
     pp: &PenaltyParams,
     pair_nodes: &[PairNode],
@@ -155,12 +165,18 @@ pub fn gather(
     status: &[u32],
     acc: &mut [u32],
     forces: &mut [[f32; 4]],
+    need: &[u32],
 ) {
     let inv_f = pow2(-fixed_exponent(status[STATUS_FORCE_SCALE], pp.n_slaves));
     let inv_r = pow2(-fixed_exponent(status[STATUS_ROW_SCALE], pp.n_slaves));
     let total = (pp.n_pair_nodes + pp.body_slots[2]) as usize;
     for (i, pn) in pair_nodes[..total].iter().enumerate() {
-        if no_partner(pp, hits, i) {
+        let need_word = if i >= pp.n_slaves as usize {
+            need[i]
+        } else {
+            0
+        };
+        if no_force(pp, hits, i, need_word) {
             continue;
         }
         let mut f = [0.0f32; 3];
@@ -200,6 +216,7 @@ pub fn gather(
 /// spring's share, the gather sums them per pair node, add_forces over the pairs per node; no
 /// share is negative, so a row only grows within an increment and the largest value written
 /// is max_n Λ_n once every pair has added its rows.
+#[allow(clippy::too_many_arguments)]
 pub fn add_forces(
     pp: &PenaltyParams,
     pair_nodes: &[PairNode],
@@ -208,9 +225,15 @@ pub fn add_forces(
     host_forces: &mut [[f32; 4]],
     rows: &mut [f32],
     stats: &mut [u32; STATS_WORDS],
+    need: &mut [u32],
 ) {
     for i in 0..(pp.n_pair_nodes + pp.body_slots[2]) as usize {
-        if no_partner(pp, hits, i) {
+        // the need word read and cleared for the next increment
+        let mut need_word = 0;
+        if i >= pp.n_slaves as usize || pp.flags & PENALTY_SLAVES_APART == 0 {
+            need_word = std::mem::take(&mut need[i]);
+        }
+        if no_force(pp, hits, i, need_word) {
             continue;
         }
         let node = pair_nodes[i].node as usize;

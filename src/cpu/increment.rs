@@ -209,8 +209,10 @@ pub(crate) fn run_entry(
             ws.active.resize(params.n_slaves as usize + 1, 0);
             active::active_compact(&params, &ws.hits, &ws.work, &mut ws.active)
         }
-        Kernel::NodalNormals => {
+        Kernel::NodalNormals | Kernel::NodalNormalsNeeded => {
             let p = pen.ok_or_else(missing)?;
+            p.penalty.need.resize(p.setup.pair_nodes.len(), 0);
+            let need = (e.kernel == Kernel::NodalNormalsNeeded).then_some(&p.penalty.need[..]);
             nodal_normals::nodal_normals(
                 p.params,
                 &prep.nodes,
@@ -218,6 +220,18 @@ pub(crate) fn run_entry(
                 &p.setup.pair_nodes,
                 &p.setup.adjacency,
                 &mut p.penalty.normals,
+                need,
+            )
+        }
+        Kernel::NeedNormals => {
+            let p = pen.ok_or_else(missing)?;
+            p.penalty.need.resize(p.setup.pair_nodes.len(), 0);
+            nodal_normals::need_normals(
+                p.params,
+                &ws.hits,
+                &ws.active,
+                &p.setup.facet_nodes,
+                &mut p.penalty.need,
             )
         }
         Kernel::Penalty | Kernel::PenaltyActive => {
@@ -246,6 +260,7 @@ pub(crate) fn run_entry(
             let acc = &mut p.penalty.acc;
             acc.clear();
             acc.resize(p.setup.pair_nodes.len() * ACC_WORDS_PER_NODE, 0);
+            p.penalty.need.resize(p.setup.pair_nodes.len(), 0);
             gather::scatter_forces(
                 p.params,
                 &p.setup.facet_nodes,
@@ -253,6 +268,7 @@ pub(crate) fn run_entry(
                 &p.penalty.out,
                 status,
                 acc,
+                &mut p.penalty.need,
                 active,
             );
         }
@@ -268,6 +284,7 @@ pub(crate) fn run_entry(
                 status,
                 &mut pn.acc,
                 &mut pn.forces,
+                &pn.need,
             );
         }
         Kernel::AddForces => {
@@ -280,6 +297,7 @@ pub(crate) fn run_entry(
                 p.forces,
                 p.rows,
                 p.stats,
+                &mut p.penalty.need,
             )
         }
         Kernel::PairStats => stats::pair_stats(status, s.plan, pen.ok_or_else(missing)?.stats),

@@ -196,6 +196,8 @@ pub struct CpuPenalty {
     pub acc: Vec<u32>,
     /// Force per pair node.
     pub forces: Vec<[f32; 4]>,
+    /// Need bits per pair node and rigid slot (`NEED_*`), zero between increments.
+    pub need: Vec<u32>,
 }
 
 impl CpuPenalty {
@@ -207,6 +209,7 @@ impl CpuPenalty {
             out: Vec::new(),
             acc: Vec::new(),
             forces: Vec::new(),
+            need: vec![0; setup.pair_nodes.len()],
         }
     }
 
@@ -229,6 +232,7 @@ impl CpuPenalty {
             Buf::Out => bytemuck::cast_slice_mut(&mut self.out),
             Buf::Acc => bytemuck::cast_slice_mut(&mut self.acc),
             Buf::Forces => bytemuck::cast_slice_mut(&mut self.forces),
+            Buf::Need => bytemuck::cast_slice_mut(&mut self.need),
             _ => return None,
         })
     }

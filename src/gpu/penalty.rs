@@ -16,6 +16,8 @@ use wgpu::BufferUsages as U;
 
 struct Pipelines {
     nodal_normals: wgpu::ComputePipeline,
+    need_normals: wgpu::ComputePipeline,
+    nodal_normals_needed: wgpu::ComputePipeline,
     penalty: wgpu::ComputePipeline,
     penalty_active: wgpu::ComputePipeline,
     scatter: wgpu::ComputePipeline,
@@ -26,6 +28,8 @@ struct Pipelines {
 
 struct Groups {
     nodal_normals: wgpu::BindGroup,
+    need_normals: wgpu::BindGroup,
+    nodal_normals_needed: wgpu::BindGroup,
     penalty: wgpu::BindGroup,
     penalty_active: wgpu::BindGroup,
     scatter: wgpu::BindGroup,
@@ -46,6 +50,8 @@ pub struct GpuPenalty {
     facet_nodes: wgpu::Buffer,
     acc: wgpu::Buffer,
     forces: wgpu::Buffer,
+    /// The need bits per pair node and rigid slot (`NEED_*`), zero between increments.
+    need: wgpu::Buffer,
     n_slaves: u32,
     /// Device-resident increments: the bind groups on the caller's buffers, keyed by the
     /// search's generation and the (velocities, forces, rows) buffers.
@@ -118,6 +124,8 @@ impl GpuPenalty {
         let friction = [("FRICTION", if setup.friction { 1.0 } else { 0.0 })];
         let pipelines = Pipelines {
             nodal_normals: ctx.pipeline(&passes::NODAL_NORMALS, &[])?,
+            need_normals: ctx.pipeline(&passes::NEED_NORMALS, &[])?,
+            nodal_normals_needed: ctx.pipeline(&passes::NODAL_NORMALS_NEEDED, &[])?,
             penalty: ctx.pipeline(&passes::PENALTY, &friction)?,
             penalty_active: ctx.pipeline(&passes::PENALTY_ACTIVE, &friction)?,
             scatter: ctx.pipeline(&passes::SCATTER_FORCES, &[])?,
@@ -204,6 +212,8 @@ impl GpuPenalty {
             facet_nodes,
             acc: storage(d, "fixed-point force sums", acc_bytes, U::COPY_SRC),
             forces: storage(d, "pair forces", n_pair_nodes as u64 * 16, U::COPY_SRC),
+            // zeroed at creation (wgpu), cleared by add_forces after each increment
+            need: storage(d, "need bits", n_pair_nodes as u64 * 4, U::COPY_SRC),
             pipelines,
             n_slaves,
             resident: None,
@@ -276,6 +286,7 @@ impl GpuPenalty {
             Buf::Out => &self.out,
             Buf::Acc => &self.acc,
             Buf::Forces => &self.forces,
+            Buf::Need => &self.need,
             _ => return None,
         })
     }
@@ -288,6 +299,8 @@ impl GpuPenalty {
         let (g, p) = (&r.groups, &self.pipelines);
         let (pipe, group) = match e.kernel {
             Kernel::NodalNormals => (&p.nodal_normals, &g.nodal_normals),
+            Kernel::NeedNormals => (&p.need_normals, &g.need_normals),
+            Kernel::NodalNormalsNeeded => (&p.nodal_normals_needed, &g.nodal_normals_needed),
             Kernel::Penalty => (&p.penalty, &g.penalty),
             Kernel::PenaltyActive => (&p.penalty_active, &g.penalty_active),
             Kernel::ScatterForces => (&p.scatter, &g.scatter),
@@ -328,6 +341,7 @@ impl GpuPenalty {
                     Buf::HostForces => forces.as_entire_binding(),
                     Buf::Rows => rows.as_entire_binding(),
                     Buf::Stats => stats.as_entire_binding(),
+                    Buf::Need => self.need.as_entire_binding(),
                     _ => return None,
                 })
             },
@@ -357,6 +371,7 @@ impl GpuPenalty {
                 Buf::Out => self.out.as_entire_binding(),
                 Buf::Acc => self.acc.as_entire_binding(),
                 Buf::Forces => self.forces.as_entire_binding(),
+                Buf::Need => self.need.as_entire_binding(),
                 _ => return None,
             })
         };
@@ -365,6 +380,8 @@ impl GpuPenalty {
         };
         Ok(Groups {
             nodal_normals: group(&p.nodal_normals, &passes::NODAL_NORMALS)?,
+            need_normals: group(&p.need_normals, &passes::NEED_NORMALS)?,
+            nodal_normals_needed: group(&p.nodal_normals_needed, &passes::NODAL_NORMALS_NEEDED)?,
             penalty: group(&p.penalty, &passes::PENALTY)?,
             penalty_active: group(&p.penalty_active, &passes::PENALTY_ACTIVE)?,
             scatter: group(&p.scatter, &passes::SCATTER_FORCES)?,

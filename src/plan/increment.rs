@@ -54,8 +54,12 @@ pub(crate) enum Kernel {
     ActiveCompact,
     /// The motion budget's reference positions.
     SetReference,
-    /// The master's nodal normals.
+    /// The master's nodal normals (every master node's).
     NodalNormals,
+    /// The facet nodes of the active slaves marked: the normals their springs read.
+    NeedNormals,
+    /// The nodal normals of the marked nodes.
+    NodalNormalsNeeded,
     /// The penalty springs.
     Penalty,
     /// The active slaves' penalty springs.
@@ -78,7 +82,7 @@ impl Kernel {
     /// Every kernel, in the order `abi::passes::PASSES` declares their passes (for the tests
     /// that go over them all).
     #[cfg(test)]
-    pub(crate) const ALL: [Kernel; 27] = [
+    pub(crate) const ALL: [Kernel; 29] = [
         Kernel::ToLocal,
         Kernel::Anchor,
         Kernel::Motion,
@@ -97,6 +101,8 @@ impl Kernel {
         Kernel::ActiveMark,
         Kernel::ActiveCompact,
         Kernel::NodalNormals,
+        Kernel::NeedNormals,
+        Kernel::NodalNormalsNeeded,
         Kernel::Penalty,
         Kernel::PenaltyActive,
         Kernel::ScatterForces,
@@ -130,6 +136,8 @@ impl Kernel {
             Kernel::ActiveCompact => &passes::ACTIVE_COMPACT,
             Kernel::SetReference => &passes::SET_REFERENCE,
             Kernel::NodalNormals => &passes::NODAL_NORMALS,
+            Kernel::NeedNormals => &passes::NEED_NORMALS,
+            Kernel::NodalNormalsNeeded => &passes::NODAL_NORMALS_NEEDED,
             Kernel::Penalty => &passes::PENALTY,
             Kernel::PenaltyActive => &passes::PENALTY_ACTIVE,
             Kernel::ScatterForces => &passes::SCATTER_FORCES,
@@ -416,15 +424,23 @@ pub(crate) fn penalty(k: usize, p: &PairShape) -> Vec<Entry> {
     };
     let (np, ns) = (p.n_pair_nodes, p.n_slaves);
     let (g, s) = (&groups::NORMALS_PENALTY, &groups::SCATTER_GATHER_ADD);
-    let mut out = vec![entry(g, Kernel::NodalNormals, Size::Items(np, iw))];
+    let mut out = Vec::new();
     if p.anchored {
-        // small sliding: every slave, every increment
+        // small sliding: every master node's normal, every slave, every increment
+        out.push(entry(g, Kernel::NodalNormals, Size::Items(np, iw)));
         out.push(entry(g, Kernel::Penalty, Size::Items(ns, iw)));
         out.push(entry(s, Kernel::ScatterForces, Size::Items(ns, iw)));
     } else {
-        // every slave after a global search, the active ones after a local one
+        // every slave after a global search, the active ones after a local one; the normals
+        // the springs read marked from the active list (fresh after a global search) first
         let (all, active) = (Size::Slot(p.slots.slaves), Size::Slot(p.slots.active));
         let (global, local) = (!p.local_only, !p.global_only);
+        for (on, size) in [(global, all), (local, active)] {
+            if on {
+                out.push(entry(g, Kernel::NeedNormals, size));
+            }
+        }
+        out.push(entry(g, Kernel::NodalNormalsNeeded, Size::Items(np, iw)));
         for (on, kernel, size) in [
             (global, Kernel::Penalty, all),
             (local, Kernel::PenaltyActive, active),

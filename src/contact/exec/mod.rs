@@ -147,7 +147,7 @@ pub(crate) trait IncrementExec: wgpu::WasmNotSend {
 /// Every role a device-resident increment writes, per pair (`true`) or once (`false`): what a
 /// split increment hands from one executor to the other. `tests` check it against the passes'
 /// declared access.
-pub(crate) const HANDED_OVER: [(Buf, bool); 19] = [
+pub(crate) const HANDED_OVER: [(Buf, bool); 20] = [
     (Buf::Nodes, true),
     (Buf::Status, true),
     (Buf::Active, true),
@@ -164,6 +164,7 @@ pub(crate) const HANDED_OVER: [(Buf, bool); 19] = [
     (Buf::Out, true),
     (Buf::Acc, true),
     (Buf::Forces, true),
+    (Buf::Need, true),
     (Buf::Rows, false),
     (Buf::Stats, false),
     (Buf::HostForces, false),
