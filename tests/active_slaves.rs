@@ -578,3 +578,64 @@ fn active_slaves_past_65536_folded_give_the_same_bytes() {
         }
     }
 }
+
+/// The normals the springs use are those of the master at the current positions: only the
+/// normals a spring reads are computed each increment (`need_normals`), so one left stale — a
+/// node its slave's walk reached this increment, say — would show. On the 3D plate, whose
+/// waves travel a third of a radian per increment under slaves sliding and pressing in, every
+/// slave in contact has the normal of its contact point from the nodal normals of this
+/// increment's positions (area-weighted over each node's facets, in f64), on every device,
+/// in local increments and global ones.
+#[test]
+fn springs_read_the_normals_of_the_current_positions() {
+    let dt = 1.0e-3;
+    let s = approach(3, true, false);
+    let pair = s.model.pair(s.pair).unwrap();
+    let surface = s.model.surface(pair.master).unwrap();
+    let area_normal = |x: &[[f64; 3]], f: [u32; 4]| {
+        let p = |j: usize| glam::DVec3::from(x[f[j] as usize]);
+        0.5 * (p(2) - p(0)).cross(p(3) - p(1))
+    };
+    for d in devices() {
+        let mut c = Contact::new(&d, &s.model).unwrap();
+        c.request_outputs(true);
+        let (mut checked, mut locals) = (0, 0);
+        for k in 0..s.steps {
+            let x = (s.at)(k);
+            c.penalty_step(&x, &velocities(&s, k, dt), dt).unwrap();
+            let outputs = c.outputs();
+            let (_, out) = outputs.iter().find(|(id, _)| *id == s.pair).unwrap();
+            let search = out.search.as_ref().unwrap();
+            if search.stats.trigger == Trigger::Local {
+                locals += 1;
+            }
+            for (i, status) in out.cstatus.iter().enumerate() {
+                if !matches!(status, Some(ContactStatus::Stick | ContactStatus::Slip)) {
+                    continue;
+                }
+                let cp = search.contact(i).unwrap();
+                let fac = surface.facets[cp.facet as usize].padded();
+                let mut sum = glam::DVec3::ZERO;
+                for (j, &node) in fac.iter().enumerate() {
+                    let n: glam::DVec3 = surface
+                        .facets_of_node(node)
+                        .iter()
+                        .map(|&f| area_normal(&x, surface.facets[f as usize].padded()))
+                        .sum();
+                    sum += cp.weights[j] * n.normalize();
+                }
+                let want = sum.normalize();
+                let got = glam::DVec3::from(out.normal[i]);
+                assert!(
+                    (got - want).length() < 2e-5,
+                    "{d}: increment {k}, slave {i}: normal {got} where the master's is {want}"
+                );
+                checked += 1;
+            }
+        }
+        assert!(
+            checked > 2000 && locals > s.steps / 3,
+            "{d}: {checked} contacts, {locals} local increments"
+        );
+    }
+}
