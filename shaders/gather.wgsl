@@ -205,17 +205,36 @@ fn gather(@builtin(workgroup_id) wg: vec3<u32>,
     forces[i] = vec4<f32>(f + vec3<f32>(sum[0], sum[1], sum[2]), row + sum[3]);
 }
 
+// The workgroup's largest row written (bits of non-negative floats order as the values).
+var<workgroup> top_row: array<u32, 64>;
+
 // Adds each pair node's force into the caller's buffer and its bound row into `rows`: one
 // invocation per pair node and rigid part slot, and a node is one pair node of a pair, so no two
 // invocations of a dispatch touch the same node (a part's slot writes its lowest node's row,
 // whose own row is then zero and not written; the pairs' passes run one after another: a fixed
-// order).
+// order). The largest row written is reduced in the workgroup, then raised with one atomicMax:
+// one atomic per 64 nodes on the one statistics word, not one per node in contact.
 @compute @workgroup_size(64)
 fn add_forces(@builtin(workgroup_id) wg: vec3<u32>,
               @builtin(num_workgroups) nwg: vec3<u32>,
               @builtin(local_invocation_index) li: u32) {
     let i = folded_id(wg, nwg, li, ITEM_WORKGROUP);
-    if (i >= pp.n_pair_nodes + pp.body_slots.z) { return; }
+    var row_bits = 0u;
+    if (i < pp.n_pair_nodes + pp.body_slots.z) { row_bits = add_node(i); }
+    // every invocation reaches the barriers (uniform control flow)
+    top_row[li] = row_bits;
+    workgroupBarrier();
+    for (var s = 32u; s > 0u; s = s >> 1u) {
+        if (li < s) { top_row[li] = max(top_row[li], top_row[li + s]); }
+        workgroupBarrier();
+    }
+    if (li == 0u && top_row[0] != 0u) { atomicMax(&stats[STAT_OMEGA2], top_row[0]); }
+}
+
+// Pair node i's force into the caller's buffer and its row into `rows`; the bits of the row
+// written (0 when none). The largest row: rows only grow within an increment (no share is
+// negative), so the largest value written is the largest row once every pair has added its own.
+fn add_node(i: u32) -> u32 {
     // the need word read and cleared for the next increment (a slave of a pair whose slaves are
     // no master nodes is never marked)
     var need_word = 0u;
@@ -223,7 +242,7 @@ fn add_forces(@builtin(workgroup_id) wg: vec3<u32>,
         need_word = atomicLoad(&need[i]);
         if (need_word != 0u) { atomicStore(&need[i], 0u); }
     }
-    if (no_force(i, need_word)) { return; }
+    if (no_force(i, need_word)) { return 0u; }
     let node = pair_nodes[i].x;
     let f = forces[i];
     // a rigid part's slot (after the pair's nodes) carries no force, only its row, to the
@@ -231,11 +250,8 @@ fn add_forces(@builtin(workgroup_id) wg: vec3<u32>,
     if (i < pp.n_pair_nodes) {
         host_forces[node] = host_forces[node] + vec4<f32>(f.xyz, 0.0);
     }
-    if (f.w != 0.0) {
-        let r = rows[node] + f.w;
-        rows[node] = r;
-        // the largest row: rows only grow within an increment (no share is negative), so the
-        // largest value written is the largest row once every pair has added its own
-        atomicMax(&stats[STAT_OMEGA2], bitcast<u32>(max(r, 0.0)));
-    }
+    if (f.w == 0.0) { return 0u; }
+    let r = rows[node] + f.w;
+    rows[node] = r;
+    return bitcast<u32>(max(r, 0.0));
 }
