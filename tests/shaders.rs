@@ -306,6 +306,7 @@ fn resident_twins_match_rust() {
         ("FLAG_WIDE_LOCAL", l::FLAG_WIDE_LOCAL),
         ("FLAG_SELF_CONTACT", l::FLAG_SELF_CONTACT),
         ("FLAG_EVERY_SLAVE", l::FLAG_EVERY_SLAVE),
+        ("FLAG_SLAVES_APART", l::FLAG_SLAVES_APART),
     ] {
         assert_eq!(constant_u32(&m, name), v, "{name}");
     }
@@ -372,6 +373,11 @@ fn penalty_twins_match_rust() {
         ("STIFFNESS_AUTO", STIFFNESS_AUTO),
         ("STIFFNESS_MODULUS", STIFFNESS_MODULUS),
         ("STIFFNESS_ABSOLUTE", STIFFNESS_ABSOLUTE),
+        ("PENALTY_ANCHORED", PENALTY_ANCHORED),
+        ("PENALTY_SLAVES_APART", PENALTY_SLAVES_APART),
+        ("NEED_NORMAL", NEED_NORMAL),
+        ("NEED_FORCE", NEED_FORCE),
+        ("STAT_OMEGA2", abut::testing::abi::stats::STAT_OMEGA2 as u32),
         (
             "STATUS_DT_STABLE",
             abut::testing::abi::status::STATUS_DT_STABLE as u32,
