@@ -105,7 +105,8 @@ fn box_finish(li: u32) {
 }
 
 // Every model node into the frame: small sliding (the anchors read any of them), and global
-// increments before the search.
+// increments before the search (there it raises the same box again after the schedule took
+// motion's: harmless, read by no one, and it names a non-finite node in no pair).
 @compute @workgroup_size(64)
 fn to_local(@builtin(workgroup_id) wg: vec3<u32>,
             @builtin(num_workgroups) nwg: vec3<u32>,
