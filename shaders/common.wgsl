@@ -294,6 +294,7 @@ fn closest_on_quad(p: vec3<f32>, x0: vec3<f32>, x1: vec3<f32>, x2: vec3<f32>, x3
     var f = dot(r0, r0);
     var step = 1.0;
     for (var k = 0u; k < QUAD_ITERATIONS; k++) {
+        let before = vec3<u32>(bitcast<u32>(xi), bitcast<u32>(eta), bitcast<u32>(f));
         let r = quad_residual(c0, cx, ce, cxe, pl, xi, eta);
         let gx = cx + cxe * eta;
         let ge = ce + cxe * xi;
@@ -329,6 +330,9 @@ fn closest_on_quad(p: vec3<f32>, x0: vec3<f32>, x1: vec3<f32>, x2: vec3<f32>, x3
             }
             s = s * 0.5;
         }
+        // a fixed point: the next steps start from the same (ξ, η, f) and leave them and the
+        // step as this one did, so stopping here changes no bit
+        if (all(vec3<u32>(bitcast<u32>(xi), bitcast<u32>(eta), bitcast<u32>(f)) == before)) { break; }
     }
     var best_point = c0 + cx * xi + ce * eta + cxe * (xi * eta);
     var bd = pl - best_point;

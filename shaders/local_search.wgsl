@@ -24,7 +24,11 @@
 //             the motion budget is exceeded (the increment is run again with a global search).
 //             A slave nearest to a free edge or corner of the master and off to its side gets
 //             HIT_BESIDE_FREE_EDGE in its candidates word (as in nearest_facet.wgsl). A facet
-//             collapsed at the current positions is passed over (facet_collapsed).
+//             collapsed at the current positions is passed over (facet_collapsed). Projections
+//             start from the facet the last search found; a facet whose nodes' box is farther
+//             than the best by more than round-off (PRUNE_SLACK) is counted, not projected, and
+//             the best carries from one step of the walk to the next: the hit, the facets
+//             counted and the steps are those of projecting every facet every step.
 
 @group(0) @binding(0) var<uniform> params: SearchParams;
 @group(0) @binding(1) var<storage, read> nodes: array<vec4<f32>>;
@@ -41,16 +45,37 @@ struct Best {
     candidates: u32,
 }
 
+// Facet f around the slave at p: counted as examined unless excluded or collapsed; projected
+// unless its nodes' box is farther than the best by more than round-off (PRUNE_SLACK: such a
+// facet cannot be nearer, nor tie, so skipping it changes nothing but the time); kept when
+// nearer than the best (ties: lowest id). The best facet itself is counted and not projected
+// again: the same positions give the same projection.
 fn consider(b: ptr<function, Best>, s: u32, p: vec3<f32>, f: u32) {
     let fac = facets[f];
-    if (excluded(s, fac) || collapsed(fac)) { return; }
+    if (excluded(s, fac)) { return; }
+    let pts = facet_points(fac);
+    if (facet_collapsed(pts.x0, pts.x1, pts.x2, pts.x3, pts.n)) { return; }
     (*b).candidates += 1u;
-    let pr = project_facet(p, fac);
+    if ((*b).facet != NO_FACET && (f == (*b).facet || points_box_d2(p, pts) > (*b).d2 * PRUNE_SLACK)) {
+        return;
+    }
+    let pr = project_points(p, pts);
     if ((*b).facet == NO_FACET || pr.dist2 < (*b).d2 || (pr.dist2 == (*b).d2 && f < (*b).facet)) {
         (*b).facet = f;
         (*b).d2 = pr.dist2;
         (*b).pr = pr;
     }
+}
+
+// Whether facet f (an active facet id, or NO_FACET) has node `node`.
+fn has_node(f: u32, node: u32) -> bool {
+    if (f >= params.n_facets) { return false; }
+    let fac = facets[f];
+    let n = facet_node_count(fac);
+    for (var j = 0u; j < n; j++) {
+        if (fac[j] == node) { return true; }
+    }
+    return false;
 }
 
 @compute @workgroup_size(64)
@@ -64,6 +89,7 @@ fn local_search(@builtin(workgroup_id) wg: vec3<u32>,
     var hit = hits[i];
     var tracked = hit.node;
     if (tracked == NO_NODE) { return; }
+    let last = hit.facet;
     let s = slaves[i];
     let p = nodes[s].xyz;
     hit.facet = NO_FACET;
@@ -73,11 +99,23 @@ fn local_search(@builtin(workgroup_id) wg: vec3<u32>,
     hit.normal_dist = vec4<f32>(0.0);
     hit.weights = vec4<f32>(0.0);
     var b: Best;
+    b.facet = NO_FACET;
+    b.d2 = 0.0;
+    // the first projection: the facet the last search found, when it is one around the tracked
+    // node (examined and counted there), so that the box test can skip the others from the start
+    if (has_node(last, tracked)) {
+        let pts = facet_points(facets[last]);
+        if (!excluded(s, facets[last]) && !facet_collapsed(pts.x0, pts.x1, pts.x2, pts.x3, pts.n)) {
+            b.facet = last;
+            b.pr = project_points(p, pts);
+            b.d2 = b.pr.dist2;
+        }
+    }
     var it = 0u;
     var settled = false;
     loop {
-        b.facet = NO_FACET;
-        b.d2 = 0.0;
+        // the best so far carries over: it has the new tracked node, so it is among the facets
+        // examined next, and the walk's result is the nearest of those whatever the order
         for (var k = adjacency[tracked]; k < adjacency[tracked + 1u]; k++) {
             consider(&b, s, p, adjacency[k]);
         }

@@ -108,9 +108,6 @@ const WALK_VISITS: u32 = 2048u;
 const WALK_GROUP: u32 = 8u;
 // Words of a slave's best record (Rust twin: BEST_WORDS).
 const BEST_WORDS: u32 = 8u;
-// A subtree is skipped when its box's distance² exceeds the bound by this factor: more than
-// the round-off of a distance² computed in f32 (Rust twin: PRUNE_SLACK).
-const PRUNE_SLACK: f32 = 1.0001;
 
 // The square of the tracking radius, radius + budget: how far the walks look (Rust twin:
 // `cpu::nearest_facet::track_radius2`).

@@ -24,6 +24,21 @@ fn facet_points(fac: vec4<u32>) -> FacetPoints {
     return f;
 }
 
+// A subtree or facet is skipped when its box's distance² exceeds the bound by this factor:
+// more than the round-off of a distance² computed in f32 (Rust twin: PRUNE_SLACK).
+const PRUNE_SLACK: f32 = 1.0001;
+
+// Distance² from p to the box of facet f's nodes: no point of the facet (a segment, a
+// triangle, or a bilinear quad, which lies within its nodes' hull) is nearer. A segment (2D)
+// is measured in x and y, as closest_on_segment projects it.
+fn points_box_d2(p: vec3<f32>, f: FacetPoints) -> f32 {
+    let lo = min(min(f.x0, f.x1), min(f.x2, f.x3));
+    let hi = max(max(f.x0, f.x1), max(f.x2, f.x3));
+    var d = max(max(lo - p, p - hi), vec3<f32>(0.0));
+    if (f.n == 2u) { d.z = 0.0; }
+    return dot(d, d);
+}
+
 // Closest point of p on the facet whose nodes are f.
 fn project_points(p: vec3<f32>, f: FacetPoints) -> Projection {
     if (f.n == 2u) { return closest_on_segment(p, f.x0, f.x1); }

@@ -352,6 +352,11 @@ fn quad_parameters<T: Real>(q: V3<T>, y: &[V3<T>; 4]) -> (T, T) {
 
 /// Nearest point to `p` on the bilinear quad x0..x3 (see the module docs for the method).
 pub fn closest_on_quad<T: Real>(p: V3<T>, x: [V3<T>; 4]) -> Projection<T> {
+    quad_projection(p, x, true)
+}
+
+/// [`closest_on_quad`], stopping Newton at a fixed point (`stop`) or taking every step.
+fn quad_projection<T: Real>(p: V3<T>, x: [V3<T>; 4], stop: bool) -> Projection<T> {
     let q = T::from_f64(0.25);
     let (one, zero) = (T::ONE, T::ZERO);
     // Work relative to node 0: round-off then scales with the facet, not the frame.
@@ -378,7 +383,9 @@ pub fn closest_on_quad<T: Real>(p: V3<T>, x: [V3<T>; 4]) -> Projection<T> {
     let residual = |xi: T, eta: T| c0 + cx * xi + ce * eta + cxe * (xi * eta) - pl;
     let mut f = residual(xi, eta).length2();
     let mut step = one;
+    let bits = |v: T| v.to_f64().to_bits();
     for _ in 0..QUAD_ITERATIONS {
+        let before = (bits(xi), bits(eta), bits(f));
         let r = residual(xi, eta);
         let gx = cx + cxe * eta;
         let ge = ce + cxe * xi;
@@ -415,6 +422,11 @@ pub fn closest_on_quad<T: Real>(p: V3<T>, x: [V3<T>; 4]) -> Projection<T> {
                 break;
             }
             s = s * T::from_f64(0.5);
+        }
+        // a fixed point: the next steps start from the same (ξ, η, f) and leave them and the
+        // step as this one did, so stopping here changes no bit
+        if stop && (bits(xi), bits(eta), bits(f)) == before {
+            break;
         }
     }
     let mut best_point = c0 + cx * xi + ce * eta + cxe * (xi * eta);
@@ -496,4 +508,57 @@ pub fn tangent_directions<T: Real>(n: V3<T>) -> (V3<T>, V3<T>) {
 pub fn tangents_f32(n: [f32; 3]) -> ([f32; 3], [f32; 3]) {
     let (t1, t2) = tangent_directions(V3::new(n[0], n[1], n[2]));
     (t1.to_array(), t2.to_array())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use proptest::prelude::*;
+
+    fn bits<T: Real>(r: &Projection<T>) -> Vec<u64> {
+        let v = |a: V3<T>| [a.x, a.y, a.z].map(|c| c.to_f64().to_bits());
+        let mut out = v(r.point).to_vec();
+        out.extend(v(r.normal));
+        out.extend(r.weights.map(|w| w.to_f64().to_bits()));
+        out.push(r.dist2.to_f64().to_bits());
+        out
+    }
+
+    proptest! {
+        #![proptest_config(ProptestConfig { cases: 2048, ..ProptestConfig::default() })]
+        /// Stopping Newton at a fixed point changes no bit of the projection, in f32 and f64:
+        /// on flat, warped, distorted and degenerate quads (nodes anywhere in a cube, one
+        /// collapsed onto another), from points on, near and far from them.
+        #[test]
+        fn a_fixed_point_stops_newton_without_changing_a_bit(
+            nodes in prop::collection::vec(-1.0f64..1.0, 12),
+            warp in 0.0f64..1.0,
+            p in prop::collection::vec(-3.0f64..3.0, 3),
+            collapse in 0usize..6,
+        ) {
+            // a unit square warped out of its plane and distorted by `nodes`
+            let square = [[0.0, 0.0], [1.0, 0.0], [1.0, 1.0], [0.0, 1.0]];
+            let mut x: Vec<[f64; 3]> = (0..4)
+                .map(|k| {
+                    let d = &nodes[3 * k..3 * k + 3];
+                    [square[k][0] + 0.4 * d[0], square[k][1] + 0.4 * d[1], warp * d[2]]
+                })
+                .collect();
+            if collapse < 4 {
+                x[collapse] = x[(collapse + 1) % 4];
+            }
+            let q = [x[0], x[1], x[2], x[3]].map(|a| V3::new(a[0], a[1], a[2]));
+            let pt = V3::new(p[0], p[1], 0.2 * p[2]);
+            prop_assert_eq!(
+                bits(&quad_projection(pt, q, true)),
+                bits(&quad_projection(pt, q, false))
+            );
+            let q32 = q.map(|a| V3::new(a.x as f32, a.y as f32, a.z as f32));
+            let p32 = V3::new(pt.x as f32, pt.y as f32, pt.z as f32);
+            prop_assert_eq!(
+                bits(&quad_projection(p32, q32, true)),
+                bits(&quad_projection(p32, q32, false))
+            );
+        }
+    }
 }

@@ -40,6 +40,23 @@ pub fn facet_collapsed(nodes: &[[f32; 4]], fac: [u32; 4]) -> bool {
     !(0.5 * len(a) > 1.0e-6)
 }
 
+/// Distance² from `p` to the box of facet `fac`'s nodes (WGSL: `points_box_d2`): no point of
+/// the facet is nearer. A segment (2D) is measured in x and y, as it is projected.
+pub fn facet_box_d2(nodes: &[[f32; 4]], fac: [u32; 4], p: V3<f32>) -> f32 {
+    let n = facet_node_count(fac);
+    let first = node(nodes, fac[0]);
+    let (mut lo, mut hi) = (first, first);
+    for &k in &fac[1..n] {
+        let x = node(nodes, k);
+        lo = V3::new(lo.x.min(x.x), lo.y.min(x.y), lo.z.min(x.z));
+        hi = V3::new(hi.x.max(x.x), hi.y.max(x.y), hi.z.max(x.z));
+    }
+    let d = |l: f32, h: f32, q: f32| (l - q).max(q - h).max(0.0);
+    let dz = if n == 2 { 0.0 } else { d(lo.z, hi.z, p.z) };
+    let d = V3::new(d(lo.x, hi.x, p.x), d(lo.y, hi.y, p.y), dz);
+    d.length2()
+}
+
 /// Self-contact exclusion: facet `fac` is slave `s`'s own or touches one of its own facets
 /// (WGSL: `excluded`). `adjacency` as in local_search.wgsl.
 pub fn excluded(

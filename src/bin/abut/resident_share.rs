@@ -9,7 +9,7 @@ use std::time::Instant;
 
 use abut::testing::abi::groups;
 use abut::CentralDifference;
-use abut::{Contact, Device, ResidentIo};
+use abut::{Contact, Device, GlobalSearch, PairId, ResidentIo};
 
 use crate::bench::{scene, BenchScene, Config};
 use crate::resident_bench::resident_bytes;
@@ -18,6 +18,9 @@ use crate::resident_bench::resident_bytes;
 const SHARES: [f64; 4] = [1.0, 0.2, 0.05, 0.01];
 /// Local increments timed per run (after the first, global, one).
 const INCREMENTS: usize = 12;
+/// Global searches timed per run (increments with a global search asked for, after the local
+/// ones).
+const GLOBALS: usize = 3;
 
 /// Compulsory bytes per slave of abut's passes in a local increment (the integrator left out)
 /// with the share `near` of the slaves within the radius.
@@ -105,13 +108,41 @@ fn cpu_run(sc: &BenchScene) -> abut::Result<f64> {
     Ok(spent / INCREMENTS as f64)
 }
 
-/// Wall seconds per local increment (abut's passes and the integrator, device completion
-/// included) and, where the adapter has timestamps, the GPU seconds of abut's passes alone.
-fn gpu_run(device: &Device, sc: &BenchScene) -> abut::Result<(f64, Option<f64>)> {
+/// Seconds of one global search of the bench pair on the CPU path (`GlobalSearch::run`, the
+/// median of [`GLOBALS`] after a first one).
+fn cpu_search(sc: &BenchScene) -> abut::Result<f64> {
+    let mut search = GlobalSearch::new(&Device::cpu(), &sc.model, PairId(0))?;
+    search.run(sc.model.positions())?;
+    let mut t: Vec<f64> = (0..GLOBALS)
+        .map(|_| {
+            let start = Instant::now();
+            search.run(sc.model.positions())?;
+            Ok(start.elapsed().as_secs_f64())
+        })
+        .collect::<abut::Result<_>>()?;
+    t.sort_by(f64::total_cmp);
+    Ok(t[t.len() / 2])
+}
+
+/// One device-resident run on an adapter.
+struct GpuTimes {
+    /// Wall seconds per local increment (abut's passes and the integrator, device completion
+    /// included).
+    wall: f64,
+    /// GPU seconds of abut's passes per local increment, where the adapter has timestamps.
+    gpu: Option<f64>,
+    /// GPU seconds of the global search group per global increment (the same pairs, the same
+    /// device), where the adapter has timestamps.
+    search: Option<f64>,
+}
+
+/// Times the local increments of `sc` on an adapter, then [`GLOBALS`] increments that search
+/// globally.
+fn gpu_run(device: &Device, sc: &BenchScene) -> abut::Result<GpuTimes> {
     let (d, q) = wgpu_of(device)?;
     let n_nodes = sc.model.positions().len();
     let (x0, v0) = (positions(sc), velocities(sc));
-    let run = |timed: bool| -> abut::Result<(f64, abut::Traffic)> {
+    let run = |timed: bool| -> abut::Result<(f64, abut::Traffic, abut::Traffic)> {
         device.enable_timestamps(timed);
         let make = |data: &[[f32; 4]]| state_buffer(d, q, data);
         let (x, v, f) = (make(&x0), make(&v0), make(&vec![[0.0; 4]; n_nodes]));
@@ -145,10 +176,18 @@ fn gpu_run(device: &Device, sc: &BenchScene) -> abut::Result<(f64, Option<f64>)>
         }
         let _ = d.poll(wgpu::PollType::wait_indefinitely());
         let wall = t.elapsed().as_secs_f64() / INCREMENTS as f64;
-        Ok((wall, device.traffic().unwrap_or_default().since(&before)))
+        let local = device.traffic().unwrap_or_default().since(&before);
+        let before = device.traffic().unwrap_or_default();
+        for _ in 0..GLOBALS {
+            contact.request_global_search();
+            step(&mut contact)?;
+        }
+        let _ = d.poll(wgpu::PollType::wait_indefinitely());
+        let global = device.traffic().unwrap_or_default().since(&before);
+        Ok((wall, local, global))
     };
-    let (wall, _) = run(false)?;
-    let (_, timed) = run(true)?;
+    let (wall, _, _) = run(false)?;
+    let (_, timed, global) = run(true)?;
     device.enable_timestamps(false);
     let gpu: f64 = timed
         .pass_ns
@@ -156,7 +195,15 @@ fn gpu_run(device: &Device, sc: &BenchScene) -> abut::Result<(f64, Option<f64>)>
         .filter(|(label, _)| label.as_str() != groups::INTEGRATOR.label)
         .map(|(_, ns)| ns / INCREMENTS as f64 / 1e9)
         .sum();
-    Ok((wall, (!timed.pass_ns.is_empty()).then_some(gpu)))
+    let search = global
+        .pass_ns
+        .get(groups::GLOBAL_SEARCH.label)
+        .map(|ns| ns / GLOBALS as f64 / 1e9);
+    Ok(GpuTimes {
+        wall,
+        gpu: (!timed.pass_ns.is_empty()).then_some(gpu),
+        search,
+    })
 }
 
 /// `abut bench --share`: the section alone, written to share.md in `a.out`.
@@ -185,13 +232,19 @@ pub(crate) fn run(a: &crate::bench::BenchArgs) -> abut::Result<()> {
     Ok(())
 }
 
-/// Time of abut's passes per local increment of `sc` on `device`: (wall or CPU time, GPU time
-/// from the timestamps where there are some).
-fn time_of(device: &Device, sc: &BenchScene) -> abut::Result<(f64, Option<f64>)> {
+/// Time of abut's passes per local increment of `sc` on `device` (wall or CPU time; GPU time
+/// from the timestamps where there are some) and of one global search of the same pair on the
+/// same device (the GPU time of the global search group where there are timestamps; on the
+/// CPU path `GlobalSearch::run`).
+fn time_of(device: &Device, sc: &BenchScene) -> abut::Result<GpuTimes> {
     if device.wgpu().is_some() {
         gpu_run(device, sc)
     } else {
-        Ok((cpu_run(sc)?, None))
+        Ok(GpuTimes {
+            wall: cpu_run(sc)?,
+            gpu: None,
+            search: Some(cpu_search(sc)?),
+        })
     }
 }
 
@@ -212,11 +265,15 @@ pub(crate) fn section(devices: &[Device], sizes: &[usize]) -> abut::Result<Strin
          passes alone; on an adapter the wall time of the increment with its integrator, device \
          completion included, and the GPU time of abut's passes from the timestamps where there \
          are some. *Every slave*: the same increment visiting every slave \
-         (`Schedule::visit_every_slave`, the same results bit for bit), abut's passes.\n"
+         (`Schedule::visit_every_slave`, the same results bit for bit), abut's passes. \
+         *Global search*: one global search of the same pair on the same device — on an adapter \
+         the GPU time of the `global search` group in {GLOBALS} increments that search \
+         globally after the local ones, on the CPU path `GlobalSearch::run` (median of \
+         {GLOBALS}).\n"
     );
     let _ = writeln!(
         md,
-        "| device | slaves | within radius | compulsory bytes / slave | MB / incr. | time / incr. | GPU time of abut's passes | every slave | against every slave | against 100 % |\n|---|---|---|---|---|---|---|---|---|---|"
+        "| device | slaves | within radius | compulsory bytes / slave | MB / incr. | time / incr. | GPU time of abut's passes | every slave | against every slave | against 100 % | global search | against the global search |\n|---|---|---|---|---|---|---|---|---|---|---|---|"
     );
     let mut all = vec![Device::cpu()];
     all.extend(devices.iter().cloned());
@@ -230,24 +287,27 @@ pub(crate) fn section(devices: &[Device], sizes: &[usize]) -> abut::Result<Strin
                 );
                 let mut config = Config::base(n);
                 config.near = share;
-                let (time, gpu) = time_of(device, &scene(&config)?)?;
+                let t = time_of(device, &scene(&config)?)?;
                 config.every_slave = true;
-                let (e_time, e_gpu) = time_of(device, &scene(&config)?)?;
-                let key = gpu.unwrap_or(time);
-                let every = e_gpu.unwrap_or(e_time);
+                let e = time_of(device, &scene(&config)?)?;
+                let key = t.gpu.unwrap_or(t.wall);
+                let every = e.gpu.unwrap_or(e.wall);
                 let full = *full.get_or_insert(key);
                 let bytes = contact_bytes(share)?;
+                let ms = |s: Option<f64>| s.map_or("–".into(), |s| format!("{:.2} ms", s * 1e3));
                 let _ = writeln!(
                     md,
-                    "| {} | {n} | {:.0} % | {bytes:.0} | {:.1} | {:.2} ms | {} | {:.2} ms | {:.2} | {:.2} |",
+                    "| {} | {n} | {:.0} % | {bytes:.0} | {:.1} | {:.2} ms | {} | {:.2} ms | {:.2} | {:.2} | {} | {} |",
                     device.backend_name(),
                     share * 100.0,
                     bytes * n as f64 / 1e6,
-                    time * 1e3,
-                    gpu.map_or("–".into(), |g| format!("{:.2} ms", g * 1e3)),
+                    t.wall * 1e3,
+                    ms(t.gpu),
                     every * 1e3,
                     key / every,
-                    key / full
+                    key / full,
+                    ms(t.search),
+                    t.search.map_or("–".into(), |s| format!("{:.2}", key / s)),
                 );
             }
         }
@@ -255,8 +315,8 @@ pub(crate) fn section(devices: &[Device], sizes: &[usize]) -> abut::Result<Strin
     let _ = writeln!(
         md,
         "\nThe last two columns compare abut's passes (GPU time where there are timestamps, else \
-         the time column) with the same increment visiting every slave, and with the same size \
-         at 100 %.\n"
+         the time column) with the same increment visiting every slave, with the same size \
+         at 100 %, and with one global search of the same pair on the same device.\n"
     );
     Ok(md)
 }
