@@ -12,15 +12,19 @@ use abut::CentralDifference;
 use abut::{Contact, Device, GlobalSearch, PairId, ResidentIo};
 
 use crate::bench::{scene, BenchScene, Config};
-use crate::resident_bench::resident_bytes;
+use crate::resident_bench::{median, resident_bytes};
 
 /// Shares of the slaves within the search radius.
 const SHARES: [f64; 4] = [1.0, 0.2, 0.05, 0.01];
 /// Local increments timed per run (after the first, global, one).
-const INCREMENTS: usize = 12;
+const INCREMENTS: usize = 8;
 /// Global searches timed per run (increments with a global search asked for, after the local
 /// ones).
-const GLOBALS: usize = 3;
+const GLOBALS: usize = 2;
+/// Rounds over every share and mode, one after another; each figure is the median over the
+/// rounds, and each ratio the median of the ratios taken within a round (this machine's
+/// timings drift between runs more than a share changes them).
+const ROUNDS: usize = 3;
 
 /// Compulsory bytes per slave of abut's passes in a local increment (the integrator left out)
 /// with the share `near` of the slaves within the radius.
@@ -124,7 +128,8 @@ fn cpu_search(sc: &BenchScene) -> abut::Result<f64> {
     Ok(t[t.len() / 2])
 }
 
-/// One device-resident run on an adapter.
+/// One run's times (on the CPU path, `wall` is abut's passes alone).
+#[derive(Clone, Copy)]
 struct GpuTimes {
     /// Wall seconds per local increment (abut's passes and the integrator, device completion
     /// included).
@@ -261,7 +266,8 @@ pub(crate) fn section(devices: &[Device], sizes: &[usize]) -> abut::Result<Strin
          slave passes do not visit them). Compulsory bytes of abut's passes in a local increment, \
          derived from each pass's declared records (`abi::traffic`): {near:.0} B per slave within \
          the radius, {far:.0} B per slave beyond it (the integrator left out). Time per local \
-         increment after the first (global) one, mean of {INCREMENTS}: on the CPU path abut's \
+         increment after the first (global) one, mean of {INCREMENTS}, median over {ROUNDS} \
+         rounds: on the CPU path abut's \
          passes alone; on an adapter the wall time of the increment with its integrator, device \
          completion included, and the GPU time of abut's passes from the timestamps where there \
          are some. *Every slave*: the same increment visiting every slave \
@@ -279,44 +285,64 @@ pub(crate) fn section(devices: &[Device], sizes: &[usize]) -> abut::Result<Strin
     all.extend(devices.iter().cloned());
     for device in &all {
         for &n in sizes {
-            let mut full = None;
-            for share in SHARES {
-                eprintln!(
-                    "{device}: {n} slaves, {:.0} % within the radius",
-                    share * 100.0
-                );
-                let mut config = Config::base(n);
-                config.near = share;
-                let t = time_of(device, &scene(&config)?)?;
-                config.every_slave = true;
-                let e = time_of(device, &scene(&config)?)?;
-                let key = t.gpu.unwrap_or(t.wall);
-                let every = e.gpu.unwrap_or(e.wall);
-                let full = *full.get_or_insert(key);
-                let bytes = contact_bytes(share)?;
+            // runs[share][round]: (with the compaction, visiting every slave)
+            let mut runs: Vec<Vec<(GpuTimes, GpuTimes)>> = vec![Vec::new(); SHARES.len()];
+            for round in 0..ROUNDS {
+                for (k, share) in SHARES.iter().enumerate() {
+                    eprintln!(
+                        "{device}: {n} slaves, {:.0} % within the radius, round {}",
+                        share * 100.0,
+                        round + 1
+                    );
+                    let mut config = Config::base(n);
+                    config.near = *share;
+                    let t = time_of(device, &scene(&config)?)?;
+                    config.every_slave = true;
+                    let e = time_of(device, &scene(&config)?)?;
+                    runs[k].push((t, e));
+                }
+            }
+            let key = |t: &GpuTimes| t.gpu.unwrap_or(t.wall);
+            for (k, share) in SHARES.iter().enumerate() {
+                let of = |f: &dyn Fn(usize) -> Option<f64>| -> Option<f64> {
+                    let v: Option<Vec<f64>> = (0..ROUNDS).map(f).collect();
+                    v.map(median)
+                };
+                let (r, full) = (&runs[k], &runs[0]);
+                let wall = of(&|i| Some(r[i].0.wall)).unwrap_or(0.0);
+                let gpu = of(&|i| r[i].0.gpu);
+                let every = of(&|i| Some(key(&r[i].1))).unwrap_or(0.0);
+                let search = of(&|i| r[i].0.search);
+                let against_every = of(&|i| Some(key(&r[i].0) / key(&r[i].1)));
+                let against_full = of(&|i| Some(key(&r[i].0) / key(&full[i].0)));
+                let against_search = of(&|i| r[i].0.search.map(|s| key(&r[i].0) / s));
+                let bytes = contact_bytes(*share)?;
                 let ms = |s: Option<f64>| s.map_or("–".into(), |s| format!("{:.2} ms", s * 1e3));
+                let ratio = |x: Option<f64>| x.map_or("–".into(), |x| format!("{x:.2}"));
                 let _ = writeln!(
                     md,
-                    "| {} | {n} | {:.0} % | {bytes:.0} | {:.1} | {:.2} ms | {} | {:.2} ms | {:.2} | {:.2} | {} | {} |",
+                    "| {} | {n} | {:.0} % | {bytes:.0} | {:.1} | {:.2} ms | {} | {:.2} ms | {} | {} | {} | {} |",
                     device.backend_name(),
                     share * 100.0,
                     bytes * n as f64 / 1e6,
-                    t.wall * 1e3,
-                    ms(t.gpu),
+                    wall * 1e3,
+                    ms(gpu),
                     every * 1e3,
-                    key / every,
-                    key / full,
-                    ms(t.search),
-                    t.search.map_or("–".into(), |s| format!("{:.2}", key / s)),
+                    ratio(against_every),
+                    ratio(against_full),
+                    ms(search),
+                    ratio(against_search),
                 );
             }
         }
     }
     let _ = writeln!(
         md,
-        "\nThe last two columns compare abut's passes (GPU time where there are timestamps, else \
+        "\nThe ratio columns compare abut's passes (GPU time where there are timestamps, else \
          the time column) with the same increment visiting every slave, with the same size \
-         at 100 %, and with one global search of the same pair on the same device.\n"
+         at 100 %, and with one global search of the same pair on the same device. Every \
+         figure is the median over {ROUNDS} rounds (each round runs every share and mode once), \
+         and every ratio the median of the ratios within a round.\n"
     );
     Ok(md)
 }
