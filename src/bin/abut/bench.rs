@@ -52,8 +52,9 @@ pub struct BenchArgs {
     pub resident: bool,
     /// Only --resident's second table: a local increment as the share of slaves within the
     /// search radius falls (100, 20, 5, 1 %), with the active-slave compaction and visiting
-    /// every slave, on the CPU path and every adapter at 10^5 and 10^6 slaves (--quick: 10^4).
-    /// Writes share.md to --out.
+    /// every slave, beside one global search of the same pair, on the CPU path and every
+    /// adapter at 10^5 and 10^6 slaves (--quick: 10^4); medians over three rounds. Writes
+    /// share.md to --out.
     #[arg(long)]
     pub share: bool,
     /// Only the global search against parry3d (one thread and rayon), every device, 10^6
