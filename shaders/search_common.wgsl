@@ -51,12 +51,6 @@ fn project_facet(p: vec3<f32>, fac: vec4<u32>) -> Projection {
     return project_points(p, facet_points(fac));
 }
 
-// Whether facet fac has collapsed at the current positions (see facet_collapsed in common.wgsl).
-fn collapsed(fac: vec4<u32>) -> bool {
-    let f = facet_points(fac);
-    return facet_collapsed(f.x0, f.x1, f.x2, f.x3, f.n);
-}
-
 // Self-contact: facet f is the slave's own or touches one of the slave's own facets.
 fn excluded(s: u32, fac: vec4<u32>) -> bool {
     if ((params.flags & FLAG_SELF_CONTACT) == 0u) { return false; }
