@@ -96,6 +96,7 @@ const PLAN_GLOBAL: u32 = 4u;        // this increment searches globally
 const PLAN_TRIGGER: u32 = 5u;       // why (TRIGGER_*)
 const PLAN_INTERVAL: u32 = 6u;      // the schedule's interval
 const PLAN_N_SLOTS: u32 = 7u;       // dispatch slots in use
+const PLAN_OTHER_NODES: u32 = 8u;   // pair nodes that are no slaves, and two rigid slots
 const PLAN_FIT_FAILED: u32 = 9u;    // the master box could not be taken (the old one was kept)
 const PLAN_MAX_DIM: u32 = 10u;      // most workgroups per dispatch dimension (for folding)
 const PLAN_PARAMS: u32 = 64u;       // 24 words: the fitted SearchParams (byte 256: bound as the uniform)

@@ -24,7 +24,10 @@
 // Dispatch: scatter_forces one invocation per slave (global increments, small sliding),
 //           scatter_forces_active one per active slave (local increments, indirect from the
 //           plan's ACTIVE_SLOT), gather and add_forces one per pair node
-//           (add_forces: device-resident increments, after gather); ITEM_WORKGROUP per
+//           (add_forces: device-resident increments, after gather), gather_active and
+//           add_forces_active (local increments of a pair with PENALTY_SLAVES_APART) one per
+//           active slave and per other pair node, indirect from the plan's
+//           ACTIVE_NODES_SLOT (two items more than the pair may have); ITEM_WORKGROUP per
 //           workgroup, folded into 2D. Each invocation does at most 4 × 4 atomic pairs (scatter)
 //           or reads 8 words (gather): bounded whatever the number of slaves on one facet.
 // Invariants: a slave node gets its own contact force; a master node gets −w_j·f of every slave
@@ -176,12 +179,40 @@ fn no_force(i: u32, need_word: u32) -> bool {
     return (need_word & NEED_FORCE) == 0u;
 }
 
+// Local increments of a pair whose slaves are no master nodes (PENALTY_SLAVES_APART): item k
+// of gather_active and add_forces_active is the active slave k, then, past the active count,
+// the pair's master nodes and rigid slots in order; a pair node past them (the slot counts two
+// rigid slots whatever the pair has) is NO_SLAVE. A slave that is not active has no facet (it
+// was untracked at the global search: beyond radius + budget), so gather and add_forces would
+// leave it after its hit word: leaving it out changes no bit.
+fn active_pair_node(k: u32) -> u32 {
+    let n_active = status[ACTIVE_LIST];
+    if (k < n_active) { return status[ACTIVE_LIST + 1u + k]; }
+    let i = pp.n_slaves + (k - n_active);
+    return select(NO_SLAVE, i, i < pp.n_pair_nodes + pp.body_slots.z);
+}
+
 @compute @workgroup_size(64)
 fn gather(@builtin(workgroup_id) wg: vec3<u32>,
           @builtin(num_workgroups) nwg: vec3<u32>,
           @builtin(local_invocation_index) li: u32) {
     let i = folded_id(wg, nwg, li, ITEM_WORKGROUP);
     if (i >= pp.n_pair_nodes + pp.body_slots.z) { return; }
+    gather_node(i);
+}
+
+// Local increments, PENALTY_SLAVES_APART: the active slaves and the other pair nodes only.
+@compute @workgroup_size(64)
+fn gather_active(@builtin(workgroup_id) wg: vec3<u32>,
+                 @builtin(num_workgroups) nwg: vec3<u32>,
+                 @builtin(local_invocation_index) li: u32) {
+    let i = active_pair_node(folded_id(wg, nwg, li, ITEM_WORKGROUP));
+    if (i == NO_SLAVE) { return; }
+    gather_node(i);
+}
+
+// Pair node i's force and row from its own spring and its sums (the sums zeroed).
+fn gather_node(i: u32) {
     var need_word = 0u;
     if (i >= pp.n_slaves) { need_word = atomicLoad(&need[i]); }
     if (no_force(i, need_word)) { return; }
@@ -221,7 +252,24 @@ fn add_forces(@builtin(workgroup_id) wg: vec3<u32>,
     let i = folded_id(wg, nwg, li, ITEM_WORKGROUP);
     var row_bits = 0u;
     if (i < pp.n_pair_nodes + pp.body_slots.z) { row_bits = add_node(i); }
-    // every invocation reaches the barriers (uniform control flow)
+    raise_top_row(li, row_bits);
+}
+
+// Local increments, PENALTY_SLAVES_APART: the active slaves and the other pair nodes only (the
+// pair nodes left out have nothing to add, and their need words were never set).
+@compute @workgroup_size(64)
+fn add_forces_active(@builtin(workgroup_id) wg: vec3<u32>,
+                     @builtin(num_workgroups) nwg: vec3<u32>,
+                     @builtin(local_invocation_index) li: u32) {
+    let i = active_pair_node(folded_id(wg, nwg, li, ITEM_WORKGROUP));
+    var row_bits = 0u;
+    if (i != NO_SLAVE) { row_bits = add_node(i); }
+    raise_top_row(li, row_bits);
+}
+
+// The workgroup's largest row (`row_bits` of invocation li) raised into STAT_OMEGA2; every
+// invocation of the workgroup calls it (uniform control flow: it has barriers).
+fn raise_top_row(li: u32, row_bits: u32) {
     top_row[li] = row_bits;
     workgroupBarrier();
     for (var s = 32u; s > 0u; s = s >> 1u) {

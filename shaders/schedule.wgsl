@@ -15,7 +15,9 @@
 //             takes the master box to_local raised (STATUS_BOX) and the tree's box margin from
 //             it; a box that cannot be taken (no finite master node) keeps the last one and is
 //             counted in PLAN_FIT_FAILED. ACTIVE_SLOT's full size is the active slaves' count
-//             (status[ACTIVE_LIST]) in workgroups, folded by PLAN_MAX_DIM. Each dispatch slot
+//             (status[ACTIVE_LIST]) in workgroups, ACTIVE_NODES_SLOT's that count and
+//             PLAN_OTHER_NODES (the pair nodes that are no slaves, and two rigid slots), both
+//             folded by PLAN_MAX_DIM. Each dispatch slot
 //             gets its full size when its kind matches the increment and zero workgroups
 //             otherwise. No loop runs past
 //             MAX_PLAN_SLOTS iterations.
@@ -28,6 +30,8 @@
 const MAX_PLAN_SLOTS: u32 = 48u;
 // The active slaves' slot, the plan's first (Rust twin: ACTIVE_SLOT).
 const ACTIVE_SLOT: u32 = 0u;
+// The active slaves' and the other pair nodes' slot, the second (Rust twin: ACTIVE_NODES_SLOT).
+const ACTIVE_NODES_SLOT: u32 = 1u;
 // Words of SearchParams the schedule reads and writes (Rust twins: P_* in src/abi/search.rs,
 // from the struct's field offsets).
 const P_BOX_MARGIN: u32 = 1u;
@@ -63,6 +67,19 @@ fn take_master_box() -> bool {
     return true;
 }
 
+// Slot `slot`'s full size: `count` items in workgroups, folded as the host folds a dispatch
+// (fold_dispatch), none for none.
+fn size_slot(slot: u32, count: u32) {
+    let groups = (count + ITEM_WORKGROUP - 1u) / ITEM_WORKGROUP;
+    let max_dim = max(plan[PLAN_MAX_DIM], 1u);
+    var y = min(groups, 1u);
+    if (groups > max_dim) { y = (groups + max_dim - 1u) / max_dim; }
+    let a = PLAN_SLOTS + slot * PLAN_SLOT_WORDS;
+    plan[a + 4u] = select(0u, (groups + y - 1u) / max(y, 1u), groups > 0u);
+    plan[a + 5u] = y;
+    plan[a + 6u] = min(groups, 1u);
+}
+
 @compute @workgroup_size(1)
 fn schedule() {
     var trigger = TRIGGER_LOCAL;
@@ -93,17 +110,11 @@ fn schedule() {
     }
     plan[PLAN_GLOBAL] = select(0u, 1u, global);
     plan[PLAN_TRIGGER] = trigger;
-    // the active slaves' slot: the count the last global search left (active.wgsl), its
-    // workgroups folded as the host folds a dispatch (fold_dispatch), none for none
+    // the active slaves' slot: the count the last global search left (active.wgsl); the
+    // active pair nodes' slot: that count and the other pair nodes
     let count = status[ACTIVE_LIST];
-    let groups = (count + ITEM_WORKGROUP - 1u) / ITEM_WORKGROUP;
-    let max_dim = max(plan[PLAN_MAX_DIM], 1u);
-    var y = min(groups, 1u);
-    if (groups > max_dim) { y = (groups + max_dim - 1u) / max_dim; }
-    let a = PLAN_SLOTS + ACTIVE_SLOT * PLAN_SLOT_WORDS;
-    plan[a + 4u] = select(0u, (groups + y - 1u) / max(y, 1u), groups > 0u);
-    plan[a + 5u] = y;
-    plan[a + 6u] = min(groups, 1u);
+    size_slot(ACTIVE_SLOT, count);
+    size_slot(ACTIVE_NODES_SLOT, count + plan[PLAN_OTHER_NODES]);
     let n = min(plan[PLAN_N_SLOTS], MAX_PLAN_SLOTS);
     for (var k = 0u; k < n; k++) {
         let s = PLAN_SLOTS + k * PLAN_SLOT_WORDS;

@@ -22,12 +22,14 @@ mod report;
 mod resident;
 mod restart;
 mod rigid_parts;
+mod slave_order;
 mod warnings;
 pub use report::{
     combined_increment, Anchoring, ContactStatus, FastNode, KinematicReport, OverclosureReport,
     PairOutput, StepReport,
 };
 pub use resident::ResidentIo;
+use slave_order::SlaveMap;
 
 /// One penalty pass of a pair (a balanced pair has two): its search's stage and its penalty
 /// setup; their device work is the `Contact`'s executor's (pair run k is its pair k).
@@ -38,6 +40,8 @@ struct PairRun {
     output: PairOutput,
     /// Host-array increments: what the host knows of the device's schedule.
     schedule: resident::HostSchedule,
+    /// The pass's slave order against the node set's (the output's `slaves`).
+    map: SlaveMap,
 }
 
 /// A kinematic pair against a meshed master (pure or balanced).
@@ -117,22 +121,37 @@ impl Contact {
         for k in 0..model.pairs().len() {
             let id = PairId(k);
             let pair = model.pair(id)?;
-            let search = SearchStage::new(model, id)?;
-            let slaves = model.node_set(pair.slave)?.to_vec();
+            let set = model.node_set(pair.slave)?.to_vec();
+            // a penalty pass keeps its slaves in the pair's order; a kinematic pair, the set's
+            let (slaves, map) = match pair.enforce {
+                Enforce::Penalty(_) => {
+                    SlaveMap::new(&set, pair.slave_order, model.positions(), model.dim())
+                }
+                Enforce::Kinematic(_) => (set.clone(), SlaveMap::default()),
+            };
+            let search = SearchStage::for_pair(model, id, slaves.clone())?;
             match &pair.enforce {
                 Enforce::Penalty(_) => {
-                    let setup = PenaltySetup::new(model, id, search.master(), &slaves)?
-                        .with_search(search.radius(), search.reference_node());
+                    let set_index = map.set_indices(slaves.len());
+                    let setup =
+                        PenaltySetup::ordered(model, id, search.master(), &slaves, &set_index)?
+                            .with_search(search.radius(), search.reference_node());
                     exec.add_pair(&setup)?;
                     let back = match pair.balanced {
                         // balanced: the master surface's nodes against the slave surface too
                         Some((surface, _)) => {
                             let slave_surface = model.surface(surface)?.clone();
                             let nodes = search.master().nodes();
+                            let (rnodes, rmap) = SlaveMap::new(
+                                &nodes,
+                                pair.slave_order,
+                                model.positions(),
+                                model.dim(),
+                            );
                             let rsearch = SearchStage::from_parts(
                                 model,
                                 slave_surface.clone(),
-                                nodes.clone(),
+                                rnodes.clone(),
                                 search.radius(),
                             )?;
                             let reverse = PenaltySetup::reverse(
@@ -140,7 +159,7 @@ impl Contact {
                                 id,
                                 search.master(),
                                 &slave_surface,
-                                &nodes,
+                                &rnodes,
                             )?
                             .with_search(rsearch.radius(), rsearch.reference_node());
                             Some(PairRun {
@@ -152,6 +171,7 @@ impl Contact {
                                     ..Default::default()
                                 },
                                 schedule: Default::default(),
+                                map: rmap,
                             })
                         }
                         None => None,
@@ -161,10 +181,11 @@ impl Contact {
                         search,
                         setup,
                         output: PairOutput {
-                            slaves,
+                            slaves: set,
                             ..Default::default()
                         },
                         schedule: Default::default(),
+                        map,
                     });
                     if let Some(b) = back {
                         exec.add_pair(&b.setup)?;
@@ -280,8 +301,8 @@ impl Contact {
     /// distributed run). Reads back from the device on a GPU.
     pub fn penalty_states(&self, pair: PairId) -> Result<Vec<Vec<SlaveState>>> {
         let mut out = Vec::new();
-        for (k, _) in self.pairs.iter().enumerate().filter(|(_, p)| p.id == pair) {
-            out.push(self.exec.penalty_state(k)?);
+        for (k, p) in self.pairs.iter().enumerate().filter(|(_, p)| p.id == pair) {
+            out.push(p.map.to_caller(&self.exec.penalty_state(k)?));
         }
         if out.is_empty() {
             return Err(Error::UnknownId {
@@ -322,7 +343,8 @@ impl Contact {
             }
         }
         for (&k, s) in runs.iter().zip(states) {
-            self.exec.set_penalty_state(k, s);
+            let s = self.pairs[k].map.to_pass(s);
+            self.exec.set_penalty_state(k, &s);
         }
         Ok(())
     }
@@ -390,15 +412,23 @@ impl Contact {
     /// the nodes left unconstrained, after the first increment (empty before it and for
     /// finite sliding). Penalty passes first, then kinematic ones.
     pub fn anchoring(&self) -> Vec<Anchoring> {
-        let penalty = self.pairs.iter().map(|p| (p.id, &p.search));
+        // the unanchored nodes in the node set's order (a penalty pass's own may differ)
+        let penalty = self
+            .pairs
+            .iter()
+            .map(|p| (p.id, &p.search, Some((&p.map, &p.output.slaves))));
         let kinematic = self.kinematic.iter().flat_map(|k| {
-            std::iter::once((k.id, &*k.search)).chain(k.back.iter().map(|b| (k.id, &*b.0)))
+            std::iter::once((k.id, &*k.search, None))
+                .chain(k.back.iter().map(|b| (k.id, &*b.0, None)))
         });
         penalty
             .chain(kinematic)
-            .filter(|(_, s)| s.anchors().is_some())
-            .map(|(pair, s)| {
-                let unanchored = s.unanchored();
+            .filter(|(_, s, _)| s.anchors().is_some())
+            .map(|(pair, s, map)| {
+                let unanchored = match map {
+                    Some((m, set)) => m.nodes_in_caller_order(s.unanchored(), set),
+                    None => s.unanchored(),
+                };
                 Anchoring {
                     pair,
                     slaves: s.slaves().len(),
@@ -407,6 +437,25 @@ impl Contact {
                 }
             })
             .collect()
+    }
+
+    /// The slave nodes of each penalty pass of pair `pair` (two for a balanced pair) in the
+    /// order the pass keeps them inside abut ([`crate::model::SlaveOrder`]); every result comes
+    /// back in the node set's order whatever this is.
+    pub fn pass_slaves(&self, pair: PairId) -> Result<Vec<Vec<u32>>> {
+        let out: Vec<Vec<u32>> = self
+            .pairs
+            .iter()
+            .filter(|p| p.id == pair)
+            .map(|p| p.search.slaves().to_vec())
+            .collect();
+        if out.is_empty() {
+            return Err(Error::UnknownId {
+                what: "penalty pair",
+                id: pair.0,
+            });
+        }
+        Ok(out)
     }
 
     /// Whether any pair is enforced by penalty.

@@ -10,9 +10,8 @@ mod common;
 use abut::mesh::{plate_quads, polyline};
 use abut::model::Schedule;
 use abut::search::Trigger;
-use abut::testing::abi::stats::STATS_BYTES;
 use abut::*;
-use common::{devices, facet_distance, node_buffers, read_buffer, vec4};
+use common::{devices, f32r, facet_distance, node_buffers, resident_run, unit, vec4};
 
 /// Positions of increment `k`.
 type Motion = dyn Fn(usize) -> Vec<[f64; 3]>;
@@ -24,19 +23,6 @@ struct Scene {
     pair: PairId,
     at: Box<Motion>,
     steps: usize,
-}
-
-/// Rounds to f32 and back: positions every path sees exactly.
-fn f32r(p: [f64; 3]) -> [f64; 3] {
-    p.map(|v| v as f32 as f64)
-}
-
-/// A small deterministic hash in [0, 1).
-fn unit(i: usize, salt: u64) -> f64 {
-    let mut z = (i as u64 + 1).wrapping_mul(0x9E37_79B9_7F4A_7C15) ^ salt;
-    z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
-    z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
-    ((z ^ (z >> 31)) >> 11) as f64 / (1u64 << 53) as f64
 }
 
 /// Slaves over a master (a 16×16 quad plate in 3D, a 40-segment polyline in 2D) at heights from
@@ -451,51 +437,8 @@ fn results_with_and_without_the_compaction_are_the_same_bits() {
             let resident = |every: bool| -> Vec<(Vec<[f32; 4]>, Vec<u8>)> {
                 let m = if every { &s_every.model } else { &s.model };
                 let mut c = Contact::new(&d, m).unwrap();
-                let n = m.positions().len();
-                let mut out = Vec::new();
-                let bufs = d.is_gpu().then(|| node_buffers(&d, n));
-                for k in 0..s.steps {
-                    let (x, v) = ((s.at)(k), velocities(&s, k, dt));
-                    match &bufs {
-                        Some([bx, bv, bf]) => {
-                            let (dev, q) = d.wgpu().unwrap();
-                            q.write_buffer(bx, 0, bytemuck::cast_slice(&vec4(&x)));
-                            q.write_buffer(bv, 0, bytemuck::cast_slice(&vec4(&v)));
-                            let mut enc = dev.create_command_encoder(&Default::default());
-                            enc.clear_buffer(bf, 0, None);
-                            c.encode_increment(
-                                ResidentIo::Gpu {
-                                    encoder: &mut enc,
-                                    positions: bx,
-                                    velocities: bv,
-                                    forces: bf,
-                                },
-                                dt,
-                            )
-                            .unwrap();
-                            q.submit([enc.finish()]);
-                            let f =
-                                bytemuck::pod_collect_to_vec(&read_buffer(&d, bf, (n * 16) as u64));
-                            let st = read_buffer(&d, c.stats_buffer().unwrap(), STATS_BYTES);
-                            out.push((f, st));
-                        }
-                        None => {
-                            let mut f = vec![[0.0f32; 4]; n];
-                            c.encode_increment(
-                                ResidentIo::Cpu {
-                                    positions: &vec4(&x),
-                                    velocities: &vec4(&v),
-                                    forces: &mut f,
-                                },
-                                dt,
-                            )
-                            .unwrap();
-                            let st = c.collect_stats().unwrap();
-                            out.push((f, bytemuck::bytes_of(&st[0]).to_vec()));
-                        }
-                    }
-                }
-                out
+                let state = |k: usize| ((s.at)(k), velocities(&s, k, dt));
+                resident_run(&d, &mut c, m.positions().len(), s.steps, &state, dt)
             };
             let (on, off) = (resident(false), resident(true));
             for (k, (a, b)) in on.iter().zip(&off).enumerate() {

@@ -254,6 +254,7 @@ fn resident_twins_match_rust() {
         ("PLAN_TRIGGER", l::PLAN_TRIGGER),
         ("PLAN_INTERVAL", l::PLAN_INTERVAL),
         ("PLAN_N_SLOTS", l::PLAN_N_SLOTS),
+        ("PLAN_OTHER_NODES", l::PLAN_OTHER_NODES),
         ("PLAN_FIT_FAILED", l::PLAN_FIT_FAILED),
         ("PLAN_MAX_DIM", l::PLAN_MAX_DIM),
         ("PLAN_PARAMS", l::PLAN_PARAMS),
@@ -293,6 +294,11 @@ fn resident_twins_match_rust() {
         constant_u32(&m, "ACTIVE_SLOT") as usize,
         l::ACTIVE_SLOT,
         "ACTIVE_SLOT"
+    );
+    assert_eq!(
+        constant_u32(&m, "ACTIVE_NODES_SLOT") as usize,
+        l::ACTIVE_NODES_SLOT,
+        "ACTIVE_NODES_SLOT"
     );
     for (name, v) in [
         ("SLOT_GLOBAL", l::SLOT_GLOBAL),

@@ -73,7 +73,9 @@ pub const SCATTER_GATHER_ADD: Group = Group {
         &SCATTER_FORCES,
         &SCATTER_FORCES_ACTIVE,
         &GATHER,
+        &GATHER_ACTIVE,
         &ADD_FORCES,
+        &ADD_FORCES_ACTIVE,
     ],
 };
 /// A pair's status words into the increment's statistics.

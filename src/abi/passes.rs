@@ -135,6 +135,9 @@ pub enum Items {
     Nodes,
     /// One per node of a penalty pair.
     PairNodes,
+    /// One per active slave, then per node of a penalty pair that is no slave and per rigid
+    /// part slot (indirect, from the plan's active nodes slot).
+    ActivePairNodes,
     /// One invocation in all.
     One,
     /// One per nearest-facet work item, dispatched indirectly from `Buf::Args`.
@@ -559,6 +562,14 @@ pub const GATHER: Pass = Pass {
     per_workgroup: ITEM_WORKGROUP,
 };
 
+/// `gather.wgsl`: the same for the active slaves and the pair's other nodes (local increments
+/// of a pair whose slaves are no master nodes).
+pub const GATHER_ACTIVE: Pass = Pass {
+    entry: "gather_active",
+    items: Items::ActivePairNodes,
+    ..GATHER
+};
+
 /// `gather.wgsl`: each pair node's force into the caller's buffer, its row into the rows.
 pub const ADD_FORCES: Pass = Pass {
     stem: "gather",
@@ -574,6 +585,26 @@ pub const ADD_FORCES: Pass = Pass {
         b(11, Need, RW),
     ],
     items: Items::PairNodes,
+    per_workgroup: ITEM_WORKGROUP,
+};
+
+/// `gather.wgsl`: the same for the active slaves and the pair's other nodes (local increments
+/// of a pair whose slaves are no master nodes), which it reads from the status words.
+pub const ADD_FORCES_ACTIVE: Pass = Pass {
+    stem: "gather",
+    entry: "add_forces_active",
+    bindings: &[
+        b(0, PenaltyParams, U),
+        b(1, PairNodes, R),
+        b(3, Hits, R),
+        b(5, Status, R),
+        b(7, Forces, RW),
+        b(8, HostForces, RW),
+        b(9, Rows, RW),
+        b(10, Stats, RW),
+        b(11, Need, RW),
+    ],
+    items: Items::ActivePairNodes,
     per_workgroup: ITEM_WORKGROUP,
 };
 
@@ -611,7 +642,7 @@ pub const INTEGRATE: Pass = Pass {
 };
 
 /// Every pass, in the order an increment may run them.
-pub const PASSES: [Pass; 30] = [
+pub const PASSES: [Pass; 32] = [
     TO_LOCAL,
     ANCHOR,
     MOTION,
@@ -637,8 +668,10 @@ pub const PASSES: [Pass; 30] = [
     SCATTER_FORCES,
     SCATTER_FORCES_ACTIVE,
     GATHER,
+    GATHER_ACTIVE,
     SET_REFERENCE,
     ADD_FORCES,
+    ADD_FORCES_ACTIVE,
     PAIR_STATS,
     FINISH_STATS,
     INTEGRATE,

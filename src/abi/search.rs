@@ -294,6 +294,12 @@ pub const PLAN_TRIGGER: usize = 5;
 pub const PLAN_INTERVAL: usize = 6;
 /// Plan word: dispatch slots in use.
 pub const PLAN_N_SLOTS: usize = 7;
+/// Plan word: the pair nodes that are no slaves (the search's motion nodes that are no slaves:
+/// the penalty's master pair nodes), and two rigid part slots, which `ACTIVE_NODES_SLOT` counts
+/// beside the active slaves.
+pub const PLAN_OTHER_NODES: usize = 8;
+/// Most rigid part slots a penalty pair's nodes end with (the master's part and the slaves').
+pub const MAX_RIGID_SLOTS: u32 = 2;
 /// Plan word: global searches whose master box could not be taken (no finite master node; the
 /// last box and margin kept).
 pub const PLAN_FIT_FAILED: usize = 9;
@@ -304,6 +310,10 @@ pub const PLAN_MAX_DIM: usize = 10;
 /// increments' slave passes), sized by the schedule from the count the last global search's
 /// `active_compact` left (WGSL: `ACTIVE_SLOT` in schedule.wgsl).
 pub const ACTIVE_SLOT: usize = 0;
+/// The dispatch slot of the active slaves and the pair's other nodes, the plan's second
+/// (`SLOT_LOCAL`: `gather_active`, `add_forces_active`), sized by the schedule from the active
+/// slaves' count and `PLAN_OTHER_NODES` (WGSL: `ACTIVE_NODES_SLOT` in schedule.wgsl).
+pub const ACTIVE_NODES_SLOT: usize = 1;
 /// Plan words: the `SearchParams` of the increment (24 words, from byte 256: the search passes
 /// bind them as their uniform).
 pub const PLAN_PARAMS: usize = 64;

@@ -231,40 +231,12 @@ pub fn touches(pass: &Pass) -> Option<&'static [Touch]> {
                 ]
             }
         }
-        // a slave's hit word (one with no facet stops there: PENALTY_SLAVES_APART), a master
-        // node's need word (one no spring scattered onto stops there); the pair node, a slave's
-        // own output, the sums read and zeroed, the force out
-        "gather" => {
-            const {
-                &[
-                    t(Hits, R, WORD, One, Slave),
-                    t(Need, R, WORD, One, Master),
-                    t(PairNodes, R, VEC4, One, Near),
-                    t(Out, R, OUT_FORCE, One, NearSlave),
-                    t(Acc, R, SUMS, One, Near),
-                    t(Acc, W, SUMS, One, Near),
-                    t(Forces, W, VEC4, One, Near),
-                ]
-            }
-        }
-        // a slave's hit word and a master node's need word (as gather; the need word cleared
-        // where it was set); the pair node and its force; the caller's force read and written,
-        // the bound row (and with it the largest row, a statistics word)
-        "add_forces" => {
-            const {
-                &[
-                    t(Hits, R, WORD, One, Slave),
-                    t(Need, R, WORD, One, Master),
-                    t(Need, W, WORD, One, NearMaster),
-                    t(PairNodes, R, VEC4, One, Near),
-                    t(Forces, R, VEC4, One, Near),
-                    t(HostForces, R, VEC4, One, Near),
-                    t(HostForces, W, VEC4, One, Near),
-                    t(Rows, R, WORD, One, Near),
-                    t(Rows, W, WORD, One, Near),
-                ]
-            }
-        }
+        "gather" => &GATHER_TOUCHES,
+        "add_forces" => &ADD_FORCES_TOUCHES,
+        // as gather and add_forces, after an active slave's index (the slaves left out touch
+        // nothing)
+        "gather_active" => const { &after_active_index::<7, 8>(GATHER_TOUCHES) },
+        "add_forces_active" => const { &after_active_index::<9, 10>(ADD_FORCES_TOUCHES) },
         // position, velocity and force read and written, the mass read
         "integrate" => {
             const {
@@ -282,6 +254,46 @@ pub fn touches(pass: &Pass) -> Option<&'static [Touch]> {
         _ => return None,
     };
     Some(list)
+}
+
+/// `gather`: a slave's hit word (one with no facet stops there: PENALTY_SLAVES_APART), a master
+/// node's need word (one no spring scattered onto stops there); the pair node, a slave's own
+/// output, the sums read and zeroed, the force out.
+const GATHER_TOUCHES: [Touch; 7] = [
+    t(Hits, R, WORD, One, Slave),
+    t(Need, R, WORD, One, Master),
+    t(PairNodes, R, VEC4, One, Near),
+    t(Out, R, OUT_FORCE, One, NearSlave),
+    t(Acc, R, SUMS, One, Near),
+    t(Acc, W, SUMS, One, Near),
+    t(Forces, W, VEC4, One, Near),
+];
+
+/// `add_forces`: a slave's hit word and a master node's need word (as gather; the need word
+/// cleared where it was set); the pair node and its force; the caller's force read and written,
+/// the bound row (and with it the largest row, a statistics word).
+const ADD_FORCES_TOUCHES: [Touch; 9] = [
+    t(Hits, R, WORD, One, Slave),
+    t(Need, R, WORD, One, Master),
+    t(Need, W, WORD, One, NearMaster),
+    t(PairNodes, R, VEC4, One, Near),
+    t(Forces, R, VEC4, One, Near),
+    t(HostForces, R, VEC4, One, Near),
+    t(HostForces, W, VEC4, One, Near),
+    t(Rows, R, WORD, One, Near),
+    t(Rows, W, WORD, One, Near),
+];
+
+/// `list` after the word of an active slave's index in the status words (a pass over the active
+/// slaves and the pair's other nodes).
+const fn after_active_index<const N: usize, const M: usize>(list: [Touch; N]) -> [Touch; M] {
+    let mut out = [t(Status, R, WORD, One, Slave); M];
+    let mut i = 0;
+    while i < N {
+        out[i + 1] = list[i];
+        i += 1;
+    }
+    out
 }
 
 /// The shape of a contact surface the declared bytes are evaluated on.
@@ -309,6 +321,18 @@ impl Topology {
     /// Items of `of` per slave node for a pass over `items`, with `near` the share of slaves
     /// within the search radius.
     fn items(&self, items: Items, of: Of, near: f64) -> f64 {
+        if items == Items::ActivePairNodes {
+            // the active slaves (those within the radius in the bench), then every master node
+            let m = self.masters_per_slave;
+            return match of {
+                Each | NearOrMaster => near + m,
+                Slave | NearSlave => near,
+                FarSlave => 0.0,
+                Master | EachMasterNode => m,
+                NearMaster => m * near,
+                Near => near + m * near,
+            };
+        }
         if items == Items::ActiveSlaves {
             // every item is a slave within the radius (the bench's active slaves are those),
             // and the master nodes they touch are the share of the master under them
@@ -363,19 +387,22 @@ pub const DECLARED: [&Pass; 12] = [
     &passes::NODAL_NORMALS_NEEDED,
     &passes::PENALTY_ACTIVE,
     &passes::SCATTER_FORCES_ACTIVE,
-    &passes::GATHER,
-    &passes::ADD_FORCES,
+    &passes::GATHER_ACTIVE,
+    &passes::ADD_FORCES_ACTIVE,
     &passes::PAIR_STATS,
     &passes::FINISH_STATS,
     &passes::INTEGRATE,
 ];
 
 /// Passes of a local increment's groups that a local increment does not run: the penalty
-/// passes over every slave, which run after a global search (and for small sliding) in place of
-/// the active slaves' ones, and every master node's normals (small sliding).
-pub const NOT_LOCAL: [&Pass; 3] = [
+/// passes over every slave and the gather and add over every pair node, which run after a global
+/// search (and for small sliding, or slaves that are master nodes) in place of the active
+/// slaves' ones, and every master node's normals (small sliding).
+pub const NOT_LOCAL: [&Pass; 5] = [
     &passes::PENALTY,
     &passes::SCATTER_FORCES,
+    &passes::GATHER,
+    &passes::ADD_FORCES,
     &passes::NODAL_NORMALS,
 ];
 
@@ -462,11 +489,13 @@ mod tests {
     }
 
     /// A slave beyond the radius, in a pair whose slaves are no master nodes, costs the motion
-    /// pass its id, hit word, position and reference (40 bytes), the normals nothing, and the
-    /// gather and add_forces one hit word each; a master node under no contact costs the
-    /// normals, gather and add_forces its need word each.
+    /// pass its id, hit word, position and reference (40 bytes) and nothing else in a local
+    /// increment: the normals and the active gather and add_forces do not visit it (the gather
+    /// and add_forces over every pair node, which global increments run, read its hit word); a
+    /// master node under no contact costs the normals, gather and add_forces its need word
+    /// each.
     #[test]
-    fn a_slave_beyond_the_radius_costs_its_motion_and_two_hit_words() {
+    fn a_slave_beyond_the_radius_costs_its_motion_alone() {
         let no_master = Topology {
             masters_per_slave: 0.0,
             facets_per_node: 4.0,
@@ -477,12 +506,14 @@ mod tests {
         assert_eq!(far(&passes::NODAL_NORMALS_NEEDED), 0.0);
         assert_eq!(far(&passes::GATHER), WORD as f64);
         assert_eq!(far(&passes::ADD_FORCES), WORD as f64);
+        assert_eq!(far(&passes::GATHER_ACTIVE), 0.0);
+        assert_eq!(far(&passes::ADD_FORCES_ACTIVE), 0.0);
         let total: f64 = DECLARED
             .iter()
             .filter(|p| p.entry != "integrate")
             .map(|p| far(p))
             .sum();
-        assert_eq!(total, 48.0);
+        assert_eq!(total, 40.0);
         // a master node under no contact: its need word in the normals, gather and add_forces
         let plate = Topology {
             masters_per_slave: 0.25,
@@ -493,6 +524,8 @@ mod tests {
         assert_eq!(far_on_plate(&passes::NODAL_NORMALS_NEEDED), need_word);
         assert_eq!(far_on_plate(&passes::GATHER), WORD as f64 + need_word);
         assert_eq!(far_on_plate(&passes::ADD_FORCES), WORD as f64 + need_word);
+        assert_eq!(far_on_plate(&passes::GATHER_ACTIVE), need_word);
+        assert_eq!(far_on_plate(&passes::ADD_FORCES_ACTIVE), need_word);
         assert_eq!(far_on_plate(&passes::NEED_NORMALS), 0.0);
     }
 }

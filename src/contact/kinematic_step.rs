@@ -69,7 +69,8 @@ impl Contact {
         for kr in &mut self.kinematic {
             let result = kr.search.step(x)?;
             let mut fast = |search: &GlobalSearch, r: &SearchResult, v: &[[f64; 3]]| {
-                let (count, top) = fast_slaves(kr.id, search, &r.raw, v, dt);
+                let order = 0..r.raw.len();
+                let (count, top) = fast_slaves(kr.id, search, &r.raw, order, v, dt);
                 report.fast_nodes += count;
                 if let Some(t) = top.filter(|_| count > 0) {
                     if report

@@ -26,8 +26,9 @@ impl Contact {
         let mut rep = OverclosureReport::default();
         let mut found = Vec::new();
         for (k, pr) in self.pairs.iter_mut().enumerate() {
+            // slaves in the node set's order: the order they are moved in, and reported
             let result = pr.search.run_on(self.exec.search(k), x)?;
-            found.push(result);
+            found.push(pr.map.result_to_caller(result));
         }
         for kr in &mut self.kinematic {
             found.push(kr.search.run(x)?);

@@ -197,10 +197,13 @@ pub struct OverclosureReport {
 /// or, for a slave with no facet within the radius, the pair's reference master node's
 /// ([`crate::search::SearchStage::reference_node`]). The penalty kernels apply the same rule in f32
 /// (`STATUS_FAST`); this is its f64 twin, for kinematic pairs and to name the fastest slave.
+/// `order` visits the slaves (indices into `hits`) in the caller's order, so that of equally
+/// fast slaves the first in the node set is named.
 pub(super) fn fast_slaves(
     pair: PairId,
     search: &SearchStage,
     hits: &[crate::abi::search::GpuHit],
+    order: impl Iterator<Item = usize>,
     velocities: &[[f64; 3]],
     dt: f64,
 ) -> (usize, Option<FastNode>) {
@@ -208,7 +211,10 @@ pub(super) fn fast_slaves(
     let facets = search.kernel_facets();
     let reference = search.reference_node();
     let (mut count, mut fastest) = (0, None::<FastNode>);
-    for (&slave, h) in search.slaves().iter().zip(hits) {
+    for k in order {
+        let (Some(&slave), Some(h)) = (search.slaves().get(k), hits.get(k)) else {
+            continue;
+        };
         let mut vm = [0.0; 3];
         if h.facet != crate::abi::search::NO_FACET {
             let fac = facets[h.facet as usize];

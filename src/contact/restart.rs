@@ -30,7 +30,8 @@ impl Contact {
         out.extend_from_slice(&self.dt_ref.unwrap_or(f64::NAN).to_le_bytes());
         out.extend_from_slice(&(self.pairs.len() as u64).to_le_bytes());
         for (k, p) in self.pairs.iter().enumerate() {
-            let states = self.exec.penalty_state(k)?;
+            // in the node set's order, whatever order the pass keeps
+            let states = p.map.to_caller(&self.exec.penalty_state(k)?);
             out.extend_from_slice(&(p.id.0 as u64).to_le_bytes());
             out.extend_from_slice(&(states.len() as u64).to_le_bytes());
             for s in &states {
@@ -96,7 +97,8 @@ impl Contact {
             return Err(bad("has a reference increment that is not positive"));
         }
         for (k, s) in all.iter().enumerate().take(self.pairs.len()) {
-            self.exec.set_penalty_state(k, s);
+            let s = self.pairs[k].map.to_pass(s);
+            self.exec.set_penalty_state(k, &s);
         }
         self.dt_ref = (!dt_ref.is_nan()).then_some(dt_ref);
         Ok(())

@@ -154,8 +154,29 @@ fn no_force(pp: &PenaltyParams, hits: &[GpuHit], i: usize, need_word: u32) -> bo
     need_word & NEED_FORCE == 0
 }
 
-/// One "invocation" per pair node: its own contact force (a slave) plus the decoded sums of the
-/// springs on its facets (WGSL: `gather`).
+/// The pair nodes `gather` and `add_forces` visit, in order: every one (`active` `None`), or,
+/// for `gather_active` and `add_forces_active`, the active slaves (`active`: the count, then
+/// the slave indices) and then the pair's other nodes and rigid slots (WGSL: `active_pair_node`
+/// of each item).
+fn visited<'a>(
+    pp: &PenaltyParams,
+    active: Option<&'a [u32]>,
+) -> Box<dyn Iterator<Item = usize> + 'a> {
+    let total = (pp.n_pair_nodes + pp.body_slots[2]) as usize;
+    match active {
+        None => Box::new(0..total),
+        Some(active) => {
+            let count = active.first().map_or(0, |&c| c as usize);
+            let slaves = active.get(1..1 + count).unwrap_or(&[]);
+            let others = (pp.n_slaves as usize).min(total)..total;
+            Box::new(slaves.iter().map(|&i| i as usize).chain(others))
+        }
+    }
+}
+
+/// One "invocation" per pair node (or per active slave and other pair node: `active`, as
+/// [`scatter_forces`]): its own contact force (a slave) plus the decoded sums of the springs on
+/// its facets (WGSL: `gather`, `gather_active`).
 #[allow(clippy::too_many_arguments)]
 pub fn gather(
     pp: &PenaltyParams,
@@ -166,11 +187,12 @@ pub fn gather(
     acc: &mut [u32],
     forces: &mut [[f32; 4]],
     need: &[u32],
+    active: Option<&[u32]>,
 ) {
     let inv_f = pow2(-fixed_exponent(status[STATUS_FORCE_SCALE], pp.n_slaves));
     let inv_r = pow2(-fixed_exponent(status[STATUS_ROW_SCALE], pp.n_slaves));
-    let total = (pp.n_pair_nodes + pp.body_slots[2]) as usize;
-    for (i, pn) in pair_nodes[..total].iter().enumerate() {
+    for i in visited(pp, active) {
+        let pn = &pair_nodes[i];
         let need_word = if i >= pp.n_slaves as usize {
             need[i]
         } else {
@@ -216,6 +238,9 @@ pub fn gather(
 /// spring's share, the gather sums them per pair node, add_forces over the pairs per node; no
 /// share is negative, so a row only grows within an increment and the largest value written
 /// is max_n Λ_n once every pair has added its rows.
+///
+/// With `active` (as [`gather`]): the active slaves and the other pair nodes only (WGSL:
+/// `add_forces_active`).
 #[allow(clippy::too_many_arguments)]
 pub fn add_forces(
     pp: &PenaltyParams,
@@ -226,8 +251,9 @@ pub fn add_forces(
     rows: &mut [f32],
     stats: &mut [u32; STATS_WORDS],
     need: &mut [u32],
+    active: Option<&[u32]>,
 ) {
-    for i in 0..(pp.n_pair_nodes + pp.body_slots[2]) as usize {
+    for i in visited(pp, active) {
         // the need word read and cleared for the next increment
         let mut need_word = 0;
         if i >= pp.n_slaves as usize || pp.flags & PENALTY_SLAVES_APART == 0 {

@@ -272,8 +272,9 @@ pub(crate) fn run_entry(
                 active,
             );
         }
-        Kernel::Gather => {
+        Kernel::Gather | Kernel::GatherActive => {
             let p = pen.ok_or_else(missing)?;
+            let active = (e.kernel == Kernel::GatherActive).then_some(&ws.active[..]);
             let pn = &mut *p.penalty;
             pn.forces.resize(p.setup.pair_nodes.len(), [0.0; 4]);
             gather::gather(
@@ -285,10 +286,12 @@ pub(crate) fn run_entry(
                 &mut pn.acc,
                 &mut pn.forces,
                 &pn.need,
+                active,
             );
         }
-        Kernel::AddForces => {
+        Kernel::AddForces | Kernel::AddForcesActive => {
             let p = pen.ok_or_else(missing)?;
+            let active = (e.kernel == Kernel::AddForcesActive).then_some(&ws.active[..]);
             gather::add_forces(
                 p.params,
                 &p.setup.pair_nodes,
@@ -298,6 +301,7 @@ pub(crate) fn run_entry(
                 p.rows,
                 p.stats,
                 &mut p.penalty.need,
+                active,
             )
         }
         Kernel::PairStats => stats::pair_stats(status, s.plan, pen.ok_or_else(missing)?.stats),

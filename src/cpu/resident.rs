@@ -100,6 +100,7 @@ impl CpuSearch {
             n_motion_nodes: r.prep.motion_nodes.len() as u32,
             n_slaves: r.prep.slaves.len() as u32,
             n_pair_nodes,
+            gather_active: false,
             slots: r.slots.clone(),
         })
     }

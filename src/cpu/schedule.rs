@@ -25,8 +25,21 @@ fn take_master_box(params: &SearchParams, plan: &mut [u32], status: &[u32]) -> b
     true
 }
 
+/// Slot `slot`'s full size: `count` items in workgroups, folded, none for none (WGSL:
+/// `size_slot`).
+fn size_slot(plan: &mut [u32], slot: usize, count: u32) {
+    let a = PLAN_SLOTS + slot * PLAN_SLOT_WORDS;
+    let size = if count == 0 {
+        [0, 0, 0]
+    } else {
+        let (x, y) = fold_dispatch(count, ITEM_WORKGROUP, plan[PLAN_MAX_DIM].max(1));
+        [x, y, 1]
+    };
+    plan[a + 4..a + 7].copy_from_slice(&size);
+}
+
 /// One "invocation": global or local, the fitted grid, the dispatch slots (the active slaves'
-/// from their count `active_count`); `args` is the nearest-facet chunk dispatch (WGSL:
+/// from their count `active_count`, the active pair nodes' from it and `PLAN_OTHER_NODES`); `args` is the nearest-facet chunk dispatch (WGSL:
 /// `schedule`, which reads the params from the plan and the count from the status buffer).
 pub fn schedule(plan: &mut [u32], status: &mut [u32], args: &mut [u32; 3], active_count: u32) {
     let params = plan_params(plan);
@@ -58,15 +71,9 @@ pub fn schedule(plan: &mut [u32], status: &mut [u32], args: &mut [u32; 3], activ
     }
     plan[PLAN_GLOBAL] = global as u32;
     plan[PLAN_TRIGGER] = trigger;
-    let groups = active_count.div_ceil(ITEM_WORKGROUP);
-    let a = PLAN_SLOTS + ACTIVE_SLOT * PLAN_SLOT_WORDS;
-    let size = if groups == 0 {
-        [0, 0, 0]
-    } else {
-        let (x, y) = fold_dispatch(active_count, ITEM_WORKGROUP, plan[PLAN_MAX_DIM].max(1));
-        [x, y, 1]
-    };
-    plan[a + 4..a + 7].copy_from_slice(&size);
+    size_slot(plan, ACTIVE_SLOT, active_count);
+    let other = plan[PLAN_OTHER_NODES];
+    size_slot(plan, ACTIVE_NODES_SLOT, active_count + other);
     let n = (plan[PLAN_N_SLOTS] as usize).min(MAX_PLAN_SLOTS);
     for k in 0..n {
         let s = PLAN_SLOTS + k * PLAN_SLOT_WORDS;

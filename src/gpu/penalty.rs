@@ -23,7 +23,9 @@ struct Pipelines {
     scatter: wgpu::ComputePipeline,
     scatter_active: wgpu::ComputePipeline,
     gather: wgpu::ComputePipeline,
+    gather_active: wgpu::ComputePipeline,
     add_forces: wgpu::ComputePipeline,
+    add_forces_active: wgpu::ComputePipeline,
 }
 
 struct Groups {
@@ -35,6 +37,7 @@ struct Groups {
     scatter: wgpu::BindGroup,
     scatter_active: wgpu::BindGroup,
     gather: wgpu::BindGroup,
+    gather_active: wgpu::BindGroup,
 }
 
 /// Penalty passes of one pair on one GPU device; buffers persist (friction state) and grow.
@@ -64,7 +67,8 @@ pub struct GpuPenalty {
 struct ResidentGroups {
     key: (u64, wgpu::Buffer, wgpu::Buffer, wgpu::Buffer, wgpu::Buffer),
     groups: Groups,
-    add_forces: wgpu::BindGroup,
+    /// add_forces and add_forces_active (they bind the caller's forces).
+    add_forces: [wgpu::BindGroup; 2],
     /// The search's plan: the indirect sizes of the passes over every slave or the active ones.
     plan: wgpu::Buffer,
 }
@@ -131,7 +135,9 @@ impl GpuPenalty {
             scatter: ctx.pipeline(&passes::SCATTER_FORCES, &[])?,
             scatter_active: ctx.pipeline(&passes::SCATTER_FORCES_ACTIVE, &[])?,
             gather: ctx.pipeline(&passes::GATHER, &[])?,
+            gather_active: ctx.pipeline(&passes::GATHER_ACTIVE, &[])?,
             add_forces: ctx.pipeline(&passes::ADD_FORCES, &[])?,
+            add_forces_active: ctx.pipeline(&passes::ADD_FORCES_ACTIVE, &[])?,
         };
         let n_slaves = setup.areas.len() as u32;
         let n_pair_nodes = setup.pair_nodes.len() as u32;
@@ -306,7 +312,9 @@ impl GpuPenalty {
             Kernel::ScatterForces => (&p.scatter, &g.scatter),
             Kernel::ScatterForcesActive => (&p.scatter_active, &g.scatter_active),
             Kernel::Gather => (&p.gather, &g.gather),
-            Kernel::AddForces => (&p.add_forces, &r.add_forces),
+            Kernel::GatherActive => (&p.gather_active, &g.gather_active),
+            Kernel::AddForces => (&p.add_forces, &r.add_forces[0]),
+            Kernel::AddForcesActive => (&p.add_forces_active, &r.add_forces[1]),
             _ => return None,
         };
         match e.size {
@@ -326,17 +334,15 @@ impl GpuPenalty {
         forces: &wgpu::Buffer,
         rows: &wgpu::Buffer,
         stats: &wgpu::Buffer,
-    ) -> Result<(Groups, wgpu::BindGroup)> {
+    ) -> Result<(Groups, [wgpu::BindGroup; 2])> {
         let groups = self.groups_with(s, velocities)?;
-        let add_forces = super::bind(
-            &self.ctx.device,
-            &self.pipelines.add_forces,
-            &passes::ADD_FORCES,
-            |buf| {
+        let add = |pipe: &wgpu::ComputePipeline, pass: &passes::Pass| {
+            super::bind(&self.ctx.device, pipe, pass, |buf| {
                 Some(match buf {
                     Buf::PenaltyParams => self.params.as_entire_binding(),
                     Buf::PairNodes => self.pair_nodes.as_entire_binding(),
                     Buf::Hits => s.hits.as_entire_binding(),
+                    Buf::Status => s.status.as_entire_binding(),
                     Buf::Forces => self.forces.as_entire_binding(),
                     Buf::HostForces => forces.as_entire_binding(),
                     Buf::Rows => rows.as_entire_binding(),
@@ -344,8 +350,13 @@ impl GpuPenalty {
                     Buf::Need => self.need.as_entire_binding(),
                     _ => return None,
                 })
-            },
-        )?;
+            })
+        };
+        let p = &self.pipelines;
+        let add_forces = [
+            add(&p.add_forces, &passes::ADD_FORCES)?,
+            add(&p.add_forces_active, &passes::ADD_FORCES_ACTIVE)?,
+        ];
         Ok((groups, add_forces))
     }
 
@@ -387,6 +398,7 @@ impl GpuPenalty {
             scatter: group(&p.scatter, &passes::SCATTER_FORCES)?,
             scatter_active: group(&p.scatter_active, &passes::SCATTER_FORCES_ACTIVE)?,
             gather: group(&p.gather, &passes::GATHER)?,
+            gather_active: group(&p.gather_active, &passes::GATHER_ACTIVE)?,
         })
     }
 }

@@ -30,6 +30,23 @@ pub struct Pair {
     /// pass of a balanced pair stated as a pure pair of its own, as a rank of a distributed
     /// model does (a balanced pair's weights come from [`Pair::balanced`]).
     pub pass_weight: f64,
+    /// The order a penalty pair keeps its slave nodes in inside abut (Morton unless set);
+    /// invisible to the caller, who gets every per-slave result in node-set order.
+    pub slave_order: SlaveOrder,
+}
+
+/// The order a penalty pair keeps its slave nodes (and their hits, penalty state and outputs)
+/// in on the device and the CPU path. The caller never sees it: outputs, penalty states, saved
+/// states, reports and forces come back in the node set's order, with the same bits either way.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
+pub enum SlaveOrder {
+    /// Morton (Z-curve) order of the slave nodes' positions in the model when the contact is
+    /// built: slaves next to each other in memory are next to each other in space, so the
+    /// passes over them read the same master facets and nodes together.
+    #[default]
+    Morton,
+    /// The node set's order, as given.
+    Given,
 }
 
 /// The sliding formulation (seed: "Sliding formulation", "Small-sliding tracking approach").
@@ -315,7 +332,15 @@ impl Pair {
             schedule: None,
             sliding: Sliding::Finite,
             pass_weight: 1.0,
+            slave_order: SlaveOrder::Morton,
         }
+    }
+
+    /// Sets the order the pair keeps its slave nodes in inside abut (penalty enforcement;
+    /// a kinematic pair keeps the node set's). Results do not depend on it.
+    pub fn slave_order(mut self, order: SlaveOrder) -> Self {
+        self.slave_order = order;
+        self
     }
 
     /// Sets the fraction (in [0, 1]) of each contact's penalty force this pure pair applies:

@@ -46,9 +46,41 @@ impl PenaltySetup {
     /// Builds the setup of pair `id` whose master surface is `master` and slaves `slaves`
     /// (the slave-on-master pass; weighted when the pair is balanced).
     pub fn new(model: &Model, id: PairId, master: &MasterSurface, slaves: &[u32]) -> Result<Self> {
+        let given: Vec<u32> = (0..slaves.len() as u32).collect();
+        Self::ordered(model, id, master, slaves, &given)
+    }
+
+    /// As [`PenaltySetup::new`], with the slave nodes `slaves` in the order the pair keeps them
+    /// ([`crate::model::SlaveOrder`]): slave `k` is entry `node_set_index[k]` of the pair's node
+    /// set (where its tributary area, when the node set has them, is found).
+    pub fn ordered(
+        model: &Model,
+        id: PairId,
+        master: &MasterSurface,
+        slaves: &[u32],
+        node_set_index: &[u32],
+    ) -> Result<Self> {
         let pair: &Pair = model.pair(id)?;
+        if node_set_index.len() != slaves.len() {
+            return Err(crate::error::Error::LengthMismatch {
+                what: "node-set index of each slave node",
+                expected: slaves.len(),
+                got: node_set_index.len(),
+            });
+        }
         let areas: Vec<f64> = match model.node_set_areas(pair.slave)? {
-            Some(a) => a.to_vec(),
+            Some(a) => node_set_index
+                .iter()
+                .map(|&c| {
+                    a.get(c as usize)
+                        .copied()
+                        .ok_or(crate::error::Error::IndexOutOfRange {
+                            what: format!("node-set index of a slave node of pair {}", id.0),
+                            index: c as u64,
+                            len: a.len(),
+                        })
+                })
+                .collect::<Result<_>>()?,
             None => vec![master.mean_facet_area(); slaves.len()],
         };
         let weight = pair.balanced.map_or(pair.pass_weight, |(_, w)| w);

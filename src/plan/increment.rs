@@ -7,9 +7,9 @@
 use crate::abi::groups::{self, Group};
 use crate::abi::passes::{self, Pass};
 use crate::abi::search::{
-    fold_dispatch, fresh_plan, ScanLevels, SearchParams, ACTIVE_SLOT, ITEM_WORKGROUP,
-    MAX_PLAN_SLOTS, PLAN_MAX_DIM, PLAN_N_SLOTS, PLAN_SLOTS, PLAN_SLOT_WORDS, SLOT_GLOBAL,
-    SLOT_LOCAL, TREE_WORKGROUP, WALK_GROUP,
+    fold_dispatch, fresh_plan, ScanLevels, SearchParams, ACTIVE_NODES_SLOT, ACTIVE_SLOT,
+    ITEM_WORKGROUP, MAX_PLAN_SLOTS, MAX_RIGID_SLOTS, PLAN_MAX_DIM, PLAN_N_SLOTS, PLAN_OTHER_NODES,
+    PLAN_SLOTS, PLAN_SLOT_WORDS, SLOT_GLOBAL, SLOT_LOCAL, TREE_WORKGROUP, WALK_GROUP,
 };
 use crate::abi::search::{tree_passes, SCAN_BLOCK};
 use crate::error::{Error, Result};
@@ -70,8 +70,12 @@ pub(crate) enum Kernel {
     ScatterForcesActive,
     /// The sums per pair node.
     Gather,
+    /// The sums of the active slaves and the other pair nodes.
+    GatherActive,
     /// The pair's forces added into the caller's array, and its bound rows.
     AddForces,
+    /// The same for the active slaves and the other pair nodes.
+    AddForcesActive,
     /// The pair's status words into the statistics.
     PairStats,
     /// The stable increment and the statistics' last words.
@@ -82,7 +86,7 @@ impl Kernel {
     /// Every kernel, in the order `abi::passes::PASSES` declares their passes (for the tests
     /// that go over them all).
     #[cfg(test)]
-    pub(crate) const ALL: [Kernel; 29] = [
+    pub(crate) const ALL: [Kernel; 31] = [
         Kernel::ToLocal,
         Kernel::Anchor,
         Kernel::Motion,
@@ -108,8 +112,10 @@ impl Kernel {
         Kernel::ScatterForces,
         Kernel::ScatterForcesActive,
         Kernel::Gather,
+        Kernel::GatherActive,
         Kernel::SetReference,
         Kernel::AddForces,
+        Kernel::AddForcesActive,
         Kernel::PairStats,
         Kernel::FinishStats,
     ];
@@ -143,7 +149,9 @@ impl Kernel {
             Kernel::ScatterForces => &passes::SCATTER_FORCES,
             Kernel::ScatterForcesActive => &passes::SCATTER_FORCES_ACTIVE,
             Kernel::Gather => &passes::GATHER,
+            Kernel::GatherActive => &passes::GATHER_ACTIVE,
             Kernel::AddForces => &passes::ADD_FORCES,
+            Kernel::AddForcesActive => &passes::ADD_FORCES_ACTIVE,
             Kernel::PairStats => &passes::PAIR_STATS,
             Kernel::FinishStats => &passes::FINISH_STATS,
         }
@@ -196,6 +204,13 @@ pub(crate) struct Slots {
     pub slave_groups: u64,
     /// Global: one invocation (nearest_args).
     pub one: u64,
+    /// Local increments: one invocation per active slave, then per pair node that is no slave
+    /// and per rigid part slot the pair may have (gather_active, add_forces_active): the
+    /// plan's `ACTIVE_NODES_SLOT`, sized by the schedule.
+    pub active_nodes: u64,
+    /// Global: one per pair node and rigid part slot the pair may have (gather and add_forces
+    /// of a pair whose local increments run the active ones).
+    pub pair_nodes: u64,
     /// Global: one per watched node (set_reference).
     pub motion_nodes: u64,
     /// Global: one per model node (to_local).
@@ -242,8 +257,21 @@ pub(crate) fn initial_plan(
     );
     let s = PLAN_SLOTS + ACTIVE_SLOT * PLAN_SLOT_WORDS;
     plan[s + 4..s + 7].copy_from_slice(&[0, 0, 0]);
+    // the active slaves' and other pair nodes' slot, sized by the schedule too
+    let active_nodes = add_slot(&mut plan, 0, iw, l, max_dim)?;
+    debug_assert_eq!(
+        active_nodes,
+        4 * (PLAN_SLOTS + ACTIVE_NODES_SLOT * PLAN_SLOT_WORDS) as u64
+    );
+    let s = PLAN_SLOTS + ACTIVE_NODES_SLOT * PLAN_SLOT_WORDS;
+    plan[s + 4..s + 7].copy_from_slice(&[0, 0, 0]);
+    // a penalty pair's nodes are its slaves, then the master nodes that are no slaves: the
+    // search's motion nodes; then at most two rigid part slots
+    let other_nodes = n_nodes_watched.saturating_sub(params.n_slaves) + MAX_RIGID_SLOTS;
+    plan[PLAN_OTHER_NODES] = other_nodes;
     let mut slots = Slots {
         active,
+        active_nodes,
         ..Default::default()
     };
     for tp in tree_passes(params.tree_levels) {
@@ -269,6 +297,7 @@ pub(crate) fn initial_plan(
         max_dim,
     )?;
     slots.one = add_slot(&mut plan, 1, 1, g, max_dim)?;
+    slots.pair_nodes = add_slot(&mut plan, params.n_slaves + other_nodes, iw, g, max_dim)?;
     slots.motion_nodes = add_slot(&mut plan, n_nodes_watched, iw, g, max_dim)?;
     slots.nodes = add_slot(&mut plan, n_nodes, iw, g, max_dim)?;
     Ok((plan, slots))
@@ -296,6 +325,13 @@ pub(crate) struct PairShape {
     pub n_slaves: u32,
     /// Nodes of the penalty pair (slaves and master nodes).
     pub n_pair_nodes: u32,
+    /// Local increments gather and add forces for the active slaves and the other pair nodes
+    /// only (`gather_active`, `add_forces_active`), global ones for every pair node from the
+    /// plan's `pair_nodes` slot: a penalty pair whose slaves are no master nodes
+    /// (`PENALTY_SLAVES_APART`), whose other pair nodes are the search's motion nodes that are
+    /// no slaves, with at most two rigid part slots. Otherwise every increment gathers every
+    /// pair node.
+    pub gather_active: bool,
     /// The search plan's dispatch slots.
     pub slots: Slots,
 }
@@ -458,11 +494,33 @@ pub(crate) fn penalty(k: usize, p: &PairShape) -> Vec<Entry> {
             }
         }
     }
-    out.extend([
-        entry(s, Kernel::Gather, Size::Items(np, iw)),
-        entry(s, Kernel::AddForces, Size::Items(np, iw)),
-        entry(&groups::STATS_PAIR, Kernel::PairStats, Size::Items(1, 1)),
-    ]);
+    if p.gather_active && !p.anchored {
+        // every pair node after a global search, the active slaves and the others after a
+        // local one (a slave left out has no facet: nothing to gather or add)
+        let (all, active) = (
+            Size::Slot(p.slots.pair_nodes),
+            Size::Slot(p.slots.active_nodes),
+        );
+        let (global, local) = (!p.local_only, !p.global_only);
+        for (gather, add, size, on) in [
+            (Kernel::Gather, Kernel::AddForces, all, global),
+            (Kernel::GatherActive, Kernel::AddForcesActive, active, local),
+        ] {
+            if on {
+                out.extend([entry(s, gather, size), entry(s, add, size)]);
+            }
+        }
+    } else {
+        out.extend([
+            entry(s, Kernel::Gather, Size::Items(np, iw)),
+            entry(s, Kernel::AddForces, Size::Items(np, iw)),
+        ]);
+    }
+    out.push(entry(
+        &groups::STATS_PAIR,
+        Kernel::PairStats,
+        Size::Items(1, 1),
+    ));
     out
 }
 
@@ -492,86 +550,4 @@ pub(crate) fn increment(pairs: &[PairShape]) -> Vec<Entry> {
 }
 
 #[cfg(test)]
-mod tests {
-    use super::*;
-
-    /// The plan's slots hold the largest search there can be: a tree of 32 levels (one refit
-    /// pass per level, 33) and the most slaves a u32 counts (four scan levels); with one level
-    /// fewer per pass this was where 16 slots ran out.
-    #[test]
-    fn the_largest_search_fits_the_plan() {
-        for (levels, slaves) in [(0, 1), (17, 1_000_000), (32, u32::MAX - 1)] {
-            let params = SearchParams {
-                tree_levels: levels,
-                n_slaves: slaves,
-                ..bytemuck::Zeroable::zeroed()
-            };
-            let (plan, slots) = initial_plan(&params, 100, slaves, slaves, 65_535)
-                .unwrap_or_else(|e| panic!("{levels} levels, {slaves} slaves: {e}"));
-            assert_eq!(slots.tree_passes.len(), levels as usize + 1);
-            assert!(plan[PLAN_N_SLOTS] as usize <= MAX_PLAN_SLOTS);
-        }
-    }
-
-    /// `Kernel::ALL` is every pass of `abi::passes::PASSES` but the host integrator's, in
-    /// order, and each kernel is its pass once.
-    #[test]
-    fn every_pass_but_the_integrator_is_a_kernel() {
-        let passes: Vec<&Pass> = passes::PASSES
-            .iter()
-            .filter(|p| p.entry != "integrate")
-            .collect();
-        let kernels: Vec<&Pass> = Kernel::ALL.iter().map(|k| k.pass()).collect();
-        assert_eq!(kernels, passes);
-    }
-
-    /// Every entry's kernel is a pass of the group it is recorded under, so the benchmarks'
-    /// rows and the timestamps name what ran.
-    #[test]
-    fn entries_belong_to_their_groups() {
-        let (_, slots) = initial_plan(
-            &SearchParams {
-                tree_levels: 5,
-                n_slaves: 1000,
-                ..bytemuck::Zeroable::zeroed()
-            },
-            100,
-            1200,
-            2000,
-            65_535,
-        )
-        .unwrap();
-        for (anchored, self_contact, local_only) in [
-            (false, false, false),
-            (false, true, false),
-            (true, false, false),
-            (false, false, true),
-        ] {
-            let shape = PairShape {
-                anchored,
-                self_contact,
-                local_only,
-                global_only: false,
-                n_nodes: 2000,
-                n_motion_nodes: 1200,
-                n_slaves: 1000,
-                n_pair_nodes: 1200,
-                slots: slots.clone(),
-            };
-            let entries = increment(&[shape.clone(), shape]);
-            for e in &entries {
-                assert!(
-                    e.group.passes.iter().any(|p| *p == e.kernel.pass()),
-                    "{:?} under {}",
-                    e.kernel,
-                    e.group.label
-                );
-            }
-            let globals = entries
-                .iter()
-                .filter(|e| e.kernel == Kernel::TreeRefit)
-                .count();
-            assert_eq!(globals, if anchored || local_only { 0 } else { 2 * 6 });
-        }
-    }
-}
+mod tests;

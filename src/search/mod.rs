@@ -332,9 +332,15 @@ impl SearchStage {
     /// The stage of the search of contact pair `pair` of `model`: its radius, anchoring reach,
     /// schedule and sliding from the pair.
     pub(crate) fn new(model: &Model, pair: PairId) -> Result<Self> {
+        let slaves = model.node_set(model.pair(pair)?.slave)?.to_vec();
+        Self::for_pair(model, pair, slaves)
+    }
+
+    /// As [`SearchStage::new`], with the pair's slave nodes `slaves` in the order the search
+    /// keeps them (a permutation of its node set: [`crate::model::SlaveOrder`]).
+    pub(crate) fn for_pair(model: &Model, pair: PairId, slaves: Vec<u32>) -> Result<Self> {
         let p = model.pair(pair)?;
         let master = model.surface(p.master)?.clone();
-        let slaves = model.node_set(p.slave)?.to_vec();
         let radius = p.search_radius.unwrap_or_else(|| master.mean_facet_size());
         let mut search = Self::from_parts(model, master, slaves, radius)?;
         search.set_anchor_reach(p.search_radius);

@@ -331,3 +331,68 @@ pub fn read_buffer(device: &Device, buffer: &wgpu::Buffer, bytes: u64) -> Vec<u8
     staging.unmap();
     out
 }
+
+/// Rounds a point to f32 and back: positions every path sees exactly.
+pub fn f32r(p: [f64; 3]) -> [f64; 3] {
+    p.map(|v| v as f32 as f64)
+}
+
+/// A small deterministic hash of `i` and `salt` in [0, 1).
+pub fn unit(i: usize, salt: u64) -> f64 {
+    let mut z = (i as u64 + 1).wrapping_mul(0x9E37_79B9_7F4A_7C15) ^ salt;
+    z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
+    z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
+    ((z ^ (z >> 31)) >> 11) as f64 / (1u64 << 53) as f64
+}
+
+/// The forces and statistics of `steps` device-resident increments of `c` on `d` (a model of
+/// `n` nodes), increment k at the positions and velocities `state(k)`, over `dt`: on an adapter
+/// through the caller's device buffers, on the CPU path through host arrays.
+pub fn resident_run(
+    d: &Device,
+    c: &mut abut::Contact,
+    n: usize,
+    steps: usize,
+    state: &dyn Fn(usize) -> (Vec<[f64; 3]>, Vec<[f64; 3]>),
+    dt: f64,
+) -> Vec<(Vec<[f32; 4]>, Vec<u8>)> {
+    use abut::testing::abi::stats::STATS_BYTES;
+    use abut::ResidentIo;
+    let bufs = d.is_gpu().then(|| node_buffers(d, n));
+    let mut out = Vec::new();
+    for k in 0..steps {
+        let (x, v) = state(k);
+        match &bufs {
+            Some([bx, bv, bf]) => {
+                let (dev, q) = d.wgpu().unwrap();
+                q.write_buffer(bx, 0, bytemuck::cast_slice(&vec4(&x)));
+                q.write_buffer(bv, 0, bytemuck::cast_slice(&vec4(&v)));
+                let mut enc = dev.create_command_encoder(&Default::default());
+                enc.clear_buffer(bf, 0, None);
+                let io = ResidentIo::Gpu {
+                    encoder: &mut enc,
+                    positions: bx,
+                    velocities: bv,
+                    forces: bf,
+                };
+                c.encode_increment(io, dt).unwrap();
+                q.submit([enc.finish()]);
+                let f = bytemuck::pod_collect_to_vec(&read_buffer(d, bf, (n * 16) as u64));
+                let st = read_buffer(d, c.stats_buffer().unwrap(), STATS_BYTES);
+                out.push((f, st));
+            }
+            None => {
+                let mut f = vec![[0.0f32; 4]; n];
+                let io = ResidentIo::Cpu {
+                    positions: &vec4(&x),
+                    velocities: &vec4(&v),
+                    forces: &mut f,
+                };
+                c.encode_increment(io, dt).unwrap();
+                let st = c.collect_stats().unwrap();
+                out.push((f, bytemuck::bytes_of(&st[0]).to_vec()));
+            }
+        }
+    }
+    out
+}

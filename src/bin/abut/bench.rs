@@ -13,7 +13,7 @@ use std::path::PathBuf;
 use std::time::Instant;
 
 use abut::mesh::{plate_quads, SplitMix64};
-use abut::model::Schedule;
+use abut::model::{Schedule, SlaveOrder};
 use abut::testing::abi::groups::{self, Group};
 use abut::{
     Contact, Device, Enforce, GlobalSearch, Kinematic, Model, Pair, Penalty, Sliding, Stiffness,
@@ -57,6 +57,12 @@ pub struct BenchArgs {
     /// share.md to --out.
     #[arg(long)]
     pub share: bool,
+    /// Only the slave order's effect: a local increment with every slave within the radius,
+    /// its slaves kept in the caller's order (the bench places them at random) and in Morton
+    /// order, on the CPU path and every adapter at 10^5 and 10^6 slaves (--quick: 10^4), the GPU
+    /// time of each group of passes; medians over three rounds. Writes order.md to --out.
+    #[arg(long)]
+    pub order: bool,
     /// Only the global search against parry3d (one thread and rayon), every device, 10^6
     /// slaves on 10^5 triangles within 0.5, 1 and 3 facet sizes, and the floor at 10^6 facets.
     /// Writes search.md and search.json to --out.
@@ -97,6 +103,10 @@ pub(crate) struct Config {
     /// Local increments visit every slave instead of the active ones
     /// (`Schedule::visit_every_slave`: the baseline of the compaction).
     pub(crate) every_slave: bool,
+    /// The order the pair keeps its slaves in (the bench's node set lists them at random;
+    /// only `--order` changes it).
+    #[serde(skip)]
+    pub(crate) slave_order: SlaveOrder,
 }
 
 impl Config {
@@ -109,6 +119,7 @@ impl Config {
             scale: 1.0,
             near: 1.0,
             every_slave: false,
+            slave_order: SlaveOrder::Morton,
         }
     }
     fn label(&self) -> String {
@@ -193,6 +204,9 @@ pub fn bench(a: &BenchArgs) -> abut::Result<()> {
     }
     if a.share {
         return crate::resident_share::run(a);
+    }
+    if a.order {
+        return crate::resident_order::run(a);
     }
     if a.search {
         return crate::search_bench::run(a);

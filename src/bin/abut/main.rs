@@ -5,6 +5,7 @@ mod bench;
 mod bounce;
 mod penalty_bench;
 mod resident_bench;
+mod resident_order;
 mod resident_share;
 mod search_bench;
 mod verify;

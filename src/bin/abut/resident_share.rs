@@ -129,16 +129,19 @@ fn cpu_search(sc: &BenchScene) -> abut::Result<f64> {
 }
 
 /// One run's times (on the CPU path, `wall` is abut's passes alone).
-#[derive(Clone, Copy)]
-struct GpuTimes {
+#[derive(Clone)]
+pub(crate) struct GpuTimes {
     /// Wall seconds per local increment (abut's passes and the integrator, device completion
     /// included).
-    wall: f64,
+    pub(crate) wall: f64,
     /// GPU seconds of abut's passes per local increment, where the adapter has timestamps.
-    gpu: Option<f64>,
+    pub(crate) gpu: Option<f64>,
     /// GPU seconds of the global search group per global increment (the same pairs, the same
     /// device), where the adapter has timestamps.
-    search: Option<f64>,
+    pub(crate) search: Option<f64>,
+    /// GPU seconds per local increment of each group of abut's passes (its label), where the
+    /// adapter has timestamps.
+    pub(crate) groups: Vec<(String, f64)>,
 }
 
 /// Times the local increments of `sc` on an adapter, then [`GLOBALS`] increments that search
@@ -204,10 +207,17 @@ fn gpu_run(device: &Device, sc: &BenchScene) -> abut::Result<GpuTimes> {
         .pass_ns
         .get(groups::GLOBAL_SEARCH.label)
         .map(|ns| ns / GLOBALS as f64 / 1e9);
+    let groups = timed
+        .pass_ns
+        .iter()
+        .filter(|(label, _)| label.as_str() != groups::INTEGRATOR.label)
+        .map(|(label, ns)| (label.clone(), ns / INCREMENTS as f64 / 1e9))
+        .collect();
     Ok(GpuTimes {
         wall,
         gpu: (!timed.pass_ns.is_empty()).then_some(gpu),
         search,
+        groups,
     })
 }
 
@@ -241,7 +251,7 @@ pub(crate) fn run(a: &crate::bench::BenchArgs) -> abut::Result<()> {
 /// from the timestamps where there are some) and of one global search of the same pair on the
 /// same device (the GPU time of the global search group where there are timestamps; on the
 /// CPU path `GlobalSearch::run`).
-fn time_of(device: &Device, sc: &BenchScene) -> abut::Result<GpuTimes> {
+pub(crate) fn time_of(device: &Device, sc: &BenchScene) -> abut::Result<GpuTimes> {
     if device.wgpu().is_some() {
         gpu_run(device, sc)
     } else {
@@ -249,6 +259,7 @@ fn time_of(device: &Device, sc: &BenchScene) -> abut::Result<GpuTimes> {
             wall: cpu_run(sc)?,
             gpu: None,
             search: Some(cpu_search(sc)?),
+            groups: Vec::new(),
         })
     }
 }

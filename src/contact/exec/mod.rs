@@ -10,8 +10,8 @@ mod gpu;
 
 use super::{PairRun, ResidentIo};
 use crate::abi::passes::Buf;
-use crate::abi::penalty::{ContactOut, PenaltyParams, SlaveState};
-use crate::abi::search::GpuHit;
+use crate::abi::penalty::{ContactOut, PenaltyParams, SlaveState, PENALTY_SLAVES_APART};
+use crate::abi::search::{GpuHit, MAX_RIGID_SLOTS};
 use crate::abi::stats::IncrementStats;
 use crate::abi::status::STATUS_WORDS;
 use crate::device::{Device, DeviceKind, GpuContext};
@@ -62,7 +62,14 @@ impl Increment<'_> {
             .enumerate()
             .map(|(k, pr)| {
                 let local_only = self.local_only.get(k).copied().unwrap_or(false);
-                shape(k, pr.setup.pair_nodes.len() as u32, local_only)
+                let mut s = shape(k, pr.setup.pair_nodes.len() as u32, local_only)?;
+                // the active slaves' gather when the slaves are no master nodes and the other
+                // pair nodes are what the plan's slot counts (PLAN_OTHER_NODES)
+                let rigid_slots = pr.setup.pair_nodes.len() - pr.setup.n_nodes;
+                s.gather_active = pr.setup.params.flags & PENALTY_SLAVES_APART != 0
+                    && pr.setup.n_nodes as u32 == s.n_motion_nodes
+                    && rigid_slots as u32 <= MAX_RIGID_SLOTS;
+                Some(s)
             })
             .collect::<Option<Vec<_>>>()
             .ok_or_else(not_resident)?;

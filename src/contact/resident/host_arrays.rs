@@ -173,7 +173,8 @@ impl Contact {
                         .last_hits(k, self.pairs[k].search.slaves().len())?,
                 };
                 let pr = &self.pairs[k];
-                let (_, top) = fast_slaves(pr.id, &pr.search, &hits, velocities, dt);
+                let order = pr.map.caller_sequence(hits.len());
+                let (_, top) = fast_slaves(pr.id, &pr.search, &hits, order, velocities, dt);
                 if let Some(t) = top {
                     if fastest.is_none_or(|f| t.distance / t.radius > f.distance / f.radius) {
                         fastest = Some(t);
@@ -185,7 +186,7 @@ impl Contact {
         // name the slave whose contact gave it (its master nodes share the value), else the node
         let forces = &self.report.forces;
         let on_slave = self.pairs.iter().find_map(|p| {
-            p.search.slaves().iter().find_map(|&s| {
+            p.output.slaves.iter().find_map(|&s| {
                 let f = forces[s as usize];
                 f.iter().find(|c| !c.is_finite()).map(|&c| (s as usize, c))
             })
@@ -226,7 +227,13 @@ impl Contact {
                 raw.plan[PLAN_TRIGGER],
                 first,
             );
-            fill_output(&mut pr.output, &raw.out, &pr.setup.areas, result);
+            // the caller reads them in the node set's order
+            let (out, areas) = (
+                pr.map.to_caller(&raw.out),
+                pr.map.to_caller(&pr.setup.areas),
+            );
+            let result = pr.map.result_to_caller(result);
+            fill_output(&mut pr.output, &out, &areas, result);
         }
         Ok(())
     }

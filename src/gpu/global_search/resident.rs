@@ -324,6 +324,7 @@ impl GpuSearch {
             n_motion_nodes: r.n_motion_nodes,
             n_slaves: r.n_slaves,
             n_pair_nodes,
+            gather_active: false,
             slots: r.slots.clone(),
         })
     }

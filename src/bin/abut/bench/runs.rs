@@ -57,7 +57,8 @@ pub(crate) fn scene(c: &Config) -> abut::Result<BenchScene> {
             } else {
                 Sliding::Finite
             })
-            .schedule(schedule),
+            .schedule(schedule)
+            .slave_order(c.slave_order),
     )?;
     Ok(BenchScene {
         model,
