@@ -7,11 +7,11 @@
 
 mod common;
 
-use abut::mesh::{plate_quads, polyline};
+use abut::mesh::plate_quads;
 use abut::model::Schedule;
 use abut::search::Trigger;
 use abut::*;
-use common::{devices, f32r, facet_distance, node_buffers, resident_run, unit, vec4};
+use common::{devices, f32r, facet_distance, flat_master, node_buffers, resident_run, unit, vec4};
 
 /// Positions of increment `k`.
 type Motion = dyn Fn(usize) -> Vec<[f64; 3]>;
@@ -31,21 +31,7 @@ struct Scene {
 /// increments, so most approaches happen in local increments) and sliding along it; a few move
 /// away. The master ripples and travels a little, so its nodes use the budget too.
 fn approach(dim: u32, penalty: bool, every: bool) -> Scene {
-    let (mut model, master, h) = if dim == 3 {
-        let plate = plate_quads(16, 16, 1.0, 1.0, 0.0, 0, &|_, _| 0.0);
-        let mut m = Model::new_3d();
-        m.add_nodes(&plate.positions, &vec![2.0; plate.positions.len()])
-            .unwrap();
-        let s = m.add_surface(Surface::quads(&plate.facets)).unwrap();
-        (m, s, 1.0 / 16.0)
-    } else {
-        let line = polyline(40, 1.0, 0.0, 0, &|_| 0.0);
-        let mut m = Model::new_2d();
-        m.add_nodes(&line.positions, &vec![2.0; line.positions.len()])
-            .unwrap();
-        let s = m.add_surface(Surface::segments(&line.facets)).unwrap();
-        (m, s, 1.0 / 40.0)
-    };
+    let (mut model, master, h) = flat_master(dim);
     let radius = 1.5 * h;
     let n_master = model.positions().len();
     let side = if dim == 3 { 24 } else { 300 };

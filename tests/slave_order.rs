@@ -10,9 +10,9 @@
 
 mod common;
 
-use abut::mesh::{plate_quads, polyline};
+use abut::mesh::plate_quads;
 use abut::*;
-use common::{devices, f32r, resident_run, unit};
+use common::{devices, f32r, flat_master, resident_run, unit};
 
 /// Positions (and velocities) of increment `k`.
 type Motion = dyn Fn(usize) -> Vec<[f64; 3]>;
@@ -64,21 +64,7 @@ const DT: f64 = 1.0e-3;
 /// (equally fast: the report names the first of them in the node set). The node set lists the
 /// slaves shuffled, with tributary areas of their own in 3D.
 fn approach(dim: u32, order: SlaveOrder) -> Scene {
-    let (mut model, master, h) = if dim == 3 {
-        let plate = plate_quads(16, 16, 1.0, 1.0, 0.0, 0, &|_, _| 0.0);
-        let mut m = Model::new_3d();
-        m.add_nodes(&plate.positions, &vec![2.0; plate.positions.len()])
-            .unwrap();
-        let s = m.add_surface(Surface::quads(&plate.facets)).unwrap();
-        (m, s, 1.0 / 16.0)
-    } else {
-        let line = polyline(40, 1.0, 0.0, 0, &|_| 0.0);
-        let mut m = Model::new_2d();
-        m.add_nodes(&line.positions, &vec![2.0; line.positions.len()])
-            .unwrap();
-        let s = m.add_surface(Surface::segments(&line.facets)).unwrap();
-        (m, s, 1.0 / 40.0)
-    };
+    let (mut model, master, h) = flat_master(dim);
     let radius = 1.5 * h;
     let n_master = model.positions().len();
     let side = if dim == 3 { 20 } else { 240 };

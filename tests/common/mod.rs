@@ -396,3 +396,25 @@ pub fn resident_run(
     }
     out
 }
+
+/// A flat master of unit size at height 0 and node mass 2: a 16×16 quad plate in 3D, a
+/// 40-segment polyline in 2D; the model, the surface and the facet size.
+pub fn flat_master(dim: u32) -> (Model, abut::SurfaceId, f64) {
+    use abut::mesh::{plate_quads, polyline};
+    use abut::Surface;
+    if dim == 3 {
+        let plate = plate_quads(16, 16, 1.0, 1.0, 0.0, 0, &|_, _| 0.0);
+        let mut m = Model::new_3d();
+        m.add_nodes(&plate.positions, &vec![2.0; plate.positions.len()])
+            .unwrap();
+        let s = m.add_surface(Surface::quads(&plate.facets)).unwrap();
+        (m, s, 1.0 / 16.0)
+    } else {
+        let line = polyline(40, 1.0, 0.0, 0, &|_| 0.0);
+        let mut m = Model::new_2d();
+        m.add_nodes(&line.positions, &vec![2.0; line.positions.len()])
+            .unwrap();
+        let s = m.add_surface(Surface::segments(&line.facets)).unwrap();
+        (m, s, 1.0 / 40.0)
+    }
+}
