@@ -31,16 +31,20 @@ struct SearchParams {
     budget: f32,
     n_motion_nodes: u32,
     ref_node: u32,       // the pair's reference master node: motion is measured relative to it
-    _pad0: u32,
+    bucket_cell: f32,    // the bucket search's cell size (buckets.wgsl); 0 with the tree
     master_lo: vec4<f32>, // the master's box at the last global search (xyz)
     master_hi: vec4<f32>,
-    _pad: vec4<u32>,
+    bucket_bits: u32,    // 2^bucket_bits hashed buckets, then the one of facets too large to bin
+    bucket_entries: u32, // word of the bucket grid where the entries (leaf slot, facet) start
+    _pad1: u32,
+    _pad2: u32,
 }
 
 const FLAG_WIDE_LOCAL: u32 = 1u;
 const FLAG_SELF_CONTACT: u32 = 2u;
 const FLAG_EVERY_SLAVE: u32 = 4u;   // local increments visit every slave (no compaction)
 const FLAG_SLAVES_APART: u32 = 8u;  // no slave node is on an active master facet
+const FLAG_BUCKETS: u32 = 16u;      // the global search bins facets in a hashed grid (buckets.wgsl)
 // The statistics' word of the node-wise bound on the springs' ω² (f32 bits; raised by add_forces,
 // read by finish_stats; the other STAT_* words: stats.wgsl; Rust twin: STAT_OMEGA2).
 const STAT_OMEGA2: u32 = 3u;

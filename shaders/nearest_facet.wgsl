@@ -109,26 +109,8 @@ const WALK_GROUP: u32 = 8u;
 // Words of a slave's best record (Rust twin: BEST_WORDS).
 const BEST_WORDS: u32 = 8u;
 
-// The square of the tracking radius, radius + budget: how far the walks look (Rust twin:
-// `cpu::nearest_facet::track_radius2`).
-fn track_radius2() -> f32 {
-    let r = params.radius + params.budget;
-    return r * r;
-}
 // Workgroups per dimension of the indirect dispatch before folding into y (WebGPU's default).
 const MAX_GROUPS_PER_DIM: u32 = 65535u;
-
-// Whether two facets share a node.
-fn share_node(a: vec4<u32>, b: vec4<u32>) -> bool {
-    let na = facet_node_count(a);
-    let nb = facet_node_count(b);
-    for (var i = 0u; i < na; i++) {
-        for (var j = 0u; j < nb; j++) {
-            if (a[i] == b[j]) { return true; }
-        }
-    }
-    return false;
-}
 
 // Whether tree node k holds nothing within distance² `bound` of the point whose box point
 // (box_point) is q: its box is empty or farther.
@@ -357,7 +339,9 @@ fn walk_start(@builtin(workgroup_id) wg: vec3<u32>,
     }
     let bound = track_radius2() * PRUNE_SLACK;
     let leaves = 1u << params.tree_levels;
-    var k = select(0u, 1u, group_near(1u, glo, ghi, bound, step));
+    // the bucket search (buckets.wgsl) has leaf boxes alone, and no start node
+    let tree = (params.flags & FLAG_BUCKETS) == 0u;
+    var k = select(0u, 1u, tree && group_near(1u, glo, ghi, bound, step));
     for (var s = 0u; s < 32u && k != 0u && k < leaves; s++) {
         let near_l = group_near(2u * k, glo, ghi, bound, step);
         let near_r = group_near(2u * k + 1u, glo, ghi, bound, step);

@@ -1,5 +1,5 @@
 // search_common.wgsl — functions shared by the search kernels that read facets and adjacency:
-// prepended (after common.wgsl) to nearest_facet.wgsl and local_search.wgsl, which declare
+// prepended (after common.wgsl) to nearest_facet.wgsl, buckets.wgsl and local_search.wgsl, which declare
 // `params`, `nodes`, `facets` and `adjacency`. CPU mirror: src/cpu/common.rs.
 
 // The positions of facet fac's nodes, and their count; the slots beyond it repeat node 1 (not
@@ -133,5 +133,24 @@ fn beside_free_edge(f: u32, fac: vec4<u32>, w: vec4<f32>, p: vec3<f32>, c: vec3<
     if (dot(lateral, lateral) <= EXTENSION_ZONE * EXTENSION_ZONE * h * h) { return false; }
     if (on == 1u) { return vertex_free(a); }
     if (on == 2u && n > 2u) { return !edge_shared(f, a, b); }
+    return false;
+}
+
+// The square of the tracking radius, radius + budget: how far the global search looks (Rust
+// twin: `cpu::nearest_facet::track_radius2`).
+fn track_radius2() -> f32 {
+    let r = params.radius + params.budget;
+    return r * r;
+}
+
+// Whether two facets share a node.
+fn share_node(a: vec4<u32>, b: vec4<u32>) -> bool {
+    let na = facet_node_count(a);
+    let nb = facet_node_count(b);
+    for (var i = 0u; i < na; i++) {
+        for (var j = 0u; j < nb; j++) {
+            if (a[i] == b[j]) { return true; }
+        }
+    }
     return false;
 }

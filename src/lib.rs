@@ -42,7 +42,7 @@ pub use kinematic::BodyState;
 pub use model::{
     Analytical, BodyId, Enforce, Facet, Friction, Kinematic, Model, NodeRange, NodeSetId, Pair,
     PairId, Penalty, PressureOverclosure, RigidBody, RigidPair, RigidPairId, RigidPart,
-    RigidPartId, Schedule, SlaveOrder, Sliding, Stiffness, Surface, SurfaceId,
+    RigidPartId, Schedule, SearchStructure, SlaveOrder, Sliding, Stiffness, Surface, SurfaceId,
     DEFAULT_CONTACT_DAMPING,
 };
 pub use search::{ContactPoint, GlobalSearch, SearchResult, SearchStats};

@@ -7,6 +7,7 @@
 //! WGSL.
 
 pub mod boxes;
+pub mod buckets;
 pub mod groups;
 pub mod integrate;
 pub mod passes;

@@ -93,6 +93,9 @@ pub enum Buf {
     /// The active slaves: the words of the status buffer from `ACTIVE_LIST` (no pass binds it
     /// by this name; a split increment hands it over as a role of its own).
     Active,
+    /// The bucket search's grid: the buckets' words, their scan levels, the entries
+    /// (`abi::buckets::BucketLayout`).
+    Grid,
 }
 
 /// How a shader declares a binding.
@@ -146,6 +149,10 @@ pub enum Items {
     TreeNodes,
     /// One workgroup per block of `SCAN_BLOCK` words of a scan level.
     ScanBlocks,
+    /// One per leaf slot of the search tree (the bucket search's binning).
+    LeafSlots,
+    /// One per word of the bucket search's buckets (`2^bits + 1`).
+    Buckets,
 }
 
 /// A compute pass: one entry point of one shader file.
@@ -253,6 +260,76 @@ pub const NEAREST_WALK: Pass = Pass {
         b(9, Work, RW),
         b(12, WalkPoints, RW),
         b(13, Best, RW),
+    ],
+    items: Items::Slaves,
+    per_workgroup: ITEM_WORKGROUP,
+};
+
+/// `buckets.wgsl`: the bucket words zeroed before the count.
+pub const BUCKET_CLEAR: Pass = Pass {
+    stem: "buckets",
+    entry: "bucket_clear",
+    bindings: &[b(0, SearchParams, U), b(14, Grid, RW)],
+    items: Items::Buckets,
+    per_workgroup: ITEM_WORKGROUP,
+};
+
+/// `buckets.wgsl`: each leaf slot's facet counted in the buckets of its cells.
+pub const BUCKET_COUNT: Pass = Pass {
+    stem: "buckets",
+    entry: "bucket_count",
+    bindings: &[b(0, SearchParams, U), b(5, Boxes, R), b(14, Grid, RW)],
+    items: Items::LeafSlots,
+    per_workgroup: ITEM_WORKGROUP,
+};
+
+/// `buckets.wgsl`: each leaf slot's entries written into its buckets (after the scan).
+pub const BUCKET_FILL: Pass = Pass {
+    stem: "buckets",
+    entry: "bucket_fill",
+    bindings: &[
+        b(0, SearchParams, U),
+        b(4, Order, R),
+        b(5, Boxes, R),
+        b(14, Grid, RW),
+    ],
+    items: Items::LeafSlots,
+    per_workgroup: ITEM_WORKGROUP,
+};
+
+/// `buckets.wgsl`: each slave's cells in rings outward, pruned; the chunks of what a capped walk
+/// did not reach counted (as `nearest_walk`).
+pub const BUCKET_WALK: Pass = Pass {
+    stem: "buckets",
+    entry: "bucket_walk",
+    bindings: &[
+        b(0, SearchParams, U),
+        b(1, Nodes, R),
+        b(2, Facets, R),
+        b(5, Boxes, R),
+        b(8, Adjacency, R),
+        b(9, Work, RW),
+        b(12, WalkPoints, RW),
+        b(13, Best, RW),
+        b(15, Grid, R),
+    ],
+    items: Items::Slaves,
+    per_workgroup: ITEM_WORKGROUP,
+};
+
+/// `buckets.wgsl`: self-contact's crowding check over the cells within the radius.
+pub const BUCKET_CROWDED: Pass = Pass {
+    stem: "buckets",
+    entry: "bucket_crowded",
+    bindings: &[
+        b(0, SearchParams, U),
+        b(1, Nodes, R),
+        b(2, Facets, R),
+        b(5, Boxes, R),
+        b(8, Adjacency, R),
+        b(10, Best, RW),
+        b(12, WalkPoints, RW),
+        b(15, Grid, R),
     ],
     items: Items::Slaves,
     per_workgroup: ITEM_WORKGROUP,
@@ -642,7 +719,7 @@ pub const INTEGRATE: Pass = Pass {
 };
 
 /// Every pass, in the order an increment may run them.
-pub const PASSES: [Pass; 32] = [
+pub const PASSES: [Pass; 37] = [
     TO_LOCAL,
     ANCHOR,
     MOTION,
@@ -653,6 +730,11 @@ pub const PASSES: [Pass; 32] = [
     SCAN_ADD,
     WALK_START,
     NEAREST_WALK,
+    BUCKET_CLEAR,
+    BUCKET_COUNT,
+    BUCKET_FILL,
+    BUCKET_WALK,
+    BUCKET_CROWDED,
     NEAREST_ARGS,
     NEAREST_CHUNKS,
     NEAREST_TIES,

@@ -53,14 +53,22 @@ pub struct SearchParams {
     /// node's displacement relative to this node's, so that a contact model travelling as a
     /// whole uses none of it ([`crate::search::SearchStage::reference_node`]).
     pub ref_node: u32,
-    /// Padding.
-    pub _pad0: u32,
+    /// The bucket search's cell size, frame units (0 with the tree): the cells are the
+    /// largest power of two of box-grid steps at or below it ([`crate::abi::boxes`]), so it is
+    /// chosen above the largest facet (a facet then spans at most two cells per axis).
+    pub bucket_cell: f32,
     /// The master's box at the last global search, lower corner (xyz; w unused), in the frame.
     pub master_lo: [f32; 4],
     /// Its upper corner (xyz; w unused).
     pub master_hi: [f32; 4],
+    /// The bucket search's hash table: `2^bucket_bits` buckets, then one for the facets too
+    /// large to bin (0 with the tree).
+    pub bucket_bits: u32,
+    /// Word of the bucket grid where its entries (leaf slot, facet) start: after the bucket
+    /// words and their scan levels ([`BucketLayout`]).
+    pub bucket_entries: u32,
     /// Padding.
-    pub _pad: [u32; 4],
+    pub _pad: [u32; 2],
 }
 const _: () = assert!(std::mem::size_of::<SearchParams>() == 96);
 
@@ -89,6 +97,9 @@ pub const FLAG_EVERY_SLAVE: u32 = 4;
 /// untracked is nobody's facet node: the motion pass reads its position for the budget and
 /// writes nothing (WGSL: `FLAG_SLAVES_APART`).
 pub const FLAG_SLAVES_APART: u32 = 8;
+/// Flag: the global search bins the facets into a hashed grid of cells and visits a slave's
+/// cells in rings outward (`buckets.wgsl`) in place of the tree's walk (WGSL: `FLAG_BUCKETS`).
+pub const FLAG_BUCKETS: u32 = 16;
 /// Walk iterations of the local search before it gives up (WGSL default).
 pub const MAX_LOCAL_ITERATIONS: u32 = 16;
 

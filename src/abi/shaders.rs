@@ -24,10 +24,11 @@ pub enum Prelude {
 
 /// (file stem, source, prelude) of every kernel file.
 #[rustfmt::skip]
-pub const KERNELS: [(&str, &str, Prelude); 13] = [
+pub const KERNELS: [(&str, &str, Prelude); 14] = [
     ("tree", include_str!("../../shaders/tree.wgsl"), Prelude::None),
     ("scan", include_str!("../../shaders/scan.wgsl"), Prelude::None),
     ("nearest_facet", include_str!("../../shaders/nearest_facet.wgsl"), Prelude::Search),
+    ("buckets", include_str!("../../shaders/buckets.wgsl"), Prelude::Search),
     ("local_search", include_str!("../../shaders/local_search.wgsl"), Prelude::Search),
     ("motion", include_str!("../../shaders/motion.wgsl"), Prelude::None),
     ("active", include_str!("../../shaders/active.wgsl"), Prelude::None),

@@ -5,9 +5,10 @@
 
 use super::resident::SearchArrays;
 use super::{
-    active, anchor, gather, hits_mut, local_search, motion, nearest_facet, nodal_normals, penalty,
-    scan, schedule, stats, to_local, tree, CpuPenalty,
+    active, anchor, buckets, gather, hits_mut, local_search, motion, nearest_facet, nodal_normals,
+    penalty, scan, schedule, stats, to_local, tree, CpuPenalty,
 };
+use crate::abi::buckets::BucketLayout;
 use crate::abi::penalty::{PenaltyParams, ACC_WORDS_PER_NODE};
 use crate::abi::search::{
     plan_params, tree_passes, ScanLevels, SearchParams, BEST_WORDS, ITEM_WORKGROUP,
@@ -170,6 +171,25 @@ pub(crate) fn run_entry(
         Kernel::NearestWalk => {
             let c = candidates(&params, prep, &ws.walk_points, &ws.boxes, &ws.corners);
             nearest_facet::nearest_walk(&c, &mut ws.work, &mut ws.best);
+        }
+        Kernel::BucketClear => buckets::bucket_clear(&params, &mut ws.grid),
+        Kernel::BucketCount => buckets::bucket_count(&params, &ws.boxes, &mut ws.grid),
+        Kernel::BucketScanBlocks => scan::scan_blocks(
+            &BucketLayout::new(params.n_facets).levels.params(e.level),
+            &mut ws.grid,
+        ),
+        Kernel::BucketScanAdd => scan::scan_add(
+            &BucketLayout::new(params.n_facets).levels.params(e.level),
+            &mut ws.grid,
+        ),
+        Kernel::BucketFill => buckets::bucket_fill(&params, &prep.order, &ws.boxes, &mut ws.grid),
+        Kernel::BucketWalk => {
+            let c = candidates(&params, prep, &ws.walk_points, &ws.boxes, &ws.corners);
+            buckets::bucket_walk(&c, &ws.grid, &mut ws.work, &mut ws.best);
+        }
+        Kernel::BucketCrowded => {
+            let c = candidates(&params, prep, &ws.walk_points, &ws.boxes, &ws.corners);
+            buckets::bucket_crowded(&c, &ws.grid, &mut ws.best);
         }
         Kernel::ScanBlocks => scan::scan_blocks(
             &ScanLevels::new(params.n_slaves + 1).params(e.level),

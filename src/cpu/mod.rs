@@ -11,6 +11,7 @@
 
 pub mod active;
 pub mod anchor;
+pub mod buckets;
 pub mod common;
 pub mod gather;
 pub(crate) mod increment;
@@ -158,6 +159,8 @@ pub struct CpuWorkspace {
     /// The active slaves the last global search left (count, then slave indices:
     /// `active::active_compact`; on a GPU the status buffer's words from `ACTIVE_LIST`).
     pub active: Vec<u32>,
+    /// The bucket search's grid (`abi::buckets::BucketLayout`; empty with the tree).
+    pub grid: Vec<u32>,
 }
 
 /// The CPU executor of the global search.

@@ -11,7 +11,8 @@ use super::PAR_MIN;
 use crate::abi::boxes;
 use crate::abi::search::BEST_WORDS;
 use crate::abi::search::{
-    GpuHit, SearchParams, FLAG_SELF_CONTACT, HIT_BESIDE_FREE_EDGE, NO_FACET, WALK_GROUP,
+    GpuHit, SearchParams, FLAG_BUCKETS, FLAG_SELF_CONTACT, HIT_BESIDE_FREE_EDGE, NO_FACET,
+    WALK_GROUP,
 };
 use crate::abi::status::{STATUS_CROWDED, STATUS_FALLBACK};
 use crate::geometry::{closest_on_quad, closest_on_segment, closest_on_triangle, Projection, V3};
@@ -42,7 +43,7 @@ pub const WALK_VISITS: u32 = 2048;
 pub const PRUNE_SLACK: f32 = 1.0001;
 
 /// The slave at walk position t (WGSL: `walk_point`): position in the frame and node id.
-fn walk_point(c: &Candidates<'_>, t: usize) -> (V3<f32>, u32) {
+pub(super) fn walk_point(c: &Candidates<'_>, t: usize) -> (V3<f32>, u32) {
     let w = c.walk_points[t];
     (
         V3::new(
@@ -90,7 +91,7 @@ impl Candidates<'_> {
 
     /// The point box tests measure from (WGSL: `box_point`): p clamped into the box grid's
     /// finite range, w = 0.
-    fn box_point(&self, p: V3<f32>) -> glam::Vec4 {
+    pub(super) fn box_point(&self, p: V3<f32>) -> glam::Vec4 {
         let step = boxes::box_step(self.params.box_margin).0;
         glam::Vec4::new(
             boxes::point(p.x, step),
@@ -101,11 +102,11 @@ impl Candidates<'_> {
     }
 
     /// Leaf slot count 2^L.
-    fn leaves(&self) -> u32 {
+    pub(super) fn leaves(&self) -> u32 {
         1 << self.params.tree_levels
     }
 
-    fn excluded(&self, slave: u32, f: u32) -> bool {
+    pub(super) fn excluded(&self, slave: u32, f: u32) -> bool {
         excluded(
             self.params,
             self.facets,
@@ -169,7 +170,7 @@ fn children(c: &Candidates<'_>, k: u32) -> [glam::Vec4; 4] {
 /// `packed_box_d2`, the same operations in the same order: the components in SIMD lanes, the
 /// sum in x, y, z order).
 #[inline]
-fn box_d2_of(lo: glam::Vec4, hi: glam::Vec4, p: glam::Vec4) -> f32 {
+pub(super) fn box_d2_of(lo: glam::Vec4, hi: glam::Vec4, p: glam::Vec4) -> f32 {
     let d = (lo - p).max(p - hi).max(glam::Vec4::ZERO);
     let d = d * d;
     d.x + d.y + d.z
@@ -381,7 +382,9 @@ pub fn walk_start(
                 glo = glo.min(q);
                 ghi = ghi.max(q);
             }
-            let mut k = if near(1, glo, ghi) { 1 } else { 0 };
+            // the bucket search has leaf boxes alone, and no start node
+            let tree = params.flags & FLAG_BUCKETS == 0;
+            let mut k = if tree && near(1, glo, ghi) { 1 } else { 0 };
             let mut s = 0;
             while s < 32 && k != 0 && k < leaves {
                 let (l, r) = (near(2 * k, glo, ghi), near(2 * k + 1, glo, ghi));
@@ -439,7 +442,7 @@ pub fn nearest_walk(c: &Candidates<'_>, work: &mut [u32], best: &mut [u32]) {
 
 /// The winner of a slave's record `b`: the chunks' facet at the best distance, or the walk's
 /// when it is at that distance with a lower id (WGSL: `winner`).
-fn winner(b: &[u32]) -> u32 {
+pub(super) fn winner(b: &[u32]) -> u32 {
     if b[4] != NO_FACET && b[6] == b[0] && b[4] < b[1] {
         b[4]
     } else {

@@ -69,6 +69,11 @@ impl CpuSearch {
             [[0.0; 4]; 2],
         );
         super::hits_mut(&mut self.ws.hits).resize(prep.slaves.len(), GpuHit::miss(0, 0));
+        self.ws.grid.clear();
+        if prep.params.flags & FLAG_BUCKETS != 0 {
+            let words = crate::abi::buckets::BucketLayout::new(prep.params.n_facets).words;
+            self.ws.grid.resize(words as usize, 0);
+        }
         self.ws.reference = prep.nodes.clone();
         // no active slave until the first global search
         self.ws.active.clear();
@@ -94,6 +99,7 @@ impl CpuSearch {
         Some(PairShape {
             anchored: r.anchored,
             self_contact: r.prep.params.flags & FLAG_SELF_CONTACT != 0,
+            buckets: r.prep.params.flags & FLAG_BUCKETS != 0,
             local_only,
             global_only: false,
             n_nodes: r.prep.n_nodes as u32,
@@ -151,6 +157,7 @@ impl CpuSearch {
             Buf::Best => bytemuck::cast_slice_mut(&mut ws.best),
             Buf::WalkPoints => bytemuck::cast_slice_mut(&mut ws.walk_points),
             Buf::Active => bytemuck::cast_slice_mut(&mut ws.active),
+            Buf::Grid => bytemuck::cast_slice_mut(&mut ws.grid),
             _ => return None,
         })
     }

@@ -84,6 +84,8 @@ struct Buffers {
     args: wgpu::Buffer,
     /// The device-resident plan (`PLAN_*` words); to_local raises the master box into it.
     plan: wgpu::Buffer,
+    /// The bucket search's grid (`abi::buckets::BucketLayout`; unused with the tree).
+    grid: GrowBuffer,
 }
 
 /// The global search on one GPU device; its buffers grow as needed and are reused.
@@ -180,6 +182,7 @@ impl GpuSearch {
                 usage: U::STORAGE | U::INDIRECT | U::UNIFORM | U::COPY_SRC | U::COPY_DST,
                 mapped_at_creation: false,
             }),
+            grid: GrowBuffer::new(device, "bucket grid", 16, storage | U::COPY_SRC),
         };
         super::upload(
             &ctx,
@@ -268,6 +271,10 @@ impl GpuSearch {
         replaced |= b
             .best
             .ensure(d, l, (prep.slaves.len() * BEST_WORDS * 4) as u64)?;
+        if prep.params.flags & crate::abi::search::FLAG_BUCKETS != 0 {
+            let words = crate::abi::buckets::BucketLayout::new(prep.params.n_facets).words;
+            replaced |= b.grid.ensure(d, l, words as u64 * 4)?;
+        }
         self.static_dirty |= replaced;
         if replaced || self.tree_levels != Some(levels) {
             self.generation += 1;
@@ -292,6 +299,7 @@ impl GpuSearch {
             Buf::Work => &b.work.buffer,
             Buf::Best => &b.best.buffer,
             Buf::WalkPoints => &b.walk_points.buffer,
+            Buf::Grid => &b.grid.buffer,
             _ => return None,
         })
     }
@@ -326,6 +334,7 @@ impl GpuSearch {
             Buf::Best => b.best.buffer.as_entire_binding(),
             Buf::Args => b.args.as_entire_binding(),
             Buf::Plan => b.plan.as_entire_binding(),
+            Buf::Grid => b.grid.buffer.as_entire_binding(),
             _ => return None,
         })
     }

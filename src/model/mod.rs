@@ -8,8 +8,8 @@ mod rigid;
 mod surface;
 
 pub use pair::{
-    Enforce, Friction, Kinematic, Pair, Penalty, PressureOverclosure, Schedule, SlaveOrder,
-    Sliding, Stiffness, DEFAULT_CONTACT_DAMPING, MAX_TABLE_POINTS,
+    Enforce, Friction, Kinematic, Pair, Penalty, PressureOverclosure, Schedule, SearchStructure,
+    SlaveOrder, Sliding, Stiffness, DEFAULT_CONTACT_DAMPING, MAX_TABLE_POINTS,
 };
 pub use rigid::{Analytical, BodyId, RigidBody, RigidPair, RigidPairId, RigidPart, RigidPartId};
 pub use surface::{facet_node_count, DegenerateFacet, Facet, MasterSurface, Surface, NO_NODE};

@@ -33,6 +33,28 @@ pub struct Pair {
     /// The order a penalty pair keeps its slave nodes in inside abut (Morton unless set);
     /// invisible to the caller, who gets every per-slave result in node-set order.
     pub slave_order: SlaveOrder,
+    /// The global search's structure (chosen from the master's facet sizes and the radius
+    /// unless set).
+    pub search_structure: SearchStructure,
+}
+
+/// The structure the global search finds each slave node's nearest facet in. Both give the
+/// same contact (facet, point, gap, normal, weights, tracked node) bit for bit; they differ
+/// in work.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
+pub enum SearchStructure {
+    /// The seed's bucket sort: the facets binned by counting sort into a hashed grid of cells
+    /// sized to the largest facet, a slave's cells visited in rings outward. For facets of one
+    /// size and a radius of about a facet: regular loops, nothing refitted.
+    Buckets,
+    /// A bounding-box tree over the facets, refitted at every global search and walked nearer
+    /// child first. For facet sizes that vary widely and radii of many facets.
+    Tree,
+    /// [`SearchStructure::Buckets`] when the master's facets are of about one size and the
+    /// radius about one facet, else [`SearchStructure::Tree`] (`crate::search::SearchStage`
+    /// states the rule).
+    #[default]
+    Auto,
 }
 
 /// The order a penalty pair keeps its slave nodes (and their hits, penalty state and outputs)
@@ -333,7 +355,14 @@ impl Pair {
             sliding: Sliding::Finite,
             pass_weight: 1.0,
             slave_order: SlaveOrder::Morton,
+            search_structure: SearchStructure::Auto,
         }
+    }
+
+    /// Sets the global search's structure ([`SearchStructure`]); results do not depend on it.
+    pub fn search_structure(mut self, structure: SearchStructure) -> Self {
+        self.search_structure = structure;
+        self
     }
 
     /// Sets the order the pair keeps its slave nodes in inside abut (penalty enforcement;

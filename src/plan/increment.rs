@@ -4,6 +4,7 @@
 //! executor: the GPU records one dispatch per entry, the CPU path calls the entry's mirror.
 //! Because both run the same list, an increment can be split at any entry (`run_split`).
 
+use crate::abi::buckets::BucketLayout;
 use crate::abi::groups::{self, Group};
 use crate::abi::passes::{self, Pass};
 use crate::abi::search::{
@@ -11,7 +12,7 @@ use crate::abi::search::{
     ITEM_WORKGROUP, MAX_PLAN_SLOTS, MAX_RIGID_SLOTS, PLAN_MAX_DIM, PLAN_N_SLOTS, PLAN_OTHER_NODES,
     PLAN_SLOTS, PLAN_SLOT_WORDS, SLOT_GLOBAL, SLOT_LOCAL, TREE_WORKGROUP, WALK_GROUP,
 };
-use crate::abi::search::{tree_passes, SCAN_BLOCK};
+use crate::abi::search::{tree_passes, FLAG_BUCKETS, SCAN_BLOCK};
 use crate::error::{Error, Result};
 
 /// A kernel an increment runs: one entry point of `abi::passes`.
@@ -33,6 +34,20 @@ pub(crate) enum Kernel {
     WalkStart,
     /// The tree walks.
     NearestWalk,
+    /// The bucket search: the bucket words zeroed.
+    BucketClear,
+    /// The bucket search: facets counted per bucket.
+    BucketCount,
+    /// One level of the bucket words' scan, up (`Entry::level`).
+    BucketScanBlocks,
+    /// One level of the bucket words' scan, down (`Entry::level`).
+    BucketScanAdd,
+    /// The bucket search: the entries written.
+    BucketFill,
+    /// The bucket search's walks (in place of the tree walks).
+    BucketWalk,
+    /// Self-contact's crowding, over the buckets.
+    BucketCrowded,
     /// One level of the work items' scan, up (`Entry::level`).
     ScanBlocks,
     /// One level of the work items' scan, down (`Entry::level`).
@@ -86,7 +101,7 @@ impl Kernel {
     /// Every kernel, in the order `abi::passes::PASSES` declares their passes (for the tests
     /// that go over them all).
     #[cfg(test)]
-    pub(crate) const ALL: [Kernel; 31] = [
+    pub(crate) const ALL: [Kernel; 38] = [
         Kernel::ToLocal,
         Kernel::Anchor,
         Kernel::Motion,
@@ -97,6 +112,13 @@ impl Kernel {
         Kernel::ScanAdd,
         Kernel::WalkStart,
         Kernel::NearestWalk,
+        Kernel::BucketClear,
+        Kernel::BucketCount,
+        Kernel::BucketScanBlocks,
+        Kernel::BucketScanAdd,
+        Kernel::BucketFill,
+        Kernel::BucketWalk,
+        Kernel::BucketCrowded,
         Kernel::NearestArgs,
         Kernel::NearestChunks,
         Kernel::NearestTies,
@@ -131,6 +153,13 @@ impl Kernel {
             Kernel::TreeRefit => &passes::TREE_REFIT,
             Kernel::WalkStart => &passes::WALK_START,
             Kernel::NearestWalk => &passes::NEAREST_WALK,
+            Kernel::BucketClear => &passes::BUCKET_CLEAR,
+            Kernel::BucketCount => &passes::BUCKET_COUNT,
+            Kernel::BucketScanBlocks => &passes::SCAN_BLOCKS,
+            Kernel::BucketScanAdd => &passes::SCAN_ADD,
+            Kernel::BucketFill => &passes::BUCKET_FILL,
+            Kernel::BucketWalk => &passes::BUCKET_WALK,
+            Kernel::BucketCrowded => &passes::BUCKET_CROWDED,
             Kernel::ScanBlocks => &passes::SCAN_BLOCKS,
             Kernel::ScanAdd => &passes::SCAN_ADD,
             Kernel::NearestArgs => &passes::NEAREST_ARGS,
@@ -197,6 +226,10 @@ pub(crate) struct Slots {
     pub tree_passes: Vec<u64>,
     /// Global: one per block of each level of the work-item scan.
     pub work_levels: Vec<u64>,
+    /// Global, the bucket search: one per bucket word (bucket_clear).
+    pub buckets: u64,
+    /// Global, the bucket search: one per block of each level of the bucket words' scan.
+    pub bucket_levels: Vec<u64>,
     /// Global: one per slave (nearest_walk, nearest_crowded, nearest_facet, active_mark,
     /// active_compact, penalty, scatter_forces).
     pub slaves: u64,
@@ -288,6 +321,15 @@ pub(crate) fn initial_plan(
             .work_levels
             .push(add_slot(&mut plan, level.1, SCAN_BLOCK, g, max_dim)?);
     }
+    if params.flags & FLAG_BUCKETS != 0 {
+        let layout = BucketLayout::new(params.n_facets);
+        slots.buckets = add_slot(&mut plan, layout.buckets(), iw, g, max_dim)?;
+        for level in &layout.levels.levels {
+            slots
+                .bucket_levels
+                .push(add_slot(&mut plan, level.1, SCAN_BLOCK, g, max_dim)?);
+        }
+    }
     slots.slaves = add_slot(&mut plan, params.n_slaves, iw, g, max_dim)?;
     slots.slave_groups = add_slot(
         &mut plan,
@@ -310,6 +352,9 @@ pub(crate) struct PairShape {
     pub anchored: bool,
     /// Self-contact: the crowding pass runs.
     pub self_contact: bool,
+    /// The global search bins the facets into buckets (`FLAG_BUCKETS`) in place of the tree's
+    /// walk: the tree's leaf boxes alone are refitted.
+    pub buckets: bool,
     /// The host proved the schedule will choose the local search: the global search's
     /// entries (which would get zero workgroups) are left out.
     pub local_only: bool,
@@ -369,11 +414,28 @@ pub(crate) fn search(k: usize, p: &PairShape) -> Vec<Entry> {
     }
     let g = &groups::GLOBAL_SEARCH;
     push(g, Kernel::ToLocal, 0, Size::Slot(s.nodes));
-    for (i, &slot) in s.tree_passes.iter().enumerate() {
-        push(g, Kernel::TreeRefit, i, Size::Slot(slot));
+    if p.buckets {
+        // the leaf boxes, then the facets binned: counted, scanned, written
+        let leaves = s.tree_passes[0];
+        push(g, Kernel::TreeRefit, 0, Size::Slot(leaves));
+        push(g, Kernel::BucketClear, 0, Size::Slot(s.buckets));
+        push(g, Kernel::BucketCount, 0, Size::Slot(leaves));
+        for (i, &slot) in s.bucket_levels.iter().enumerate() {
+            push(g, Kernel::BucketScanBlocks, i, Size::Slot(slot));
+        }
+        for i in (0..s.bucket_levels.len().saturating_sub(1)).rev() {
+            push(g, Kernel::BucketScanAdd, i, Size::Slot(s.bucket_levels[i]));
+        }
+        push(g, Kernel::BucketFill, 0, Size::Slot(leaves));
+        push(g, Kernel::WalkStart, 0, Size::Slot(s.slave_groups));
+        push(g, Kernel::BucketWalk, 0, Size::Slot(s.slaves));
+    } else {
+        for (i, &slot) in s.tree_passes.iter().enumerate() {
+            push(g, Kernel::TreeRefit, i, Size::Slot(slot));
+        }
+        push(g, Kernel::WalkStart, 0, Size::Slot(s.slave_groups));
+        push(g, Kernel::NearestWalk, 0, Size::Slot(s.slaves));
     }
-    push(g, Kernel::WalkStart, 0, Size::Slot(s.slave_groups));
-    push(g, Kernel::NearestWalk, 0, Size::Slot(s.slaves));
     for (i, &slot) in s.work_levels.iter().enumerate() {
         push(g, Kernel::ScanBlocks, i, Size::Slot(slot));
     }
@@ -384,7 +446,12 @@ pub(crate) fn search(k: usize, p: &PairShape) -> Vec<Entry> {
     push(g, Kernel::NearestChunks, 0, Size::Chunks);
     push(g, Kernel::NearestTies, 0, Size::Chunks);
     if p.self_contact {
-        push(g, Kernel::NearestCrowded, 0, Size::Slot(s.slaves));
+        let crowded = if p.buckets {
+            Kernel::BucketCrowded
+        } else {
+            Kernel::NearestCrowded
+        };
+        push(g, crowded, 0, Size::Slot(s.slaves));
     }
     push(g, Kernel::NearestFacet, 0, Size::Slot(s.slaves));
     push(g, Kernel::SetReference, 0, Size::Slot(s.motion_nodes));
@@ -417,19 +484,50 @@ pub(crate) fn prepared_global(params: &SearchParams) -> Vec<Entry> {
         })
     };
     let (iw, n) = (ITEM_WORKGROUP, params.n_slaves);
+    let buckets = params.flags & FLAG_BUCKETS != 0;
     for (i, tp) in tree_passes(params.tree_levels).iter().enumerate() {
+        if buckets && i > 0 {
+            break;
+        }
         push(
             Kernel::TreeRefit,
             i,
             Size::Items(1 << tp.bottom, TREE_WORKGROUP),
         );
     }
+    if buckets {
+        let layout = BucketLayout::new(params.n_facets);
+        let leaves = Size::Items(1 << params.tree_levels, iw);
+        push(Kernel::BucketClear, 0, Size::Items(layout.buckets(), iw));
+        push(Kernel::BucketCount, 0, leaves);
+        let levels = &layout.levels.levels;
+        for (i, level) in levels.iter().enumerate() {
+            push(
+                Kernel::BucketScanBlocks,
+                i,
+                Size::Items(level.1, SCAN_BLOCK),
+            );
+        }
+        for i in (0..levels.len().saturating_sub(1)).rev() {
+            push(
+                Kernel::BucketScanAdd,
+                i,
+                Size::Items(levels[i].1, SCAN_BLOCK),
+            );
+        }
+        push(Kernel::BucketFill, 0, leaves);
+    }
     push(
         Kernel::WalkStart,
         0,
         Size::Items(n.div_ceil(WALK_GROUP), iw),
     );
-    push(Kernel::NearestWalk, 0, Size::Items(n, iw));
+    let walk = if buckets {
+        Kernel::BucketWalk
+    } else {
+        Kernel::NearestWalk
+    };
+    push(walk, 0, Size::Items(n, iw));
     let levels = ScanLevels::new(n + 1).levels;
     for (i, level) in levels.iter().enumerate() {
         push(Kernel::ScanBlocks, i, Size::Items(level.1, SCAN_BLOCK));
@@ -441,7 +539,12 @@ pub(crate) fn prepared_global(params: &SearchParams) -> Vec<Entry> {
     push(Kernel::NearestChunks, 0, Size::Chunks);
     push(Kernel::NearestTies, 0, Size::Chunks);
     if params.flags & crate::abi::search::FLAG_SELF_CONTACT != 0 {
-        push(Kernel::NearestCrowded, 0, Size::Items(n, iw));
+        let crowded = if buckets {
+            Kernel::BucketCrowded
+        } else {
+            Kernel::NearestCrowded
+        };
+        push(crowded, 0, Size::Items(n, iw));
     }
     push(Kernel::NearestFacet, 0, Size::Items(n, iw));
     out

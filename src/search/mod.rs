@@ -27,7 +27,7 @@ use crate::abi::status::STATUS_WORDS;
 use crate::device::Device;
 use crate::error::{Error, Result};
 use crate::model::Schedule;
-use crate::model::{validate_positions, MasterSurface, Model, PairId};
+use crate::model::{validate_positions, MasterSurface, Model, PairId, SearchStructure};
 pub(crate) use exec::SearchExec;
 use layout::{GpuHit, SearchParams, NO_FACET};
 use std::sync::Arc;
@@ -199,6 +199,17 @@ pub enum Trigger {
     Anchored,
 }
 
+/// `SearchStructure::Auto` takes the buckets only when the largest active facet is at most this
+/// many times the median one.
+pub const AUTO_SIZE_SPREAD: f64 = 4.0;
+/// `SearchStructure::Auto` takes the buckets only when the search radius is at most this many
+/// median facets.
+pub const AUTO_RADIUS_FACETS: f64 = 2.0;
+/// The bucket search's cells are at most this many times the largest facet at the model's
+/// positions, and more than half of it (a power of two of box-grid steps): a facet spans at most
+/// two cells per axis until it has grown by a quarter.
+pub const BUCKET_CELL_FACETS: f64 = 2.5;
+
 /// A global search bound to one contact pair and one device; reusable every increment: its
 /// stage (the host's data and schedule, [`SearchStage`], whose methods it has through `Deref`)
 /// and the executor chosen once from the device.
@@ -245,6 +256,52 @@ pub struct SearchStage {
     resident_origin: Option<[f64; 3]>,
     /// Device-resident increments: the master's extent when the frame was chosen.
     resident_span: f64,
+    /// The structure the global search uses (never `Auto`: resolved when set).
+    structure: SearchStructure,
+    /// The active facets' sizes at the model's positions: the largest box side, and the
+    /// median of each facet's largest box side (model units; what `Auto` and the bucket
+    /// cells follow).
+    facet_sizes: FacetSizes,
+}
+
+/// The master's active facets' sizes at the model's positions (the longest side of each
+/// facet's nodes' box), model units.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct FacetSizes {
+    /// The largest.
+    pub max: f64,
+    /// The median.
+    pub median: f64,
+}
+
+impl FacetSizes {
+    /// The sizes of `facets` (padded) at `positions`.
+    fn of(facets: &[[u32; 4]], positions: &[[f64; 3]]) -> Self {
+        let mut sizes: Vec<f64> = facets
+            .iter()
+            .map(|fac| {
+                let n = crate::model::facet_node_count(*fac);
+                (0..3)
+                    .map(|a| {
+                        let xs = fac[..n].iter().map(|&id| positions[id as usize][a]);
+                        let lo = xs.clone().fold(f64::INFINITY, f64::min);
+                        let hi = xs.fold(f64::NEG_INFINITY, f64::max);
+                        hi - lo
+                    })
+                    .fold(0.0, f64::max)
+            })
+            .collect();
+        if sizes.is_empty() {
+            return Self {
+                max: 0.0,
+                median: 0.0,
+            };
+        }
+        let mid = sizes.len() / 2;
+        let (_, &mut median, _) = sizes.select_nth_unstable_by(mid, f64::total_cmp);
+        let max = sizes.iter().copied().fold(0.0, f64::max);
+        Self { max, median }
+    }
 }
 
 impl std::ops::Deref for GlobalSearch {
@@ -348,6 +405,7 @@ impl SearchStage {
             search.set_schedule(schedule)?;
         }
         search.set_sliding(p.sliding);
+        search.set_search_structure(p.search_structure);
         Ok(search)
     }
 
@@ -427,7 +485,8 @@ impl SearchStage {
             .map(|&s| model.positions()[s as usize])
             .collect();
         let walk_order = tree::morton_order(&slave_points, model.dim()).into();
-        Ok(Self {
+        let facet_sizes = FacetSizes::of(&facets, model.positions());
+        let mut stage = Self {
             active: master.active.as_slice().into(),
             master,
             facets,
@@ -448,7 +507,43 @@ impl SearchStage {
             anchor_reach: None,
             resident_origin: None,
             resident_span: 0.0,
-        })
+            structure: SearchStructure::Tree,
+            facet_sizes,
+        };
+        stage.set_search_structure(SearchStructure::Auto);
+        Ok(stage)
+    }
+
+    /// Sets the global search's structure; `Auto` chooses the buckets when the active facets
+    /// are of about one size (the largest at most [`AUTO_SIZE_SPREAD`] times the median) and
+    /// the radius at most [`AUTO_RADIUS_FACETS`] median facets, the tree otherwise. Results do
+    /// not depend on it.
+    pub fn set_search_structure(&mut self, structure: SearchStructure) {
+        let s = self.facet_sizes;
+        self.structure = match structure {
+            SearchStructure::Auto => {
+                let uniform = s.max <= AUTO_SIZE_SPREAD * s.median;
+                let near = self.radius <= AUTO_RADIUS_FACETS * s.median;
+                if uniform && near && s.median > 0.0 {
+                    SearchStructure::Buckets
+                } else {
+                    SearchStructure::Tree
+                }
+            }
+            chosen => chosen,
+        };
+        // the plan holds the flags: the next increment makes a fresh one
+        self.resident_origin = None;
+    }
+
+    /// The global search's structure in use (`Buckets` or `Tree`).
+    pub fn search_structure(&self) -> SearchStructure {
+        self.structure
+    }
+
+    /// The active facets' sizes at the model's positions.
+    pub fn facet_sizes(&self) -> FacetSizes {
+        self.facet_sizes
     }
 
     /// Sets when the search runs globally.

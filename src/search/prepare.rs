@@ -37,6 +37,8 @@ impl SearchStage {
             let [a, b, c] = [0, 1, 2].map(|k| (x[k] - frame[k]) as f32);
             [a, b, c, 0.0]
         };
+        let buckets = self.structure == crate::model::SearchStructure::Buckets;
+        let layout = crate::abi::buckets::BucketLayout::new(n_facets as u32);
         let params = SearchParams {
             radius: self.radius as f32,
             box_margin: box_margin(lo, hi, frame),
@@ -49,10 +51,16 @@ impl SearchStage {
             budget: (self.schedule.budget * self.radius) as f32,
             n_motion_nodes: self.motion_nodes.len() as u32,
             ref_node: self.ref_node,
-            _pad0: 0,
+            bucket_cell: if buckets {
+                (BUCKET_CELL_FACETS * self.facet_sizes.max) as f32
+            } else {
+                0.0
+            },
             master_lo: in_frame(lo),
             master_hi: in_frame(hi),
-            _pad: [0; 4],
+            bucket_bits: if buckets { layout.bits } else { 0 },
+            bucket_entries: if buckets { layout.entries } else { 0 },
+            _pad: [0; 2],
         };
         Ok(Prepared {
             params,
@@ -79,6 +87,10 @@ impl SearchStage {
             0
         }) | (if self.schedule.visit_every_slave {
             layout::FLAG_EVERY_SLAVE
+        } else {
+            0
+        }) | (if self.structure == crate::model::SearchStructure::Buckets {
+            layout::FLAG_BUCKETS
         } else {
             0
         }) | (if self

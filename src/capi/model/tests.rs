@@ -64,6 +64,7 @@ fn every_pair_option_reaches_the_rust_pair() {
         }),
         pass_weight: 0.9,
         slave_order: crate::model::SlaveOrder::Morton,
+        search_structure: crate::model::SearchStructure::Auto,
     };
     assert_eq!(pair_from(1, 2, &o, "t").unwrap(), want);
     for (kind, value, rule) in [

@@ -23,6 +23,8 @@ pub(crate) struct ResidentSearch {
     tree_passes: usize,
     /// Self-contact: the crowding pass runs.
     self_contact: bool,
+    /// The bucket search's pipelines and scan parameters (`None` with the tree).
+    buckets: Option<BucketPipes>,
     slots: Slots,
     groups: Option<Groups>,
     n_nodes: u32,
@@ -31,6 +33,28 @@ pub(crate) struct ResidentSearch {
     anchored: bool,
     /// The origin to_local subtracts in the increments' frame (f32, model units).
     pub(super) frame_origin: [f32; 3],
+}
+
+/// The bucket search's pipelines (`buckets.wgsl`) and the scan parameters of its bucket words.
+struct BucketPipes {
+    clear: wgpu::ComputePipeline,
+    count: wgpu::ComputePipeline,
+    fill: wgpu::ComputePipeline,
+    walk: wgpu::ComputePipeline,
+    crowded: wgpu::ComputePipeline,
+    scan_params: wgpu::Buffer,
+    levels: usize,
+}
+
+/// The bucket search's bind groups.
+struct BucketGroups {
+    clear: wgpu::BindGroup,
+    count: wgpu::BindGroup,
+    fill: wgpu::BindGroup,
+    walk: wgpu::BindGroup,
+    crowded: wgpu::BindGroup,
+    scan_blocks: Vec<wgpu::BindGroup>,
+    scan_add: Vec<wgpu::BindGroup>,
 }
 
 /// The bind groups of a search's device-resident passes: every pass that reads `SearchParams`
@@ -54,6 +78,8 @@ struct Groups {
     active_compact: wgpu::BindGroup,
     work_scan_blocks: Vec<wgpu::BindGroup>,
     work_scan_add: Vec<wgpu::BindGroup>,
+    /// The bucket search's (`None` with the tree).
+    buckets: Option<BucketGroups>,
     /// The passes that read the caller's positions buffer, on that buffer.
     positions: Option<(wgpu::Buffer, PositionGroups)>,
 }
@@ -127,6 +153,20 @@ impl GpuSearch {
             buffer
         };
         let work_scan_params = uniform("resident work scan params", &work_levels);
+        let buckets = if params.flags & FLAG_BUCKETS != 0 {
+            let levels = crate::abi::buckets::BucketLayout::new(params.n_facets).levels;
+            Some(BucketPipes {
+                clear: ctx.pipeline(&passes::BUCKET_CLEAR, &[])?,
+                count: ctx.pipeline(&passes::BUCKET_COUNT, &[])?,
+                fill: ctx.pipeline(&passes::BUCKET_FILL, &[])?,
+                walk: ctx.pipeline(&passes::BUCKET_WALK, &[])?,
+                crowded: ctx.pipeline(&passes::BUCKET_CROWDED, &[])?,
+                scan_params: uniform("resident bucket scan params", &levels),
+                levels: levels.levels.len(),
+            })
+        } else {
+            None
+        };
         let (plan, slots) = initial_plan(
             &params,
             interval,
@@ -149,6 +189,7 @@ impl GpuSearch {
             work_levels,
             tree_passes: tree_passes(params.tree_levels).len(),
             self_contact: params.flags & FLAG_SELF_CONTACT != 0,
+            buckets,
             slots,
             groups: None,
             n_nodes: prep.n_nodes as u32,
@@ -235,6 +276,22 @@ impl GpuSearch {
                     })
                 })
                 .collect::<Result<Vec<_>>>()?;
+            let buckets = match r.buckets.as_ref() {
+                Some(bp) => {
+                    let (scan_blocks, scan_add) =
+                        scan(&bp.scan_params, &self.buffers.grid.buffer, bp.levels)?;
+                    Some(BucketGroups {
+                        clear: group(&bp.clear, &passes::BUCKET_CLEAR)?,
+                        count: group(&bp.count, &passes::BUCKET_COUNT)?,
+                        fill: group(&bp.fill, &passes::BUCKET_FILL)?,
+                        walk: group(&bp.walk, &passes::BUCKET_WALK)?,
+                        crowded: group(&bp.crowded, &passes::BUCKET_CROWDED)?,
+                        scan_blocks,
+                        scan_add,
+                    })
+                }
+                None => None,
+            };
             let groups = Groups {
                 generation,
                 schedule: group(&r.schedule, &passes::SCHEDULE)?,
@@ -253,6 +310,7 @@ impl GpuSearch {
                 active_compact: group(&r.active_compact, &passes::ACTIVE_COMPACT)?,
                 work_scan_blocks,
                 work_scan_add,
+                buckets,
                 positions: None,
             };
             self.resident.as_mut().expect("resident").groups = Some(groups);
@@ -318,6 +376,7 @@ impl GpuSearch {
         Some(PairShape {
             anchored: r.anchored,
             self_contact: r.self_contact,
+            buckets: r.buckets.is_some(),
             local_only,
             global_only: false,
             n_nodes: r.n_nodes,
@@ -355,6 +414,16 @@ impl GpuSearch {
             Kernel::SetReference => (&r.set_reference, &g.set_reference),
             Kernel::ActiveMark => (&r.active_mark, &g.active_mark),
             Kernel::ActiveCompact => (&r.active_compact, &g.active_compact),
+            Kernel::BucketClear => (&r.buckets.as_ref()?.clear, &g.buckets.as_ref()?.clear),
+            Kernel::BucketCount => (&r.buckets.as_ref()?.count, &g.buckets.as_ref()?.count),
+            Kernel::BucketScanBlocks => (
+                &p.scan_blocks,
+                g.buckets.as_ref()?.scan_blocks.get(e.level)?,
+            ),
+            Kernel::BucketScanAdd => (&p.scan_add, g.buckets.as_ref()?.scan_add.get(e.level)?),
+            Kernel::BucketFill => (&r.buckets.as_ref()?.fill, &g.buckets.as_ref()?.fill),
+            Kernel::BucketWalk => (&r.buckets.as_ref()?.walk, &g.buckets.as_ref()?.walk),
+            Kernel::BucketCrowded => (&r.buckets.as_ref()?.crowded, &g.buckets.as_ref()?.crowded),
             _ => return None,
         };
         Some(super::super::entry_dispatch(
