@@ -7,7 +7,7 @@ mod common;
 
 use abut::mesh::SplitMix64;
 use abut::*;
-use common::{devices, gpus};
+use common::{devices, gpus, Both};
 
 /// One quad master facet (the unit square at z = 0, normal +z, corner masses 1e3) and `n`
 /// slave nodes scattered over it, each `depth` below it: every slave is in contact with the one
@@ -131,7 +131,7 @@ fn searched_like_the_oracle(
     let set = m.add_node_set(&r.to_vec()).unwrap();
     let p = m.add_pair(Pair::new(set, s).search_radius(radius)).unwrap();
     let master = m.surface(s).unwrap();
-    let mut cpu = GlobalSearch::new(&Device::cpu(), &m, p).unwrap();
+    let mut cpu = Both::new(&Device::cpu(), &m, p).unwrap();
     let cpu_r = cpu.run(m.positions()).unwrap();
     let tol = tolerance(&cpu_r, radius);
     // the oracle (f64, every facet): the nearest distance, and the facet unless another is as
@@ -157,7 +157,7 @@ fn searched_like_the_oracle(
     };
     check_oracle(&cpu_r, name);
     for gpu in gpus() {
-        let mut search = GlobalSearch::new(gpu, &m, p).unwrap();
+        let mut search = Both::new(gpu, &m, p).unwrap();
         let r = search.run(m.positions()).unwrap();
         let what = format!("{name}, {gpu}");
         assert_same_search(&r, &cpu_r, master, m.positions(), radius, tol, &what);

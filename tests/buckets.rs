@@ -7,7 +7,6 @@
 mod common;
 
 use abut::mesh::{plate_quads, plate_triangles, point_cloud, polyline, sphere_triangles};
-use abut::testing::abi::search::{GpuHit, HIT_BESIDE_FREE_EDGE};
 use abut::{Device, GlobalSearch, Model, PairId, SearchResult, SearchStructure, Surface};
 use common::*;
 
@@ -26,14 +25,6 @@ fn run_with(
     s.run(moved.unwrap_or(model.positions())).unwrap()
 }
 
-/// A hit without its count of facets projected (which follows the structure's work).
-fn contact_bits(h: &GpuHit) -> GpuHit {
-    GpuHit {
-        candidates: h.candidates & HIT_BESIDE_FREE_EDGE,
-        ..*h
-    }
-}
-
 /// Both structures on every device (the CPU path first): the same hits but for the count,
 /// bit for bit; each adapter's bucket search against the CPU path's within round-off, and
 /// run twice with the same bytes. Returns the CPU path's bucket result.
@@ -46,16 +37,16 @@ fn check(model: &Model, pair: PairId, moved: Option<&[[f64; 3]]>, what: &str) ->
     for device in devices() {
         let tree = run_with(&device, model, pair, SearchStructure::Tree, moved);
         let buckets = run_with(&device, model, pair, SearchStructure::Buckets, moved);
-        assert_eq!(tree.raw.len(), buckets.raw.len());
-        for (i, (a, b)) in tree.raw.iter().zip(buckets.raw.iter()).enumerate() {
-            assert_eq!(
-                contact_bits(a),
-                contact_bits(b),
-                "{what} on {device}: slave {i}: tree vs buckets"
-            );
-        }
+        assert_same_contacts(
+            &tree,
+            &buckets,
+            &format!("{what} on {device}: tree vs buckets"),
+        );
         let again = run_with(&device, model, pair, SearchStructure::Buckets, moved);
-        assert_eq!(again.raw, buckets.raw, "{what} on {device}: not deterministic");
+        assert_eq!(
+            again.raw, buckets.raw,
+            "{what} on {device}: not deterministic"
+        );
         assert_eq!(again.stats.candidates, buckets.stats.candidates);
         match &cpu {
             None => cpu = Some(buckets),
@@ -70,7 +61,10 @@ fn check(model: &Model, pair: PairId, moved: Option<&[[f64; 3]]>, what: &str) ->
                     tol,
                     &format!("{what}: buckets on {device} vs CPU"),
                 );
-                assert_eq!(buckets.stats.fallbacks, c.stats.fallbacks, "{what}: {device}");
+                assert_eq!(
+                    buckets.stats.fallbacks, c.stats.fallbacks,
+                    "{what}: {device}"
+                );
             }
         }
     }
@@ -88,12 +82,26 @@ fn quads_and_triangles_3d() {
     let plate = plate_quads(60, 50, 1.0, 1.0, 0.0, 1, &wave);
     let slaves = point_cloud(20_000, [-0.05, -0.05, -0.06], [1.05, 1.05, 0.06], 7);
     for radius in [0.01, 0.02, 0.05] {
-        let (m, p) = scene(3, &plate.positions, Surface::quads(&plate.facets), &slaves, radius);
+        let (m, p) = scene(
+            3,
+            &plate.positions,
+            Surface::quads(&plate.facets),
+            &slaves,
+            radius,
+        );
         check(&m, p, None, &format!("wavy quads, radius {radius}"));
     }
-    let plate = plate_triangles(40, 30, 1.2, 1.0, 0.3, 3, &|x, y| 0.1 * (3.0 * x + 2.0 * y).sin());
+    let plate = plate_triangles(40, 30, 1.2, 1.0, 0.3, 3, &|x, y| {
+        0.1 * (3.0 * x + 2.0 * y).sin()
+    });
     let slaves = point_cloud(20_000, [-0.1, -0.1, -0.15], [1.3, 1.1, 0.15], 8);
-    let (m, p) = scene(3, &plate.positions, Surface::triangles(&plate.facets), &slaves, 0.06);
+    let (m, p) = scene(
+        3,
+        &plate.positions,
+        Surface::triangles(&plate.facets),
+        &slaves,
+        0.06,
+    );
     check(&m, p, None, "irregular triangles");
     let s = sphere_triangles(24, 48, 1.0, [0.5, -0.25, 2.0]);
     let slaves = point_cloud(10_000, [-0.8, -1.55, 0.7], [1.8, 1.05, 3.3], 10);

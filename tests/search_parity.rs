@@ -279,13 +279,10 @@ fn gpu_runs_are_bitwise_identical() {
     let mut devices = vec![Device::cpu()];
     devices.extend(gpus().iter().cloned());
     for d in &devices {
-        let mut search = GlobalSearch::new(d, &m, p).unwrap();
+        let mut search = Both::new(d, &m, p).unwrap();
         let a = search.run(m.positions()).unwrap();
         let b = search.run(m.positions()).unwrap();
-        let c = GlobalSearch::new(d, &m, p)
-            .unwrap()
-            .run(m.positions())
-            .unwrap();
+        let c = Both::new(d, &m, p).unwrap().run(m.positions()).unwrap();
         assert!(
             bytemuck::cast_slice::<_, u8>(&a.raw) == bytemuck::cast_slice::<_, u8>(&b.raw),
             "{d}: runs differ"
@@ -313,11 +310,11 @@ fn dispatch_folding_gives_the_same_bytes() {
     let mut devices = vec![Device::cpu()];
     devices.extend(gpus().iter().cloned());
     for d in &devices {
-        let mut search = GlobalSearch::new(d, &m, p).unwrap();
+        let mut search = Both::new(d, &m, p).unwrap();
         let reference = search.run(m.positions()).unwrap();
         let again = search.run(m.positions()).unwrap();
         assert_eq!(again.raw, reference.raw, "{d}: a second run differs");
-        let mut folded = GlobalSearch::new(d, &m, p).unwrap();
+        let mut folded = Both::new(d, &m, p).unwrap();
         folded.set_max_workgroups_per_dim(3);
         let f = folded.run(m.positions()).unwrap();
         assert_eq!(f.raw, reference.raw, "{d}: folded dispatch differs");
@@ -353,7 +350,7 @@ fn bad_positions_at_run_time_are_errors() {
         &[[0.5, 0.5, 0.1]],
         0.5,
     );
-    let mut s = GlobalSearch::new(&Device::cpu(), &m, p).unwrap();
+    let mut s = Both::new(&Device::cpu(), &m, p).unwrap();
     let mut pos = m.positions().to_vec();
     assert!(matches!(
         s.run(&pos[1..]),
@@ -395,6 +392,7 @@ fn the_tree_and_the_search_match_the_mirror() {
     );
     let master = m.surface(m.pair(p).unwrap().master).unwrap();
     let mut cpu_search = GlobalSearch::new(&Device::cpu(), &m, p).unwrap();
+    cpu_search.set_search_structure(abut::SearchStructure::Tree);
     let cpu = cpu_search.run(m.positions()).unwrap();
     let cpu_boxes = cpu_search.tree_boxes().unwrap();
     let order = cpu_search.tree_order().to_vec();
@@ -466,6 +464,7 @@ fn the_tree_and_the_search_match_the_mirror() {
     let tol = tolerance(&cpu, 0.05);
     for gpu in gpus() {
         let mut search = GlobalSearch::new(gpu, &m, p).unwrap();
+        search.set_search_structure(abut::SearchStructure::Tree);
         search.run(m.positions()).unwrap();
         assert!(
             search.tree_boxes().unwrap()[2..] == cpu_boxes[2..],

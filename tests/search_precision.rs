@@ -83,7 +83,7 @@ fn a_node_beyond_single_precision_is_named() {
                 let n = if node_of == "master" { 40 } else { 81 + 17 };
                 let mut pos = m.positions().to_vec();
                 pos[n][axis] = value;
-                let mut s = GlobalSearch::new(&d, &m, p).unwrap();
+                let mut s = Both::new(&d, &m, p).unwrap();
                 let e = s.run(&pos).unwrap_err();
                 assert!(
                     matches!(e, Error::CoordinateOutOfRange { node, axis: a, .. } if node == n && a == axis),
@@ -91,7 +91,7 @@ fn a_node_beyond_single_precision_is_named() {
                 );
                 assert!(e.to_string().contains(&format!("node {n}")), "{e}");
                 // after a good search too
-                let mut s = GlobalSearch::new(&d, &m, p).unwrap();
+                let mut s = Both::new(&d, &m, p).unwrap();
                 s.run(m.positions()).unwrap();
                 assert!(
                     s.run(&pos).is_err(),
@@ -145,7 +145,7 @@ fn facets_collapsed_at_run_time_are_skipped_and_counted() {
 fn check_collapsed(m: &Model, p: PairId, pos: &[[f64; 3]], collapsed: u32, what: &str) {
     let mut reference: Option<SearchResult> = None;
     for d in devices() {
-        let mut s = GlobalSearch::new(&d, m, p).unwrap();
+        let mut s = Both::new(&d, m, p).unwrap();
         let before = s.run(m.positions()).unwrap();
         assert_eq!(before.stats.collapsed_facets, 0, "{what}: {d}");
         assert!(

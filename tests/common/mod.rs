@@ -10,8 +10,9 @@ pub mod scene_toml;
 
 use abut::geometry::{closest_on_facet, V3};
 use abut::model::MasterSurface;
+use abut::testing::abi::search::{GpuHit, HIT_BESIDE_FREE_EDGE};
 use abut::testing::brute_force::{brute_force, OracleHit};
-use abut::{Device, GlobalSearch, Model, Pair, PairId, SearchResult};
+use abut::{Device, GlobalSearch, Model, Pair, PairId, SearchResult, SearchStructure};
 
 /// The CPU path and every GPU adapter ([`gpus`]): the devices a test runs on.
 pub fn devices() -> Vec<Device> {
@@ -278,10 +279,91 @@ pub fn scene(
     (m, p)
 }
 
-/// Runs the search of `pair` on `device`.
+/// Runs the search of `pair` on `device` with both structures ([`Both`]): the tree's result,
+/// the buckets' checked to give the same contacts bit for bit.
 pub fn run(device: &Device, model: &Model, pair: PairId) -> SearchResult {
-    let mut s = GlobalSearch::new(device, model, pair).unwrap();
+    let mut s = Both::new(device, model, pair).unwrap();
     s.run(model.positions()).unwrap()
+}
+
+/// A hit without its count of facets projected (which follows the structure's work): the
+/// contact both structures must give bit for bit.
+pub fn contact_bits(h: &GpuHit) -> GpuHit {
+    GpuHit {
+        candidates: h.candidates & HIT_BESIDE_FREE_EDGE,
+        ..*h
+    }
+}
+
+/// Asserts that two searches of the same scene found the same contacts bit for bit (every hit
+/// word but the count of facets projected), in the same frame.
+pub fn assert_same_contacts(a: &SearchResult, b: &SearchResult, what: &str) {
+    assert_eq!(a.frame, b.frame, "{what}: frames");
+    assert_eq!(a.raw.len(), b.raw.len(), "{what}: hits");
+    for (i, (x, y)) in a.raw.iter().zip(b.raw.iter()).enumerate() {
+        assert_eq!(contact_bits(x), contact_bits(y), "{what}: slave {i}");
+    }
+}
+
+/// The global search of one pair with both structures, the tree and the buckets, on one
+/// device: each run runs both and checks that they give the same contacts bit for bit (or the
+/// same error), and returns the tree's result.
+pub struct Both {
+    /// The tree's search.
+    pub tree: GlobalSearch,
+    /// The buckets' search.
+    pub buckets: GlobalSearch,
+    device: String,
+}
+
+impl Both {
+    /// Both searches of `pair` on `device`.
+    pub fn new(device: &Device, model: &Model, pair: PairId) -> abut::Result<Self> {
+        let mut tree = GlobalSearch::new(device, model, pair)?;
+        tree.set_search_structure(SearchStructure::Tree);
+        let mut buckets = GlobalSearch::new(device, model, pair)?;
+        buckets.set_search_structure(SearchStructure::Buckets);
+        Ok(Self {
+            tree,
+            buckets,
+            device: device.to_string(),
+        })
+    }
+
+    /// Folds both searches' dispatches beyond `groups` workgroups per dimension.
+    pub fn set_max_workgroups_per_dim(&mut self, groups: u32) {
+        self.tree.set_max_workgroups_per_dim(groups);
+        self.buckets.set_max_workgroups_per_dim(groups);
+    }
+
+    /// A global search with both structures at `positions`: the tree's result.
+    pub fn run(&mut self, positions: &[[f64; 3]]) -> abut::Result<SearchResult> {
+        let t = self.tree.run(positions);
+        let b = self.buckets.run(positions);
+        self.compare(t, b)
+    }
+
+    /// An increment of tracking with both structures at `positions` (`GlobalSearch::step`):
+    /// the tree's result.
+    pub fn step(&mut self, positions: &[[f64; 3]]) -> abut::Result<SearchResult> {
+        let t = self.tree.step(positions);
+        let b = self.buckets.step(positions);
+        self.compare(t, b)
+    }
+
+    fn compare(
+        &self,
+        t: abut::Result<SearchResult>,
+        b: abut::Result<SearchResult>,
+    ) -> abut::Result<SearchResult> {
+        let what = format!("tree vs buckets on {}", self.device);
+        match (&t, &b) {
+            (Ok(t), Ok(b)) => assert_same_contacts(t, b, &what),
+            (Err(x), Err(y)) => assert_eq!(x.to_string(), y.to_string(), "{what}"),
+            _ => panic!("{what}: {:?} vs {:?}", t.as_ref().err(), b.as_ref().err()),
+        }
+        t
+    }
 }
 
 /// Positions or velocities as the kernels' `vec4<f32>` per node.
