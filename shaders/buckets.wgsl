@@ -209,6 +209,41 @@ fn ring_cell(r: u32, m: u32) -> vec3<i32> {
     return vec3<i32>(square_cell(r, f % (8u * r)), i32(f / (8u * r)) - (ri - 1));
 }
 
+// Where the walk over ring r goes after its m-th cell when the run of cells that cell starts
+// (a face or layer of the cube, or a row or column of a layer) lies outside the master's cells
+// along the axis that fixes it: the first cell after the run; m itself otherwise (Rust twin:
+// abi::buckets::ring_skip).
+fn ring_skip(o: Origin, r: u32, m: u32) -> u32 {
+    if (r == 0u) { return m; }
+    let ri = i32(r);
+    let side = 2u * r + 1u;
+    var base = 0u;
+    var e = m;
+    if (params.dim != 2u) {
+        let face = side * side;
+        if (m < 2u * face) {
+            let z = select(ri, -ri, m < face);
+            let end = select(2u * face, face, m < face);
+            return select(m, end, o.cell.z + z < o.lo.z || o.cell.z + z > o.hi.z);
+        }
+        let layer = (m - 2u * face) / (8u * r);
+        base = 2u * face + layer * 8u * r;
+        let z = o.cell.z + i32(layer) - (ri - 1);
+        if (z < o.lo.z || z > o.hi.z) { return base + 8u * r; }
+        e = m - base;
+    }
+    if (e < 2u * side) {
+        let y = o.cell.y + select(ri, -ri, e < side);
+        let end = select(2u * side, side, e < side);
+        return select(m, base + end, y < o.lo.y || y > o.hi.y);
+    }
+    let inner = 2u * r - 1u;
+    let f = e - 2u * side;
+    let x = o.cell.x + select(ri, -ri, f < inner);
+    let end = select(2u * inner, inner, f < inner);
+    return select(m, base + 2u * side + end, x < o.lo.x || x > o.hi.x);
+}
+
 // The slave at walk position t: position in the frame, model node id.
 struct WalkPoint {
     p: vec3<f32>,
@@ -220,13 +255,16 @@ fn walk_point(t: u32) -> WalkPoint {
     return WalkPoint(bitcast<vec3<f32>>(w.xyz), w.w);
 }
 
-// Where a slave's rings are measured from: its box point q, its cell, the cells per axis.
+// Where a slave's rings are measured from: its box point q, its cell (clamped into the
+// master's), and the master's cells (every binned facet lies in them).
 struct Origin {
     q: vec3<f32>,
     cell: vec3<i32>,
     s: u32,
-    cells: i32,   // cells per axis: 2^(21 − s)
     step: f32,
+    lo: vec3<i32>,   // the master's cells: the box of this global search grown by the margin
+    hi: vec3<i32>,
+    d2: f32,         // distance² from q to that box
 }
 
 fn origin(p: vec3<f32>) -> Origin {
@@ -235,16 +273,34 @@ fn origin(p: vec3<f32>) -> Origin {
     o.step = bs.x;
     o.s = cell_shift();
     o.q = box_point(p, o.step);
+    let sv = vec3<u32>(o.s);
     let code = vec3<u32>(box_code_lo(o.q.x, bs.y), box_code_lo(o.q.y, bs.y), box_code_lo(o.q.z, bs.y));
-    o.cell = vec3<i32>(code >> vec3<u32>(o.s));
-    if (params.dim == 2u) { o.cell.z = i32(u32(BOX_BIAS) >> o.s); }
-    o.cells = 1 << (21u - o.s);
+    o.cell = vec3<i32>(code >> sv);
+    let m = params.box_margin;
+    let mlo = params.master_lo.xyz - vec3<f32>(m);
+    let mhi = params.master_hi.xyz + vec3<f32>(m);
+    let clo = vec3<u32>(box_code_lo(mlo.x, bs.y), box_code_lo(mlo.y, bs.y), box_code_lo(mlo.z, bs.y));
+    let chi = vec3<u32>(box_code_hi(mhi.x, bs.y), box_code_hi(mhi.y, bs.y), box_code_hi(mhi.z, bs.y));
+    o.lo = vec3<i32>(clo >> sv);
+    o.hi = vec3<i32>(chi >> sv);
+    var e = max(max(box_bounds(clo, o.step) - o.q, o.q - box_bounds(chi, o.step)), vec3<f32>(0.0));
+    if (params.dim == 2u) {
+        let z = i32(u32(BOX_BIAS) >> o.s);
+        o.cell.z = z;
+        o.lo.z = z;
+        o.hi.z = z;
+        e.z = 0.0;
+    }
+    o.d2 = dot(e, e);
+    // rings around the nearest of the master's cells: none of them is wasted beyond its side
+    o.cell = clamp(o.cell, o.lo, o.hi);
     return o;
 }
 
-// Distance² from the origin's box point to cell c, or −1 when c lies outside the grid.
+// Distance² from the origin's box point to cell c, or −1 when c lies outside the master's
+// cells (no facet is binned there).
 fn cell_d2(o: Origin, c: vec3<i32>) -> f32 {
-    if (any(c < vec3<i32>(0)) || any(c >= vec3<i32>(o.cells))) { return -1.0; }
+    if (any(c < o.lo) || any(c > o.hi)) { return -1.0; }
     let lo = box_bounds(vec3<u32>(c) << vec3<u32>(o.s), o.step);
     let hi = box_bounds(vec3<u32>(c + vec3<i32>(1)) << vec3<u32>(o.s), o.step);
     var e = max(max(lo - o.q, o.q - hi), vec3<f32>(0.0));
@@ -252,19 +308,20 @@ fn cell_d2(o: Origin, c: vec3<i32>) -> f32 {
     return dot(e, e);
 }
 
-// Whether ring r (r ≥ 1) may hold a cell within distance² `bound`: the least distance from the
-// box point out of the cube of rings below it, over the sides where ring r has cells.
+// Whether ring r (r ≥ 1) may hold a cell of the master's within distance² `bound`: the least
+// distance from the box point out of the cube of rings below it, over the sides where ring r
+// has master cells.
 fn ring_near(o: Origin, r: u32, bound: f32) -> bool {
     let ri = i32(r);
     var d = 3.4e38;
     let axes = select(3u, 2u, params.dim == 2u);
     for (var a = 0u; a < axes; a++) {
         let c = o.cell[a];
-        if (c - ri >= 0) {
+        if (c - ri >= o.lo[a]) {
             let lo = box_bounds(vec3<u32>(u32(c - ri + 1) << o.s), o.step).x;
             d = min(d, max(o.q[a] - lo, 0.0));
         }
-        if (c + ri < o.cells) {
+        if (c + ri <= o.hi[a]) {
             let hi = box_bounds(vec3<u32>(u32(c + ri) << o.s), o.step).x;
             d = min(d, max(hi - o.q[a], 0.0));
         }
@@ -279,33 +336,52 @@ struct BucketWalk {
     cut: bool,   // the visit cap cut it off: the chunks take every leaf slot
 }
 
-// The entries of bucket b for the walk `w` of the slave at p (box point q): each whose box is
-// within the best distance as it stood before the bucket, not that best facet itself, and not
-// excluded, projected.
+// Projects facet f for the walk `w` of the slave at p unless excluded.
+fn walk_project(w: ptr<function, BucketWalk>, f: u32, p: vec3<f32>, slave: u32) {
+    let fac = facets[f];
+    if (excluded(slave, fac)) { return; }
+    let d2 = project_facet(p, fac).dist2;
+    (*w).projections += 1u;
+    if (d2 < (*w).d2 || (d2 == (*w).d2 && f < (*w).f)) {
+        (*w).d2 = d2;
+        (*w).f = f;
+    }
+}
+
+// The entries of bucket b for the walk `w` of the slave at p (box point q), in two rounds that
+// do not depend on the entries' order: first the one whose box is nearest (ties to the lowest
+// facet id), then each other whose box is within the best distance as it stood after it. The
+// best facet from before the bucket is not projected again.
 fn walk_bucket(w: ptr<function, BucketWalk>, b: u32, p: vec3<f32>, q: vec3<f32>, slave: u32,
                step: f32, visits: ptr<function, u32>) {
     let range = bucket_range(b);
-    if (*visits + (range.y - range.x) > BUCKET_VISITS) {
+    if (*visits + 2u * (range.y - range.x) > BUCKET_VISITS) {
         (*w).cut = true;
         return;
     }
-    *visits += range.y - range.x;
-    let bound = (*w).d2 * PRUNE_SLACK;
+    *visits += 2u * (range.y - range.x);
     let before = (*w).f;
     let leaves = 1u << params.tree_levels;
     let at = params.bucket_entries;
+    var first = NO_FACET;
+    var first_d2 = (*w).d2 * PRUNE_SLACK;
     for (var e = range.x; e < range.y; e++) {
-        let j = grid_words[at + 2u * e];
         let f = grid_words[at + 2u * e + 1u];
-        if (f == before || packed_box_d2(boxes[leaves + j], q, step) > bound) { continue; }
-        let fac = facets[f];
-        if (excluded(slave, fac)) { continue; }
-        let d2 = project_facet(p, fac).dist2;
-        (*w).projections += 1u;
-        if (d2 < (*w).d2 || (d2 == (*w).d2 && f < (*w).f)) {
-            (*w).d2 = d2;
-            (*w).f = f;
+        if (f == before) { continue; }
+        let d2 = packed_box_d2(boxes[leaves + grid_words[at + 2u * e]], q, step);
+        if (d2 < first_d2 || (d2 == first_d2 && f < first)) {
+            first_d2 = d2;
+            first = f;
         }
+    }
+    if (first == NO_FACET) { return; }
+    walk_project(w, first, p, slave);
+    let bound = (*w).d2 * PRUNE_SLACK;
+    for (var e = range.x; e < range.y; e++) {
+        let f = grid_words[at + 2u * e + 1u];
+        if (f == before || f == first) { continue; }
+        if (packed_box_d2(boxes[leaves + grid_words[at + 2u * e]], q, step) > bound) { continue; }
+        walk_project(w, f, p, slave);
     }
 }
 
@@ -320,6 +396,7 @@ fn bucket_walk_of(t: u32) -> BucketWalk {
     w.f = NO_FACET;
     w.projections = 0u;
     w.cut = false;
+    if (o.d2 > w.d2 * PRUNE_SLACK) { return w; } // the master is farther than the radius
     var visits = 1u;
     walk_bucket(&w, overflow_bucket(), wp.p, o.q, wp.node, o.step, &visits);
     var r = 0u;
@@ -329,6 +406,11 @@ fn bucket_walk_of(t: u32) -> BucketWalk {
             r++;
             m = 0u;
             if (!ring_near(o, r, w.d2)) { break; }
+        }
+        let next = ring_skip(o, r, m);
+        if (next != m) {
+            m = next;
+            continue;
         }
         let c = o.cell + ring_cell(r, m);
         m++;
@@ -397,6 +479,7 @@ fn bucket_crowded_of(i: u32, best_f: u32) -> bool {
     let wp = walk_point(i);
     let o = origin(wp.p);
     let r2 = params.radius * params.radius;
+    if (o.d2 > r2 * PRUNE_SLACK) { return false; }
     var visits = 1u;
     var b = overflow_bucket();
     var r = 0u;
@@ -413,6 +496,11 @@ fn bucket_crowded_of(i: u32, best_f: u32) -> bool {
             r++;
             m = 0u;
             if (!ring_near(o, r, r2)) { return false; }
+        }
+        let next = ring_skip(o, r, m);
+        if (next != m) {
+            m = next;
+            continue;
         }
         let c = o.cell + ring_cell(r, m);
         m++;

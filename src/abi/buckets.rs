@@ -32,15 +32,19 @@ pub struct BucketLayout {
 impl BucketLayout {
     /// The layout for `facets` active facets: at least two buckets per facet (64 at least),
     /// room for every facet in `BIN_SPAN^3` cells.
+    /// (Sizes past `u32` saturate: no device holds such a buffer, and allocating it fails.)
     pub fn new(facets: u32) -> Self {
-        let bits = (2 * facets.max(32)).next_power_of_two().trailing_zeros();
+        let bits = (2 * facets.max(32) as u64)
+            .next_power_of_two()
+            .trailing_zeros()
+            .min(30);
         let levels = ScanLevels::new((1 << bits) + 1);
         let entries = levels.words;
-        let cap = facets.max(1) * BIN_SPAN.pow(3);
+        let cap = facets.max(1).saturating_mul(BIN_SPAN.pow(3));
         Self {
             bits,
             entries,
-            words: entries + 2 * cap,
+            words: entries.saturating_add(cap.saturating_mul(2)),
             levels,
         }
     }
@@ -118,6 +122,60 @@ pub fn ring_cell(r: u32, m: u32, dim: u32) -> [i32; 3] {
     [x, y, layer as i32 - (ri - 1)]
 }
 
+/// Where the walk over ring `r` around cell `c` goes after its `m`-th cell when the run of
+/// cells it starts (a face or layer of the cube, or a row or column of a layer) lies outside
+/// the cells `lo..=hi` along the axis that fixes it: the first cell after the run; `m` itself
+/// otherwise (WGSL: `ring_skip`). The runs in order are those of [`ring_cell`].
+pub fn ring_skip(r: u32, m: u32, dim: u32, c: [i32; 3], lo: [i32; 3], hi: [i32; 3]) -> u32 {
+    if r == 0 {
+        return m;
+    }
+    let ri = r as i32;
+    let side = 2 * r + 1;
+    let outside = |a: usize, x: i32| x < lo[a] || x > hi[a];
+    // a layer of the square ring starting at index `base`, e = m − base
+    let square = |base: u32, e: u32| -> u32 {
+        if e < 2 * side {
+            let (y, end) = if e < side {
+                (-ri, side)
+            } else {
+                (ri, 2 * side)
+            };
+            return if outside(1, c[1] + y) { base + end } else { m };
+        }
+        let f = e - 2 * side;
+        let inner = 2 * r - 1;
+        let (x, end) = if f < inner {
+            (-ri, inner)
+        } else {
+            (ri, 2 * inner)
+        };
+        if outside(0, c[0] + x) {
+            base + 2 * side + end
+        } else {
+            m
+        }
+    };
+    if dim == 2 {
+        return square(0, m);
+    }
+    let face = side * side;
+    if m < 2 * face {
+        let (z, end) = if m < face {
+            (-ri, face)
+        } else {
+            (ri, 2 * face)
+        };
+        return if outside(2, c[2] + z) { end } else { m };
+    }
+    let layer = (m - 2 * face) / (8 * r);
+    let base = 2 * face + layer * 8 * r;
+    if outside(2, c[2] + layer as i32 - (ri - 1)) {
+        return base + 8 * r;
+    }
+    square(base, m - base)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -138,6 +196,50 @@ mod tests {
             }
             let side = 11usize;
             assert_eq!(seen.len(), if dim == 2 { side * side } else { side.pow(3) });
+        }
+    }
+
+    /// Skipping runs outside a box visits exactly the ring's cells inside it, in order.
+    #[test]
+    fn skipped_runs_leave_the_cells_inside() {
+        for dim in [2, 3] {
+            for (lo, hi) in [
+                ([-1, -2, 0], [3, 1, 0]),
+                ([-9, -9, -1], [9, 9, 2]),
+                ([2, 2, 2], [5, 5, 5]),
+            ] {
+                let (lo, hi) = if dim == 2 {
+                    ([lo[0], lo[1], 0], [hi[0], hi[1], 0])
+                } else {
+                    (lo, hi)
+                };
+                for r in 0..7 {
+                    let inside = |o: [i32; 3]| (0..3).all(|a| lo[a] <= o[a] && o[a] <= hi[a]);
+                    let all: Vec<[i32; 3]> = (0..ring_cells(r, dim))
+                        .map(|m| ring_cell(r, m, dim))
+                        .filter(|&o| inside(o))
+                        .collect();
+                    let mut got = Vec::new();
+                    let mut m = 0;
+                    while m < ring_cells(r, dim) {
+                        let next = ring_skip(r, m, dim, [0; 3], lo, hi);
+                        if next != m {
+                            assert!(next > m);
+                            for k in m..next {
+                                assert!(!inside(ring_cell(r, k, dim)), "{dim}D r {r}: skipped {k}");
+                            }
+                            m = next;
+                            continue;
+                        }
+                        let o = ring_cell(r, m, dim);
+                        if inside(o) {
+                            got.push(o);
+                        }
+                        m += 1;
+                    }
+                    assert_eq!(got, all, "{dim}D ring {r}, box {lo:?}..{hi:?}");
+                }
+            }
         }
     }
 

@@ -15,7 +15,9 @@ use super::nearest_facet::{
 };
 use super::PAR_MIN;
 use crate::abi::boxes::{self, BOX_BIAS};
-use crate::abi::buckets::{bucket_of, cell_shift, ring_cell, ring_cells, BIN_SPAN, BUCKET_VISITS};
+use crate::abi::buckets::{
+    bucket_of, cell_shift, ring_cell, ring_cells, ring_skip, BIN_SPAN, BUCKET_VISITS,
+};
 use crate::abi::search::{SearchParams, BEST_WORDS, FLAG_SELF_CONTACT, NO_FACET};
 use crate::geometry::V3;
 
@@ -91,35 +93,60 @@ fn bucket_range(grid: &[u32], b: u32) -> (u32, u32) {
     (first, grid[b as usize])
 }
 
-/// Where a slave's rings are measured from (WGSL: `Origin`).
+/// Where a slave's rings are measured from (WGSL: `Origin`): its box point, its cell clamped
+/// into the master's cells, and those cells with their distance² from the box point.
 struct Origin {
     q: glam::Vec4,
     cell: [i32; 3],
     s: u32,
-    cells: i32,
     step: f32,
+    lo: [i32; 3],
+    hi: [i32; 3],
+    d2: f32,
 }
 
 fn origin(c: &Candidates<'_>, p: V3<f32>) -> Origin {
-    let (step, inv) = boxes::box_step(c.params.box_margin);
-    let s = cell_shift(c.params.bucket_cell, c.params.box_margin);
+    let params = c.params;
+    let (step, inv) = boxes::box_step(params.box_margin);
+    let s = cell_shift(params.bucket_cell, params.box_margin);
     let q = c.box_point(p);
     let mut cell = [q.x, q.y, q.z].map(|x| (boxes::code_lo(x, inv) >> s) as i32);
-    if c.params.dim == 2 {
-        cell[2] = ((BOX_BIAS as u32) >> s) as i32;
+    let m = params.box_margin;
+    let clo: [u32; 3] = std::array::from_fn(|a| boxes::code_lo(params.master_lo[a] - m, inv));
+    let chi: [u32; 3] = std::array::from_fn(|a| boxes::code_hi(params.master_hi[a] + m, inv));
+    let mut lo = clo.map(|x| (x >> s) as i32);
+    let mut hi = chi.map(|x| (x >> s) as i32);
+    let bounds = |k: [u32; 3]| {
+        glam::Vec4::new(
+            boxes::bound(k[0], step),
+            boxes::bound(k[1], step),
+            boxes::bound(k[2], step),
+            0.0,
+        )
+    };
+    let mut e = (bounds(clo) - q).max(q - bounds(chi)).max(glam::Vec4::ZERO);
+    if params.dim == 2 {
+        let z = ((BOX_BIAS as u32) >> s) as i32;
+        (cell[2], lo[2], hi[2]) = (z, z, z);
+        e.z = 0.0;
     }
+    let e = e * e;
+    let cell = std::array::from_fn(|a| cell[a].clamp(lo[a], hi[a]));
     Origin {
         q,
         cell,
         s,
-        cells: 1 << (21 - s),
         step,
+        lo,
+        hi,
+        d2: e.x + e.y + e.z,
     }
 }
 
-/// Distance² from the origin's box point to cell `c`, or −1 outside the grid (WGSL: `cell_d2`).
+/// Distance² from the origin's box point to cell `c`, or −1 outside the master's cells (WGSL:
+/// `cell_d2`).
 fn cell_d2(o: &Origin, c: [i32; 3], dim: u32) -> f32 {
-    if c.iter().any(|&x| x < 0 || x >= o.cells) {
+    if (0..3).any(|a| c[a] < o.lo[a] || c[a] > o.hi[a]) {
         return -1.0;
     }
     let bound = |x: i32| boxes::bound((x as u32) << o.s, o.step);
@@ -133,18 +160,18 @@ fn cell_d2(o: &Origin, c: [i32; 3], dim: u32) -> f32 {
     e.x + e.y + e.z
 }
 
-/// Whether ring `r` ≥ 1 may hold a cell within distance² `bound` (WGSL: `ring_near`).
+/// Whether ring `r` ≥ 1 may hold a master cell within distance² `bound` (WGSL: `ring_near`).
 fn ring_near(o: &Origin, r: u32, bound: f32, dim: u32) -> bool {
     let ri = r as i32;
     let mut d = 3.4e38f32;
     let axes = if dim == 2 { 2 } else { 3 };
     for a in 0..axes {
         let c = o.cell[a];
-        if c - ri >= 0 {
+        if c - ri >= o.lo[a] {
             let lo = boxes::bound(((c - ri + 1) as u32) << o.s, o.step);
             d = d.min((o.q[a] - lo).max(0.0));
         }
-        if c + ri < o.cells {
+        if c + ri <= o.hi[a] {
             let hi = boxes::bound(((c + ri) as u32) << o.s, o.step);
             d = d.min((hi - o.q[a]).max(0.0));
         }
@@ -160,7 +187,23 @@ struct BucketWalk {
     cut: bool,
 }
 
-/// The entries of bucket `b` for the walk `w` of the slave at `p` (WGSL: `walk_bucket`).
+/// Facet `f` projected for the walk `w` of the slave at `p` unless excluded (WGSL:
+/// `walk_project`).
+fn walk_project(c: &Candidates<'_>, w: &mut BucketWalk, f: u32, p: V3<f32>, slave: u32) {
+    if c.excluded(slave, f) {
+        return;
+    }
+    let d2 = project(c.nodes, p, c.facets[f as usize]).dist2;
+    w.projections += 1;
+    if d2 < w.d2 || (d2 == w.d2 && f < w.f) {
+        w.d2 = d2;
+        w.f = f;
+    }
+}
+
+/// The entries of bucket `b` for the walk `w` of the slave at `p`, in two rounds that do not
+/// depend on their order: the nearest box first, then the others within the best distance
+/// (WGSL: `walk_bucket`).
 fn walk_bucket(
     c: &Candidates<'_>,
     grid: &[u32],
@@ -170,26 +213,35 @@ fn walk_bucket(
     visits: &mut u32,
 ) {
     let (first, end) = bucket_range(grid, b);
-    if *visits + (end - first) > BUCKET_VISITS {
+    if *visits + 2 * (end - first) > BUCKET_VISITS {
         w.cut = true;
         return;
     }
-    *visits += end - first;
-    let bound = w.d2 * PRUNE_SLACK;
+    *visits += 2 * (end - first);
     let before = w.f;
     let leaves = c.leaves() as usize;
     let at = c.params.bucket_entries as usize;
-    for e in first as usize..end as usize {
-        let (j, f) = (grid[at + 2 * e] as usize, grid[at + 2 * e + 1]);
-        let [lo, hi] = c.corners[leaves + j].map(glam::Vec4::from_array);
-        if f == before || box_d2_of(lo, hi, q) > bound || c.excluded(slave, f) {
-            continue;
+    let entries = || {
+        (first as usize..end as usize).filter_map(|e| {
+            let (j, f) = (grid[at + 2 * e] as usize, grid[at + 2 * e + 1]);
+            let [lo, hi] = c.corners[leaves + j].map(glam::Vec4::from_array);
+            (f != before).then(|| (f, box_d2_of(lo, hi, q)))
+        })
+    };
+    let (mut near, mut near_d2) = (NO_FACET, w.d2 * PRUNE_SLACK);
+    for (f, d2) in entries() {
+        if d2 < near_d2 || (d2 == near_d2 && f < near) {
+            (near, near_d2) = (f, d2);
         }
-        let d2 = project(c.nodes, p, c.facets[f as usize]).dist2;
-        w.projections += 1;
-        if d2 < w.d2 || (d2 == w.d2 && f < w.f) {
-            w.d2 = d2;
-            w.f = f;
+    }
+    if near == NO_FACET {
+        return;
+    }
+    walk_project(c, w, near, p, slave);
+    let bound = w.d2 * PRUNE_SLACK;
+    for (f, d2) in entries() {
+        if f != near && d2 <= bound {
+            walk_project(c, w, f, p, slave);
         }
     }
 }
@@ -206,6 +258,9 @@ fn bucket_walk_of(c: &Candidates<'_>, grid: &[u32], t: usize) -> BucketWalk {
         projections: 0,
         cut: false,
     };
+    if o.d2 > w.d2 * PRUNE_SLACK {
+        return w; // the master is farther than the radius
+    }
     let at = (p, o.q, slave);
     let mut visits = 1;
     walk_bucket(c, grid, &mut w, 1 << c.params.bucket_bits, at, &mut visits);
@@ -217,6 +272,12 @@ fn bucket_walk_of(c: &Candidates<'_>, grid: &[u32], t: usize) -> BucketWalk {
             if !ring_near(&o, r, w.d2, dim) {
                 break;
             }
+        }
+        let next = ring_skip(r, m, dim, o.cell, o.lo, o.hi);
+        if next != m {
+            m = next;
+            visits += 1;
+            continue;
         }
         let off = ring_cell(r, m, dim);
         let cell = [0, 1, 2].map(|a| o.cell[a] + off[a]);
@@ -305,6 +366,9 @@ fn bucket_crowded_of(c: &Candidates<'_>, grid: &[u32], i: usize, best_f: u32) ->
     let o = origin(c, p);
     let dim = c.params.dim;
     let r2 = c.params.radius * c.params.radius;
+    if o.d2 > r2 * PRUNE_SLACK {
+        return false;
+    }
     let at = (p, o.q, slave);
     let mut visits = 1;
     let mut b = Some(1u32 << c.params.bucket_bits);
@@ -326,6 +390,12 @@ fn bucket_crowded_of(c: &Candidates<'_>, grid: &[u32], i: usize, best_f: u32) ->
             if !ring_near(&o, r, r2, dim) {
                 return false;
             }
+        }
+        let next = ring_skip(r, m, dim, o.cell, o.lo, o.hi);
+        if next != m {
+            m = next;
+            visits += 1;
+            continue;
         }
         let off = ring_cell(r, m, dim);
         let cell = [0, 1, 2].map(|a| o.cell[a] + off[a]);

@@ -222,7 +222,8 @@ pub(crate) struct Slots {
     /// scatter_forces_active): the plan's `ACTIVE_SLOT`, sized by the schedule from the count
     /// the last global search's active_compact left (empty until the first).
     pub active: u64,
-    /// Global: one per node of each refit pass's bottom level (tree_refit).
+    /// Global: one per node of each refit pass's bottom level (tree_refit; the leaves alone for
+    /// the bucket search).
     pub tree_passes: Vec<u64>,
     /// Global: one per block of each level of the work-item scan.
     pub work_levels: Vec<u64>,
@@ -307,7 +308,13 @@ pub(crate) fn initial_plan(
         active_nodes,
         ..Default::default()
     };
-    for tp in tree_passes(params.tree_levels) {
+    // the bucket search refits the tree's leaves alone
+    let refits = if params.flags & FLAG_BUCKETS != 0 {
+        1
+    } else {
+        usize::MAX
+    };
+    for tp in tree_passes(params.tree_levels).into_iter().take(refits) {
         slots.tree_passes.push(add_slot(
             &mut plan,
             1 << tp.bottom,

@@ -77,12 +77,16 @@ pub struct SearchStats {
     /// Facet–node distance evaluations in the nearest-facet step (the tree walks' projections
     /// and the chunks' candidates), or in a local increment the tracked slaves' walks.
     pub candidates: u64,
-    /// Slaves whose tree walk reached its visit cap and was finished in chunks (global searches).
+    /// Slaves whose walk (of the tree or the buckets) reached its visit cap and was finished in
+    /// chunks (global searches).
     pub fallbacks: u32,
     /// Global searches: active master facets that had collapsed at these positions (zero
     /// length or area, by the model's rule for degenerate facets), skipped by the search; local
     /// searches pass over them too, uncounted.
     pub collapsed_facets: u32,
+    /// The structure the global search uses for this pair ([`SearchStructure::Buckets`] or
+    /// [`SearchStructure::Tree`]; `Auto` resolved).
+    pub structure: SearchStructure,
 }
 
 /// The result of a search: one entry per slave node, in node-set order. It holds the kernels'
@@ -206,9 +210,9 @@ pub const AUTO_SIZE_SPREAD: f64 = 4.0;
 /// median facets.
 pub const AUTO_RADIUS_FACETS: f64 = 2.0;
 /// The bucket search's cells are at most this many times the largest facet at the model's
-/// positions, and more than half of it (a power of two of box-grid steps): a facet spans at most
-/// two cells per axis until it has grown by a quarter.
-pub const BUCKET_CELL_FACETS: f64 = 2.5;
+/// positions, and more than half of it (a power of two of box-grid steps): larger than every
+/// facet, so a facet spans at most two cells per axis until it grows.
+pub const BUCKET_CELL_FACETS: f64 = 2.0;
 
 /// A global search bound to one contact pair and one device; reusable every increment: its
 /// stage (the host's data and schedule, [`SearchStage`], whose methods it has through `Deref`)
@@ -648,6 +652,7 @@ impl SearchStage {
                 candidates,
                 fallbacks: Status(*status).fallbacks(),
                 collapsed_facets: Status(*status).collapsed(),
+                structure: self.structure,
             },
         }
     }

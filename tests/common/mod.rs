@@ -358,7 +358,14 @@ impl Both {
     ) -> abut::Result<SearchResult> {
         let what = format!("tree vs buckets on {}", self.device);
         match (&t, &b) {
-            (Ok(t), Ok(b)) => assert_same_contacts(t, b, &what),
+            (Ok(t), Ok(b)) => {
+                assert_same_contacts(t, b, &what);
+                assert_eq!(t.stats.trigger, b.stats.trigger, "{what}: triggers");
+                let (c, d) = (t.stats.collapsed_facets, b.stats.collapsed_facets);
+                assert_eq!(c, d, "{what}: collapsed facets");
+                assert_eq!(t.stats.structure, SearchStructure::Tree);
+                assert_eq!(b.stats.structure, SearchStructure::Buckets);
+            }
             (Err(x), Err(y)) => assert_eq!(x.to_string(), y.to_string(), "{what}"),
             _ => panic!("{what}: {:?} vs {:?}", t.as_ref().err(), b.as_ref().err()),
         }

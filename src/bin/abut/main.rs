@@ -79,6 +79,32 @@ struct SearchArgs {
     /// Slave nodes checked against the f64 brute-force oracle.
     #[arg(long, default_value_t = 2000)]
     check: usize,
+    /// The global search's structure (auto: the buckets for facets of about one size and a
+    /// radius of about a facet, else the tree).
+    #[arg(long, value_enum, default_value_t = StructureArg::Auto)]
+    structure: StructureArg,
+}
+
+/// `abut::SearchStructure` on the command line.
+#[derive(ValueEnum, Clone, Copy, PartialEq, Eq, Default)]
+enum StructureArg {
+    /// Chosen from the facet sizes and the radius.
+    #[default]
+    Auto,
+    /// The seed's bucket sort.
+    Buckets,
+    /// The bounding-box tree.
+    Tree,
+}
+
+impl From<StructureArg> for abut::SearchStructure {
+    fn from(s: StructureArg) -> Self {
+        match s {
+            StructureArg::Auto => Self::Auto,
+            StructureArg::Buckets => Self::Buckets,
+            StructureArg::Tree => Self::Tree,
+        }
+    }
 }
 
 #[derive(clap::Args, Clone, Default)]
@@ -398,7 +424,11 @@ fn search(a: &SearchArgs) -> abut::Result<()> {
     let range = model.add_nodes(&cloud, &vec![1.0; cloud.len()])?;
     let slaves = model.add_node_set(&range.to_vec())?;
     let radius = 2.0 * h;
-    let pair = model.add_pair(Pair::new(slaves, master).search_radius(radius))?;
+    let pair = model.add_pair(
+        Pair::new(slaves, master)
+            .search_radius(radius)
+            .search_structure(a.structure.into()),
+    )?;
     println!(
         "scene: {} slave nodes in a slab of ±0.1 around a wavy plate of {} quads (facet {h:.4}), search radius {radius:.4}",
         cloud.len(),
@@ -419,7 +449,11 @@ fn search(a: &SearchArgs) -> abut::Result<()> {
     let penetrating = result.contacts().flatten().filter(|c| c.gap < 0.0).count();
     let s = &result.stats;
     println!(
-        "tree over {} facets: {:.1} facets projected per node, {} walks finished in chunks",
+        "{} over {} facets: {:.1} facets projected per node, {} walks finished in chunks",
+        match s.structure {
+            abut::SearchStructure::Buckets => "buckets",
+            _ => "tree",
+        },
         search.master().active.len(),
         s.candidates as f64 / cloud.len() as f64,
         s.fallbacks

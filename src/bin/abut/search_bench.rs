@@ -13,7 +13,7 @@ use std::fmt::Write as _;
 use std::time::Instant;
 
 use abut::mesh::{plate_triangles, SplitMix64};
-use abut::{Device, GlobalSearch, Model, Surface, SurfaceId};
+use abut::{Device, GlobalSearch, Model, SearchStructure, Surface, SurfaceId};
 use parry3d::math::Vector as PVec;
 use parry3d::query::PointQuery;
 use rayon::prelude::*;
@@ -25,10 +25,20 @@ use crate::bench::{io_err, machine, BenchArgs};
 const REPS: usize = 3;
 /// Search radii, in facet sizes.
 const RADII: [f64; 3] = [0.5, 1.0, 3.0];
+/// The graded plate's largest facet width over its smallest.
+const GRADING: f64 = 100.0;
+/// The global search's structures each device runs.
+const STRUCTURES: [SearchStructure; 3] = [
+    SearchStructure::Tree,
+    SearchStructure::Buckets,
+    SearchStructure::Auto,
+];
 
 /// One contestant's figures at one radius.
 #[derive(Clone, Debug, Serialize)]
 struct SearchRow {
+    /// The plate: wavy, or wavy and graded.
+    plate: &'static str,
     radius: f64,
     slaves: usize,
     facets: usize,
@@ -56,11 +66,23 @@ struct Scene {
 }
 
 /// A wavy plate of `side` × `side` quads split into triangles on the unit square, and `slaves`
-/// random points (random order) within ±2 facet sizes of it.
-fn scene(side: usize, slaves: usize) -> abut::Result<Scene> {
+/// random points (random order) within ±2 facet sizes of it. `graded`: the columns' widths grow
+/// geometrically across the plate, 100× from the first to the last (the mean stays
+/// 1 / `side`).
+fn scene(side: usize, slaves: usize, graded: bool) -> abut::Result<Scene> {
     let h = 1.0 / side as f64;
     let shape = |x: f64, y: f64| 0.02 * (6.0 * x).sin() * (4.0 * y).cos();
-    let plate = plate_triangles(side, side, 1.0, 1.0, 0.0, 0, &shape);
+    let mut plate = plate_triangles(side, side, 1.0, 1.0, 0.0, 0, &|_, _| 0.0);
+    let grade = |x: f64| {
+        let a = GRADING.ln();
+        ((a * x).exp() - 1.0) / (a.exp() - 1.0)
+    };
+    for p in &mut plate.positions {
+        if graded {
+            p[0] = grade(p[0]);
+        }
+        p[2] = shape(p[0], p[1]);
+    }
     let mut model = Model::new_3d();
     model.add_nodes(&plate.positions, &vec![1.0; plate.positions.len()])?;
     let s = model.add_surface(Surface::triangles(&plate.facets))?;
@@ -107,24 +129,47 @@ fn parry(sc: &Scene, radius: f64, parallel: bool) -> Vec<f64> {
 /// A contestant: its name and one run (distances, projections per slave).
 type Run<'a> = Box<dyn FnMut() -> abut::Result<(Vec<f64>, Option<f64>)> + 'a>;
 
-/// abut's global search on `device` within `radius`.
-fn abut_run<'a>(device: &Device, sc: &'a Scene, radius: f64) -> abut::Result<Run<'a>> {
+/// abut's global search on `device` within `radius` with `structure`; the structure it uses
+/// (`Auto` resolved).
+fn abut_run<'a>(
+    device: &Device,
+    sc: &'a Scene,
+    radius: f64,
+    structure: SearchStructure,
+) -> abut::Result<(Run<'a>, SearchStructure)> {
     let master = sc.model.surface(sc.master)?.clone();
     let mut search =
         GlobalSearch::from_parts(device, &sc.model, master, sc.slave_ids.clone(), radius)?;
+    search.set_search_structure(structure);
+    let used = search.search_structure();
     let n = sc.queries.len() as f64;
-    Ok(Box::new(move || {
+    let run: Run<'a> = Box::new(move || {
         let r = search.run(sc.model.positions())?;
         let d = r
             .contacts()
             .map(|c| c.as_ref().map_or(f64::INFINITY, |c| c.distance))
             .collect();
         Ok((d, Some(r.stats.candidates as f64 / n)))
-    }))
+    });
+    Ok((run, used))
+}
+
+/// A structure's name in the tables.
+fn structure_name(s: SearchStructure) -> &'static str {
+    match s {
+        SearchStructure::Tree => "tree",
+        SearchStructure::Buckets => "buckets",
+        SearchStructure::Auto => "auto",
+    }
 }
 
 /// Times every contestant at one radius: the first run, then `REPS` interleaved rounds.
-fn race(sc: &Scene, radius_h: f64, devices: &[Device]) -> abut::Result<Vec<SearchRow>> {
+fn race(
+    sc: &Scene,
+    plate: &'static str,
+    radius_h: f64,
+    devices: &[Device],
+) -> abut::Result<Vec<SearchRow>> {
     let radius = radius_h * sc.h;
     let mut who: Vec<(String, Run<'_>)> = vec![
         (
@@ -140,7 +185,14 @@ fn race(sc: &Scene, radius_h: f64, devices: &[Device]) -> abut::Result<Vec<Searc
         ),
     ];
     for d in devices {
-        who.push((format!("abut, {d}"), abut_run(d, sc, radius)?));
+        for st in STRUCTURES {
+            let (run, used) = abut_run(d, sc, radius, st)?;
+            let name = match st {
+                SearchStructure::Auto => format!("abut auto (→ {}), {d}", structure_name(used)),
+                _ => format!("abut {}, {d}", structure_name(st)),
+            };
+            who.push((name, run));
+        }
     }
     let mut first = Vec::new();
     let mut result = Vec::new();
@@ -181,6 +233,7 @@ fn race(sc: &Scene, radius_h: f64, devices: &[Device]) -> abut::Result<Vec<Searc
                 }
             }
             SearchRow {
+                plate,
                 radius: radius_h,
                 slaves: n,
                 facets: sc.tris.len(),
@@ -196,6 +249,52 @@ fn race(sc: &Scene, radius_h: f64, devices: &[Device]) -> abut::Result<Vec<Searc
         .collect())
 }
 
+/// `Auto` against the better of the tree and the buckets, per plate, radius and device: its
+/// steady time over the better one's (1 when it chose the faster; the noise of the rounds
+/// shows in the rows where it chose the same one as the better).
+fn auto_table(md: &mut String, rows: &[SearchRow], devices: &[Device]) {
+    let _ = writeln!(
+        md,
+        "\n## Auto against the better structure\n\n| plate | radius [facets] | device | tree [ms] | buckets [ms] | auto chose | auto [ms] | auto / better |\n|---|---:|---|---:|---:|---|---:|---:|"
+    );
+    let find = |plate: &str, r: f64, prefix: &str, d: &Device| {
+        rows.iter().find(|s| {
+            s.plate == plate
+                && s.radius == r
+                && s.who.starts_with(prefix)
+                && s.who.ends_with(&d.to_string())
+        })
+    };
+    for plate in ["wavy", "graded"] {
+        for r in RADII {
+            for d in devices {
+                let (Some(t), Some(b), Some(a)) = (
+                    find(plate, r, "abut tree", d),
+                    find(plate, r, "abut buckets", d),
+                    find(plate, r, "abut auto", d),
+                ) else {
+                    continue;
+                };
+                let better = t.steady_ms.min(b.steady_ms);
+                let chose = if a.who.contains("→ buckets") {
+                    "buckets"
+                } else {
+                    "tree"
+                };
+                let _ = writeln!(
+                    md,
+                    "| {plate} | {r} | {} | {:.1} | {:.1} | {chose} | {:.1} | {:.2} |",
+                    d.backend_name(),
+                    t.steady_ms,
+                    b.steady_ms,
+                    a.steady_ms,
+                    a.steady_ms / better
+                );
+            }
+        }
+    }
+}
+
 /// `abut bench --search`.
 pub fn run(a: &BenchArgs) -> abut::Result<()> {
     let mut devices: Vec<Device> = vec![Device::cpu()];
@@ -205,18 +304,21 @@ pub fn run(a: &BenchArgs) -> abut::Result<()> {
     } else {
         (1_000_000, 708)
     };
-    let sc = scene(224, slaves)?;
+    let sc = scene(224, slaves, false)?;
+    let graded = scene(224, slaves, true)?;
     let mut rows = Vec::new();
-    for r in RADII {
-        eprintln!("search within {r} facet sizes, {slaves} slaves");
-        rows.extend(race(&sc, r, &devices)?);
+    for (plate, sc) in [("wavy", &sc), ("graded", &graded)] {
+        for r in RADII {
+            eprintln!("the {plate} plate: search within {r} facet sizes, {slaves} slaves");
+            rows.extend(race(sc, plate, r, &devices)?);
+        }
     }
     eprintln!(
         "the floor: 1,000 slaves on {} facets",
         2 * floor_side * floor_side
     );
-    let floor_scene = scene(floor_side, 1_000)?;
-    let floor = race(&floor_scene, 1.0, &devices)?;
+    let floor_scene = scene(floor_side, 1_000, false)?;
+    let floor = race(&floor_scene, "wavy", 1.0, &devices)?;
     let mut md = String::new();
     let _ = writeln!(
         md,
@@ -233,12 +335,13 @@ pub fn run(a: &BenchArgs) -> abut::Result<()> {
         sc.tris.len()
     );
     let table = |md: &mut String, rows: &[SearchRow]| {
-        let _ = writeln!(md, "| radius [facets] | slaves | facets | who | first [ms] | steady [ms] | ns/slave | projections/slave | max distance difference to parry [facets] | found by one side only |");
-        let _ = writeln!(md, "|---:|---:|---:|---|---:|---:|---:|---:|---:|---:|");
+        let _ = writeln!(md, "| plate | radius [facets] | slaves | facets | who | first [ms] | steady [ms] | ns/slave | projections/slave | max distance difference to parry [facets] | found by one side only |");
+        let _ = writeln!(md, "|---|---:|---:|---:|---|---:|---:|---:|---:|---:|---:|");
         for s in rows {
             let _ = writeln!(
                 md,
-                "| {} | {} | {} | {} | {:.1} | {:.1} | {:.0} | {} | {:.1e} | {} |",
+                "| {} | {} | {} | {} | {} | {:.1} | {:.1} | {:.0} | {} | {:.1e} | {} |",
+                s.plate,
                 s.radius,
                 s.slaves,
                 s.facets,
@@ -253,6 +356,7 @@ pub fn run(a: &BenchArgs) -> abut::Result<()> {
         }
     };
     table(&mut md, &rows);
+    auto_table(&mut md, &rows, &devices);
     let _ = writeln!(
         md,
         "\n## The floor: 1,000 slaves on {} facets, radius 1 facet\n",

@@ -8,15 +8,21 @@ use super::*;
 #[test]
 fn the_largest_search_fits_the_plan() {
     for (levels, slaves) in [(0, 1), (17, 1_000_000), (32, u32::MAX - 1)] {
-        let params = SearchParams {
-            tree_levels: levels,
-            n_slaves: slaves,
-            ..bytemuck::Zeroable::zeroed()
-        };
-        let (plan, slots) = initial_plan(&params, 100, slaves, slaves, 65_535)
-            .unwrap_or_else(|e| panic!("{levels} levels, {slaves} slaves: {e}"));
-        assert_eq!(slots.tree_passes.len(), levels as usize + 1);
-        assert!(plan[PLAN_N_SLOTS] as usize <= MAX_PLAN_SLOTS);
+        for flags in [0, FLAG_BUCKETS] {
+            let params = SearchParams {
+                tree_levels: levels,
+                n_slaves: slaves,
+                n_facets: ((1u64 << levels) - 1).min(u32::MAX as u64) as u32,
+                flags,
+                ..bytemuck::Zeroable::zeroed()
+            };
+            let (plan, slots) = initial_plan(&params, 100, slaves, slaves, 65_535)
+                .unwrap_or_else(|e| panic!("{levels} levels, {slaves} slaves: {e}"));
+            // the buckets refit the tree's leaves alone
+            let refits = if flags == 0 { levels as usize + 1 } else { 1 };
+            assert_eq!(slots.tree_passes.len(), refits);
+            assert!(plan[PLAN_N_SLOTS] as usize <= MAX_PLAN_SLOTS);
+        }
     }
 }
 
@@ -41,29 +47,36 @@ fn every_pass_but_the_integrator_is_a_kernel() {
 /// rows and the timestamps name what ran.
 #[test]
 fn entries_belong_to_their_groups() {
-    let (_, slots) = initial_plan(
-        &SearchParams {
-            tree_levels: 5,
-            n_slaves: 1000,
-            ..bytemuck::Zeroable::zeroed()
-        },
-        100,
-        1200,
-        2000,
-        65_535,
-    )
-    .unwrap();
-    for (anchored, self_contact, local_only, gather_active) in [
-        (false, false, false, false),
-        (false, true, false, false),
-        (true, false, false, false),
-        (false, false, true, false),
-        (false, false, false, true),
-        (false, false, true, true),
+    for (anchored, self_contact, local_only, gather_active, buckets) in [
+        (false, false, false, false, false),
+        (false, true, false, false, false),
+        (true, false, false, false, false),
+        (false, false, true, false, false),
+        (false, false, false, true, false),
+        (false, false, true, true, false),
+        (false, false, false, false, true),
+        (false, true, false, true, true),
     ] {
+        let flags = if buckets { FLAG_BUCKETS } else { 0 };
+        let (_, slots) = initial_plan(
+            &SearchParams {
+                tree_levels: 5,
+                n_slaves: 1000,
+                n_facets: 30,
+                flags,
+                ..bytemuck::Zeroable::zeroed()
+            },
+            100,
+            1200,
+            2000,
+            65_535,
+        )
+        .unwrap();
+        assert_eq!(slots.bucket_levels.is_empty(), !buckets);
         let shape = PairShape {
             anchored,
             self_contact,
+            buckets,
             local_only,
             global_only: false,
             n_nodes: 2000,
@@ -86,6 +99,23 @@ fn entries_belong_to_their_groups() {
             .iter()
             .filter(|e| e.kernel == Kernel::TreeRefit)
             .count();
-        assert_eq!(globals, if anchored || local_only { 0 } else { 2 * 6 });
+        // the tree's six refit passes, or its leaves alone for the buckets
+        let refits = if buckets { 1 } else { 6 };
+        assert_eq!(
+            globals,
+            if anchored || local_only {
+                0
+            } else {
+                2 * refits
+            }
+        );
+        let walks = |k: Kernel| entries.iter().filter(|e| e.kernel == k).count();
+        let global = !(anchored || local_only);
+        assert_eq!(walks(Kernel::BucketWalk) > 0, global && buckets);
+        assert_eq!(walks(Kernel::NearestWalk) > 0, global && !buckets);
+        assert_eq!(
+            walks(Kernel::BucketCrowded) > 0,
+            global && buckets && self_contact
+        );
     }
 }
