@@ -175,73 +175,86 @@ fn bucket_range(b: u32) -> vec2<u32> {
     return vec2<u32>(first, grid_words[b]);
 }
 
-// Cells in ring r (Rust twin: abi::buckets::ring_cells).
-fn ring_cells(r: u32) -> u32 {
-    if (r == 0u) { return 1u; }
-    if (params.dim == 2u) { return 8u * r; }
-    return 24u * r * r + 2u;
+// A walk over the cells around a slave's cell in rings outward (Rust twin:
+// abi::buckets::Ring): ring r is the cells at Chebyshev distance r, taken layer by layer along
+// z (one layer in 2D), row by row along y, and along x every cell of a row on the ring's
+// boundary in y or z, the two ends of the others. No division (on a software adapter an
+// integer division is a loop over the SIMD lanes).
+struct Ring {
+    r: i32,
+    d: vec3<i32>,   // the current cell's offset from the centre cell
 }
 
-// Cell e of the square ring r in x, y.
-fn square_cell(r: u32, e: u32) -> vec2<i32> {
-    let ri = i32(r);
-    let side = 2u * r + 1u;
-    if (e < 2u * side) {
-        return vec2<i32>(i32(e % side) - ri, select(ri, -ri, e < side));
+fn ring_row_start(g: Ring) -> bool {
+    return g.d.x == -g.r;
+}
+
+fn ring_layer_start(g: Ring) -> bool {
+    return g.d.x == -g.r && g.d.y == -g.r;
+}
+
+// To the next row (layer, ring); true when that starts a new ring.
+fn ring_next_row(g: ptr<function, Ring>) -> bool {
+    let r = (*g).r;
+    (*g).d.x = -r;
+    (*g).d.y += 1;
+    if ((*g).d.y <= r) { return false; }
+    (*g).d.y = -r;
+    (*g).d.z += 1;
+    if (params.dim != 2u && (*g).d.z <= r) { return false; }
+    (*g).r = r + 1;
+    (*g).d = vec3<i32>(-r - 1, -r - 1, select(-r - 1, 0, params.dim == 2u));
+    return true;
+}
+
+// To the next layer (ring); true when that starts a new ring.
+fn ring_next_layer(g: ptr<function, Ring>) -> bool {
+    (*g).d.y = (*g).r;
+    return ring_next_row(g);
+}
+
+// To the next cell (row, layer, ring); true when that starts a new ring.
+fn ring_next_cell(g: ptr<function, Ring>) -> bool {
+    let r = (*g).r;
+    let edge = abs((*g).d.y) == r || (params.dim != 2u && abs((*g).d.z) == r);
+    if ((*g).d.x < r) {
+        (*g).d.x = select(r, (*g).d.x + 1, edge);
+        return false;
     }
-    let f = e - 2u * side;
-    let inner = 2u * r - 1u;
-    return vec2<i32>(select(ri, -ri, f < inner), i32(f % inner) - (ri - 1));
+    return ring_next_row(g);
 }
 
-// The offset of the m-th cell of ring r (Rust twin: abi::buckets::ring_cell).
-fn ring_cell(r: u32, m: u32) -> vec3<i32> {
-    if (r == 0u) { return vec3<i32>(0); }
-    let ri = i32(r);
-    if (params.dim == 2u) { return vec3<i32>(square_cell(r, m), 0); }
-    let side = 2u * r + 1u;
-    let face = side * side;
-    if (m < 2u * face) {
-        let e = m % face;
-        return vec3<i32>(i32(e % side) - ri, i32(e / side) - ri, select(ri, -ri, m < face));
-    }
-    let f = m - 2u * face;
-    return vec3<i32>(square_cell(r, f % (8u * r)), i32(f / (8u * r)) - (ri - 1));
+// The distance² from the box point to the slab of cells c along axis a.
+fn slab_d2(o: Origin, c: i32, a: u32) -> f32 {
+    let lo = box_bounds(vec3<u32>(u32(c) << o.s), o.step).x;
+    let hi = box_bounds(vec3<u32>(u32(c + 1) << o.s), o.step).x;
+    let e = max(max(lo - o.q[a], o.q[a] - hi), 0.0);
+    return e * e;
 }
 
-// Where the walk over ring r goes after its m-th cell when the run of cells that cell starts
-// (a face or layer of the cube, or a row or column of a layer) lies outside the master's cells
-// along the axis that fixes it: the first cell after the run; m itself otherwise (Rust twin:
-// abi::buckets::ring_skip).
-fn ring_skip(o: Origin, r: u32, m: u32) -> u32 {
-    if (r == 0u) { return m; }
-    let ri = i32(r);
-    let side = 2u * r + 1u;
-    var base = 0u;
-    var e = m;
-    if (params.dim != 2u) {
-        let face = side * side;
-        if (m < 2u * face) {
-            let z = select(ri, -ri, m < face);
-            let end = select(2u * face, face, m < face);
-            return select(m, end, o.cell.z + z < o.lo.z || o.cell.z + z > o.hi.z);
+// One step of a ring walk within distance² `bound`: at the start of a layer or a row that holds
+// no master cell within it, that layer or row skipped (0, or 2 when the rings end there);
+// else 1: the caller visits the current cell, then calls ring_next_cell.
+fn ring_step(o: Origin, g: ptr<function, Ring>, bound: f32) -> u32 {
+    let c = o.cell + (*g).d;
+    let limit = bound * PRUNE_SLACK;
+    if (params.dim != 2u && ring_layer_start(*g)) {
+        if (c.z < o.lo.z || c.z > o.hi.z || slab_d2(o, c.z, 2u) > limit) {
+            return select(0u, 2u, ring_next_layer(g) && !ring_near(o, u32((*g).r), bound));
         }
-        let layer = (m - 2u * face) / (8u * r);
-        base = 2u * face + layer * 8u * r;
-        let z = o.cell.z + i32(layer) - (ri - 1);
-        if (z < o.lo.z || z > o.hi.z) { return base + 8u * r; }
-        e = m - base;
     }
-    if (e < 2u * side) {
-        let y = o.cell.y + select(ri, -ri, e < side);
-        let end = select(2u * side, side, e < side);
-        return select(m, base + end, y < o.lo.y || y > o.hi.y);
+    if (ring_row_start(*g)) {
+        var far = c.y < o.lo.y || c.y > o.hi.y;
+        var yz = slab_d2(o, c.y, 1u);
+        if (params.dim != 2u) {
+            far = far || c.z < o.lo.z || c.z > o.hi.z;
+            yz += slab_d2(o, c.z, 2u);
+        }
+        if (far || yz > limit) {
+            return select(0u, 2u, ring_next_row(g) && !ring_near(o, u32((*g).r), bound));
+        }
     }
-    let inner = 2u * r - 1u;
-    let f = e - 2u * side;
-    let x = o.cell.x + select(ri, -ri, f < inner);
-    let end = select(2u * inner, inner, f < inner);
-    return select(m, base + 2u * side + end, x < o.lo.x || x > o.hi.x);
+    return 1u;
 }
 
 // The slave at walk position t: position in the frame, model node id.
@@ -399,26 +412,20 @@ fn bucket_walk_of(t: u32) -> BucketWalk {
     if (o.d2 > w.d2 * PRUNE_SLACK) { return w; } // the master is farther than the radius
     var visits = 1u;
     walk_bucket(&w, overflow_bucket(), wp.p, o.q, wp.node, o.step, &visits);
-    var r = 0u;
-    var m = 0u;
-    for (; visits < BUCKET_VISITS && !w.cut; visits++) {
-        if (m == ring_cells(r)) {
-            r++;
-            m = 0u;
-            if (!ring_near(o, r, w.d2)) { break; }
-        }
-        let next = ring_skip(o, r, m);
-        if (next != m) {
-            m = next;
-            continue;
-        }
-        let c = o.cell + ring_cell(r, m);
-        m++;
+    var g = Ring(0, vec3<i32>(0));
+    var more = true;
+    for (; more && visits < BUCKET_VISITS && !w.cut; visits++) {
+        let k = ring_step(o, &g, w.d2);
+        if (k == 2u) { more = false; }
+        if (k != 1u) { continue; }
+        let c = o.cell + g.d;
         let d2 = cell_d2(o, c);
-        if (d2 < 0.0 || d2 > w.d2 * PRUNE_SLACK) { continue; }
-        walk_bucket(&w, bucket_of(vec3<u32>(c)), wp.p, o.q, wp.node, o.step, &visits);
+        if (d2 >= 0.0 && d2 <= w.d2 * PRUNE_SLACK) {
+            walk_bucket(&w, bucket_of(vec3<u32>(c)), wp.p, o.q, wp.node, o.step, &visits);
+        }
+        if (ring_next_cell(&g) && !ring_near(o, u32(g.r), w.d2)) { more = false; }
     }
-    if (visits >= BUCKET_VISITS) { w.cut = true; }
+    if (more && visits >= BUCKET_VISITS) { w.cut = true; }
     return w;
 }
 
@@ -481,31 +488,25 @@ fn bucket_crowded_of(i: u32, best_f: u32) -> bool {
     let r2 = params.radius * params.radius;
     if (o.d2 > r2 * PRUNE_SLACK) { return false; }
     var visits = 1u;
-    var b = overflow_bucket();
-    var r = 0u;
-    var m = 0u;
+    let over = bucket_range(overflow_bucket());
+    if (visits + (over.y - over.x) > BUCKET_VISITS) { return true; }
+    visits += over.y - over.x;
+    if (crowded_in(overflow_bucket(), wp.p, o.q, wp.node, best_f, o.step)) { return true; }
+    var g = Ring(0, vec3<i32>(0));
     for (; visits < BUCKET_VISITS; visits++) {
-        if (b != 0xffffffffu) {
+        let k = ring_step(o, &g, r2);
+        if (k == 2u) { return false; }
+        if (k != 1u) { continue; }
+        let c = o.cell + g.d;
+        let d2 = cell_d2(o, c);
+        if (d2 >= 0.0 && d2 <= r2 * PRUNE_SLACK) {
+            let b = bucket_of(vec3<u32>(c));
             let range = bucket_range(b);
             if (visits + (range.y - range.x) > BUCKET_VISITS) { return true; }
             visits += range.y - range.x;
             if (crowded_in(b, wp.p, o.q, wp.node, best_f, o.step)) { return true; }
-            b = 0xffffffffu;
         }
-        if (m == ring_cells(r)) {
-            r++;
-            m = 0u;
-            if (!ring_near(o, r, r2)) { return false; }
-        }
-        let next = ring_skip(o, r, m);
-        if (next != m) {
-            m = next;
-            continue;
-        }
-        let c = o.cell + ring_cell(r, m);
-        m++;
-        let d2 = cell_d2(o, c);
-        if (d2 >= 0.0 && d2 <= r2 * PRUNE_SLACK) { b = bucket_of(vec3<u32>(c)); }
+        if (ring_next_cell(&g) && !ring_near(o, u32(g.r), r2)) { return false; }
     }
     return true;
 }

@@ -458,6 +458,28 @@ impl Contact {
         Ok(out)
     }
 
+    /// The global search's structure of each pass of pair `pair` (two for a balanced pair),
+    /// `Auto` resolved ([`crate::model::SearchStructure`]).
+    pub fn search_structures(&self, pair: PairId) -> Result<Vec<crate::model::SearchStructure>> {
+        let mut out: Vec<_> = self
+            .pairs
+            .iter()
+            .filter(|p| p.id == pair)
+            .map(|p| p.search.search_structure())
+            .collect();
+        for k in self.kinematic.iter().filter(|k| k.id == pair) {
+            out.push(k.search.search_structure());
+            out.extend(k.back.iter().map(|b| b.0.search_structure()));
+        }
+        if out.is_empty() {
+            return Err(Error::UnknownId {
+                what: "meshed contact pair",
+                id: pair.0,
+            });
+        }
+        Ok(out)
+    }
+
     /// Whether any pair is enforced by penalty.
     pub fn has_penalty_pairs(&self) -> bool {
         !self.pairs.is_empty()

@@ -34,7 +34,7 @@ impl BucketLayout {
     /// room for every facet in `BIN_SPAN^3` cells.
     /// (Sizes past `u32` saturate: no device holds such a buffer, and allocating it fails.)
     pub fn new(facets: u32) -> Self {
-        let bits = (2 * facets.max(32) as u64)
+        let bits = (8 * facets.max(8) as u64)
             .next_power_of_two()
             .trailing_zeros()
             .min(30);
@@ -73,173 +73,128 @@ pub fn cell_shift(cell: f32, margin: f32) -> u32 {
     (exp(cell) - step).clamp(0, 20) as u32
 }
 
-/// Cells in ring `r` around a cell (Chebyshev distance exactly `r`), in `dim` 2 or 3 (WGSL:
-/// `ring_cells`).
-pub fn ring_cells(r: u32, dim: u32) -> u32 {
-    if r == 0 {
-        1
-    } else if dim == 2 {
-        8 * r
-    } else {
-        24 * r * r + 2
+/// A walk over the cells around a slave's cell in rings outward (WGSL: `Ring` and its
+/// functions): ring r is the cells at Chebyshev distance r, taken layer by layer along z
+/// (dz = −r ..= r; one layer in 2D), row by row along y, and along x: every cell of a row on the
+/// ring's boundary in y or z, the two ends (dx = ∓r) of the others. No division: on a software
+/// adapter an integer division is a loop over the SIMD lanes.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Ring {
+    /// The ring.
+    pub r: i32,
+    /// The offset of the current cell from the centre cell.
+    pub d: [i32; 3],
+}
+
+impl Ring {
+    /// At ring 0, the centre cell.
+    pub fn new() -> Self {
+        Self { r: 0, d: [0; 3] }
+    }
+
+    /// Whether the current cell starts its row (WGSL: `ring_row_start`).
+    pub fn row_start(&self) -> bool {
+        self.d[0] == -self.r
+    }
+
+    /// Whether the current cell starts its layer (WGSL: `ring_layer_start`).
+    pub fn layer_start(&self) -> bool {
+        self.row_start() && self.d[1] == -self.r
+    }
+
+    /// To the next row (the next layer, or the next ring's first cell, after the last row);
+    /// true when that starts a new ring (WGSL: `ring_next_row`).
+    pub fn next_row(&mut self, dim: u32) -> bool {
+        let r = self.r;
+        self.d[0] = -r;
+        self.d[1] += 1;
+        if self.d[1] <= r {
+            return false;
+        }
+        self.d[1] = -r;
+        self.d[2] += 1;
+        if dim != 2 && self.d[2] <= r {
+            return false;
+        }
+        self.r += 1;
+        let r = self.r;
+        self.d = [-r, -r, if dim == 2 { 0 } else { -r }];
+        true
+    }
+
+    /// To the next layer (or the next ring); true when that starts a new ring (WGSL:
+    /// `ring_next_layer`).
+    pub fn next_layer(&mut self, dim: u32) -> bool {
+        self.d[1] = self.r;
+        self.next_row(dim)
+    }
+
+    /// To the next cell of the ring (or the next ring's first); true when that starts a new
+    /// ring (WGSL: `ring_next_cell`).
+    pub fn next_cell(&mut self, dim: u32) -> bool {
+        let r = self.r;
+        let edge = self.d[1].abs() == r || (dim != 2 && self.d[2].abs() == r);
+        if self.d[0] < r {
+            self.d[0] = if edge { self.d[0] + 1 } else { r };
+            return false;
+        }
+        self.next_row(dim)
     }
 }
 
-/// The offset of the `m`-th cell of ring `r` (`m < ring_cells(r, dim)`; WGSL: `ring_cell`):
-/// in 3D the two faces z = ∓r row by row, then each layer between them as in 2D; in 2D the
-/// rows y = ∓r, then the columns x = ∓r between them.
-pub fn ring_cell(r: u32, m: u32, dim: u32) -> [i32; 3] {
-    let ri = r as i32;
-    let side = 2 * r + 1;
-    let square = |e: u32| -> [i32; 2] {
-        // cell e of the square ring r in x, y
-        if e < 2 * side {
-            let y = if e < side { -ri } else { ri };
-            [(e % side) as i32 - ri, y]
-        } else {
-            let e = e - 2 * side;
-            let inner = 2 * r - 1;
-            let x = if e < inner { -ri } else { ri };
-            [x, (e % inner) as i32 - (ri - 1)]
-        }
-    };
-    if r == 0 {
-        return [0; 3];
+impl Default for Ring {
+    fn default() -> Self {
+        Self::new()
     }
-    if dim == 2 {
-        let [x, y] = square(m);
-        return [x, y, 0];
-    }
-    let face = side * side;
-    if m < 2 * face {
-        let z = if m < face { -ri } else { ri };
-        let e = m % face;
-        return [(e % side) as i32 - ri, (e / side) as i32 - ri, z];
-    }
-    let m = m - 2 * face;
-    let layer = m / (8 * r);
-    let [x, y] = square(m % (8 * r));
-    [x, y, layer as i32 - (ri - 1)]
-}
-
-/// Where the walk over ring `r` around cell `c` goes after its `m`-th cell when the run of
-/// cells it starts (a face or layer of the cube, or a row or column of a layer) lies outside
-/// the cells `lo..=hi` along the axis that fixes it: the first cell after the run; `m` itself
-/// otherwise (WGSL: `ring_skip`). The runs in order are those of [`ring_cell`].
-pub fn ring_skip(r: u32, m: u32, dim: u32, c: [i32; 3], lo: [i32; 3], hi: [i32; 3]) -> u32 {
-    if r == 0 {
-        return m;
-    }
-    let ri = r as i32;
-    let side = 2 * r + 1;
-    let outside = |a: usize, x: i32| x < lo[a] || x > hi[a];
-    // a layer of the square ring starting at index `base`, e = m − base
-    let square = |base: u32, e: u32| -> u32 {
-        if e < 2 * side {
-            let (y, end) = if e < side {
-                (-ri, side)
-            } else {
-                (ri, 2 * side)
-            };
-            return if outside(1, c[1] + y) { base + end } else { m };
-        }
-        let f = e - 2 * side;
-        let inner = 2 * r - 1;
-        let (x, end) = if f < inner {
-            (-ri, inner)
-        } else {
-            (ri, 2 * inner)
-        };
-        if outside(0, c[0] + x) {
-            base + 2 * side + end
-        } else {
-            m
-        }
-    };
-    if dim == 2 {
-        return square(0, m);
-    }
-    let face = side * side;
-    if m < 2 * face {
-        let (z, end) = if m < face {
-            (-ri, face)
-        } else {
-            (ri, 2 * face)
-        };
-        return if outside(2, c[2] + z) { end } else { m };
-    }
-    let layer = (m - 2 * face) / (8 * r);
-    let base = 2 * face + layer * 8 * r;
-    if outside(2, c[2] + layer as i32 - (ri - 1)) {
-        return base + 8 * r;
-    }
-    square(base, m - base)
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
 
-    /// Ring r's cells are exactly those at Chebyshev distance r, each once.
+    /// Ring r's cells are exactly those at Chebyshev distance r, each once, in order of r;
+    /// skipping a row or a layer leaves out exactly its cells.
     #[test]
     fn rings_cover_each_cell_once() {
         for dim in [2, 3] {
             let mut seen = std::collections::HashSet::new();
-            for r in 0..6u32 {
-                for m in 0..ring_cells(r, dim) {
-                    let c = ring_cell(r, m, dim);
-                    let cheb = c.iter().map(|x| x.unsigned_abs()).max().unwrap();
-                    assert_eq!(cheb, r, "{dim}D ring {r} cell {m}: {c:?}");
-                    assert!(dim == 3 || c[2] == 0);
-                    assert!(seen.insert(c), "{dim}D ring {r}: {c:?} twice");
-                }
+            let mut ring = Ring::new();
+            let mut last_r = 0;
+            while ring.r < 6 {
+                let cheb = ring.d.iter().map(|x| x.abs()).max().unwrap();
+                assert_eq!(cheb, ring.r, "{dim}D: {ring:?}");
+                assert!(ring.r >= last_r);
+                last_r = ring.r;
+                assert!(dim == 3 || ring.d[2] == 0);
+                assert!(seen.insert(ring.d), "{dim}D: {ring:?} twice");
+                let r = ring.r;
+                assert_eq!(ring.next_cell(dim), ring.r != r);
             }
             let side = 11usize;
             assert_eq!(seen.len(), if dim == 2 { side * side } else { side.pow(3) });
-        }
-    }
-
-    /// Skipping runs outside a box visits exactly the ring's cells inside it, in order.
-    #[test]
-    fn skipped_runs_leave_the_cells_inside() {
-        for dim in [2, 3] {
-            for (lo, hi) in [
-                ([-1, -2, 0], [3, 1, 0]),
-                ([-9, -9, -1], [9, 9, 2]),
-                ([2, 2, 2], [5, 5, 5]),
-            ] {
-                let (lo, hi) = if dim == 2 {
-                    ([lo[0], lo[1], 0], [hi[0], hi[1], 0])
-                } else {
-                    (lo, hi)
-                };
-                for r in 0..7 {
-                    let inside = |o: [i32; 3]| (0..3).all(|a| lo[a] <= o[a] && o[a] <= hi[a]);
-                    let all: Vec<[i32; 3]> = (0..ring_cells(r, dim))
-                        .map(|m| ring_cell(r, m, dim))
-                        .filter(|&o| inside(o))
-                        .collect();
-                    let mut got = Vec::new();
-                    let mut m = 0;
-                    while m < ring_cells(r, dim) {
-                        let next = ring_skip(r, m, dim, [0; 3], lo, hi);
-                        if next != m {
-                            assert!(next > m);
-                            for k in m..next {
-                                assert!(!inside(ring_cell(r, k, dim)), "{dim}D r {r}: skipped {k}");
-                            }
-                            m = next;
-                            continue;
-                        }
-                        let o = ring_cell(r, m, dim);
-                        if inside(o) {
-                            got.push(o);
-                        }
-                        m += 1;
-                    }
-                    assert_eq!(got, all, "{dim}D ring {r}, box {lo:?}..{hi:?}");
+            // skip every row with dy = 1 and every layer with dz = −1: the rest is the same
+            let mut kept = Vec::new();
+            let mut ring = Ring::new();
+            while ring.r < 5 {
+                if dim == 3 && ring.layer_start() && ring.d[2] == -1 {
+                    ring.next_layer(dim);
+                    continue;
                 }
+                if ring.row_start() && ring.d[1] == 1 {
+                    ring.next_row(dim);
+                    continue;
+                }
+                kept.push(ring.d);
+                ring.next_cell(dim);
             }
+            let mut all = Vec::new();
+            let mut ring = Ring::new();
+            while ring.r < 5 {
+                all.push(ring.d);
+                ring.next_cell(dim);
+            }
+            all.retain(|d| d[1] != 1 && !(dim == 3 && d[2] == -1));
+            assert_eq!(kept, all, "{dim}D");
         }
     }
 

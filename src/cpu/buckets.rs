@@ -15,9 +15,7 @@ use super::nearest_facet::{
 };
 use super::PAR_MIN;
 use crate::abi::boxes::{self, BOX_BIAS};
-use crate::abi::buckets::{
-    bucket_of, cell_shift, ring_cell, ring_cells, ring_skip, BIN_SPAN, BUCKET_VISITS,
-};
+use crate::abi::buckets::{bucket_of, cell_shift, Ring, BIN_SPAN, BUCKET_VISITS};
 use crate::abi::search::{SearchParams, BEST_WORDS, FLAG_SELF_CONTACT, NO_FACET};
 use crate::geometry::V3;
 
@@ -179,6 +177,57 @@ fn ring_near(o: &Origin, r: u32, bound: f32, dim: u32) -> bool {
     d < 3.4e38 && d * d <= bound * PRUNE_SLACK
 }
 
+/// The distance² from the box point to the slab of cells `c` along axis `a` (WGSL: `slab_d2`).
+fn slab_d2(o: &Origin, c: i32, a: usize) -> f32 {
+    let lo = boxes::bound((c as u32) << o.s, o.step);
+    let hi = boxes::bound(((c + 1) as u32) << o.s, o.step);
+    let e = (lo - o.q[a]).max(o.q[a] - hi).max(0.0);
+    e * e
+}
+
+/// What one step of a ring walk does (WGSL: `ring_step`'s 0, 1, 2).
+#[derive(PartialEq)]
+enum Step {
+    /// A layer or row skipped.
+    Skipped,
+    /// The current cell, to visit.
+    Visit,
+    /// The rings are done.
+    Done,
+}
+
+/// One step of a ring walk within distance² `bound`: a layer or row holding no master cell
+/// within it skipped, else the current cell handed back (WGSL: `ring_step`).
+fn ring_step(o: &Origin, g: &mut Ring, bound: f32, dim: u32) -> Step {
+    let c: [i32; 3] = std::array::from_fn(|a| o.cell[a] + g.d[a]);
+    let limit = bound * PRUNE_SLACK;
+    let outside = |a: usize| c[a] < o.lo[a] || c[a] > o.hi[a];
+    let skipped = |new_ring: bool, g: &Ring| {
+        if new_ring && !ring_near(o, g.r as u32, bound, dim) {
+            Step::Done
+        } else {
+            Step::Skipped
+        }
+    };
+    if dim != 2 && g.layer_start() && (outside(2) || slab_d2(o, c[2], 2) > limit) {
+        let new_ring = g.next_layer(dim);
+        return skipped(new_ring, g);
+    }
+    if g.row_start() {
+        let mut far = outside(1);
+        let mut yz = slab_d2(o, c[1], 1);
+        if dim != 2 {
+            far = far || outside(2);
+            yz += slab_d2(o, c[2], 2);
+        }
+        if far || yz > limit {
+            let new_ring = g.next_row(dim);
+            return skipped(new_ring, g);
+        }
+    }
+    Step::Visit
+}
+
 /// What a bucket walk found (WGSL: `BucketWalk`).
 struct BucketWalk {
     d2: f32,
@@ -264,32 +313,27 @@ fn bucket_walk_of(c: &Candidates<'_>, grid: &[u32], t: usize) -> BucketWalk {
     let at = (p, o.q, slave);
     let mut visits = 1;
     walk_bucket(c, grid, &mut w, 1 << c.params.bucket_bits, at, &mut visits);
-    let (mut r, mut m) = (0, 0);
-    while visits < BUCKET_VISITS && !w.cut {
-        if m == ring_cells(r, dim) {
-            r += 1;
-            m = 0;
-            if !ring_near(&o, r, w.d2, dim) {
-                break;
+    let mut g = Ring::new();
+    let mut more = true;
+    while more && visits < BUCKET_VISITS && !w.cut {
+        match ring_step(&o, &mut g, w.d2, dim) {
+            Step::Done => more = false,
+            Step::Skipped => {}
+            Step::Visit => {
+                let cell: [i32; 3] = std::array::from_fn(|a| o.cell[a] + g.d[a]);
+                let d2 = cell_d2(&o, cell, dim);
+                if d2 >= 0.0 && d2 <= w.d2 * PRUNE_SLACK {
+                    let b = bucket_of(cell.map(|x| x as u32), c.params.bucket_bits);
+                    walk_bucket(c, grid, &mut w, b, at, &mut visits);
+                }
+                if g.next_cell(dim) && !ring_near(&o, g.r as u32, w.d2, dim) {
+                    more = false;
+                }
             }
-        }
-        let next = ring_skip(r, m, dim, o.cell, o.lo, o.hi);
-        if next != m {
-            m = next;
-            visits += 1;
-            continue;
-        }
-        let off = ring_cell(r, m, dim);
-        let cell = [0, 1, 2].map(|a| o.cell[a] + off[a]);
-        m += 1;
-        let d2 = cell_d2(&o, cell, dim);
-        if d2 >= 0.0 && d2 <= w.d2 * PRUNE_SLACK {
-            let b = bucket_of(cell.map(|x| x as u32), c.params.bucket_bits);
-            walk_bucket(c, grid, &mut w, b, at, &mut visits);
         }
         visits += 1;
     }
-    if visits >= BUCKET_VISITS {
+    if more && visits >= BUCKET_VISITS {
         w.cut = true;
     }
     w
@@ -371,38 +415,37 @@ fn bucket_crowded_of(c: &Candidates<'_>, grid: &[u32], i: usize, best_f: u32) ->
     }
     let at = (p, o.q, slave);
     let mut visits = 1;
-    let mut b = Some(1u32 << c.params.bucket_bits);
-    let (mut r, mut m) = (0, 0);
+    let (first, end) = bucket_range(grid, 1 << c.params.bucket_bits);
+    if visits + (end - first) > BUCKET_VISITS {
+        return true;
+    }
+    visits += end - first;
+    if crowded_in(c, grid, 1 << c.params.bucket_bits, at, best_f) {
+        return true;
+    }
+    let mut g = Ring::new();
     while visits < BUCKET_VISITS {
-        if let Some(bk) = b.take() {
-            let (first, end) = bucket_range(grid, bk);
-            if visits + (end - first) > BUCKET_VISITS {
-                return true;
+        match ring_step(&o, &mut g, r2, dim) {
+            Step::Done => return false,
+            Step::Skipped => {}
+            Step::Visit => {
+                let cell: [i32; 3] = std::array::from_fn(|a| o.cell[a] + g.d[a]);
+                let d2 = cell_d2(&o, cell, dim);
+                if d2 >= 0.0 && d2 <= r2 * PRUNE_SLACK {
+                    let b = bucket_of(cell.map(|x| x as u32), c.params.bucket_bits);
+                    let (first, end) = bucket_range(grid, b);
+                    if visits + (end - first) > BUCKET_VISITS {
+                        return true;
+                    }
+                    visits += end - first;
+                    if crowded_in(c, grid, b, at, best_f) {
+                        return true;
+                    }
+                }
+                if g.next_cell(dim) && !ring_near(&o, g.r as u32, r2, dim) {
+                    return false;
+                }
             }
-            visits += end - first;
-            if crowded_in(c, grid, bk, at, best_f) {
-                return true;
-            }
-        }
-        if m == ring_cells(r, dim) {
-            r += 1;
-            m = 0;
-            if !ring_near(&o, r, r2, dim) {
-                return false;
-            }
-        }
-        let next = ring_skip(r, m, dim, o.cell, o.lo, o.hi);
-        if next != m {
-            m = next;
-            visits += 1;
-            continue;
-        }
-        let off = ring_cell(r, m, dim);
-        let cell = [0, 1, 2].map(|a| o.cell[a] + off[a]);
-        m += 1;
-        let d2 = cell_d2(&o, cell, dim);
-        if d2 >= 0.0 && d2 <= r2 * PRUNE_SLACK {
-            b = Some(bucket_of(cell.map(|x| x as u32), c.params.bucket_bits));
         }
         visits += 1;
     }

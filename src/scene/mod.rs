@@ -269,6 +269,31 @@ impl Scene {
 }
 
 /// What a run built, in words: elements by kind, rigid bodies, each contact pair.
+/// The global search's structure of each meshed pair's passes, one line per pair (the
+/// scene summary's `built`).
+fn search_structures(
+    model: &crate::model::Model,
+    contact: &crate::contact::Contact,
+) -> Vec<String> {
+    use crate::model::SearchStructure;
+    (0..model.pairs().len())
+        .filter_map(|k| {
+            let passes = contact.search_structures(crate::model::PairId(k)).ok()?;
+            let names: Vec<&str> = passes
+                .iter()
+                .map(|s| match s {
+                    SearchStructure::Buckets => "buckets",
+                    _ => "tree",
+                })
+                .collect();
+            Some(format!(
+                "pair {k}: global search by {}",
+                names.join(" and ")
+            ))
+        })
+        .collect()
+}
+
 fn built_list(scene: &Scene, solver: &Solver, slaves: &[Vec<u32>]) -> Vec<String> {
     let mut list = Vec::new();
     let mut kinds = BTreeMap::<&str, usize>::new();

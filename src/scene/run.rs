@@ -9,8 +9,8 @@ use super::account::{Account, Ends};
 use super::build::PartNodes;
 use super::increments::{self, Limits, Ranks, Sums};
 use super::{
-    built_list, finish_outputs, open_history, output_error, stress6, BodySummary, ContactNode,
-    PartSummary, Progress, Scene, Summary,
+    built_list, finish_outputs, open_history, output_error, search_structures, stress6,
+    BodySummary, ContactNode, PartSummary, Progress, Scene, Summary,
 };
 use crate::contact::Contact;
 use crate::device::Device;
@@ -36,7 +36,10 @@ pub(super) fn run_into(
     let mut slaves: Vec<u32> = built.slaves.iter().flatten().copied().collect();
     slaves.sort_unstable();
     slaves.dedup();
-    let built_list = built_list(scene, &solver, &built.slaves);
+    let mut built_list = built_list(scene, &solver, &built.slaves);
+    if let Some(c) = contact.as_ref() {
+        built_list.extend(search_structures(&model, c));
+    }
     let io = output_error;
     let history = match output {
         Some(dir) => Some(open_history(dir, &built.parts, &built.bodies).map_err(io)?),
