@@ -361,20 +361,46 @@ fn walk_project(w: ptr<function, BucketWalk>, f: u32, p: vec3<f32>, slave: u32) 
     }
 }
 
-// Loop iterations of a bucket walk at most: a ring step or the start of a bucket per visit, and
-// two per entry (which count two visits), so the visit cap ends the walk first.
-const WALK_STEPS: u32 = 3u * BUCKET_VISITS + 2u;
+// The entries of bucket b for the walk `w` of the slave at p (box point q), in two rounds that
+// do not depend on the entries' order: first the one whose box is nearest (ties to the lowest
+// facet id), then each other whose box is within the best distance as it stood after it. The
+// best facet from before the bucket is not projected again.
+fn walk_bucket(w: ptr<function, BucketWalk>, b: u32, p: vec3<f32>, q: vec3<f32>, slave: u32,
+               step: f32, visits: ptr<function, u32>) {
+    let range = bucket_range(b);
+    if (*visits + 2u * (range.y - range.x) > BUCKET_VISITS) {
+        (*w).cut = true;
+        return;
+    }
+    *visits += 2u * (range.y - range.x);
+    let before = (*w).f;
+    let leaves = 1u << params.tree_levels;
+    let at = params.bucket_entries;
+    var first = NO_FACET;
+    var first_d2 = (*w).d2 * PRUNE_SLACK;
+    for (var e = range.x; e < range.y; e++) {
+        let f = grid_words[at + 2u * e + 1u];
+        if (f == before) { continue; }
+        let d2 = packed_box_d2(boxes[leaves + grid_words[at + 2u * e]], q, step);
+        if (d2 < first_d2 || (d2 == first_d2 && f < first)) {
+            first_d2 = d2;
+            first = f;
+        }
+    }
+    if (first == NO_FACET) { return; }
+    walk_project(w, first, p, slave);
+    let bound = (*w).d2 * PRUNE_SLACK;
+    for (var e = range.x; e < range.y; e++) {
+        let f = grid_words[at + 2u * e + 1u];
+        if (f == before || f == first) { continue; }
+        if (packed_box_d2(boxes[leaves + grid_words[at + 2u * e]], q, step) > bound) { continue; }
+        walk_project(w, f, p, slave);
+    }
+}
 
 // The nearest facet within the tracking radius of the slave at walk position t: the last
 // bucket, then its cells ring by ring, each cell skipped when farther than the best; the rings
-// end where none can be nearer. A bucket's entries are taken in two rounds that do not depend
-// on their order: first the one whose box is nearest (ties to the lowest facet id), then each
-// other whose box is within the best distance as it stood after it; the best facet from before
-// the bucket is not projected again (CPU mirror: walk_bucket and bucket_walk_of).
-// One flat loop, one step per iteration (a ring step, a bucket started, one entry of a round)
-// and one projection site: on a software adapter a loop nested in a loop costs every SIMD lane
-// the longest inner loop of any lane at each outer iteration, and a projection inside both
-// rounds runs twice as often.
+// end where none can be nearer.
 fn bucket_walk_of(t: u32) -> BucketWalk {
     let wp = walk_point(t);
     let o = origin(wp.p);
@@ -384,95 +410,22 @@ fn bucket_walk_of(t: u32) -> BucketWalk {
     w.projections = 0u;
     w.cut = false;
     if (o.d2 > w.d2 * PRUNE_SLACK) { return w; } // the master is farther than the radius
-    let leaves = 1u << params.tree_levels;
-    let at = params.bucket_entries;
     var visits = 1u;
+    walk_bucket(&w, overflow_bucket(), wp.p, o.q, wp.node, o.step, &visits);
     var g = Ring(0, vec3<i32>(0));
     var more = true;
-    // 0: start bucket b; 1: its entries' nearest box; 2: the others within the best after it;
-    // 3: the ring's next step; 4: the ring's next cell after a cell's bucket
-    var phase = 0u;
-    var b = overflow_bucket();
-    var after = 3u;
-    var start = 0u;
-    var e = 0u;
-    var end = 0u;
-    var before = NO_FACET;
-    var first = NO_FACET;
-    var first_d2 = 0.0;
-    var bound = 0.0;
-    var it = 0u;
-    for (; it < WALK_STEPS; it++) {
-        var project_f = NO_FACET;
-        if (phase == 0u) {
-            let range = bucket_range(b);
-            if (visits + 2u * (range.y - range.x) > BUCKET_VISITS) {
-                w.cut = true;
-                break;
-            }
-            visits += 2u * (range.y - range.x);
-            before = w.f;
-            first = NO_FACET;
-            first_d2 = w.d2 * PRUNE_SLACK;
-            start = range.x;
-            e = range.x;
-            end = range.y;
-            phase = select(after, 1u, e < end);
-        } else if (phase == 1u) {
-            let f = grid_words[at + 2u * e + 1u];
-            if (f != before) {
-                let d2 = packed_box_d2(boxes[leaves + grid_words[at + 2u * e]], o.q, o.step);
-                if (d2 < first_d2 || (d2 == first_d2 && f < first)) {
-                    first_d2 = d2;
-                    first = f;
-                }
-            }
-            e++;
-            if (e == end) {
-                if (first == NO_FACET) {
-                    phase = after;
-                } else {
-                    project_f = first;
-                    phase = 2u;
-                    e = start;
-                    bound = -1.0;
-                }
-            }
-        } else if (phase == 2u) {
-            if (bound < 0.0) { bound = w.d2 * PRUNE_SLACK; } // after the first's projection
-            let f = grid_words[at + 2u * e + 1u];
-            if (f != before && f != first
-                && packed_box_d2(boxes[leaves + grid_words[at + 2u * e]], o.q, o.step) <= bound) {
-                project_f = f;
-            }
-            e++;
-            if (e == end) { phase = after; }
-        } else if (phase == 4u) {
-            if (ring_next_cell(&g) && !ring_near(o, u32(g.r), w.d2)) { more = false; }
-            visits++;
-            phase = 3u;
-        } else {
-            if (!more || visits >= BUCKET_VISITS || w.cut) { break; }
-            let k = ring_step(o, &g, w.d2);
-            if (k == 2u) { more = false; }
-            var next = k != 1u;
-            if (k == 1u) {
-                let c = o.cell + g.d;
-                let d2 = cell_d2(o, c);
-                if (d2 >= 0.0 && d2 <= w.d2 * PRUNE_SLACK) {
-                    b = bucket_of(vec3<u32>(c));
-                    after = 4u;
-                    phase = 0u;
-                } else {
-                    if (ring_next_cell(&g) && !ring_near(o, u32(g.r), w.d2)) { more = false; }
-                    next = true;
-                }
-            }
-            if (next) { visits++; }
+    for (; more && visits < BUCKET_VISITS && !w.cut; visits++) {
+        let k = ring_step(o, &g, w.d2);
+        if (k == 2u) { more = false; }
+        if (k != 1u) { continue; }
+        let c = o.cell + g.d;
+        let d2 = cell_d2(o, c);
+        if (d2 >= 0.0 && d2 <= w.d2 * PRUNE_SLACK) {
+            walk_bucket(&w, bucket_of(vec3<u32>(c)), wp.p, o.q, wp.node, o.step, &visits);
         }
-        if (project_f != NO_FACET) { walk_project(&w, project_f, wp.p, wp.node); }
+        if (ring_next_cell(&g) && !ring_near(o, u32(g.r), w.d2)) { more = false; }
     }
-    if ((more && visits >= BUCKET_VISITS) || it == WALK_STEPS) { w.cut = true; }
+    if (more && visits >= BUCKET_VISITS) { w.cut = true; }
     return w;
 }
 

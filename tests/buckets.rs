@@ -1,13 +1,17 @@
 //! The bucket search beside the tree: both structures give the same contact bit for bit (every
-//! hit word but the count of facets projected), on the CPU path and every adapter, on regular and
-//! irregular meshes in 2D and 3D, self-contact, far from the origin, collapsed and grown facets,
-//! crowded cells; the bucket search is deterministic and GPU against the CPU mirror agrees; `Auto`
-//! follows the facet sizes and the radius.
+//! hit word but the count of facets projected), on the CPU path and every adapter: meshes in 3D
+//! at several radii, self-contact tracked over increments, facets grown past their cells, a
+//! crowded cell, more than 65,536 slaves with folded dispatches; the bucket search is
+//! deterministic and agrees with the CPU mirror; `Auto` takes the tree. (Every search parity,
+//! precision, tie, far-from-origin, collapsed-facet and bounded-work test also runs both
+//! structures: `common::Both`.)
 
 mod common;
 
-use abut::mesh::{plate_quads, plate_triangles, point_cloud, polyline, sphere_triangles};
-use abut::{Device, GlobalSearch, Model, PairId, SearchResult, SearchStructure, Surface};
+use abut::mesh::{plate_quads, plate_triangles, point_cloud, sphere_triangles};
+use abut::{
+    Device, GlobalSearch, Model, Pair, PairId, Schedule, SearchResult, SearchStructure, Surface,
+};
 use common::*;
 
 /// Runs the search of `pair` with `structure` on `device` at the model's positions, or at
@@ -107,4 +111,152 @@ fn quads_and_triangles_3d() {
     let slaves = point_cloud(10_000, [-0.8, -1.55, 0.7], [1.8, 1.05, 3.3], 10);
     let (m, p) = scene(3, &s.positions, Surface::triangles(&s.facets), &slaves, 0.2);
     check(&m, p, None, "sphere");
+}
+
+/// Self-contact over increments: a sheet folded over itself, every node a slave of its own
+/// surface, moving; global searches (the crowding check included: it decides when the next one
+/// runs) and local ones give the same contacts and triggers with either structure.
+#[test]
+fn self_contact_tracked_over_increments() {
+    let plate = plate_quads(40, 8, 2.0, 0.4, 0.0, 0, &|_, _| 0.0);
+    // fold the right half back over the left, 0.03 above it
+    let folded: Vec<[f64; 3]> = plate
+        .positions
+        .iter()
+        .map(|p| {
+            if p[0] > 1.0 {
+                let a = (p[0] - 1.0) * std::f64::consts::PI / 0.06;
+                let t = a.min(std::f64::consts::PI);
+                let beyond = (p[0] - 1.0 - 0.06).max(0.0);
+                [
+                    1.0 + 0.015 * t.sin() - beyond,
+                    p[1],
+                    0.015 * (1.0 - t.cos()),
+                ]
+            } else {
+                *p
+            }
+        })
+        .collect();
+    let mut m = Model::new_3d();
+    let nodes = m.add_nodes(&folded, &vec![1.0; folded.len()]).unwrap();
+    let s = m.add_surface(Surface::quads(&plate.facets)).unwrap();
+    let set = m.add_node_set(&nodes.to_vec()).unwrap();
+    let schedule = Schedule {
+        interval: 4,
+        ..Schedule::default_for(true)
+    };
+    let p = m
+        .add_pair(Pair::new(set, s).search_radius(0.05).schedule(schedule))
+        .unwrap();
+    for device in devices() {
+        let mut both = Both::new(&device, &m, p).unwrap();
+        let mut pos = m.positions().to_vec();
+        let mut found = 0;
+        for step in 0..10 {
+            for (i, x) in pos.iter_mut().enumerate() {
+                x[0] += 1e-3 * ((i * 7 + step) % 5) as f64;
+                x[2] += 2e-4 * ((i * 3 + step) % 7) as f64 - 6e-4;
+            }
+            let r = both.step(&pos).unwrap();
+            found += r.contacts().flatten().count();
+        }
+        assert!(
+            found > 100,
+            "{device}: too few contacts to be a test ({found})"
+        );
+    }
+}
+
+/// Facets that grew beyond their cells after the pair was made (the plate stretched threefold)
+/// go to the last bucket, which every walk visits: the same contacts.
+#[test]
+fn grown_facets_in_the_last_bucket() {
+    let plate = plate_quads(30, 30, 1.0, 1.0, 0.1, 5, &|x, y| 0.02 * (5.0 * x + y).sin());
+    let slaves = point_cloud(5_000, [0.0, 0.0, -0.05], [3.0, 1.0, 0.05], 17);
+    let (m, p) = scene(
+        3,
+        &plate.positions,
+        Surface::quads(&plate.facets),
+        &slaves,
+        0.05,
+    );
+    let mut moved = m.positions().to_vec();
+    let n_plate = plate.positions.len();
+    for x in &mut moved[..n_plate] {
+        x[0] *= 3.0;
+    }
+    check(&m, p, Some(&moved), "stretched plate");
+}
+
+/// A cell crowded past the walks' visit cap (3,600 small facets inside one large facet's cell):
+/// the slaves there fall back to every facet in chunks, with the tree's contacts.
+#[test]
+fn a_crowded_cell_falls_back_to_chunks() {
+    let small = plate_quads(60, 60, 0.05, 0.05, 0.0, 0, &|_, _| 0.0);
+    let mut positions = small.positions.clone();
+    let mut facets: Vec<[u32; 4]> = small.facets.clone();
+    // one large facet beside them, which sizes the cells
+    let base = positions.len() as u32;
+    positions.extend([
+        [0.1, 0.0, 0.0],
+        [1.1, 0.0, 0.0],
+        [1.1, 1.0, 0.0],
+        [0.1, 1.0, 0.0],
+    ]);
+    facets.push([base, base + 1, base + 2, base + 3]);
+    let slaves = point_cloud(2_000, [0.0, 0.0, -0.01], [0.05, 0.05, 0.01], 23);
+    let (m, p) = scene(3, &positions, Surface::quads(&facets), &slaves, 0.01);
+    let r = check(&m, p, None, "crowded cell");
+    assert!(r.stats.fallbacks > 0, "no walk was cut off: not a test");
+    assert_eq!(r.stats.structure, SearchStructure::Buckets);
+}
+
+/// More than 65,536 slaves with dispatches folded into 2D by a cap of 3 workgroups per
+/// dimension: the same bytes as unfolded, and the tree's contacts.
+#[test]
+fn past_65536_slaves_folded() {
+    let plate = plate_quads(100, 100, 1.0, 1.0, 0.0, 0, &|x, y| {
+        0.01 * (9.0 * x * y).sin()
+    });
+    let slaves = point_cloud(70_000, [0.0, 0.0, -0.02], [1.0, 1.0, 0.02], 29);
+    let (m, p) = scene(
+        3,
+        &plate.positions,
+        Surface::quads(&plate.facets),
+        &slaves,
+        0.02,
+    );
+    for device in devices() {
+        let plain = run_with(&device, &m, p, SearchStructure::Buckets, None);
+        let mut both = Both::new(&device, &m, p).unwrap();
+        both.set_max_workgroups_per_dim(3);
+        both.run(m.positions()).unwrap();
+        let folded = both.buckets.run(m.positions()).unwrap();
+        assert_eq!(folded.raw, plain.raw, "{device}: folded dispatches differ");
+    }
+}
+
+/// `Auto` resolves to the tree, and the statistics and the scene summary's line say which
+/// structure ran.
+#[test]
+fn auto_takes_the_tree_and_says_so() {
+    let plate = plate_quads(10, 10, 1.0, 1.0, 0.0, 0, &|_, _| 0.0);
+    let slaves = point_cloud(100, [0.0, 0.0, -0.05], [1.0, 1.0, 0.05], 3);
+    let (m, p) = scene(
+        3,
+        &plate.positions,
+        Surface::quads(&plate.facets),
+        &slaves,
+        0.1,
+    );
+    assert_eq!(m.pair(p).unwrap().search_structure, SearchStructure::Auto);
+    let mut s = GlobalSearch::new(&Device::cpu(), &m, p).unwrap();
+    assert_eq!(s.search_structure(), SearchStructure::Tree);
+    assert_eq!(
+        s.run(m.positions()).unwrap().stats.structure,
+        SearchStructure::Tree
+    );
+    let r = run_with(&Device::cpu(), &m, p, SearchStructure::Buckets, None);
+    assert_eq!(r.stats.structure, SearchStructure::Buckets);
 }

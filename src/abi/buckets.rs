@@ -34,7 +34,7 @@ impl BucketLayout {
     /// room for every facet in `BIN_SPAN^3` cells.
     /// (Sizes past `u32` saturate: no device holds such a buffer, and allocating it fails.)
     pub fn new(facets: u32) -> Self {
-        let bits = (8 * facets.max(8) as u64)
+        let bits = (4 * facets.max(16) as u64)
             .next_power_of_two()
             .trailing_zeros()
             .min(30);

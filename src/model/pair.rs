@@ -44,15 +44,18 @@ pub struct Pair {
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
 pub enum SearchStructure {
     /// The seed's bucket sort: the facets binned by counting sort into a hashed grid of cells
-    /// sized to the largest facet, a slave's cells visited in rings outward. For facets of one
-    /// size and a radius of about a facet: regular loops, nothing refitted.
+    /// sized to the largest facet (at the model's positions), a slave's cells visited in rings
+    /// outward and pruned by the best distance so far. Its work follows the gap where facets
+    /// are of one size; where sizes vary, small facets crowd the cells (a crowded walk falls
+    /// back to every facet in bounded chunks).
     Buckets,
     /// A bounding-box tree over the facets, refitted at every global search and walked nearer
-    /// child first. For facet sizes that vary widely and radii of many facets.
+    /// child first, pruned by the best distance so far: work that follows the gap whatever the
+    /// facet sizes and the radius.
     Tree,
-    /// [`SearchStructure::Buckets`] when the master's facets are of about one size and the
-    /// radius about one facet, else [`SearchStructure::Tree`] (`crate::search::SearchStage`
-    /// states the rule).
+    /// The faster of the two as measured: [`SearchStructure::Tree`] on every device and scene
+    /// `abut bench --search` has measured (`crate::search::SearchStage::set_search_structure`
+    /// gives the figures).
     #[default]
     Auto,
 }

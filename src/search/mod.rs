@@ -203,12 +203,6 @@ pub enum Trigger {
     Anchored,
 }
 
-/// `SearchStructure::Auto` takes the buckets only when the largest active facet is at most this
-/// many times the median one.
-pub const AUTO_SIZE_SPREAD: f64 = 4.0;
-/// `SearchStructure::Auto` takes the buckets only when the search radius is at most this many
-/// median facets.
-pub const AUTO_RADIUS_FACETS: f64 = 2.0;
 /// The bucket search's cells are at most this many times the largest facet at the model's
 /// positions, and more than half of it (a power of two of box-grid steps): larger than every
 /// facet, so a facet spans at most two cells per axis until it grows.
@@ -262,50 +256,27 @@ pub struct SearchStage {
     resident_span: f64,
     /// The structure the global search uses (never `Auto`: resolved when set).
     structure: SearchStructure,
-    /// The active facets' sizes at the model's positions: the largest box side, and the
-    /// median of each facet's largest box side (model units; what `Auto` and the bucket
-    /// cells follow).
-    facet_sizes: FacetSizes,
+    /// The largest side of an active facet's nodes' box at the model's positions (model
+    /// units): what the bucket search's cells are sized to.
+    largest_facet: f64,
 }
 
-/// The master's active facets' sizes at the model's positions (the longest side of each
-/// facet's nodes' box), model units.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct FacetSizes {
-    /// The largest.
-    pub max: f64,
-    /// The median.
-    pub median: f64,
-}
-
-impl FacetSizes {
-    /// The sizes of `facets` (padded) at `positions`.
-    fn of(facets: &[[u32; 4]], positions: &[[f64; 3]]) -> Self {
-        let mut sizes: Vec<f64> = facets
-            .iter()
-            .map(|fac| {
-                let n = crate::model::facet_node_count(*fac);
-                (0..3)
-                    .map(|a| {
-                        let xs = fac[..n].iter().map(|&id| positions[id as usize][a]);
-                        let lo = xs.clone().fold(f64::INFINITY, f64::min);
-                        let hi = xs.fold(f64::NEG_INFINITY, f64::max);
-                        hi - lo
-                    })
-                    .fold(0.0, f64::max)
-            })
-            .collect();
-        if sizes.is_empty() {
-            return Self {
-                max: 0.0,
-                median: 0.0,
-            };
-        }
-        let mid = sizes.len() / 2;
-        let (_, &mut median, _) = sizes.select_nth_unstable_by(mid, f64::total_cmp);
-        let max = sizes.iter().copied().fold(0.0, f64::max);
-        Self { max, median }
-    }
+/// The largest side of the nodes' box of any of `facets` (padded) at `positions`.
+fn largest_facet(facets: &[[u32; 4]], positions: &[[f64; 3]]) -> f64 {
+    facets
+        .iter()
+        .map(|fac| {
+            let n = crate::model::facet_node_count(*fac);
+            (0..3)
+                .map(|a| {
+                    let xs = fac[..n].iter().map(|&id| positions[id as usize][a]);
+                    let lo = xs.clone().fold(f64::INFINITY, f64::min);
+                    let hi = xs.fold(f64::NEG_INFINITY, f64::max);
+                    hi - lo
+                })
+                .fold(0.0, f64::max)
+        })
+        .fold(0.0, f64::max)
 }
 
 impl std::ops::Deref for GlobalSearch {
@@ -489,7 +460,7 @@ impl SearchStage {
             .map(|&s| model.positions()[s as usize])
             .collect();
         let walk_order = tree::morton_order(&slave_points, model.dim()).into();
-        let facet_sizes = FacetSizes::of(&facets, model.positions());
+        let largest_facet = largest_facet(&facets, model.positions());
         let mut stage = Self {
             active: master.active.as_slice().into(),
             master,
@@ -512,28 +483,20 @@ impl SearchStage {
             resident_origin: None,
             resident_span: 0.0,
             structure: SearchStructure::Tree,
-            facet_sizes,
+            largest_facet,
         };
         stage.set_search_structure(SearchStructure::Auto);
         Ok(stage)
     }
 
-    /// Sets the global search's structure; `Auto` chooses the buckets when the active facets
-    /// are of about one size (the largest at most [`AUTO_SIZE_SPREAD`] times the median) and
-    /// the radius at most [`AUTO_RADIUS_FACETS`] median facets, the tree otherwise. Results do
-    /// not depend on it.
+    /// Sets the global search's structure. Results do not depend on it. `Auto` chooses the
+    /// tree: `abut bench --search` (docs/BENCHMARKS.md) measured it faster than the buckets on
+    /// the CPU path, lavapipe and llvmpipe for every radius on the wavy plate (1.5–6×) and by
+    /// orders of magnitude on the graded one, so no facet-size spread or radius measured there
+    /// justifies the buckets.
     pub fn set_search_structure(&mut self, structure: SearchStructure) {
-        let s = self.facet_sizes;
         self.structure = match structure {
-            SearchStructure::Auto => {
-                let uniform = s.max <= AUTO_SIZE_SPREAD * s.median;
-                let near = self.radius <= AUTO_RADIUS_FACETS * s.median;
-                if uniform && near && s.median > 0.0 {
-                    SearchStructure::Buckets
-                } else {
-                    SearchStructure::Tree
-                }
-            }
+            SearchStructure::Auto => SearchStructure::Tree,
             chosen => chosen,
         };
         // the plan holds the flags: the next increment makes a fresh one
@@ -545,9 +508,10 @@ impl SearchStage {
         self.structure
     }
 
-    /// The active facets' sizes at the model's positions.
-    pub fn facet_sizes(&self) -> FacetSizes {
-        self.facet_sizes
+    /// The largest side of an active facet's nodes' box at the model's positions (model
+    /// units): the bucket search's cells are sized to it.
+    pub fn largest_facet(&self) -> f64 {
+        self.largest_facet
     }
 
     /// Sets when the search runs globally.

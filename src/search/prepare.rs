@@ -52,7 +52,7 @@ impl SearchStage {
             n_motion_nodes: self.motion_nodes.len() as u32,
             ref_node: self.ref_node,
             bucket_cell: if buckets {
-                (BUCKET_CELL_FACETS * self.facet_sizes.max) as f32
+                (BUCKET_CELL_FACETS * self.largest_facet) as f32
             } else {
                 0.0
             },

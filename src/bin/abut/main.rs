@@ -79,8 +79,7 @@ struct SearchArgs {
     /// Slave nodes checked against the f64 brute-force oracle.
     #[arg(long, default_value_t = 2000)]
     check: usize,
-    /// The global search's structure (auto: the buckets for facets of about one size and a
-    /// radius of about a facet, else the tree).
+    /// The global search's structure (auto: the faster as measured, the tree).
     #[arg(long, value_enum, default_value_t = StructureArg::Auto)]
     structure: StructureArg,
 }
