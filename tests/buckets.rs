@@ -147,12 +147,12 @@ fn self_contact_tracked_over_increments() {
         ..Schedule::default_for(true)
     };
     let p = m
-        .add_pair(Pair::new(set, s).search_radius(0.05).schedule(schedule))
+        .add_pair(Pair::new(set, s).search_radius(0.12).schedule(schedule))
         .unwrap();
     for device in devices() {
         let mut both = Both::new(&device, &m, p).unwrap();
         let mut pos = m.positions().to_vec();
-        let mut found = 0;
+        let (mut found, mut crowded) = (0, 0);
         for step in 0..10 {
             for (i, x) in pos.iter_mut().enumerate() {
                 x[0] += 1e-3 * ((i * 7 + step) % 5) as f64;
