@@ -113,21 +113,23 @@ fn quads_and_triangles_3d() {
     check(&m, p, None, "sphere");
 }
 
-/// Self-contact over increments: a sheet folded over itself, every node a slave of its own
-/// surface, moving; global searches (the crowding check included: it decides when the next one
-/// runs) and local ones give the same contacts and triggers with either structure.
+/// Self-contact over device-resident penalty increments: a sheet folded over itself, every
+/// node a slave of its own surface, moving; the pair with the buckets gives the tree's forces
+/// bit for bit and the same statistics but the fallbacks — the same global searches among
+/// them, so the crowding check (which asks for the next one) agrees.
 #[test]
 fn self_contact_tracked_over_increments() {
+    use abut::testing::abi::stats::IncrementStats;
+    use abut::{Contact, Enforce, Penalty, Stiffness};
     let plate = plate_quads(40, 8, 2.0, 0.4, 0.0, 0, &|_, _| 0.0);
-    // fold the right half back over the left, 0.03 above it
+    // the right half folded back over the left, 0.03 above it
     let folded: Vec<[f64; 3]> = plate
         .positions
         .iter()
         .map(|p| {
             if p[0] > 1.0 {
-                let a = (p[0] - 1.0) * std::f64::consts::PI / 0.06;
-                let t = a.min(std::f64::consts::PI);
-                let beyond = (p[0] - 1.0 - 0.06).max(0.0);
+                let t = ((p[0] - 1.0) * std::f64::consts::PI / 0.06).min(std::f64::consts::PI);
+                let beyond = (p[0] - 1.06).max(0.0);
                 [
                     1.0 + 0.015 * t.sin() - beyond,
                     p[1],
@@ -138,32 +140,74 @@ fn self_contact_tracked_over_increments() {
             }
         })
         .collect();
-    let mut m = Model::new_3d();
-    let nodes = m.add_nodes(&folded, &vec![1.0; folded.len()]).unwrap();
-    let s = m.add_surface(Surface::quads(&plate.facets)).unwrap();
-    let set = m.add_node_set(&nodes.to_vec()).unwrap();
-    let schedule = Schedule {
-        interval: 4,
-        ..Schedule::default_for(true)
+    let n = folded.len();
+    let model = |structure| {
+        let mut m = Model::new_3d();
+        let nodes = m.add_nodes(&folded, &vec![1.0; n]).unwrap();
+        let s = m.add_surface(Surface::quads(&plate.facets)).unwrap();
+        let set = m.add_node_set(&nodes.to_vec()).unwrap();
+        let pair = Pair::new(set, s)
+            .search_radius(0.12)
+            .search_structure(structure)
+            .schedule(Schedule {
+                interval: 1000,
+                ..Schedule::default_for(true)
+            })
+            .enforce(Enforce::Penalty(Penalty {
+                stiffness: Stiffness::Absolute(50.0),
+                ..Default::default()
+            }));
+        m.add_pair(pair).unwrap();
+        m
     };
-    let p = m
-        .add_pair(Pair::new(set, s).search_radius(0.12).schedule(schedule))
-        .unwrap();
-    for device in devices() {
-        let mut both = Both::new(&device, &m, p).unwrap();
-        let mut pos = m.positions().to_vec();
-        let (mut found, mut crowded) = (0, 0);
-        for step in 0..10 {
-            for (i, x) in pos.iter_mut().enumerate() {
-                x[0] += 1e-3 * ((i * 7 + step) % 5) as f64;
-                x[2] += 2e-4 * ((i * 3 + step) % 7) as f64 - 6e-4;
+    // the upper sheet pressed down through the lower one, everything sliding a little
+    let state = |k: usize| {
+        let x: Vec<[f64; 3]> = folded
+            .iter()
+            .zip(&plate.positions)
+            .enumerate()
+            .map(|(i, (p, flat))| {
+                let s = 1e-3 * k as f64;
+                let down = if flat[0] > 1.06 { 6.0 * s } else { 0.0 };
+                [p[0] + s * ((i * 7) % 5) as f64, p[1], p[2] - down]
+            })
+            .collect();
+        (x, vec![[0.0, 0.0, -0.1]; n])
+    };
+    for d in devices() {
+        let runs: Vec<_> = [SearchStructure::Tree, SearchStructure::Buckets]
+            .map(|st| {
+                let m = model(st);
+                let mut c = Contact::new(&d, &m).unwrap();
+                resident_run(&d, &mut c, n, 10, &state, 1e-4)
+            })
+            .into_iter()
+            .collect();
+        let mut searches = 0;
+        for (k, (t, b)) in runs[0].iter().zip(&runs[1]).enumerate() {
+            assert_eq!(t.0, b.0, "{d}: increment {k}: forces");
+            let mut st: [IncrementStats; 2] = [
+                bytemuck::pod_read_unaligned(&t.1[..std::mem::size_of::<IncrementStats>()]),
+                bytemuck::pod_read_unaligned(&b.1[..std::mem::size_of::<IncrementStats>()]),
+            ];
+            for s in &mut st {
+                s.fallbacks = 0;
             }
-            let r = both.step(&pos).unwrap();
-            found += r.contacts().flatten().count();
+            assert_eq!(st[0], st[1], "{d}: increment {k}: statistics");
+            searches += st[0].global_searches;
         }
+        let loaded = runs[0]
+            .iter()
+            .flat_map(|r| &r.0)
+            .filter(|f| f[2] != 0.0)
+            .count();
         assert!(
-            found > 100,
-            "{device}: too few contacts to be a test ({found})"
+            loaded > 100,
+            "{d}: too few contact forces ({loaded}): not a test"
+        );
+        assert!(
+            searches >= 3,
+            "{d}: {searches} global searches: never crowded, not a test"
         );
     }
 }
