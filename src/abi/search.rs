@@ -65,7 +65,7 @@ pub struct SearchParams {
     /// large to bin (0 with the tree).
     pub bucket_bits: u32,
     /// Word of the bucket grid where its entries (leaf slot, facet) start: after the bucket
-    /// words and their scan levels ([`BucketLayout`]).
+    /// words and their scan levels ([`crate::abi::buckets::BucketLayout`]).
     pub bucket_entries: u32,
     /// Padding.
     pub _pad: [u32; 2],

@@ -17,6 +17,7 @@ mod exec;
 mod prepare;
 mod resident;
 mod run;
+mod structure;
 pub(crate) mod tree;
 
 pub use crate::plan::{frame, Prepared};
@@ -261,24 +262,6 @@ pub struct SearchStage {
     largest_facet: f64,
 }
 
-/// The largest side of the nodes' box of any of `facets` (padded) at `positions`.
-fn largest_facet(facets: &[[u32; 4]], positions: &[[f64; 3]]) -> f64 {
-    facets
-        .iter()
-        .map(|fac| {
-            let n = crate::model::facet_node_count(*fac);
-            (0..3)
-                .map(|a| {
-                    let xs = fac[..n].iter().map(|&id| positions[id as usize][a]);
-                    let lo = xs.clone().fold(f64::INFINITY, f64::min);
-                    let hi = xs.fold(f64::NEG_INFINITY, f64::max);
-                    hi - lo
-                })
-                .fold(0.0, f64::max)
-        })
-        .fold(0.0, f64::max)
-}
-
 impl std::ops::Deref for GlobalSearch {
     type Target = SearchStage;
     fn deref(&self) -> &SearchStage {
@@ -460,7 +443,7 @@ impl SearchStage {
             .map(|&s| model.positions()[s as usize])
             .collect();
         let walk_order = tree::morton_order(&slave_points, model.dim()).into();
-        let largest_facet = largest_facet(&facets, model.positions());
+        let largest_facet = structure::largest_facet(&facets, model.positions());
         let mut stage = Self {
             active: master.active.as_slice().into(),
             master,
@@ -487,31 +470,6 @@ impl SearchStage {
         };
         stage.set_search_structure(SearchStructure::Auto);
         Ok(stage)
-    }
-
-    /// Sets the global search's structure. Results do not depend on it. `Auto` chooses the
-    /// tree: `abut bench --search` (docs/BENCHMARKS.md) measured it faster than the buckets on
-    /// the CPU path, lavapipe and llvmpipe for every radius on the wavy plate (1.5–6×) and by
-    /// orders of magnitude on the graded one, so no facet-size spread or radius measured there
-    /// justifies the buckets.
-    pub fn set_search_structure(&mut self, structure: SearchStructure) {
-        self.structure = match structure {
-            SearchStructure::Auto => SearchStructure::Tree,
-            chosen => chosen,
-        };
-        // the plan holds the flags: the next increment makes a fresh one
-        self.resident_origin = None;
-    }
-
-    /// The global search's structure in use (`Buckets` or `Tree`).
-    pub fn search_structure(&self) -> SearchStructure {
-        self.structure
-    }
-
-    /// The largest side of an active facet's nodes' box at the model's positions (model
-    /// units): the bucket search's cells are sized to it.
-    pub fn largest_facet(&self) -> f64 {
-        self.largest_facet
     }
 
     /// Sets when the search runs globally.

@@ -1,6 +1,7 @@
 //! Tests of the increment's entries: kernels, groups, slots.
 
 use super::*;
+use crate::abi::passes::{self, Pass};
 
 /// The plan's slots hold the largest search there can be: a tree of 32 levels (one refit
 /// pass per level, 33) and the most slaves a u32 counts (four scan levels); with one level
