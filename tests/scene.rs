@@ -1195,3 +1195,37 @@ fn a_fixed_increment_above_the_contacts_limit_is_warned_about() {
         "{b:?}"
     );
 }
+
+/// `search_structure` in a scene: "buckets" and "tree" give the same run bit for bit (the
+/// bar's contact force curve and the contact nodes), the summary names the structure each pair
+/// used ("auto" the tree), and anything else is an error naming the key.
+#[test]
+fn the_search_structure_is_a_scene_key() {
+    let scene_with = |structure: &str| {
+        bar_on_plate("bar on a plate, search structure", 0.0, 0.0)
+            .boundary(
+                boundary("bar", "z+")
+                    .with("displacement", [0.0, 0.0, -0.01])
+                    .with("ramp", 20.0),
+            )
+            .set_in("contact", 0, "search_structure", structure)
+    };
+    for d in devices() {
+        let runs: Vec<_> = ["tree", "buckets", "auto"]
+            .iter()
+            .map(|s| run(&scene_with(s).scene(), &d, None).unwrap())
+            .collect();
+        for (s, used) in runs.iter().zip(["tree", "buckets", "tree"]) {
+            let line = format!("pair 0: global search by {used}");
+            assert!(s.built.contains(&line), "{d}: {:?}", s.built);
+        }
+        let json = |s: &abut::scene::Summary| {
+            let v = serde_json::to_value(s).unwrap();
+            (v["curve"].to_string(), v["contact_nodes"].to_string())
+        };
+        assert_eq!(json(&runs[0]), json(&runs[1]), "{d}: tree vs buckets");
+        assert!(runs[0].peak_force > 0.0);
+    }
+    let e = Scene::parse(&scene_with("grid").text()).unwrap_err();
+    assert!(e.to_string().contains("contact.search_structure"), "{e}");
+}

@@ -96,7 +96,9 @@ fn scene() -> Scene {
         .add_pair(
             Pair::new(set, master)
                 .search_radius(0.05)
-                .enforce(Enforce::Penalty(pen)),
+                .enforce(Enforce::Penalty(pen))
+                // the bucket search's kernels split too (self-contact: its crowding check)
+                .search_structure(abut::SearchStructure::Buckets),
         )
         .unwrap();
     let x0 = model.positions().to_vec();

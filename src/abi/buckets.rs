@@ -30,7 +30,7 @@ pub struct BucketLayout {
 }
 
 impl BucketLayout {
-    /// The layout for `facets` active facets: at least two buckets per facet (64 at least),
+    /// The layout for `facets` active facets: at least four buckets per facet (64 at least),
     /// room for every facet in `BIN_SPAN^3` cells.
     /// (Sizes past `u32` saturate: no device holds such a buffer, and allocating it fails.)
     pub fn new(facets: u32) -> Self {
@@ -201,11 +201,12 @@ mod tests {
     #[test]
     fn layout_and_shift() {
         let l = BucketLayout::new(1000);
-        assert_eq!(l.bits, 11);
-        assert_eq!(l.buckets(), 2049);
+        assert_eq!(l.bits, 12);
+        assert_eq!(l.buckets(), 4097);
         assert_eq!(l.entries, l.levels.words);
         assert_eq!(l.words, l.entries + 16_000);
         assert_eq!(BucketLayout::new(0).bits, 6);
+        assert_eq!(BucketLayout::new(u32::MAX).bits, 30);
         // cells of 2^s steps at or below the cell size
         let margin = 1.0 / 1024.0;
         assert_eq!(cell_shift(1.0, margin), 10);

@@ -559,6 +559,11 @@ impl Scene {
             if let Some(r) = c.search_radius {
                 pair = pair.search_radius(r);
             }
+            pair = pair.search_structure(match c.search_structure.as_deref() {
+                Some("tree") => crate::model::SearchStructure::Tree,
+                Some("buckets") => crate::model::SearchStructure::Buckets,
+                _ => crate::model::SearchStructure::Auto,
+            });
             if let Some(k) = c.search_interval {
                 pair = pair.schedule(Schedule {
                     interval: k,

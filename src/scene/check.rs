@@ -502,6 +502,16 @@ impl Scene {
                 );
             }
         }
+        if !matches!(
+            c.search_structure.as_deref(),
+            None | Some("auto" | "tree" | "buckets")
+        ) {
+            return bad(
+                "contact.search_structure",
+                format!("{:?} (master {})", c.search_structure, c.master),
+                "must be auto, tree or buckets",
+            );
+        }
         if c.search_interval == Some(0) {
             return bad(
                 "contact.search_interval",

@@ -67,6 +67,7 @@
 //! # damping = 0.1         # of each penalty spring's critical damping
 //! # search_interval = 100
 //! # search_radius = 0.1   # model length (default: the master's mean facet size)
+//! # search_structure = "auto"   # auto (the tree, as measured) | tree | buckets
 //! ```
 //!
 //! Errors name the key and the `[[section]]` entry; from a file (`Scene::load`) also the file

@@ -405,6 +405,10 @@ pub struct ContactSpec {
     /// farther than this from every master facet is not in the pair's contacts.
     #[serde(default)]
     pub search_radius: Option<f64>,
+    /// The global search's structure: "auto" (default: the tree, as measured), "tree" or
+    /// "buckets" (`abut::SearchStructure`; results do not depend on it).
+    #[serde(default)]
+    pub search_structure: Option<String>,
     /// A pair read from an Abaqus deck: its enforcement, friction, sliding and schedule as the
     /// deck defines them (the keys above then only name the faces).
     #[serde(skip)]

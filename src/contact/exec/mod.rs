@@ -154,7 +154,7 @@ pub(crate) trait IncrementExec: wgpu::WasmNotSend {
 /// Every role a device-resident increment writes, per pair (`true`) or once (`false`): what a
 /// split increment hands from one executor to the other. `tests` check it against the passes'
 /// declared access.
-pub(crate) const HANDED_OVER: [(Buf, bool); 20] = [
+pub(crate) const HANDED_OVER: [(Buf, bool); 21] = [
     (Buf::Nodes, true),
     (Buf::Status, true),
     (Buf::Active, true),
@@ -166,6 +166,7 @@ pub(crate) const HANDED_OVER: [(Buf, bool); 20] = [
     (Buf::Work, true),
     (Buf::Best, true),
     (Buf::WalkPoints, true),
+    (Buf::Grid, true),
     (Buf::Normals, true),
     (Buf::State, true),
     (Buf::Out, true),

@@ -67,6 +67,7 @@ impl ContactSpec {
             damping: None,
             search_interval: None,
             search_radius: None,
+            search_structure: None,
             deck: Some(settings),
         }
     }
