@@ -378,7 +378,7 @@ fn walk_bucket(w: ptr<function, BucketWalk>, b: u32, p: vec3<f32>, q: vec3<f32>,
     let at = params.bucket_entries;
     var first = NO_FACET;
     var first_d2 = (*w).d2 * PRUNE_SLACK;
-    for (var e = range.x; e < range.y; e++) {
+    for (var e = range.x; e < min(range.y, range.x + BUCKET_VISITS); e++) {
         let f = grid_words[at + 2u * e + 1u];
         if (f == before) { continue; }
         let d2 = packed_box_d2(boxes[leaves + grid_words[at + 2u * e]], q, step);
@@ -390,7 +390,7 @@ fn walk_bucket(w: ptr<function, BucketWalk>, b: u32, p: vec3<f32>, q: vec3<f32>,
     if (first == NO_FACET) { return; }
     walk_project(w, first, p, slave);
     let bound = (*w).d2 * PRUNE_SLACK;
-    for (var e = range.x; e < range.y; e++) {
+    for (var e = range.x; e < min(range.y, range.x + BUCKET_VISITS); e++) {
         let f = grid_words[at + 2u * e + 1u];
         if (f == before || f == first) { continue; }
         if (packed_box_d2(boxes[leaves + grid_words[at + 2u * e]], q, step) > bound) { continue; }
@@ -466,7 +466,7 @@ fn crowded_in(b: u32, p: vec3<f32>, q: vec3<f32>, slave: u32, best_f: u32, step:
     let r2 = params.radius * params.radius;
     let leaves = 1u << params.tree_levels;
     let at = params.bucket_entries;
-    for (var e = range.x; e < range.y; e++) {
+    for (var e = range.x; e < min(range.y, range.x + BUCKET_VISITS); e++) {
         let j = grid_words[at + 2u * e];
         let f = grid_words[at + 2u * e + 1u];
         if (f == best_f || packed_box_d2(boxes[leaves + j], q, step) > r2 * PRUNE_SLACK) { continue; }
