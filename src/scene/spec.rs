@@ -1,4 +1,7 @@
 //! The scene file's tables, as serde reads them, and their checks (each error names the key).
+//!
+//! Long file: one struct per table of the scene file, each key documented where serde reads
+//! it — the file's schema, read as one; split, it would be a schema in pieces.
 
 use serde::Deserialize;
 

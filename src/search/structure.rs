@@ -5,9 +5,10 @@ use super::*;
 
 impl SearchStage {
     /// Sets the global search's structure. Results do not depend on it. `Auto` chooses the
-    /// tree: `abut bench --search` (docs/BENCHMARKS.md) measured it faster than the buckets on
-    /// the CPU path, lavapipe and llvmpipe for every radius on the wavy plate (1.5–6×) and by
-    /// orders of magnitude on the graded one, so no facet-size spread or radius measured there
+    /// tree: `abut bench --search` (docs/BENCHMARKS.md, 2026-12-04) measured it faster than the
+    /// buckets on the CPU path, lavapipe and llvmpipe at every radius (0.5, 1 and 3 facets): on
+    /// the wavy plate of uniform facets by 1.8–2.3× on the CPU path and 4.4–7.5× on the
+    /// adapters, on the graded one by 230–320×; no facet-size spread or radius measured there
     /// justifies the buckets.
     pub fn set_search_structure(&mut self, structure: SearchStructure) {
         self.structure = match structure {
