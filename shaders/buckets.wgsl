@@ -41,9 +41,10 @@
 //             when its box is farther than the best distance by more than round-off
 //             (PRUNE_SLACK), so every facet at the best distance is projected: the result is
 //             the tree's and the brute force's (nearest within the tracking radius, ties to the
-//             lowest id). Determinism: a bucket's entries are pruned by the best distance as
-//             it stood before the bucket and never by each other, so the facets projected and
-//             counted do not depend on the order bucket_fill left them in. Bounded: a walk
+//             lowest id). Determinism: a bucket's entries are taken in two rounds that no
+//             order decides (the nearest box first, ties to the lowest facet id; then the
+//             others within the best distance after it), so the facets projected and counted
+//             do not depend on the order bucket_fill left them in. Bounded: a walk
 //             visits at most BUCKET_VISITS cells and entries; one that would go beyond leaves
 //             every leaf slot to the chunks (as the tree's fallback, STATUS_FALLBACK), and a
 //             crowding check cut off counts the slave as crowded.

@@ -4,8 +4,9 @@
 //! walk (`nearest_facet::nearest_walk`), which the chunk, tie and hit passes finish.
 //!
 //! `bucket_fill` writes each bucket's entries in leaf-slot order here and in the device's order
-//! on a GPU; a walk prunes a bucket's entries by the best distance from before the bucket, so
-//! the records are the same bits either way.
+//! on a GPU; a walk takes a bucket's entries in two rounds that no order decides (the nearest
+//! box first, then the others within the best distance after it), so the records are the same
+//! bits either way.
 
 use rayon::prelude::*;
 
