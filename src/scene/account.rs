@@ -6,10 +6,15 @@
 
 use std::time::Instant;
 
+use super::force_history::ForceHistory;
 use super::summary::QuasiStaticSummary;
 use super::{CurveSample, Progress, RunSpec, Scene, Summary};
 use crate::device::{Device, Traffic};
 use crate::error::{Error, Result};
+
+/// Samples the force–displacement curve keeps at most; a power of two (about 0.5 MB of
+/// `summary.json` with one rigid body).
+pub const CURVE_SAMPLES: usize = 1 << 12;
 
 /// A run's accumulators.
 pub(super) struct Account<'a> {
@@ -27,9 +32,15 @@ pub(super) struct Account<'a> {
     /// The energy balance's largest drift and the largest energy (its scale).
     drift: f64,
     scale: f64,
-    /// Each increment's middle and the total contact force then.
-    forces: Vec<(f64, f64)>,
+    /// Each increment's middle and the total contact force then (in blocks past
+    /// `force_history::FORCE_BLOCKS` increments).
+    forces: ForceHistory,
+    /// The force–displacement curve, at most [`CURVE_SAMPLES`] samples, one every
+    /// `curve_stride` output rows.
     curve: Vec<CurveSample>,
+    curve_stride: usize,
+    /// Output rows so far.
+    rows: usize,
     /// The contact force at the last increment.
     pub final_force: [f64; 3],
     peak: f64,
@@ -76,8 +87,10 @@ impl<'a> Account<'a> {
             // a large fraction
             drift: 0.0,
             scale: 0.0,
-            forces: Vec::new(),
+            forces: ForceHistory::default(),
             curve: Vec::new(),
+            curve_stride: 1,
+            rows: 0,
             final_force: [0.0; 3],
             peak: 0.0,
             first_seconds: 0.0,
@@ -185,7 +198,7 @@ impl<'a> Account<'a> {
         let force = (f[0] * f[0] + f[1] * f[1] + f[2] * f[2]).sqrt();
         let peak = force > self.peak;
         self.peak = self.peak.max(force);
-        self.forces.push((time - 0.5 * step, force));
+        self.forces.push(time, step, force);
         (force, peak)
     }
 
@@ -194,13 +207,28 @@ impl<'a> Account<'a> {
         self.k.is_multiple_of(self.run.output_every.max(1))
     }
 
-    /// A sample of the force–displacement curve at `time` (the rigid bodies' displacements).
+    /// An output row's sample of the force–displacement curve at `time` (the rigid bodies'
+    /// displacements), kept when it falls on the curve's stride; a full curve keeps every
+    /// other sample and doubles its stride, so that it stays within [`CURVE_SAMPLES`].
     pub fn sample(&mut self, time: f64, body_displacement: Vec<[f64; 3]>) {
+        let row = self.rows;
+        self.rows += 1;
+        if !row.is_multiple_of(self.curve_stride) {
+            return;
+        }
         self.curve.push(CurveSample {
             time,
             force: self.final_force,
             body_displacement,
         });
+        if self.curve.len() == CURVE_SAMPLES {
+            let mut k = 0;
+            self.curve.retain(|_| {
+                k += 1;
+                k % 2 == 1
+            });
+            self.curve_stride *= 2;
+        }
     }
 
     /// Kinetic and internal energy after the increment to `time`: their ratio at the end of a
@@ -253,6 +281,7 @@ impl<'a> Account<'a> {
             _ => Traffic::default(),
         };
         let stats = force_stats(&self.forces, self.dt);
+        let curve_every = self.run.output_every.max(1) * self.curve_stride;
         let (governing_limit, increment_note) = governing_limit(
             self.run.dt.is_some(),
             self.contact_dt.is_finite(),
@@ -324,6 +353,8 @@ impl<'a> Account<'a> {
             bodies: ends.bodies,
             contact_nodes: ends.contact_nodes,
             curve: self.curve,
+            curve_every,
+            force_history_every: self.forces.per_entry(),
             dispatches_per_increment: traffic
                 .dispatches
                 .iter()
@@ -381,13 +412,19 @@ struct ForceStats {
     mean: f64,
 }
 
-fn force_stats(forces: &[(f64, f64)], dt: f64) -> ForceStats {
-    let first = forces.iter().position(|h| h.1 > 0.0);
-    let last = forces.iter().rposition(|h| h.1 > 0.0);
+fn force_stats(history: &ForceHistory, dt: f64) -> ForceStats {
+    let (first, last) = history.contact_span();
+    let forces = &history.entries();
     let (impact, release, impulse, plateau) = super::half_plateau_edges(forces);
+    // once merged into blocks, the impulse as summed increment by increment
+    let impulse = if history.per_entry() > 1 {
+        history.impulse()
+    } else {
+        impulse
+    };
     ForceStats {
-        start: first.map_or(f64::NAN, |i| forces[i].0 - 0.5 * dt),
-        end: last.map_or(f64::NAN, |i| forces[i].0 + 0.5 * dt),
+        start: first.map_or(f64::NAN, |t| t - 0.5 * dt),
+        end: last.map_or(f64::NAN, |t| t + 0.5 * dt),
         impact,
         release,
         impulse,

@@ -80,6 +80,7 @@ mod check;
 pub mod deck_output;
 #[cfg(feature = "mpi")]
 mod distributed;
+mod force_history;
 mod from_inp;
 mod increments;
 mod run;

@@ -149,9 +149,18 @@ pub struct Summary {
     pub bodies: Vec<BodySummary>,
     /// Slave nodes in contact at the end, with their pressures.
     pub contact_nodes: Vec<ContactNode>,
-    /// The total contact force against the bodies' displacements every `run.output_every`
-    /// increments: a force–indentation (or crush) curve.
+    /// The total contact force against the bodies' displacements every `curve_every`
+    /// increments: a force–indentation (or crush) curve. At most 4,096 samples: a run with more
+    /// output rows keeps every other one each time the curve fills (`history.csv` has every
+    /// row).
     pub curve: Vec<CurveSample>,
+    /// Increments between the curve's samples: `run.output_every`, times 2, 4, … once the curve
+    /// filled.
+    pub curve_every: usize,
+    /// Increments per entry of the contact force history the force statistics (contact times,
+    /// plateau, mean force, impulse) come from: 1, or 2, 4, … past 131,072 increments, where
+    /// neighbouring increments are merged to keep the history's memory bounded.
+    pub force_history_every: usize,
     /// GPU dispatches per increment by pass, averaged over the increments after the first
     /// (empty on the CPU path). Counted on the device: work others submit to it during the
     /// run counts too.
