@@ -9,7 +9,7 @@ mod common;
 
 use abut::scene::{run_with_progress, Progress};
 use abut::Device;
-use common::scene_toml::{contact, part, part_of, SceneToml};
+use common::scene_toml::{mass_on_spring, SceneToml};
 
 /// Increments of the run.
 const INCREMENTS: u64 = 1_000_000;
@@ -34,23 +34,8 @@ fn resident_bytes() -> u64 {
 /// an increment, so that round-off in the time adds none).
 fn bouncing() -> SceneToml {
     let end = (INCREMENTS as f64 - 0.5) * DT;
-    SceneToml::new("a point mass bouncing for a million increments", end)
-        .run("dt", DT)
-        .run("gravity", [0.0, 0.0, -1000.0])
-        .run("output_every", 1)
-        .part(part("plate", "plate", [0.0; 3], [1.0, 1.0, 0.0], [2, 2, 0]))
-        .part(
-            part_of("ball", "points")
-                .with("points", [[0.4, 0.6, 0.005]])
-                .with("mass", 1.0)
-                .with("velocity", [0.0, 0.0, 0.0]),
-        )
-        .contact(
-            contact("ball", "all", "plate", "z+")
-                .with("stiffness", 1e6)
-                .with("damping", 0.0)
-                .with("search_radius", 0.5),
-        )
+    let title = "a point mass bouncing for a million increments";
+    mass_on_spring(title, 1e6, 0.005, DT, end).run("output_every", 1)
 }
 
 #[test]

@@ -10,27 +10,12 @@ mod common;
 use abut::explicit::Solver;
 use abut::scene::run;
 use abut::{Device, Error};
-use common::scene_toml::{contact, part, part_of, SceneToml};
+use common::scene_toml::{mass_on_spring, part, SceneToml};
 
 /// A unit mass resting on a rigid plate with a penalty spring of stiffness `k` (undamped),
 /// pressed by a gravity of 1000 m/s², at a fixed `dt`, for `end` seconds.
 fn bouncing(k: f64, dt: f64, end: f64) -> SceneToml {
-    SceneToml::new("a point mass on a stiff spring", end)
-        .run("dt", dt)
-        .run("gravity", [0.0, 0.0, -1000.0])
-        .part(part("plate", "plate", [0.0; 3], [1.0, 1.0, 0.0], [2, 2, 0]))
-        .part(
-            part_of("ball", "points")
-                .with("points", [[0.4, 0.6, 0.0]])
-                .with("mass", 1.0)
-                .with("velocity", [0.0, 0.0, 0.0]),
-        )
-        .contact(
-            contact("ball", "all", "plate", "z+")
-                .with("stiffness", k)
-                .with("damping", 0.0)
-                .with("search_radius", 0.5),
-        )
+    mass_on_spring("a point mass on a stiff spring", k, 0.0, dt, end)
 }
 
 #[test]

@@ -3,6 +3,9 @@
 
 use super::*;
 
+/// The energy floor's share of the model's capacity (see [`Solver::energy_floor`]).
+pub const ENERGY_FLOOR: f64 = 1e-12;
+
 impl Solver {
     /// What to look at when the solution runs away: the largest overclosure contact resolved
     /// so far and when (an initial one resolved within one increment strains the elements
@@ -170,9 +173,55 @@ impl Solver {
 
     /// The energy balance error: the change of [`Energy::balance`] since the first increment,
     /// relative to the largest of the kinetic, internal, external, contact and dissipated
-    /// energies now.
+    /// energies now, or to [`Solver::energy_floor`] where they are all below it (a model at
+    /// rest, whose energies are round-off).
     pub fn balance_error(&self) -> f64 {
-        self.energy_drift() / self.energy_scale().max(1e-300)
+        let floor = self.floor0.unwrap_or_else(|| self.energy_floor());
+        self.energy_drift() / self.energy_scale().max(floor).max(1e-300)
+    }
+
+    /// The least energy the balance error is measured against (energy units): 10⁻¹² of the
+    /// model's capacity — its elements' Young's modulus times their reference volume, plus the
+    /// work its gravity and constant loads on free directions would do over its size (the
+    /// diagonal of its nodes' box now; [`Solver::balance_error`] takes it at the first
+    /// increment). Energies below it are round-off in any unit system: a
+    /// body at rest reports no error, where relative to its own round-off it reported one of
+    /// order 1.
+    pub fn energy_floor(&self) -> f64 {
+        let stiffness: f64 = self
+            .elements
+            .iter()
+            .map(|e| e.mass() * e.material().young / e.material().density)
+            .sum();
+        let (mut lo, mut hi) = ([f64::INFINITY; 3], [f64::NEG_INFINITY; 3]);
+        for p in &self.x {
+            for a in 0..3 {
+                lo[a] = lo[a].min(p[a]);
+                hi[a] = hi[a].max(p[a]);
+            }
+        }
+        let size = (0..3)
+            .map(|a| (hi[a] - lo[a]).max(0.0).powi(2))
+            .sum::<f64>()
+            .sqrt();
+        let mut pull = 0.0;
+        for (i, held) in self.fixed.iter().enumerate() {
+            for a in (0..3).filter(|&a| !held[a]) {
+                let load = self.loads.get(i).map_or(0.0, |l| l[a]);
+                pull += (self.mass[i] * self.gravity[a]).abs() + load.abs();
+            }
+        }
+        for b in self.bodies.iter().filter(|b| b.motion == BodyMotion::Free) {
+            for a in 0..3 {
+                pull += (b.mass * self.gravity[a]).abs() + b.load[a].abs();
+            }
+        }
+        let floor = ENERGY_FLOOR * (stiffness + pull * size);
+        if floor.is_finite() {
+            floor
+        } else {
+            0.0
+        }
     }
 
     /// The change of [`Energy::balance`] since the first increment (energy units): what

@@ -210,6 +210,16 @@ impl Element {
         }
     }
 
+    /// Its material.
+    pub fn material(&self) -> &Material {
+        match self {
+            Element::Bar { material, .. }
+            | Element::Tri3 { material, .. }
+            | Element::Tet4 { material, .. } => material,
+            Element::Hex8(h) => &h.material,
+        }
+    }
+
     /// Reference mass (density × reference measure).
     pub fn mass(&self) -> f64 {
         match self {

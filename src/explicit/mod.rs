@@ -111,6 +111,8 @@ pub struct Solver {
     /// increment it reported (∞: none limited it; NaN: no penalty contact ran).
     last_increment: (f64, f64),
     balance0: Option<f64>,
+    /// [`Solver::energy_floor`] at the first increment.
+    floor0: Option<f64>,
     /// (external, contact, damping) power at the last step's time, and the increment since.
     last_power: Option<([f64; 3], f64)>,
     /// The body each node is carried by.
@@ -188,6 +190,7 @@ impl Solver {
             worst_overclosure: (0.0, 0),
             last_increment: (0.0, f64::NAN),
             balance0: None,
+            floor0: None,
             last_power: None,
             carried: vec![None; n],
             counted: None,
@@ -570,6 +573,9 @@ impl Solver {
         self.energy.internal = internal;
         self.energy.kinetic = kinetic;
         self.balance0.get_or_insert(self.energy.balance());
+        if self.floor0.is_none() {
+            self.floor0 = Some(self.energy_floor());
+        }
         self.check_diverged()
     }
 

@@ -353,6 +353,7 @@ fn run_into(
         halo_bytes: 0,
         contact_bytes: 0,
         balance0: None,
+        floor: None,
         energy: [0.0; 5],
         last: Vec::new(),
     };

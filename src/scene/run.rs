@@ -67,7 +67,9 @@ pub(super) fn run_into(
         let first = account.dt.min(scene.run.end_time - solver.time);
         adjusted = Some(c.adjust_initial_overclosure(&mut solver.x, &bodies, first)?);
     }
+    let floor = solver.energy_floor();
     let mut one = OneProcess {
+        floor,
         scene,
         model: &model,
         at_peak: bodies0.clone(),
@@ -149,6 +151,9 @@ struct OneProcess<'a> {
     outputs_done: (usize, usize, usize),
     /// A deck's node history requests' text so far (header and rows).
     history_texts: Vec<String>,
+    /// The least energy the balance error is measured against (`Solver::energy_floor` at the
+    /// start).
+    floor: f64,
 }
 
 impl Ranks for OneProcess<'_> {
@@ -205,7 +210,7 @@ impl Ranks for OneProcess<'_> {
         Ok(Sums {
             force,
             drift: s.energy_drift(),
-            scale: s.energy_scale(),
+            scale: s.energy_scale().max(self.floor),
             balance: s.energy.balance(),
             moved,
             kinetic_internal: [s.energy.kinetic, s.energy.internal],

@@ -131,7 +131,9 @@ pub struct Summary {
     pub max_penetration: f64,
     /// Energy balance error: the largest drift of the energy balance over the run relative to
     /// the largest of the kinetic, internal, external, contact and dissipated energies met
-    /// in the run.
+    /// in the run, or to the model's energy floor where they stay below it
+    /// ([`crate::explicit::Solver::energy_floor`]: 10⁻¹² of its capacity; a model at rest
+    /// reports 0, not its round-off over its round-off).
     pub energy_balance_error: f64,
     /// Final kinetic energy.
     pub kinetic: f64,

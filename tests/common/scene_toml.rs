@@ -226,3 +226,25 @@ pub fn deck(name: &str, text: &str) -> abut::Result<Scene> {
     std::fs::write(&path, text).unwrap();
     Scene::load(&path)
 }
+
+/// A unit point mass at `height` above a rigid 1 × 1 plate under a gravity of 1000 (downwards),
+/// on an undamped penalty spring of stiffness `k`, searched within 0.5, for `end` at the fixed
+/// increment `dt`.
+pub fn mass_on_spring(title: &str, k: f64, height: f64, dt: f64, end: f64) -> SceneToml {
+    SceneToml::new(title, end)
+        .run("dt", dt)
+        .run("gravity", [0.0, 0.0, -1000.0])
+        .part(part("plate", "plate", [0.0; 3], [1.0, 1.0, 0.0], [2, 2, 0]))
+        .part(
+            part_of("ball", "points")
+                .with("points", [[0.4, 0.6, height]])
+                .with("mass", 1.0)
+                .with("velocity", [0.0, 0.0, 0.0]),
+        )
+        .contact(
+            contact("ball", "all", "plate", "z+")
+                .with("stiffness", k)
+                .with("damping", 0.0)
+                .with("search_radius", 0.5),
+        )
+}
