@@ -10,7 +10,7 @@ mod common;
 use abut::explicit::Solver;
 use abut::scene::run;
 use abut::{Device, Error};
-use common::scene_toml::{mass_on_spring, part, SceneToml};
+use common::scene_toml::{deck, mass_on_spring, part, SceneToml};
 
 /// A unit mass resting on a rigid plate with a penalty spring of stiffness `k` (undamped),
 /// pressed by a gravity of 1000 m/s², at a fixed `dt`, for `end` seconds.
@@ -143,4 +143,49 @@ fn a_run_too_long_to_take_is_refused_naming_the_element_that_makes_it() {
         None,
     )
     .unwrap();
+}
+
+/// A deck of three hexahedra in a row along x, labelled 7, 42 and 99, the middle one
+/// `thickness` long, for a `period` of explicit dynamics.
+fn sliver_deck(thickness: f64, period: f64) -> String {
+    let xs = [0.0, 1.0, 1.0 + thickness, 2.0 + thickness];
+    let mut s = String::from("*HEADING\nthree bricks, one a sliver\n*NODE\n");
+    for (i, x) in xs.iter().enumerate() {
+        for (j, (y, z)) in [(0.0, 0.0), (1.0, 0.0), (1.0, 1.0), (0.0, 1.0)]
+            .iter()
+            .enumerate()
+        {
+            s += &format!("{}, {x:?}, {y:?}, {z:?}\n", 10 * (i + 1) + j);
+        }
+    }
+    s += "*ELEMENT, TYPE=C3D8, ELSET=ROW\n";
+    for (i, label) in [7, 42, 99].into_iter().enumerate() {
+        let (a, b) = (10 * (i + 1), 10 * (i + 2));
+        s += &format!(
+            "{label}, {}, {}, {}, {}, {}, {}, {}, {}\n",
+            a,
+            b,
+            b + 1,
+            a + 1,
+            a + 3,
+            b + 3,
+            b + 2,
+            a + 2
+        );
+    }
+    s += "*MATERIAL, NAME=M\n*ELASTIC\n1.0e7, 0.3\n*DENSITY\n1000.0\n";
+    s += "*SOLID SECTION, ELSET=ROW, MATERIAL=M\n";
+    s += &format!("*STEP\n*DYNAMIC, EXPLICIT\n, {period:?}\n*END STEP\n");
+    s
+}
+
+#[test]
+fn a_deck_sliver_is_named_by_its_label_in_the_deck() {
+    let scene = deck("sliver.inp", &sliver_deck(1e-7, 10.0)).unwrap();
+    let e = run(&scene, &Device::cpu(), None).unwrap_err().to_string();
+    assert!(e.contains("element 42 of part"), "{e}");
+    assert!(e.contains("max_increments"), "{e}");
+    // the same row without the sliver runs its first increments
+    let fine = deck("fine.inp", &sliver_deck(1.0, 1e-3)).unwrap();
+    run(&fine, &Device::cpu(), None).unwrap();
 }

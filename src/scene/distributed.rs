@@ -335,6 +335,7 @@ fn run_into(
     agree(comm, fault)?;
 
     let mut account = Account::new(&scene.run, all_min(comm, solver.stable_increment()))?;
+    super::run::check_length(scene, g, &built.parts, account.dt)?;
     account.ramp = scene
         .quasi_static
         .as_ref()
@@ -353,7 +354,7 @@ fn run_into(
         halo_bytes: 0,
         contact_bytes: 0,
         balance0: None,
-        floor: None,
+        floor: g.energy_floor(),
         energy: [0.0; 5],
         last: Vec::new(),
     };

@@ -62,9 +62,9 @@ pub(super) struct Rank<'a> {
     pub(super) contact_bytes: usize,
     /// The energy balance at the first increment.
     pub(super) balance0: Option<f64>,
-    /// The least energy the balance error is measured against: the ranks' own
-    /// `Solver::energy_floor` summed (at the first increment).
-    pub(super) floor: Option<f64>,
+    /// The least energy the balance error is measured against: the whole model's
+    /// `Solver::energy_floor` (every rank builds it), as in one process.
+    pub(super) floor: f64,
     /// Kinetic, internal, external, contact and damping energies, summed over the ranks.
     pub(super) energy: [f64; 5],
     /// The last increment's sums over the ranks (force, energies, the parts' motion on rows).
@@ -141,9 +141,6 @@ impl Ranks for Rank<'_> {
     fn sums(&mut self, row: bool) -> Result<Sums> {
         // the ranks' shares, added in rank order: contact force on the slaves, energies, and
         // the parts' motion on output rows
-        if self.floor.is_none() {
-            self.floor = Some(sum_over_ranks(self.comm, &[self.solver.energy_floor()])[0]);
-        }
         let solver = &self.solver;
         let e = &solver.energy;
         let mut mine = vec![0.0; 3];
@@ -172,7 +169,7 @@ impl Ranks for Rank<'_> {
             drift: (balance - b0).abs(),
             scale: (self.energy.iter())
                 .fold(0.0f64, |m, x| m.max(x.abs()))
-                .max(self.floor.unwrap_or(0.0)),
+                .max(self.floor),
             balance,
             moved: Vec::new(),
             kinetic_internal: [kinetic, internal],
@@ -188,7 +185,7 @@ impl Ranks for Rank<'_> {
         let drift = (balance - self.balance0.unwrap_or(balance)).abs();
         let scale = (self.energy.iter())
             .fold(0.0f64, |m, x| m.max(x.abs()))
-            .max(self.floor.unwrap_or(0.0));
+            .max(self.floor);
         // rank 0 writes; a failure there is agreed, so no rank is left waiting
         let mut fault = None;
         if let Some(f) = self.history.as_mut() {
