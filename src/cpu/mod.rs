@@ -81,7 +81,8 @@ impl<'a, T: Copy> Scatter<'a, T> {
         }
     }
 
-    /// Whether `write` uses non-temporal stores for T.
+    /// Whether `write` uses non-temporal stores for T (x86-64 only).
+    #[cfg(target_arch = "x86_64")]
     const STREAM: bool = cfg!(target_arch = "x86_64")
         && std::mem::size_of::<T>() == 64
         && std::mem::align_of::<T>() == 64;
