@@ -3,7 +3,8 @@
 //! takes a backend and a name in code whatever the environment says, and every device says
 //! what it is. One test, so that changing the environment races with nothing.
 
-use abut::{Backend, Device, Error};
+use abut::mesh::plate_triangles;
+use abut::{Backend, Device, Error, GlobalSearch, Model, Surface};
 
 fn with_env<T>(vars: &[(&str, Option<&str>)], f: impl FnOnce() -> T) -> T {
     let saved: Vec<(String, Option<String>)> = vars
@@ -107,10 +108,56 @@ fn adapter_choice_follows_the_environment() {
                     };
                     let d = Device::choose(backend, None).unwrap();
                     assert_eq!(d.backend_name(), want);
+                    // the way in where nothing may block (a browser): the same backend's
+                    // adapter, requested asynchronously, gives the same contact bit for bit
+                    let wgpu_backend = match backend {
+                        Backend::Vulkan => wgpu::Backends::VULKAN,
+                        _ => wgpu::Backends::GL,
+                    };
+                    let asked = pollster::block_on(Device::request(wgpu_backend)).unwrap();
+                    assert_eq!(asked.backend_name(), want, "{asked}");
+                    assert_eq!(contacts(&asked), contacts(&d), "{asked}");
                 }
             }
+            // no backend: an error naming what was asked, not a panic
+            let e = pollster::block_on(Device::request(wgpu::Backends::empty())).unwrap_err();
+            assert!(matches!(e, Error::NoAdapter { .. }), "{e}");
         }
         Err(e) if !require => eprintln!("\n*** SKIPPED the GPU half: {e} ***\n"),
         Err(e) => panic!("ABUT_REQUIRE_ADAPTER=1 but Device::gpu() failed: {e}"),
     }
+}
+
+/// The contacts (debug text, so every bit shows) of 200 slaves over a wavy plate of 8 × 8 quads
+/// split in two, searched on `device`.
+fn contacts(device: &Device) -> Vec<String> {
+    let mut plate = plate_triangles(8, 8, 1.0, 1.0, 0.0, 0, &|_, _| 0.0);
+    for p in &mut plate.positions {
+        p[2] = 0.05 * (5.0 * p[0]).sin() * (3.0 * p[1]).cos();
+    }
+    let mut model = Model::new_3d();
+    model
+        .add_nodes(&plate.positions, &vec![1.0; plate.positions.len()])
+        .unwrap();
+    let master = model
+        .add_surface(Surface::triangles(&plate.facets))
+        .unwrap();
+    let slaves: Vec<[f64; 3]> = (0..200)
+        .map(|k| {
+            let (x, y) = ((k % 20) as f64 / 19.0, (k / 20) as f64 / 9.0);
+            [
+                x,
+                y,
+                0.05 * (5.0 * x).sin() * (3.0 * y).cos() + 0.01 * ((k % 7) as f64 - 3.0),
+            ]
+        })
+        .collect();
+    let ids = model.add_nodes(&slaves, &vec![1.0; slaves.len()]).unwrap();
+    let surface = model.surface(master).unwrap().clone();
+    let mut search = GlobalSearch::from_parts(device, &model, surface, ids.to_vec(), 0.2).unwrap();
+    let r = search.run(model.positions()).unwrap();
+    let found: Vec<String> = r.contacts().map(|c| format!("{c:?}")).collect();
+    let near = found.iter().filter(|c| c.starts_with("Some")).count();
+    assert!(near > 150, "{device}: {near} of 200 slaves found a facet");
+    found
 }

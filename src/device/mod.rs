@@ -128,6 +128,7 @@ pub enum Backend {
 }
 
 impl Backend {
+    #[cfg(not(target_arch = "wasm32"))]
     fn wgpu(self) -> wgpu::Backends {
         match self {
             Backend::Vulkan => wgpu::Backends::VULKAN,
@@ -155,6 +156,7 @@ pub struct Device {
 }
 
 impl Device {
+    #[cfg(not(target_arch = "wasm32"))]
     /// The best available device: a GPU adapter if there is one, else the CPU path (with a
     /// notice on stderr). `ABUT_BACKEND=cpu` forces the CPU path, `ABUT_BACKEND=gpu` makes a
     /// missing adapter an error.
@@ -174,6 +176,7 @@ impl Device {
         }
     }
 
+    #[cfg(not(target_arch = "wasm32"))]
     /// The best GPU adapter, or [`Error::NoAdapter`].
     pub fn gpu() -> Result<Self> {
         let mut last_err = None;
@@ -194,6 +197,7 @@ impl Device {
         }))
     }
 
+    #[cfg(not(target_arch = "wasm32"))]
     /// The best GPU adapter of `backend` whose name contains `name` (case-insensitive; `None`:
     /// any name), chosen in code: the environment's `WGPU_BACKEND` and `WGPU_ADAPTER_NAME` do
     /// not apply. [`Error::NoAdapter`] names what was asked when there is none. The device
@@ -215,12 +219,49 @@ impl Device {
         }))
     }
 
+    #[cfg(not(target_arch = "wasm32"))]
     /// Every usable GPU adapter, best first (tests run their parity checks on each).
     pub fn all_gpus() -> Vec<Result<Self>> {
         ranked_adapters(wgpu::Backends::all())
             .into_iter()
             .map(|a| GpuContext::new(a).map(Self::from_context))
             .collect()
+    }
+
+    /// A GPU adapter of `backends` that runs compute shaders, the one wgpu picks for high
+    /// performance, without blocking: the way to a device where nothing may wait on the GPU — a
+    /// browser's WebGPU (`wgpu::Backends::BROWSER_WEBGPU`) — or in an async host. The
+    /// environment's `WGPU_BACKEND` and `WGPU_ADAPTER_NAME` do not apply. Errors as
+    /// [`Device::gpu`]'s: [`Error::NoAdapter`] (none, or none with compute shaders),
+    /// [`Error::AdapterLimit`], [`Error::RequestDevice`].
+    pub async fn request(backends: wgpu::Backends) -> Result<Self> {
+        let mut desc = wgpu::InstanceDescriptor::new_without_display_handle();
+        desc.backends = backends;
+        desc.flags = instance_flags();
+        let instance = wgpu::Instance::new(desc);
+        let options = wgpu::RequestAdapterOptions {
+            power_preference: wgpu::PowerPreference::HighPerformance,
+            ..Default::default()
+        };
+        let adapter = instance
+            .request_adapter(&options)
+            .await
+            .map_err(|e| Error::NoAdapter {
+                detail: format!(": backends {backends:?}: {e}"),
+            })?;
+        let compute = adapter
+            .get_downlevel_capabilities()
+            .flags
+            .contains(wgpu::DownlevelFlags::COMPUTE_SHADERS);
+        if !compute {
+            return Err(Error::NoAdapter {
+                detail: format!(
+                    ": backends {backends:?}: {} runs no compute shaders",
+                    adapter.get_info().name
+                ),
+            });
+        }
+        Ok(Self::from_context(GpuContext::request(adapter).await?))
     }
 
     /// A device on the caller's own wgpu device and queue, so that searches can read positions
@@ -359,6 +400,7 @@ impl fmt::Display for Device {
     }
 }
 
+#[cfg(not(target_arch = "wasm32"))]
 fn search_detail() -> String {
     let mut d = Vec::new();
     if let Ok(b) = std::env::var("WGPU_BACKEND") {
@@ -390,6 +432,7 @@ pub(crate) fn instance_flags() -> wgpu::InstanceFlags {
 
 /// Adapters of `backends` that can run compute shaders, filtered by the environment
 /// (`WGPU_BACKEND` narrows `backends` further, `WGPU_ADAPTER_NAME` the names), best first.
+#[cfg(not(target_arch = "wasm32"))]
 fn ranked_adapters(backends: wgpu::Backends) -> Vec<wgpu::Adapter> {
     let backends = wgpu::Backends::from_env().map_or(backends, |env| env & backends);
     let name = std::env::var("WGPU_ADAPTER_NAME")
@@ -400,6 +443,7 @@ fn ranked_adapters(backends: wgpu::Backends) -> Vec<wgpu::Adapter> {
 
 /// Adapters of `backends` that can run compute shaders and whose lowercased name contains
 /// `name` (already lowercase), best first.
+#[cfg(not(target_arch = "wasm32"))]
 fn ranked(backends: wgpu::Backends, name: Option<&str>) -> Vec<wgpu::Adapter> {
     if backends.is_empty() {
         return Vec::new();
@@ -462,8 +506,14 @@ fn required_limits(have: &wgpu::Limits, adapter: &str) -> Result<wgpu::Limits> {
 }
 
 impl GpuContext {
-    /// Creates a device on `adapter` with [`required_limits`].
+    /// Creates a device on `adapter` with [`required_limits`], waiting for it (native targets).
+    #[cfg(not(target_arch = "wasm32"))]
     fn new(adapter: wgpu::Adapter) -> Result<Self> {
+        pollster::block_on(Self::request(adapter))
+    }
+
+    /// Requests a device on `adapter` with [`required_limits`], without blocking.
+    async fn request(adapter: wgpu::Adapter) -> Result<Self> {
         let info = adapter.get_info();
         let limits = required_limits(&adapter.limits(), &info.name)?;
         // timestamp queries are an optional fast path of the benchmark: asked for when there
@@ -474,12 +524,13 @@ impl GpuContext {
             ..Default::default()
         };
         let (device, queue) =
-            pollster::block_on(adapter.request_device(&desc)).map_err(|source| {
-                Error::RequestDevice {
+            adapter
+                .request_device(&desc)
+                .await
+                .map_err(|source| Error::RequestDevice {
                     adapter: info.name.clone(),
                     source,
-                }
-            })?;
+                })?;
         let uncaptured = Arc::new(Mutex::new(Vec::new()));
         let sink = uncaptured.clone();
         device.on_uncaptured_error(Arc::new(move |e: wgpu::Error| {
@@ -507,6 +558,30 @@ impl GpuContext {
             traffic: Arc::default(),
             profiler: Mutex::new(None),
             pipelines: Mutex::default(),
+        }
+    }
+
+    /// The validation error `scope` caught in the operation that just ran inside it: waited for
+    /// on native targets. A browser cannot wait on the GPU; there the scope's error joins the
+    /// uncaptured errors when it arrives, which [`GpuContext::take_uncaptured`] reports at the
+    /// increment's next check, and this returns `None`.
+    pub(crate) fn scope_error(&self, scope: wgpu::ErrorScopeGuard) -> Option<wgpu::Error> {
+        #[cfg(not(target_arch = "wasm32"))]
+        {
+            pollster::block_on(scope.pop())
+        }
+        #[cfg(target_arch = "wasm32")]
+        {
+            let sink = self.uncaptured.clone();
+            let popped = scope.pop();
+            wasm_bindgen_futures::spawn_local(async move {
+                if let Some(e) = popped.await {
+                    if let Ok(mut v) = sink.lock() {
+                        v.push(e.to_string());
+                    }
+                }
+            });
+            None
         }
     }
 

@@ -45,7 +45,7 @@ impl GpuContext {
         let mut compiled_module = false;
         if !cache.modules.contains_key(pass.stem) {
             let Some(src) = crate::abi::shaders::source(pass.stem) else {
-                let _ = pollster::block_on(scope.pop());
+                let _ = self.scope_error(scope);
                 return Err(Error::Gpu {
                     during: "compiling the pipelines".into(),
                     message: format!("no kernel file '{}'", pass.stem),
@@ -69,7 +69,7 @@ impl GpuContext {
             },
             cache: None,
         });
-        if let Some(e) = pollster::block_on(scope.pop()) {
+        if let Some(e) = self.scope_error(scope) {
             if compiled_module {
                 cache.modules.remove(pass.stem);
             }

@@ -131,7 +131,7 @@ impl GpuIncrement {
                 dropped: 0,
             })
         })();
-        if let Some(e) = pollster::block_on(scope.pop()) {
+        if let Some(e) = ctx.scope_error(scope) {
             return Err(Error::Gpu {
                 during: "making the device-resident statistics".into(),
                 message: e.to_string(),

@@ -266,7 +266,7 @@ impl GpuPenalty {
                 .device
                 .push_error_scope(wgpu::ErrorFilter::Validation);
             let made = self.build_resident_groups(search, velocities, forces, rows, stats);
-            if let Some(e) = pollster::block_on(scope.pop()) {
+            if let Some(e) = self.ctx.scope_error(scope) {
                 return Err(Error::Gpu {
                     during: "binding the caller's buffers".into(),
                     message: e.to_string(),
