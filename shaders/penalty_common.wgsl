@@ -16,7 +16,9 @@ const STIFFNESS_AUTO: u32 = 0u;
 const STIFFNESS_MODULUS: u32 = 1u;
 const STIFFNESS_ABSOLUTE: u32 = 2u;
 const STIFFNESS_PER_AREA: u32 = 3u;
-const NO_LIMIT: f32 = 3.40282347e38;
+// f32::MAX, written as the double it is exactly (a literal above it is an error in Tint, WebGPU's
+// compiler in Chromium, though naga rounds it down)
+const NO_LIMIT: f32 = 3.4028234663852886e38;
 const PENALTY_ANCHORED: u32 = 1u;
 // no slave node is a master node: a slave with no facet is no one's partner (its force, row and
 // normal are nothing), so the per-node passes leave it at one hit word

@@ -36,3 +36,6 @@ pub mod brute_force {
 pub mod tree {
     pub use crate::search::tree::*;
 }
+
+/// Scenes the tests share, native and in a browser.
+pub mod scenes;

@@ -333,44 +333,6 @@ fn resident_increments_match_host_arrays() {
     }
 }
 
-/// A bounce scene: `n` point masses (m = 1) falling at 1 m/s onto a rigid plate (huge masses),
-/// penalty k = 4e5 undamped (an elastic bounce), 40 increments per contact.
-fn bounce_scene(n: usize) -> (Model, std::ops::Range<u32>, f64) {
-    let side = 10;
-    let plate = plate_quads(side, side, 1.0, 1.0, 0.0, 0, &|_, _| 0.0);
-    let mut model = Model::new_3d();
-    model
-        .add_nodes(&plate.positions, &vec![1e12; plate.positions.len()])
-        .unwrap();
-    let master = model.add_surface(Surface::quads(&plate.facets)).unwrap();
-    let drops: Vec<[f64; 3]> = (0..n)
-        .map(|i| {
-            let (a, b) = ((i * 7919) % 997, (i * 104_729) % 991);
-            [
-                f32r(0.02 + 0.96 * a as f64 / 997.0),
-                f32r(0.02 + 0.96 * b as f64 / 991.0),
-                f32r(0.01 + 0.04 * ((i * 31) % 101) as f64 / 101.0),
-            ]
-        })
-        .collect();
-    let range = model.add_nodes(&drops, &vec![1.0; n]).unwrap();
-    let set = model.add_node_set(&range.to_vec()).unwrap();
-    let pen = Penalty {
-        stiffness: Stiffness::Absolute(4.0e5),
-        damping: 0.0,
-        ..Default::default()
-    };
-    model
-        .add_pair(
-            Pair::new(set, master)
-                .search_radius(0.1)
-                .enforce(Enforce::Penalty(pen)),
-        )
-        .unwrap();
-    let dt = std::f64::consts::PI / (4.0e5f64).sqrt() / 40.0;
-    (model, range.start..range.end, dt)
-}
-
 /// 1,000 device-resident increments, each recorded with a WGSL integrator into one encoder and
 /// submitted: no readback, no wait, no upload by abut (the statistics ring aside), and the masses
 /// bounce as on the CPU path's mirror of the same program.
@@ -378,7 +340,7 @@ fn bounce_scene(n: usize) -> (Model, std::ops::Range<u32>, f64) {
 fn resident_increments_neither_read_back_nor_wait() {
     use abut::testing::abi::integrate::IntegrateParams;
     use abut::CentralDifference;
-    let (model, range, dt) = bounce_scene(300);
+    let (model, range, dt) = abut::testing::scenes::bounce(300).unwrap();
     let n = model.positions().len();
     let steps = 1000;
     let masses = model.masses().to_vec();

@@ -335,7 +335,7 @@ fn run_into(
     agree(comm, fault)?;
 
     let mut account = Account::new(&scene.run, all_min(comm, solver.stable_increment()))?;
-    super::run::check_length(scene, g, &built.parts, account.dt)?;
+    super::run_length::check_length(scene, g, &built.parts, account.dt)?;
     account.ramp = scene
         .quasi_static
         .as_ref()

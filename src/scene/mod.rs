@@ -84,6 +84,7 @@ mod force_history;
 mod from_inp;
 mod increments;
 mod run;
+mod run_length;
 mod spec;
 mod summary;
 mod to_inp;

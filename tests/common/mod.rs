@@ -380,25 +380,10 @@ pub fn vec4(a: &[[f64; 3]]) -> Vec<[f32; 4]> {
         .collect()
 }
 
-/// A host program's own device buffers for `n` nodes, `vec4<f32>` each (STORAGE, COPY_DST,
-/// COPY_SRC): positions, velocities, forces. Panics on a device without an adapter.
+/// A host program's own device buffers for `n` nodes (`abut::testing::scenes::node_buffers`);
+/// panics on the CPU path.
 pub fn node_buffers(device: &Device, n: usize) -> [wgpu::Buffer; 3] {
-    let (d, _) = device.wgpu().expect("a GPU device");
-    let make = |label| {
-        d.create_buffer(&wgpu::BufferDescriptor {
-            label: Some(label),
-            size: (n * 16) as u64,
-            usage: wgpu::BufferUsages::STORAGE
-                | wgpu::BufferUsages::COPY_DST
-                | wgpu::BufferUsages::COPY_SRC,
-            mapped_at_creation: false,
-        })
-    };
-    [
-        make("test positions"),
-        make("test velocities"),
-        make("test forces"),
-    ]
+    abut::testing::scenes::node_buffers(device, n).expect("a GPU device")
 }
 
 /// Reads `bytes` of `buffer` back (the test's own readback, not abut's).

@@ -1,0 +1,146 @@
+//! Issue 33: abut's kernels in a real browser. Built for wasm32 and run by
+//! `wasm-bindgen-test-runner` in headless Chromium, whose WebGPU adapter is SwiftShader (a CPU
+//! implementation, like lavapipe): 300 point masses fall onto a rigid plate and bounce back, each
+//! increment the device-resident penalty increment and the WGSL integrator recorded on the
+//! page's device with nothing read back, against the CPU path compiled into the same page (the
+//! same code and f32 arithmetic as natively). The same comparison, and the same tolerances, as
+//! `tests/resident.rs` makes on lavapipe and llvmpipe: the GPU sums the springs in a different
+//! order. Native builds compile nothing here.
+#![cfg(target_arch = "wasm32")]
+
+use abut::device::DeviceKind;
+use abut::testing::abi::integrate::IntegrateParams;
+use abut::{CentralDifference, Contact, Device, ResidentIo};
+use wasm_bindgen_test::{wasm_bindgen_test, wasm_bindgen_test_configure};
+
+wasm_bindgen_test_configure!(run_in_browser);
+
+/// Masses dropped.
+const MASSES: usize = 300;
+/// Increments run (62 ms): every mass has hit the plate and come back up.
+const STEPS: usize = 500;
+
+/// `buffer`'s first `size` bytes, copied to a mapped buffer and awaited: the browser delivers
+/// the mapping when the page yields, so nothing blocks.
+async fn read(
+    device: &wgpu::Device,
+    queue: &wgpu::Queue,
+    buffer: &wgpu::Buffer,
+    size: u64,
+) -> Vec<u8> {
+    let staging = device.create_buffer(&wgpu::BufferDescriptor {
+        label: Some("web test readback"),
+        size,
+        usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
+        mapped_at_creation: false,
+    });
+    let mut enc = device.create_command_encoder(&Default::default());
+    enc.copy_buffer_to_buffer(buffer, 0, &staging, 0, size);
+    queue.submit([enc.finish()]);
+    let (tx, rx) = futures_channel::oneshot::channel();
+    staging.slice(..).map_async(wgpu::MapMode::Read, move |r| {
+        let _ = tx.send(r);
+    });
+    let _ = device.poll(wgpu::PollType::Poll);
+    rx.await
+        .expect("the mapping's callback")
+        .expect("the mapping");
+    let data = staging
+        .slice(..)
+        .get_mapped_range()
+        .expect("a mapped range")
+        .to_vec();
+    staging.unmap();
+    data
+}
+
+#[wasm_bindgen_test]
+async fn bouncing_masses_in_the_browser_equal_the_cpu_path() {
+    let (model, range, dt) = abut::testing::scenes::bounce(MASSES).unwrap();
+    let n = model.positions().len();
+    let masses = model.masses().to_vec();
+    let x0: Vec<[f32; 4]> = model
+        .positions()
+        .iter()
+        .map(|p| [p[0] as f32, p[1] as f32, p[2] as f32, 0.0])
+        .collect();
+    let mut v0 = vec![[0.0f32; 4]; n];
+    for v in &mut v0[range.start as usize..] {
+        v[2] = -1.0;
+    }
+    // the CPU path, compiled into the page
+    let (xc, vc) = {
+        let mut c = Contact::new(&Device::cpu(), &model).unwrap();
+        let (mut x, mut v, mut f) = (x0.clone(), v0.clone(), vec![[0.0f32; 4]; n]);
+        let m32: Vec<f32> = masses.iter().map(|&m| m as f32).collect();
+        let ip = IntegrateParams {
+            acceleration: [0.0, 0.0, 0.0, dt as f32],
+            first: range.start,
+            count: range.end - range.start,
+            n_nodes: n as u32,
+            _pad: 0,
+        };
+        for _ in 0..STEPS {
+            let io = ResidentIo::Cpu {
+                positions: &x,
+                velocities: &v,
+                forces: &mut f,
+            };
+            c.encode_increment(io, dt).unwrap();
+            abut::testing::cpu::integrate::integrate(&ip, &mut x, &mut v, &mut f, &m32);
+        }
+        (x, v)
+    };
+    // the page's WebGPU device, asked for without blocking
+    let g = Device::request(wgpu::Backends::BROWSER_WEBGPU)
+        .await
+        .expect("a WebGPU adapter (Chromium: --enable-unsafe-webgpu)");
+    let (d, q) = g.wgpu().unwrap();
+    let [bx, bv, bf] = abut::testing::scenes::node_buffers(&g, n).unwrap();
+    q.write_buffer(&bx, 0, bytemuck::cast_slice(&x0));
+    q.write_buffer(&bv, 0, bytemuck::cast_slice(&v0));
+    let mut c = Contact::new(&g, &model).unwrap();
+    let mut integ = CentralDifference::new(&g, &masses).unwrap();
+    for _ in 0..STEPS {
+        let mut enc = d.create_command_encoder(&Default::default());
+        let io = ResidentIo::Gpu {
+            encoder: &mut enc,
+            positions: &bx,
+            velocities: &bv,
+            forces: &bf,
+        };
+        c.encode_increment(io, dt).unwrap();
+        integ
+            .encode(&mut enc, &bx, &bv, &bf, dt, [0.0; 3], range.clone())
+            .unwrap();
+        q.submit([enc.finish()]);
+    }
+    let x: Vec<[f32; 4]> = bytemuck::pod_collect_to_vec(&read(d, q, &bx, (n * 16) as u64).await);
+    let v: Vec<[f32; 4]> = bytemuck::pod_collect_to_vec(&read(d, q, &bv, (n * 16) as u64).await);
+    if let DeviceKind::Gpu(ctx) = g.kind() {
+        ctx.take_uncaptured("the bounce in the browser").unwrap();
+    }
+    let mut bounced = 0;
+    for i in range.start as usize..range.end as usize {
+        for a in 0..3 {
+            assert!(
+                (v[i][a] - vc[i][a]).abs() < 1e-3,
+                "{g}: node {i} velocity {:?} against the CPU path's {:?}",
+                v[i],
+                vc[i]
+            );
+            assert!(
+                (x[i][a] - xc[i][a]).abs() < 1e-5,
+                "{g}: node {i} position {:?} against the CPU path's {:?}",
+                x[i],
+                xc[i]
+            );
+        }
+        bounced += usize::from(vc[i][2] > 0.5);
+    }
+    // the comparison is not of masses at rest: they have hit the plate and come back up
+    assert!(
+        bounced * 10 > MASSES * 9,
+        "{bounced} of {MASSES} masses rebounded"
+    );
+}
