@@ -3,9 +3,11 @@
 //! implementation, like lavapipe): 300 point masses fall onto a rigid plate and bounce back, each
 //! increment the device-resident penalty increment and the WGSL integrator recorded on the
 //! page's device with nothing read back, against the CPU path compiled into the same page (the
-//! same code and f32 arithmetic as natively). The same comparison, and the same tolerances, as
-//! `tests/resident.rs` makes on lavapipe and llvmpipe: the GPU sums the springs in a different
-//! order. Native builds compile nothing here.
+//! same code and f32 arithmetic as natively): the contact forces after every increment (copied
+//! aside on the device, read once at the end), then the masses' positions and velocities after
+//! the WGSL integrator, to the tolerances `tests/resident.rs` uses on lavapipe and llvmpipe (on
+//! Chromium 156 all three are the CPU path's bits; the log gives the differences). Native
+//! builds compile nothing here.
 #![cfg(target_arch = "wasm32")]
 
 use abut::device::DeviceKind;
@@ -68,7 +70,9 @@ async fn bouncing_masses_in_the_browser_equal_the_cpu_path() {
     for v in &mut v0[range.start as usize..] {
         v[2] = -1.0;
     }
-    // the CPU path, compiled into the page
+    // the CPU path, compiled into the page: the contact forces of every increment, then where
+    // the masses end
+    let mut forces_cpu: Vec<[f32; 4]> = Vec::with_capacity(n * STEPS);
     let (xc, vc) = {
         let mut c = Contact::new(&Device::cpu(), &model).unwrap();
         let (mut x, mut v, mut f) = (x0.clone(), v0.clone(), vec![[0.0f32; 4]; n]);
@@ -87,6 +91,7 @@ async fn bouncing_masses_in_the_browser_equal_the_cpu_path() {
                 forces: &mut f,
             };
             c.encode_increment(io, dt).unwrap();
+            forces_cpu.extend_from_slice(&f);
             abut::testing::cpu::integrate::integrate(&ip, &mut x, &mut v, &mut f, &m32);
         }
         (x, v)
@@ -101,7 +106,15 @@ async fn bouncing_masses_in_the_browser_equal_the_cpu_path() {
     q.write_buffer(&bv, 0, bytemuck::cast_slice(&v0));
     let mut c = Contact::new(&g, &model).unwrap();
     let mut integ = CentralDifference::new(&g, &masses).unwrap();
-    for _ in 0..STEPS {
+    // each increment's contact forces copied aside on the device, read once at the end
+    let row = (n * 16) as u64;
+    let history = d.create_buffer(&wgpu::BufferDescriptor {
+        label: Some("forces of every increment"),
+        size: row * STEPS as u64,
+        usage: wgpu::BufferUsages::COPY_DST | wgpu::BufferUsages::COPY_SRC,
+        mapped_at_creation: false,
+    });
+    for k in 0..STEPS {
         let mut enc = d.create_command_encoder(&Default::default());
         let io = ResidentIo::Gpu {
             encoder: &mut enc,
@@ -110,6 +123,7 @@ async fn bouncing_masses_in_the_browser_equal_the_cpu_path() {
             forces: &bf,
         };
         c.encode_increment(io, dt).unwrap();
+        enc.copy_buffer_to_buffer(&bf, 0, &history, k as u64 * row, row);
         integ
             .encode(&mut enc, &bx, &bv, &bf, dt, [0.0; 3], range.clone())
             .unwrap();
@@ -117,9 +131,41 @@ async fn bouncing_masses_in_the_browser_equal_the_cpu_path() {
     }
     let x: Vec<[f32; 4]> = bytemuck::pod_collect_to_vec(&read(d, q, &bx, (n * 16) as u64).await);
     let v: Vec<[f32; 4]> = bytemuck::pod_collect_to_vec(&read(d, q, &bv, (n * 16) as u64).await);
+    let forces: Vec<[f32; 4]> =
+        bytemuck::pod_collect_to_vec(&read(d, q, &history, row * STEPS as u64).await);
     if let DeviceKind::Gpu(ctx) = g.kind() {
         ctx.take_uncaptured("the bounce in the browser").unwrap();
     }
+    // the forces after every increment, to the tolerance tests/resident.rs uses natively (3·10⁻⁵
+    // of the largest force); on Chromium 156's SwiftShader they are the CPU path's bits, and
+    // the log says so
+    let scale = forces_cpu
+        .iter()
+        .flat_map(|f| f[..3].iter())
+        .fold(0.0f32, |a, f| a.max(f.abs()));
+    assert!(scale > 0.0, "no contact force at all");
+    for (j, (a, b)) in forces.iter().zip(&forces_cpu).enumerate() {
+        for c in 0..3 {
+            assert!(
+                (a[c] - b[c]).abs() <= 3e-5 * scale,
+                "{g}: increment {}, node {}: force {a:?} against the CPU path's {b:?}",
+                j / n,
+                j % n
+            );
+        }
+    }
+    let worst = |p: &[[f32; 4]], q: &[[f32; 4]]| {
+        p.iter()
+            .zip(q)
+            .flat_map(|(a, b)| (0..3).map(move |c| (a[c] - b[c]).abs()))
+            .fold(0.0f32, f32::max)
+    };
+    wasm_bindgen_test::console_log!(
+        "{g}: {STEPS} increments; largest difference from the CPU path: forces {:e}, positions {:e}, velocities {:e}",
+        worst(&forces, &forces_cpu),
+        worst(&x, &xc),
+        worst(&v, &vc)
+    );
     let mut bounced = 0;
     for i in range.start as usize..range.end as usize {
         for a in 0..3 {
