@@ -39,3 +39,17 @@ pub mod tree {
 
 /// Scenes the tests share, native and in a browser.
 pub mod scenes;
+
+/// The web page's scene, run on the CPU path or device-resident on a GPU.
+pub mod incline;
+
+/// Each pass's hits of the last penalty increment (the pass's slave order): on the CPU path at
+/// once, on a GPU read back and waited for (native only).
+pub fn resident_hits(contact: &crate::Contact) -> crate::Result<Vec<Vec<abi::search::GpuHit>>> {
+    contact.pass_hits()
+}
+
+/// Each pass's device buffer of hits and the bytes its slaves' take; empty on the CPU path.
+pub fn resident_hits_buffers(contact: &crate::Contact) -> Vec<(&wgpu::Buffer, u64)> {
+    contact.pass_hits_buffers()
+}

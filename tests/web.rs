@@ -3,15 +3,14 @@
 //! implementation, like lavapipe): 300 point masses fall onto a rigid plate and bounce back, each
 //! increment the device-resident penalty increment and the WGSL integrator recorded on the
 //! page's device with nothing read back, against the CPU path compiled into the same page (the
-//! same code and f32 arithmetic as natively): the contact forces after every increment (copied
-//! aside on the device, read once at the end), then the masses' positions and velocities after
+//! same code and f32 arithmetic as natively): the search's hits and the contact forces after
+//! every increment (copied aside on the device, read once at the end), then the masses' positions and velocities after
 //! the WGSL integrator, to the tolerances `tests/resident.rs` uses on lavapipe and llvmpipe (on
 //! Chromium 156 all three are the CPU path's bits; the log gives the differences). Native
 //! builds compile nothing here.
 #![cfg(target_arch = "wasm32")]
 
 use abut::device::DeviceKind;
-use abut::testing::abi::integrate::IntegrateParams;
 use abut::{CentralDifference, Contact, Device, ResidentIo};
 use wasm_bindgen_test::{wasm_bindgen_test, wasm_bindgen_test_configure};
 
@@ -61,41 +60,13 @@ async fn bouncing_masses_in_the_browser_equal_the_cpu_path() {
     let (model, range, dt) = abut::testing::scenes::bounce(MASSES).unwrap();
     let n = model.positions().len();
     let masses = model.masses().to_vec();
-    let x0: Vec<[f32; 4]> = model
-        .positions()
-        .iter()
-        .map(|p| [p[0] as f32, p[1] as f32, p[2] as f32, 0.0])
-        .collect();
-    let mut v0 = vec![[0.0f32; 4]; n];
-    for v in &mut v0[range.start as usize..] {
-        v[2] = -1.0;
-    }
-    // the CPU path, compiled into the page: the contact forces of every increment, then where
-    // the masses end
-    let mut forces_cpu: Vec<[f32; 4]> = Vec::with_capacity(n * STEPS);
-    let (xc, vc) = {
-        let mut c = Contact::new(&Device::cpu(), &model).unwrap();
-        let (mut x, mut v, mut f) = (x0.clone(), v0.clone(), vec![[0.0f32; 4]; n]);
-        let m32: Vec<f32> = masses.iter().map(|&m| m as f32).collect();
-        let ip = IntegrateParams {
-            acceleration: [0.0, 0.0, 0.0, dt as f32],
-            first: range.start,
-            count: range.end - range.start,
-            n_nodes: n as u32,
-            _pad: 0,
-        };
-        for _ in 0..STEPS {
-            let io = ResidentIo::Cpu {
-                positions: &x,
-                velocities: &v,
-                forces: &mut f,
-            };
-            c.encode_increment(io, dt).unwrap();
-            forces_cpu.extend_from_slice(&f);
-            abut::testing::cpu::integrate::integrate(&ip, &mut x, &mut v, &mut f, &m32);
-        }
-        (x, v)
-    };
+    let (x0, v0) = abut::testing::scenes::bounce_start(&model, &range);
+    // the CPU path, compiled into the page: the contact forces and hits of every increment,
+    // then where the masses end
+    let cpu = abut::testing::scenes::bounce_cpu(&model, &range, dt, STEPS).unwrap();
+    let forces_cpu: Vec<[f32; 4]> = cpu.forces.concat();
+    let hits_cpu = &cpu.hits;
+    let (xc, vc) = (&cpu.positions, &cpu.velocities);
     // the page's WebGPU device, asked for without blocking
     let g = Device::request(wgpu::Backends::BROWSER_WEBGPU)
         .await
@@ -114,6 +85,8 @@ async fn bouncing_masses_in_the_browser_equal_the_cpu_path() {
         usage: wgpu::BufferUsages::COPY_DST | wgpu::BufferUsages::COPY_SRC,
         mapped_at_creation: false,
     });
+    // and the search's hits (one pass: 64 bytes per slave), made on the first increment
+    let mut hit_history: Option<(wgpu::Buffer, u64)> = None;
     for k in 0..STEPS {
         let mut enc = d.create_command_encoder(&Default::default());
         let io = ResidentIo::Gpu {
@@ -124,6 +97,19 @@ async fn bouncing_masses_in_the_browser_equal_the_cpu_path() {
         };
         c.encode_increment(io, dt).unwrap();
         enc.copy_buffer_to_buffer(&bf, 0, &history, k as u64 * row, row);
+        let passes = abut::testing::resident_hits_buffers(&c);
+        assert_eq!(passes.len(), 1, "the bounce has one penalty pass");
+        let (hits, bytes) = passes[0];
+        let (store, _) = hit_history.get_or_insert_with(|| {
+            let b = d.create_buffer(&wgpu::BufferDescriptor {
+                label: Some("hits of every increment"),
+                size: bytes * STEPS as u64,
+                usage: wgpu::BufferUsages::COPY_DST | wgpu::BufferUsages::COPY_SRC,
+                mapped_at_creation: false,
+            });
+            (b, bytes)
+        });
+        enc.copy_buffer_to_buffer(hits, 0, store, k as u64 * bytes, bytes);
         integ
             .encode(&mut enc, &bx, &bv, &bf, dt, [0.0; 3], range.clone())
             .unwrap();
@@ -133,6 +119,9 @@ async fn bouncing_masses_in_the_browser_equal_the_cpu_path() {
     let v: Vec<[f32; 4]> = bytemuck::pod_collect_to_vec(&read(d, q, &bv, (n * 16) as u64).await);
     let forces: Vec<[f32; 4]> =
         bytemuck::pod_collect_to_vec(&read(d, q, &history, row * STEPS as u64).await);
+    let (store, hit_row) = hit_history.expect("hits");
+    let hits: Vec<abut::testing::abi::search::GpuHit> =
+        bytemuck::pod_collect_to_vec(&read(d, q, &store, hit_row * STEPS as u64).await);
     if let DeviceKind::Gpu(ctx) = g.kind() {
         ctx.take_uncaptured("the bounce in the browser").unwrap();
     }
@@ -154,6 +143,17 @@ async fn bouncing_masses_in_the_browser_equal_the_cpu_path() {
             );
         }
     }
+    // the search's hits after every increment: the same facet and tracked node for every
+    // slave, the closest point, gap, normal and weights to 10⁻⁵ (tests/resident_hits.rs)
+    let per = hit_row as usize / 64;
+    let mut worst_hit = 0.0f32;
+    for (k, expected) in hits_cpu.iter().enumerate() {
+        let got = &hits[k * per..(k + 1) * per];
+        let diff = abut::testing::scenes::hits_difference(got, expected)
+            .unwrap_or_else(|e| panic!("{g}: increment {k}: {e}"));
+        worst_hit = worst_hit.max(diff);
+    }
+    assert!(worst_hit <= 1e-5, "{g}: hits differ by {worst_hit:e}");
     let worst = |p: &[[f32; 4]], q: &[[f32; 4]]| {
         p.iter()
             .zip(q)
@@ -161,10 +161,10 @@ async fn bouncing_masses_in_the_browser_equal_the_cpu_path() {
             .fold(0.0f32, f32::max)
     };
     wasm_bindgen_test::console_log!(
-        "{g}: {STEPS} increments; largest difference from the CPU path: forces {:e}, positions {:e}, velocities {:e}",
+        "{g}: {STEPS} increments; largest difference from the CPU path: hits {worst_hit:e}, forces {:e}, positions {:e}, velocities {:e}",
         worst(&forces, &forces_cpu),
-        worst(&x, &xc),
-        worst(&v, &vc)
+        worst(&x, xc),
+        worst(&v, vc)
     );
     let mut bounced = 0;
     for i in range.start as usize..range.end as usize {

@@ -272,6 +272,25 @@ impl Contact {
         self.exec.dropped_stats()
     }
 
+    /// Each pass's hits of the last penalty increment, in the pass's slave order: on the CPU
+    /// path at once, on a GPU read back and waited for (tests; not in a browser).
+    pub(crate) fn pass_hits(&self) -> Result<Vec<Vec<crate::abi::search::GpuHit>>> {
+        (0..self.pairs.len())
+            .map(|k| self.exec.last_hits(k, self.pairs[k].search.slaves().len()))
+            .collect()
+    }
+
+    /// Each pass's device buffer of hits with the bytes its slaves' hits take (64 per slave);
+    /// empty on the CPU path (tests copy them aside after each increment).
+    pub(crate) fn pass_hits_buffers(&self) -> Vec<(&wgpu::Buffer, u64)> {
+        (0..self.pairs.len())
+            .filter_map(|k| {
+                let bytes = self.pairs[k].search.slaves().len() as u64 * 64;
+                self.exec.hits_buffer(k).map(|b| (b, bytes))
+            })
+            .collect()
+    }
+
     /// Asks the next penalty increment (device-resident or host-array) of every pair to search
     /// globally (a 4-byte upload per pair on a GPU).
     pub fn request_global_search(&mut self) {

@@ -133,6 +133,30 @@ pub fn read_back_with<T>(
     during: &str,
     take: impl FnOnce(&[u8]) -> T,
 ) -> Result<T> {
+    // a browser's thread cannot wait for the device: refused by name rather than left to hang
+    #[cfg(target_arch = "wasm32")]
+    {
+        let _ = (ctx, buffer, take);
+        Err(Error::BadParameter {
+            name: "readback",
+            value: format!("{bytes} bytes waited for during {during}"),
+            expected: "no waiting in a browser: the device-resident increment \
+                       (Contact::encode_increment) and the caller's own awaited readbacks",
+        })
+    }
+    #[cfg(not(target_arch = "wasm32"))]
+    map_and_take(ctx, buffer, bytes, during, take)
+}
+
+/// Maps `buffer` for `bytes`, waits and hands the mapped bytes to `take` (natively).
+#[cfg(not(target_arch = "wasm32"))]
+fn map_and_take<T>(
+    ctx: &crate::device::GpuContext,
+    buffer: &wgpu::Buffer,
+    bytes: u64,
+    during: &str,
+    take: impl FnOnce(&[u8]) -> T,
+) -> Result<T> {
     if let Ok(mut t) = ctx.traffic.lock() {
         t.read_back_bytes += bytes;
         t.waits += 1;

@@ -39,16 +39,24 @@ impl SearchStage {
     /// Small sliding: anchors the slaves by one global search at `positions` reaching as far
     /// as the pair allows ([`Self::anchoring_radius`]) — the search's plan without anchors, at
     /// that radius, its first increment global — whose hits become the anchors, installed in
-    /// `exec`.
+    /// `exec` (in a browser that search runs on the CPU path: a readback cannot be waited for).
     fn anchor(&mut self, exec: &mut dyn SearchExec, positions: &[[f64; 3]]) -> Result<()> {
         let reach = self.anchoring_radius(positions);
         let own = std::mem::replace(&mut self.radius, reach);
         let prep = self.prepare(positions);
         self.radius = own;
         let prep = prep?;
-        exec.make_resident(&prep, 1, false, [0.0; 3])?;
+        // in a browser nothing may wait for the device: the anchors' one search runs on the
+        // CPU path there (the kernels' mirrors, from the same host positions)
+        #[cfg(target_arch = "wasm32")]
+        let mut cpu = crate::cpu::CpuSearch::default();
+        #[cfg(target_arch = "wasm32")]
+        let finder: &mut dyn SearchExec = &mut cpu;
+        #[cfg(not(target_arch = "wasm32"))]
+        let finder: &mut dyn SearchExec = &mut *exec;
+        finder.make_resident(&prep, 1, false, [0.0; 3])?;
         let x = self.in_frame(positions, prep.frame)?;
-        let ran = exec.run_plan(crate::plan::PlanPositions::Host(&x), true, true)?;
+        let ran = finder.run_plan(crate::plan::PlanPositions::Host(&x), true, true)?;
         let anchors = self.build_anchors(positions, &ran.hits);
         exec.set_anchors(&anchors)?;
         self.anchors = Some(anchors);

@@ -298,6 +298,10 @@ impl IncrementExec for CpuExec {
         Ok(self.pairs[k].search.resident_outputs().2[..n_slaves].to_vec())
     }
 
+    fn hits_buffer(&self, _: usize) -> Option<&wgpu::Buffer> {
+        None
+    }
+
     fn request_global(&mut self, k: usize) {
         self.pairs[k].search.request_global();
     }

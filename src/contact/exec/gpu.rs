@@ -415,6 +415,10 @@ impl IncrementExec for GpuExec {
         Ok(bytemuck::pod_collect_to_vec(&raw))
     }
 
+    fn hits_buffer(&self, k: usize) -> Option<&wgpu::Buffer> {
+        Some(self.pairs.get(k)?.search.resident_outputs().2)
+    }
+
     fn request_global(&mut self, k: usize) {
         self.pairs[k].search.request_global();
     }

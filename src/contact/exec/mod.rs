@@ -139,6 +139,8 @@ pub(crate) trait IncrementExec: wgpu::WasmNotSend {
     ) -> Result<usize>;
     /// Pair `k`'s hits of the last increment (`n_slaves` of them).
     fn last_hits(&self, k: usize, n_slaves: usize) -> Result<Vec<GpuHit>>;
+    /// Pair `k`'s device buffer of hits (`None` on the CPU path).
+    fn hits_buffer(&self, k: usize) -> Option<&wgpu::Buffer>;
     /// Asks pair `k`'s next increment to search globally.
     fn request_global(&mut self, k: usize);
     /// The GPU this executor records on (`None` on the CPU path).
