@@ -190,3 +190,21 @@ async fn bouncing_masses_in_the_browser_equal_the_cpu_path() {
         "{bounced} of {MASSES} masses rebounded"
     );
 }
+
+/// What waits for the device — the host-array increment, which reads its forces back — is
+/// refused in a browser with an error naming the readback, not left to hang the page.
+#[wasm_bindgen_test]
+async fn a_blocking_readback_is_refused_by_name_in_the_browser() {
+    let (model, _, dt) = abut::testing::scenes::bounce(20).unwrap();
+    let g = Device::request(wgpu::Backends::BROWSER_WEBGPU)
+        .await
+        .expect("a WebGPU adapter");
+    let mut c = Contact::new(&g, &model).unwrap();
+    let x = model.positions().to_vec();
+    let v = vec![[0.0; 3]; x.len()];
+    let err = c.penalty_step(&x, &v, dt).unwrap_err().to_string();
+    assert!(
+        err.contains("readback") && err.contains("browser"),
+        "the error does not name the readback: {err}"
+    );
+}
