@@ -50,6 +50,7 @@ async function start() {
     const page = await Page.start($("scene"), Number($("beads").value), Number($("friction").value),
       Number($("scale").value), $("sliding").value === "small");
     history.dt = page.dt();
+    $("legend").textContent = `blue → red: 0 → ${page.pressure_scale()} Pa`;
     const weight = page.weight_normal();
     let last = null;
     for (let frame = 0; frame < FRAMES && mine === run; frame++) {

@@ -1,8 +1,8 @@
 //! abut's contact page: beads poured onto an inclined rigid plate, their contact computed each
 //! increment by abut's kernels device-resident on the page's WebGPU device (the penalty
 //! increment and the central-difference integrator recorded together, nothing waited for),
-//! drawn with WebGPU from the same buffers: the plate coloured by contact pressure, the beads
-//! by whether they touch it. `web/index.html` drives it: [`Page::start`] once per setting,
+//! drawn with WebGPU from the same buffers: the plate coloured by contact pressure (each node's
+//! force over its tributary area), the beads by whether they touch it. `web/index.html` drives it: [`Page::start`] once per setting,
 //! then [`Page::advance`] once per animation frame, which reports what the plot and the
 //! panel show. Natively this crate is empty.
 #![cfg(target_arch = "wasm32")]
@@ -132,6 +132,11 @@ impl Page {
                 increments: 0,
             })),
         })
+    }
+
+    /// The contact pressure at the top of the plate's colour ramp (Pa).
+    pub fn pressure_scale(&self) -> f64 {
+        f64::from(render::PRESSURE_SCALE)
     }
 
     /// The increment (s).

@@ -1,5 +1,6 @@
 //! Draws the page's scene with WebGPU from abut's increment buffers (`scene.wgsl`): the plate
-//! coloured by its nodes' contact forces, the beads as discs.
+//! coloured by the contact pressure at its nodes (nodal force over tributary area), the beads
+//! as discs.
 
 use abut::testing::incline::InclineGpu;
 use abut::testing::scenes::Incline;
@@ -28,6 +29,28 @@ pub struct Renderer {
     bead_count: u32,
 }
 
+/// The contact pressure at the top of the colour ramp (Pa): the beads' weight, 1,024 of them
+/// spread over the plate's 2 m², four times over.
+pub const PRESSURE_SCALE: f32 = 200.0;
+
+/// Each plate node's tributary area (m²): a quarter of every quad around it.
+fn tributary_areas(scene: &Incline) -> Vec<f32> {
+    let x = scene.model.positions();
+    let mut areas = vec![0.0f32; scene.beads.start as usize];
+    for q in &scene.plate_quads {
+        let p = |k: usize| glam::DVec3::from_array(x[q[k] as usize]);
+        let area = 0.5 * (p(2) - p(0)).cross(p(3) - p(1)).length();
+        for &n in q {
+            areas[n as usize] += (area / 4.0) as f32;
+        }
+    }
+    // a node of no quad draws nothing
+    areas
+        .iter()
+        .map(|&a| if a > 0.0 { a } else { 1.0 })
+        .collect()
+}
+
 /// The camera over the inclined plate: the model turned so that gravity points down the
 /// screen, seen from the front and above.
 fn view(scene: &Incline, aspect: f32) -> View {
@@ -45,12 +68,11 @@ fn view(scene: &Incline, aspect: f32) -> View {
     let back = turn.transpose();
     let r = back.transform_vector3(right);
     let u = back.transform_vector3(up);
-    let bead_weight = (scene.bead_mass * 9.81) as f32;
     View {
         view_proj: (proj * look * turn).to_cols_array_2d(),
         right: Vec4::from((r, 0.0)).to_array(),
         up: Vec4::from((u, 0.0)).to_array(),
-        params: [4.0 * bead_weight, 0.014, scene.beads.start as f32, 0.0],
+        params: [PRESSURE_SCALE, 0.014, scene.beads.start as f32, 0.0],
     }
 }
 
@@ -97,6 +119,11 @@ impl Renderer {
             contents: bytemuck::cast_slice(&quad_ids),
             usage: wgpu::BufferUsages::STORAGE,
         });
+        let areas = d.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+            label: Some("plate node areas"),
+            contents: bytemuck::cast_slice(&tributary_areas(scene)),
+            usage: wgpu::BufferUsages::STORAGE,
+        });
         let module = d.create_shader_module(wgpu::ShaderModuleDescriptor {
             label: Some("scene.wgsl"),
             source: wgpu::ShaderSource::Wgsl(include_str!("scene.wgsl").into()),
@@ -127,6 +154,7 @@ impl Renderer {
                 storage(1),
                 storage(2),
                 storage(3),
+                storage(4),
             ],
         });
         let bind = d.create_bind_group(&wgpu::BindGroupDescriptor {
@@ -148,6 +176,10 @@ impl Renderer {
                 wgpu::BindGroupEntry {
                     binding: 3,
                     resource: quads.as_entire_binding(),
+                },
+                wgpu::BindGroupEntry {
+                    binding: 4,
+                    resource: areas.as_entire_binding(),
                 },
             ],
         });

@@ -3,7 +3,8 @@
 //
 // Bindings: 0 view (uniform View), 1 positions (vec4<f32> per model node, the increment's),
 //           2 forces (vec4<f32> per node: the last increment's contact forces), 3 quads
-//           (vec4<u32> per plate quad: its node ids).
+//           (vec4<u32> per plate quad: its node ids), 4 areas (f32 per plate node: its
+//           tributary area, m², a quarter of each quad around it).
 // Draws: plate_vs with 6 vertices per quad (two triangles); bead_vs with 6 vertices per bead
 //        instance (a camera-facing square, the disc cut out in bead_fs).
 // Invariants: reads only; a bead's node is view.first_bead + instance index.
@@ -12,7 +13,8 @@ struct View {
     view_proj: mat4x4<f32>,
     right: vec4<f32>,          // camera right in the model frame (xyz)
     up: vec4<f32>,             // camera up in the model frame (xyz)
-    // x: node force (N) per unit pressure colour, y: bead radius (m), z: first bead (as f32)
+    // x: the contact pressure at the top of the colour ramp (Pa), y: bead radius (m), z: first
+    // bead (as f32)
     params: vec4<f32>,
 }
 
@@ -20,6 +22,7 @@ struct View {
 @group(0) @binding(1) var<storage, read> positions: array<vec4<f32>>;
 @group(0) @binding(2) var<storage, read> forces: array<vec4<f32>>;
 @group(0) @binding(3) var<storage, read> quads: array<vec4<u32>>;
+@group(0) @binding(4) var<storage, read> areas: array<f32>;
 
 struct Out {
     @builtin(position) clip: vec4<f32>,
@@ -41,9 +44,10 @@ fn plate_vs(@builtin(vertex_index) vi: u32) -> Out {
     let node = q[corners[vi % 6u]];
     let p = positions[node].xyz;
     let f = length(forces[node].xyz);
+    let pressure = f / areas[node];
     var out: Out;
     out.clip = view.view_proj * vec4<f32>(p, 1.0);
-    out.colour = mix(vec3<f32>(0.16, 0.18, 0.24), ramp(f / view.params.x), select(0.0, 1.0, f > 0.0));
+    out.colour = mix(vec3<f32>(0.16, 0.18, 0.24), ramp(pressure / view.params.x), select(0.0, 1.0, f > 0.0));
     out.disc = vec2<f32>(0.0);
     return out;
 }
