@@ -1,4 +1,4 @@
-//! The web page's scene run (`web/`): the beads-on-an-incline scene of [`super::scenes`],
+//! The web page's scene run (`web/`): the beads-on-an-incline scene of [`crate::testing::scenes`],
 //! advanced increment by increment on the CPU path or device-resident on a GPU — the same
 //! sequence of calls either way, so the page (WebGPU), its native twin (`examples/page_scene`)
 //! and the tests compare like with like.
