@@ -96,6 +96,43 @@ pub struct Incline {
 /// uphill half of the plate, falling onto it with 30 % of critical contact damping, then
 /// sliding downhill (friction below tan(slope)) or staying (above).
 pub fn incline(s: &InclineSettings) -> Result<Incline> {
+    // the increment below is fixed for the stiffest scale the page offers: a stiffer spring
+    // (a query parameter, say) would run past its stable limit, so it is refused by name
+    let checks: [(&'static str, f64, bool, &'static str); 4] = [
+        (
+            "beads",
+            s.beads as f64,
+            (1..=65_536).contains(&s.beads),
+            "1 to 65,536",
+        ),
+        (
+            "friction",
+            s.friction,
+            (0.0..=2.0).contains(&s.friction),
+            "a Coulomb coefficient from 0 to 2",
+        ),
+        (
+            "penalty_scale",
+            s.penalty_scale,
+            s.penalty_scale > 0.0 && s.penalty_scale <= 4.0,
+            "above 0 and at most 4 (the increment is set for 4)",
+        ),
+        (
+            "slope_deg",
+            s.slope_deg,
+            (0.0..=60.0).contains(&s.slope_deg),
+            "0 to 60 degrees",
+        ),
+    ];
+    for (name, value, ok, expected) in checks {
+        if !ok {
+            return Err(Error::BadParameter {
+                name,
+                value: value.to_string(),
+                expected,
+            });
+        }
+    }
     let (nx, ny, lx, ly) = (32, 16, 2.0, 1.0);
     let plate = plate_quads(nx, ny, lx, ly, 0.0, 0, &|_, _| 0.0);
     let mut model = Model::new_3d();
@@ -267,4 +304,48 @@ pub fn bounce_cpu(model: &Model, range: &Range<u32>, dt: f64, steps: usize) -> R
     run.positions = x;
     run.velocities = v;
     Ok(run)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The page's settings outside what its fixed increment allows are refused by name.
+    #[test]
+    fn the_page_scene_refuses_settings_by_name() {
+        assert!(incline(&InclineSettings::default()).is_ok());
+        for (bad, name) in [
+            (
+                InclineSettings {
+                    penalty_scale: 8.0,
+                    ..Default::default()
+                },
+                "penalty_scale",
+            ),
+            (
+                InclineSettings {
+                    penalty_scale: f64::NAN,
+                    ..Default::default()
+                },
+                "penalty_scale",
+            ),
+            (
+                InclineSettings {
+                    beads: 0,
+                    ..Default::default()
+                },
+                "beads",
+            ),
+            (
+                InclineSettings {
+                    friction: -0.1,
+                    ..Default::default()
+                },
+                "friction",
+            ),
+        ] {
+            let err = incline(&bad).err().expect("refused").to_string();
+            assert!(err.contains(name), "{err}");
+        }
+    }
 }
