@@ -160,6 +160,9 @@ fn main() {
     let mut checksum: u64 = 0xcbf2_9ce4_8422_2325;
     let mut active = 0;
     let mut micros = 0.0f64;
+    // the collectives of each kind of increment: (fewest, most) between distributed global
+    // searches and at them
+    let (mut local_calls, mut global_calls) = ((u64::MAX, 0u64), (u64::MAX, 0u64));
     for k in 0..INCREMENTS {
         let x = at(k as f64 * DT);
         let xo: Vec<[f64; 3]> = own.iter().map(|&i| x[i]).collect();
@@ -168,6 +171,12 @@ fn main() {
         let step = dc.step(&xo, &vo, DT).expect("a distributed increment");
         micros += t.elapsed().as_secs_f64() * 1e6;
         searches += step.global_search as usize;
+        let calls = if step.global_search {
+            &mut global_calls
+        } else {
+            &mut local_calls
+        };
+        *calls = (calls.0.min(step.collectives), calls.1.max(step.collectives));
         bytes += step.bytes_sent;
         active = step.active;
         // every rank's forces on rank 0, by global id
@@ -226,9 +235,14 @@ fn main() {
         println!(
             "ranks {size}: largest force difference {rel:.3e} of the largest force {scale:.4e}; \
              {active} slaves in contact; {handovers} hand-overs of a slave's facet between \
-             ranks; {searches} distributed global searches; per rank: bytes sent per increment, \
+             ranks; {searches} distributed global searches; collectives per increment \
+             {}-{} local {}-{} global; per rank: bytes sent per increment, \
              slaves, time per increment {}; \
              checksum {checksum:016x}",
+            local_calls.0,
+            local_calls.1,
+            global_calls.0,
+            global_calls.1,
             per.join(" ")
         );
         if !(rel <= 1e-5) || scale == 0.0 {

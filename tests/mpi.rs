@@ -94,6 +94,14 @@ fn forces_across_ranks_equal_the_single_process_and_reruns_are_bitwise() {
             let b = run(ranks);
             assert_eq!(checksum(&a), checksum(&b), "reruns with {ranks} ranks");
         }
+        // one increment's collectives: the agreement on faults, motion and increment, the ghosts'
+        // state, their forces back, the agreement on the results; a distributed global search
+        // adds the slave boxes and the ghosts' counts, ids and masses (before issue 34: 13 and
+        // 19-20)
+        assert!(
+            a.contains("collectives per increment 4-4 local 7-7 global"),
+            "{a}"
+        );
         if ranks > 1 {
             // slaves' facets passed from one rank's nodes to another's
             let handovers = count_before(&a, " hand-overs");
@@ -311,6 +319,21 @@ fn scene_across_ranks(scene: &Path, name: &str, tol: f64) -> Value {
         assert!(bad.is_empty(), "{name}, {ranks} ranks:\n{}", bad.join("\n"));
         let split = s["ranks"].as_array().expect("the ranks' account");
         assert_eq!(split.len(), ranks, "{name}");
+        // 7 collectives per increment between distributed global searches (the contact's 4,
+        // the solver's agreement, the halo, the sums; 18 before issue 34), a search adding 3
+        // and an output row 1: the same count on every rank
+        let calls = split[0]["collectives_per_increment"].as_f64().unwrap();
+        assert!(
+            (7.0..8.0).contains(&calls),
+            "{name}, {ranks} ranks: {calls}"
+        );
+        for r in split {
+            assert_eq!(
+                r["collectives_per_increment"].as_f64(),
+                Some(calls),
+                "{name}"
+            );
+        }
         if ranks == 2 {
             let again = base.join("again");
             abut_run(scene, &again, 2);

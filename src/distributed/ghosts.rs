@@ -2,6 +2,7 @@
 //! inside it (chosen at each distributed global search), and the rank's local model and contact
 //! rebuilt from its own and its ghost nodes.
 
+use super::collectives::all_gather_fixed;
 use super::*;
 
 impl DistributedContact {
@@ -44,55 +45,68 @@ impl DistributedContact {
 
     /// New ghosts for own positions `x`: the send lists, the ghosts' ids and masses. Returns
     /// the ghosts' global ids (by source rank, then in the order sent) and the bytes sent.
+    /// Three collectives: each rank's slave box with its longest local edge (facets that
+    /// stretched since the start widen every rank's ghost margin, never narrowed), then the
+    /// ghosts' ids and masses with their counts.
     pub(super) fn choose_ghosts(&mut self, x: &[[f64; 3]]) -> (Vec<u64>, usize) {
         let size = self.comm.size() as usize;
-        let grow = self.pairs.iter().map(|p| p.radius).fold(0.0f64, f64::max)
-            + 2.0 * self.budget()
-            + 2.0 * self.h_max;
-        // this rank's slave region (none: an inverted box, which contains nothing)
-        let mut region = [
+        // this rank's slaves' box (none: an inverted box, which contains nothing once grown)
+        // and its longest local edge; the margin is added once every rank's edge is known
+        // (min(x) − grow is min(x − grow) to the bit: rounding is monotone)
+        let mut mine = [
             f64::INFINITY,
             f64::INFINITY,
             f64::INFINITY,
             f64::NEG_INFINITY,
             f64::NEG_INFINITY,
             f64::NEG_INFINITY,
+            self.longest_local_edge(x),
         ];
         for p in &self.pairs {
             for &s in &p.slaves {
                 for a in 0..3 {
-                    region[a] = region[a].min(x[s][a] - grow);
-                    region[3 + a] = region[3 + a].max(x[s][a] + grow);
+                    mine[a] = mine[a].min(x[s][a]);
+                    mine[3 + a] = mine[3 + a].max(x[s][a]);
                 }
             }
         }
-        let (regions, _) = all_gather(&self.comm, &region);
+        let boxes = all_gather_fixed(&self.comm, &mine);
+        let longest = boxes.chunks_exact(7).map(|b| b[6]).fold(0.0f64, f64::max);
+        self.h_max = self.h_max.max(longest);
+        let grow = self.pairs.iter().map(|p| p.radius).fold(0.0f64, f64::max)
+            + 2.0 * self.budget()
+            + 2.0 * self.h_max;
         let me = self.comm.rank() as usize;
         self.send = vec![Vec::new(); size];
         for r in (0..size).filter(|&r| r != me) {
-            let b = &regions[6 * r..6 * r + 6];
+            let b = &boxes[7 * r..7 * r + 6];
+            let (lo, hi) = (
+                [b[0] - grow, b[1] - grow, b[2] - grow],
+                [b[3] + grow, b[4] + grow, b[5] + grow],
+            );
             for &i in &self.master_nodes {
-                if (0..3).all(|a| x[i][a] >= b[a] && x[i][a] <= b[3 + a]) {
+                if (0..3).all(|a| x[i][a] >= lo[a] && x[i][a] <= hi[a]) {
                     self.send[r].push(i);
                 }
             }
         }
-        let ids_out: Vec<Vec<u64>> = self
+        // each ghost's id and mass (its bits), in one exchange
+        let out: Vec<Vec<u64>> = self
             .send
             .iter()
-            .map(|l| l.iter().map(|&i| self.ids[i]).collect())
+            .map(|l| {
+                l.iter()
+                    .flat_map(|&i| [self.ids[i], self.masses[i].to_bits()])
+                    .collect()
+            })
             .collect();
-        let mass_out: Vec<Vec<f64>> = self
-            .send
-            .iter()
-            .map(|l| l.iter().map(|&i| self.masses[i]).collect())
-            .collect();
-        let ids_in = exchange(&self.comm, &ids_out);
-        let mass_in = exchange(&self.comm, &mass_out);
-        self.recv = ids_in.iter().map(Vec::len).collect();
-        self.ghost_masses = mass_in.into_iter().flatten().collect();
+        let came = exchange(&self.comm, &out);
+        self.recv = came.iter().map(|l| l.len() / 2).collect();
+        let pairs = came.iter().flat_map(|l| l.chunks_exact(2));
+        self.ghost_masses = pairs.clone().map(|c| f64::from_bits(c[1])).collect();
+        let ids = pairs.map(|c| c[0]).collect();
         let sent: usize = self.send.iter().map(Vec::len).sum();
-        (ids_in.into_iter().flatten().collect(), 16 * sent + 48)
+        (ids, 16 * sent + 56)
     }
 
     /// The local model of own nodes at `x` and ghosts at `gx` (global ids `ghost_ids`), and its

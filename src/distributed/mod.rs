@@ -52,8 +52,9 @@ mod ghosts;
 mod step;
 mod validate;
 
-pub use collectives::all_gather;
-use collectives::{all_sum, gather_facets, whole_surface};
+pub(crate) use collectives::{agree, all_gather_fixed, all_max, all_min, exchange, exchange_known};
+pub use collectives::{all_gather, collectives_issued};
+use collectives::{gather_facets, whole_surface};
 use validate::validate;
 
 /// Marks the unused fourth node of a triangle in [`RankPair::facets`].
@@ -148,6 +149,12 @@ pub struct DistributedStep {
     pub fast_nodes: usize,
     /// The fastest of them over all ranks (relative to its radius), the same on every rank.
     pub fastest: Option<FastGlobalNode>,
+    /// MPI collectives this increment issued (the same on every rank): 4 for an increment
+    /// between distributed global searches — the agreement on faults, motion and increment;
+    /// the ghosts' state; their forces back; the agreement on the results — and 3 more for one
+    /// that begins with a distributed global search (the slave boxes, the ghost counts and the
+    /// ghosts' ids and masses).
+    pub collectives: u64,
 }
 
 /// A node that moved farther than its pair's search radius within one increment, by global id.
@@ -251,71 +258,9 @@ fn bad(name: &'static str, value: String, expected: &'static str) -> Error {
     }
 }
 
-/// Sends `out[r]` to rank r and returns what each rank sent here (all-to-all with counts).
-pub(crate) fn exchange<T: Equivalence + Clone + Default>(
-    comm: &SimpleCommunicator,
-    out: &[Vec<T>],
-) -> Vec<Vec<T>> {
-    let n = comm.size() as usize;
-    let send_counts: Vec<Count> = out.iter().map(|v| v.len() as Count).collect();
-    let mut recv_counts = vec![0 as Count; n];
-    comm.all_to_all_into(&send_counts[..], &mut recv_counts[..]);
-    let offsets = |c: &[Count]| -> Vec<Count> {
-        c.iter()
-            .scan(0, |acc, &x| {
-                let d = *acc;
-                *acc += x;
-                Some(d)
-            })
-            .collect()
-    };
-    let (sd, rd) = (offsets(&send_counts), offsets(&recv_counts));
-    let flat: Vec<T> = out.iter().flatten().cloned().collect();
-    let mut back = vec![T::default(); recv_counts.iter().sum::<Count>() as usize];
-    {
-        let send = Partition::new(&flat[..], &send_counts[..], &sd[..]);
-        let mut recv = PartitionMut::new(&mut back[..], &recv_counts[..], &rd[..]);
-        comm.all_to_all_varcount_into(&send, &mut recv);
-    }
-    let mut res = Vec::with_capacity(n);
-    for r in 0..n {
-        let (a, b) = (rd[r] as usize, (rd[r] + recv_counts[r]) as usize);
-        res.push(back[a..b].to_vec());
-    }
-    res
-}
-
-pub(crate) fn all_min(comm: &SimpleCommunicator, x: f64) -> f64 {
-    let mut y = 0.0;
-    comm.all_reduce_into(&x, &mut y, mpi::collective::SystemOperation::min());
-    y
-}
-
-pub(crate) fn all_max(comm: &SimpleCommunicator, x: f64) -> f64 {
-    let mut y = 0.0;
-    comm.all_reduce_into(&x, &mut y, mpi::collective::SystemOperation::max());
-    y
-}
-
 /// Own node index by global id, and each pair's slaves as own indices; or the first fault of
 /// this rank's share (no collective: see [`agree`]).
 type Validated = (HashMap<u64, usize>, Vec<Vec<usize>>);
-
-/// Whether every rank got on (collective): this rank's own error, or, where another rank failed,
-/// an error naming the first such rank.
-pub(crate) fn agree(comm: &SimpleCommunicator, own: Option<Error>) -> Result<()> {
-    let me = comm.rank() as f64;
-    let first = all_min(comm, if own.is_some() { me } else { f64::INFINITY });
-    match own {
-        Some(e) => Err(e),
-        None if first.is_finite() => Err(bad(
-            "rank",
-            format!("{first}"),
-            "every rank to get through (that rank failed: its own error says why)",
-        )),
-        None => Ok(()),
-    }
-}
 
 impl DistributedContact {
     /// This rank's contact over `comm` (duplicated: abut's messages never mix with the

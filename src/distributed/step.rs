@@ -2,12 +2,14 @@
 //! contact on its own device, the ghosts' forces back to their owners added in rank order, and the
 //! agreement over ranks (faults, stable increment, counts).
 
+use super::collectives::{agree_and_gather, agree_and_max, exchange_known};
 use super::*;
 
 impl DistributedContact {
     /// One increment: own nodes at `x` moving at `v` (in [`RankModel::ids`] order), increment
     /// `dt`. Collective: every rank calls it in the same increment with the same `dt`.
     pub fn step(&mut self, x: &[[f64; 3]], v: &[[f64; 3]], dt: f64) -> Result<&DistributedStep> {
+        let issued_before = collectives_issued();
         let n_own = self.ids.len();
         // faults are agreed on, never returned by one rank alone (the others would wait in the
         // next exchange for ever)
@@ -35,12 +37,6 @@ impl DistributedContact {
         {
             fault = Some(Error::NonFiniteCoordinate { node, axis, value });
         }
-        agree(&self.comm, fault)?;
-        let mut fault = None;
-        if self.dt_ref.is_none() {
-            // the automatic stiffness' reference: the first increment, on every rank
-            self.dt_ref = Some(all_min(&self.comm, dt));
-        }
         // a distributed global search: first, at the interval, or when any node has used up
         // the motion budget (agreed: the largest motion over all ranks)
         let moved = if self.started {
@@ -51,21 +47,24 @@ impl DistributedContact {
         } else {
             0.0
         };
+        // one collective: the faults, the largest motion and the smallest increment
+        let agreed = agree_and_max(&self.comm, fault, &[moved, -dt])?;
+        let (moved, dt_min) = (agreed[0], -agreed[1]);
+        let mut fault = None;
+        if self.dt_ref.is_none() {
+            // the automatic stiffness' reference: the first increment, on every rank
+            self.dt_ref = Some(dt_min);
+        }
         let interval = self
             .pairs
             .iter()
             .map(|p| p.interval)
             .min()
             .unwrap_or(u32::MAX);
-        let global = !self.started
-            || self.since_search >= interval
-            || all_max(&self.comm, moved) > self.budget();
+        let global = !self.started || self.since_search >= interval || moved > self.budget();
         let mut bytes = 0;
         let mut ghost_ids = Vec::new();
         if global {
-            // facets that stretched since the start widen the ghost margin (never narrowed)
-            let longest = all_max(&self.comm, self.longest_local_edge(x));
-            self.h_max = self.h_max.max(longest);
             let (ids, b) = self.choose_ghosts(x);
             ghost_ids = ids;
             bytes += b;
@@ -84,7 +83,8 @@ impl DistributedContact {
             })
             .collect();
         bytes += 8 * state_out.iter().map(Vec::len).sum::<usize>();
-        let state_in: Vec<f64> = exchange(&self.comm, &state_out)
+        let counts: Vec<usize> = self.recv.iter().map(|&c| 6 * c).collect();
+        let state_in: Vec<f64> = exchange_known(&self.comm, &state_out, &counts)
             .into_iter()
             .flatten()
             .collect();
@@ -169,7 +169,8 @@ impl DistributedContact {
             at += count;
         }
         bytes += 8 * back.iter().map(Vec::len).sum::<usize>();
-        let came = exchange(&self.comm, &back);
+        let counts: Vec<usize> = self.send.iter().map(|l| 3 * l.len()).collect();
+        let came = exchange_known(&self.comm, &back, &counts);
         for (q, list) in self.send.iter().enumerate() {
             for (k, &i) in list.iter().enumerate() {
                 for a in 0..3 {
@@ -177,10 +178,24 @@ impl DistributedContact {
                 }
             }
         }
-        agree(&self.comm, fault)?;
-        let (all_fast, _) = all_gather(&self.comm, &fast.1);
-        let fastest = all_fast
-            .chunks_exact(5)
+        // one collective: the faults and each rank's stable increment, overclosure, counts
+        // and fastest node, folded in rank order (the same bits on every rank)
+        let [f0, f1, f2, f3, f4] = fast.1;
+        let record = [
+            stable,
+            over,
+            active as f64,
+            fast.0 as f64,
+            f0,
+            f1,
+            f2,
+            f3,
+            f4,
+        ];
+        let rows = agree_and_gather(&self.comm, fault, &record)?;
+        let fastest = rows
+            .iter()
+            .map(|r| &r[4..9])
             .filter(|f| f[0] > 1.0)
             .fold(None::<&[f64]>, |best, f| match best {
                 Some(b) if b[0] >= f[0] => Some(b),
@@ -194,14 +209,15 @@ impl DistributedContact {
             });
         self.last = DistributedStep {
             forces,
-            stable_dt: all_min(&self.comm, stable),
-            max_overclosure: all_max(&self.comm, over),
-            active: all_sum(&self.comm, active as u64) as usize,
+            stable_dt: rows.iter().map(|r| r[0]).fold(f64::INFINITY, f64::min),
+            max_overclosure: rows.iter().map(|r| r[1]).fold(0.0, f64::max),
+            active: rows.iter().map(|r| r[2] as usize).sum(),
             global_search: global,
             bytes_sent: bytes,
             ghosts: gx.len(),
-            fast_nodes: all_sum(&self.comm, fast.0 as u64) as usize,
+            fast_nodes: rows.iter().map(|r| r[3] as usize).sum(),
             fastest,
+            collectives: collectives_issued() - issued_before,
         };
         Ok(&self.last)
     }

@@ -36,8 +36,8 @@ use super::{
 };
 use crate::device::Device;
 use crate::distributed::{
-    agree, all_gather, all_max, all_min, exchange, DistributedContact, RankBalance, RankModel,
-    RankPair, NO_GLOBAL_NODE,
+    agree, all_gather, all_gather_fixed, all_max, all_min, collectives_issued, exchange,
+    DistributedContact, RankBalance, RankModel, RankPair, NO_GLOBAL_NODE,
 };
 use crate::error::{Error, Result};
 use crate::explicit::{Element, LoadCurve, Prescribed, Solver};
@@ -52,10 +52,10 @@ fn refuse(what: &str, expected: &'static str) -> Error {
     }
 }
 
-/// The values every rank holds, summed over the ranks in rank order (the same bits on every
-/// rank, run after run).
+/// The values every rank holds (the same number on every rank), summed over the ranks in rank
+/// order (the same bits on every rank, run after run; one collective).
 fn sum_over_ranks(comm: &SimpleCommunicator, values: &[f64]) -> Vec<f64> {
-    let (all, _) = all_gather(comm, values);
+    let all = all_gather_fixed(comm, values);
     let mut sum = vec![0.0; values.len()];
     for chunk in all.chunks_exact(values.len().max(1)) {
         for (s, v) in sum.iter_mut().zip(chunk) {
@@ -63,6 +63,15 @@ fn sum_over_ranks(comm: &SimpleCommunicator, values: &[f64]) -> Vec<f64> {
         }
     }
     sum
+}
+
+/// This process's peak resident memory, bytes (Linux: `VmHWM` in /proc/self/status; `None`
+/// where the system does not say).
+fn peak_resident_bytes() -> Option<u64> {
+    let status = std::fs::read_to_string("/proc/self/status").ok()?;
+    let kb = status.lines().find_map(|l| l.strip_prefix("VmHWM:"))?;
+    let kb: u64 = kb.trim().trim_end_matches("kB").trim().parse().ok()?;
+    Some(kb * 1024)
 }
 
 /// `e` with its nodes renumbered through `local_of`.
@@ -275,6 +284,7 @@ fn run_into(
         .flatten()
         .map(|&i| local_of[i as usize] as usize)
         .collect();
+    let halo_counts: Vec<usize> = asks.iter().map(Vec::len).collect();
     // the contact share
     let pairs = rank_pairs(model, &part, me)?;
     let has_contact = !pairs.is_empty();
@@ -347,6 +357,7 @@ fn run_into(
         own: &own,
         send: &send,
         halo_in: &halo_in,
+        halo_counts: &halo_counts,
         own_slaves: &own_slaves,
         part_nodes: &part_nodes,
         x0: &x0,
@@ -358,7 +369,9 @@ fn run_into(
         energy: [0.0; 5],
         last: Vec::new(),
     };
+    let issued = collectives_issued();
     increments::run(&mut account, &mut rank, device, progress)?;
+    let issued = collectives_issued() - issued;
     let Rank {
         solver,
         contact,
@@ -382,6 +395,8 @@ fn run_into(
         per_increment(contact_bytes),
         my_seconds,
         contact.as_ref().map_or(0.0, |c| c.rebuilds() as f64),
+        per_increment(issued as usize),
+        peak_resident_bytes().map_or(-1.0, |b| b as f64),
     ];
     let ranks: Vec<RankSummary> = all_gather(comm, &mine)
         .0
@@ -396,6 +411,8 @@ fn run_into(
             contact_bytes_per_increment: r[6],
             seconds_per_increment: r[7],
             contact_rebuilds: r[8] as u64,
+            collectives_per_increment: r[9],
+            peak_resident_bytes: (r[10] >= 0.0).then_some(r[10] as u64),
         })
         .collect();
     // the parts: motion summed over the ranks, stress extremes over each rank's own elements

@@ -218,4 +218,12 @@ pub struct RankSummary {
     /// Local contact models built (`abut::distributed::DistributedContact::rebuilds`, feature
     /// `mpi`).
     pub contact_rebuilds: u64,
+    /// MPI collectives per increment, mean over the run (the same on every rank): 7 for an
+    /// increment between distributed global searches with contact (4 of the contact's, the
+    /// solver's agreement, the halo and the sums), 3 with none; a distributed global search
+    /// adds 3 and an output row 1.
+    pub collectives_per_increment: f64,
+    /// The rank's peak resident memory at the end of the run, bytes (its process's high-water
+    /// mark; `None` where the system does not say: Linux only).
+    pub peak_resident_bytes: Option<u64>,
 }

@@ -7,7 +7,7 @@ use std::io::Write as _;
 use mpi::topology::SimpleCommunicator;
 
 use super::sum_over_ranks;
-use crate::distributed::{agree, all_max, exchange, DistributedContact};
+use crate::distributed::{agree, all_max, exchange_known, DistributedContact};
 use crate::error::{Error, Result};
 use crate::explicit::Solver;
 use crate::scene::account::Account;
@@ -52,6 +52,8 @@ pub(super) struct Rank<'a> {
     pub(super) send: &'a [Vec<usize>],
     /// The halo nodes (local indices), in the order their owners send them.
     pub(super) halo_in: &'a [usize],
+    /// How many of them each rank owns (sends here), in rank order.
+    pub(super) halo_counts: &'a [usize],
     /// The slave nodes this rank owns (local indices).
     pub(super) own_slaves: &'a [usize],
     pub(super) part_nodes: &'a PartNodes,
@@ -124,7 +126,11 @@ impl Ranks for Rank<'_> {
             })
             .collect();
         self.halo_bytes += 8 * out.iter().map(Vec::len).sum::<usize>();
-        let came: Vec<f64> = exchange(self.comm, &out).into_iter().flatten().collect();
+        let counts: Vec<usize> = self.halo_counts.iter().map(|&c| 6 * c).collect();
+        let came: Vec<f64> = exchange_known(self.comm, &out, &counts)
+            .into_iter()
+            .flatten()
+            .collect();
         for (&l, s) in self.halo_in.iter().zip(came.chunks_exact(6)) {
             solver.x[l] = [s[0], s[1], s[2]];
             solver.v[l] = [s[3], s[4], s[5]];
