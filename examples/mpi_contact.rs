@@ -18,7 +18,9 @@
 //! `ABUT_MPI_CASE` picks another model: `self` (a self-contact sheet), `balanced` (a balanced
 //! pair of two plates), `stretch` (a plate stretched tenfold under slaves that lie in the middle
 //! of one of its facets), `bad-slave` (a rank names a slave it does not own: refused
-//! everywhere).
+//! everywhere), `bad-facet` (a rank gives a 2D segment as a facet of this 3D model: likewise).
+//! The line also gives the MPI collectives per increment, between distributed global searches
+//! and at them.
 
 use abut::distributed::{
     all_gather, DistributedContact, RankBalance, RankModel, RankPair, NO_GLOBAL_NODE,
@@ -80,7 +82,6 @@ fn main() {
         .filter(|f| part[f[0] as usize] as usize == rank)
         .map(|f| f.map(|g| g as u64))
         .collect();
-    let _ = NO_GLOBAL_NODE;
     let pairs: Vec<RankPair> = specs
         .iter()
         .map(|(half, friction)| {
@@ -107,17 +108,23 @@ fn main() {
         .collect();
     let my_slaves: usize = pairs.iter().map(|p| p.slaves.len()).sum();
     let model = RankModel {
+        two_d: false,
         ids: own.iter().map(|&i| i as u64).collect(),
         positions: own.iter().map(|&i| x0[i]).collect(),
         masses: own.iter().map(|&i| masses[i]).collect(),
         pairs,
     };
     let device = Device::cpu();
-    if std::env::var("ABUT_MPI_CASE").as_deref() == Ok("bad-slave") {
-        // the last rank names a slave it does not own: every rank is refused, none hangs
+    if case == "bad-slave" || case == "bad-facet" {
+        // the last rank names a slave it does not own, or gives a 2D segment as a facet of
+        // this 3D model: every rank is refused, none hangs
         let mut bad = model.clone();
-        if rank == size - 1 {
+        if rank == size - 1 && case == "bad-slave" {
             bad.pairs[0].slaves.push(u64::MAX - 1);
+        } else if rank == size - 1 {
+            bad.pairs[0]
+                .facets
+                .push([0, 1, NO_GLOBAL_NODE, NO_GLOBAL_NODE]);
         }
         let e = DistributedContact::new(&world, &device, bad)
             .err()

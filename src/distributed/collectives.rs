@@ -216,17 +216,19 @@ pub(super) fn gather_facets(
 }
 
 /// The whole surface of `facets` at the start positions `at` (by global id), numbered in the
-/// order its nodes first appear; and that numbering. Errors: a node no rank owns.
+/// order its nodes first appear, of a 2D model when `two_d`; and that numbering. Errors: a node
+/// no rank owns.
 pub(super) fn whole_surface(
     facets: &[[u64; 4]],
     at: &HashMap<u64, [f64; 3]>,
     k: usize,
+    two_d: bool,
 ) -> Result<(MasterSurface, HashMap<u64, u32>)> {
     let mut local_of: HashMap<u64, u32> = HashMap::new();
     let mut positions = Vec::new();
     let mut list = Vec::with_capacity(facets.len());
     for f in facets {
-        let m = if f[3] == NO_GLOBAL_NODE { 3 } else { 4 };
+        let m = facet_node_count(f, NO_GLOBAL_NODE);
         let mut l = [0u32; 4];
         for j in 0..m {
             let p = at.get(&f[j]).ok_or_else(|| {
@@ -241,12 +243,9 @@ pub(super) fn whole_surface(
                 (positions.len() - 1) as u32
             });
         }
-        list.push(if m == 3 {
-            Facet::Triangle([l[0], l[1], l[2]])
-        } else {
-            Facet::Quad(l)
-        });
+        list.push(facet_of(l, m));
     }
-    let surface = MasterSurface::build(&Surface::from_facets(list), &positions, 3)?;
+    let dim = if two_d { 2 } else { 3 };
+    let surface = MasterSurface::build(&Surface::from_facets(list), &positions, dim)?;
     Ok((surface, local_of))
 }

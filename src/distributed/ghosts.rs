@@ -32,7 +32,7 @@ impl DistributedContact {
         };
         let mut longest = 0.0f64;
         for f in self.local_facets.iter().chain(&self.own_facets) {
-            let m = if f[3] == u32::MAX { 3 } else { 4 };
+            let m = facet_node_count(f, u32::MAX);
             for j in 0..m {
                 if let (Some(a), Some(b)) = (at(f[j]), at(f[(j + 1) % m])) {
                     let d = (0..3).map(|c| (a[c] - b[c]).powi(2)).sum::<f64>().sqrt();
@@ -125,7 +125,11 @@ impl DistributedContact {
         for (k, &g) in ghost_ids.iter().enumerate() {
             local_of.insert(g, (n_own + k) as u32);
         }
-        let mut model = Model::new_3d();
+        let mut model = if self.two_d {
+            Model::new_2d()
+        } else {
+            Model::new_3d()
+        };
         let positions: Vec<[f64; 3]> = x.iter().chain(gx).copied().collect();
         let masses: Vec<f64> = self
             .masses
@@ -154,16 +158,12 @@ impl DistributedContact {
                 .facets
                 .iter()
                 .filter_map(|f| {
-                    let m = if f[3] == NO_GLOBAL_NODE { 3 } else { 4 };
-                    let mut l = [0u32; 4];
+                    let m = facet_node_count(f, NO_GLOBAL_NODE);
+                    let mut l = [u32::MAX; 4];
                     for j in 0..m {
                         l[j] = *local_of.get(&f[j])?;
                     }
-                    Some(if m == 3 {
-                        Facet::Triangle([l[0], l[1], l[2]])
-                    } else {
-                        Facet::Quad(l)
-                    })
+                    Some(facet_of(l, m))
                 })
                 .collect();
             if facets.is_empty() {
@@ -171,7 +171,8 @@ impl DistributedContact {
             }
             local_facets.extend(facets.iter().map(|f| {
                 let n = f.nodes();
-                [n[0], n[1], n[2], n.get(3).copied().unwrap_or(u32::MAX)]
+                let at = |j: usize| n.get(j).copied().unwrap_or(u32::MAX);
+                [at(0), at(1), at(2), at(3)]
             }));
             let surf = model.add_surface(Surface::from_facets(facets.clone()))?;
             let slaves: Vec<u32> = p.slaves.iter().map(|&s| s as u32).collect();

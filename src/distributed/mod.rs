@@ -57,8 +57,30 @@ pub use collectives::{all_gather, collectives_issued};
 use collectives::{gather_facets, whole_surface};
 use validate::validate;
 
-/// Marks the unused fourth node of a triangle in [`RankPair::facets`].
+/// Marks the unused nodes of a facet in [`RankPair::facets`]: a triangle's fourth, a 2D
+/// segment's third and fourth.
 pub const NO_GLOBAL_NODE: u64 = u64::MAX;
+
+/// How many nodes facet `f` has (2: a segment, 3: a triangle, 4: a quad), its unused ids being
+/// `none` ([`NO_GLOBAL_NODE`], or `u32::MAX` for local indices).
+pub(crate) fn facet_node_count<T: PartialEq + Copy>(f: &[T; 4], none: T) -> usize {
+    if f[2] == none {
+        2
+    } else if f[3] == none {
+        3
+    } else {
+        4
+    }
+}
+
+/// The facet of the first `m` nodes of `l` (a segment, a triangle or a quad).
+pub(crate) fn facet_of(l: [u32; 4], m: usize) -> Facet {
+    match m {
+        2 => Facet::Segment([l[0], l[1]]),
+        3 => Facet::Triangle([l[0], l[1], l[2]]),
+        _ => Facet::Quad(l),
+    }
+}
 
 /// One rank's share of a model.
 #[derive(Clone, Debug, Default)]
@@ -71,6 +93,9 @@ pub struct RankModel {
     pub masses: Vec<f64>,
     /// The contact pairs, the same pairs in the same order on every rank.
     pub pairs: Vec<RankPair>,
+    /// The model is 2D (the x–y plane; [`crate::Model::new_2d`]): its facets are segments,
+    /// `[a, b, NO_GLOBAL_NODE, NO_GLOBAL_NODE]`. The same on every rank.
+    pub two_d: bool,
 }
 
 /// One penalty pair's share on a rank.
@@ -79,7 +104,7 @@ pub struct RankPair {
     /// This rank's slave nodes of the pair (global ids of nodes it owns; may be empty).
     pub slaves: Vec<u64>,
     /// The master facets this rank owns: 3D triangles (fourth id [`NO_GLOBAL_NODE`]) or quads,
-    /// by global node ids, nodes counter-clockwise seen from the side contact comes from.
+    /// or in a 2D model segments (third and fourth [`NO_GLOBAL_NODE`]), by global node ids, nodes counter-clockwise seen from the side contact comes from.
     pub facets: Vec<[u64; 4]>,
     /// Search radius (model length units), the same on every rank.
     pub search_radius: f64,
@@ -199,7 +224,10 @@ pub struct DistributedContact {
     /// every rank's local facets at each distributed global search (facets that stretch widen
     /// the ghost margin).
     h_max: f64,
-    /// The local model's facets (local node indices, `u32::MAX` pads a triangle), every pass.
+    /// Whether the model is 2D ([`RankModel::two_d`]).
+    two_d: bool,
+    /// The local model's facets (local node indices, `u32::MAX` pads a triangle or segment),
+    /// every pass.
     local_facets: Vec<[u32; 4]>,
     /// The facets all of whose nodes this rank owns (own indices, padded likewise).
     own_facets: Vec<[u32; 4]>,
@@ -279,12 +307,21 @@ impl DistributedContact {
         };
         let count = model.pairs.len() as f64;
         let uneven = all_min(&comm, count) != all_max(&comm, count);
+        let dim = if model.two_d { 2.0 } else { 3.0 };
+        let mixed = all_min(&comm, dim) != all_max(&comm, dim);
         agree(&comm, fault)?;
         if uneven {
             return Err(bad(
                 "pairs",
                 model.pairs.len().to_string(),
                 "the same number of pairs on every rank",
+            ));
+        }
+        if mixed {
+            return Err(bad(
+                "two_d",
+                model.two_d.to_string(),
+                "the same dimension on every rank",
             ));
         }
         let (index, slaves_of) = valid.expect("agreed: every share valid");
@@ -343,7 +380,7 @@ impl DistributedContact {
             .zip(model.pairs.iter().zip(slaves_of))
             .enumerate()
         {
-            let (whole, local_of) = whole_surface(&master, &at, k)?;
+            let (whole, local_of) = whole_surface(&master, &at, k, model.two_d)?;
             edge = edge.max(whole.facet_size.iter().copied().fold(0.0, f64::max));
             let areas = match &p.slave_areas {
                 Some(a) => a.clone(),
@@ -367,7 +404,7 @@ impl DistributedContact {
             if let Some((slave_facets, w)) = slave {
                 // the master-on-slave pass: this rank's nodes of the master surface, each with
                 // its tributary area on the whole surface
-                let (slave_whole, _) = whole_surface(&slave_facets, &at, k)?;
+                let (slave_whole, _) = whole_surface(&slave_facets, &at, k, model.two_d)?;
                 edge = edge.max(slave_whole.facet_size.iter().copied().fold(0.0, f64::max));
                 let mine: Vec<usize> = (0..n)
                     .filter(|&i| {
@@ -390,7 +427,7 @@ impl DistributedContact {
             .flat_map(|p| &p.facets)
             .filter_map(|f| {
                 let mut l = [u32::MAX; 4];
-                for j in 0..if f[3] == NO_GLOBAL_NODE { 3 } else { 4 } {
+                for j in 0..facet_node_count(f, NO_GLOBAL_NODE) {
                     l[j] = *index.get(&f[j])? as u32;
                 }
                 Some(l)
@@ -400,6 +437,7 @@ impl DistributedContact {
         Ok(Self {
             comm,
             device: device.clone(),
+            two_d: model.two_d,
             ids: model.ids,
             masses: model.masses,
             index,

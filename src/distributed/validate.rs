@@ -65,6 +65,24 @@ pub(super) fn validate(model: &RankModel) -> Result<Validated> {
                 ));
             }
         }
+        let facets = p
+            .facets
+            .iter()
+            .chain(p.balanced.iter().flat_map(|b| &b.slave_facets));
+        for f in facets {
+            let m = super::facet_node_count(f, NO_GLOBAL_NODE);
+            let (fits, expected) = if model.two_d {
+                (
+                    m == 2,
+                    "a segment in a 2D model: [a, b, NO_GLOBAL_NODE, NO_GLOBAL_NODE]",
+                )
+            } else {
+                (m > 2, "a triangle or a quad in a 3D model")
+            };
+            if !fits || f[..m].contains(&NO_GLOBAL_NODE) {
+                return Err(bad("master facet", format!("{f:?} of pair {k}"), expected));
+            }
+        }
         if let Some(b) = &p.balanced {
             if !(b.weight.is_finite() && (0.0..=1.0).contains(&b.weight)) {
                 return Err(bad(

@@ -90,24 +90,19 @@ fn renumbered(e: &Element, local_of: &[u32]) -> Element {
 }
 
 /// The facets of `facets` this rank owns (those whose first node it owns), by global ids.
-fn owned_facets(facets: &[Facet], part: &[u32], me: u32) -> Result<Vec<[u64; 4]>> {
+fn owned_facets(facets: &[Facet], part: &[u32], me: u32) -> Vec<[u64; 4]> {
     let mut out = Vec::new();
     for f in facets {
         let ids: [u64; 4] = match f {
             Facet::Triangle(n) => [n[0] as u64, n[1] as u64, n[2] as u64, NO_GLOBAL_NODE],
             Facet::Quad(n) => n.map(|k| k as u64),
-            Facet::Segment(_) => {
-                return Err(refuse(
-                    "a 2D surface",
-                    "3D surfaces (2D scenes run in one process)",
-                ))
-            }
+            Facet::Segment(n) => [n[0] as u64, n[1] as u64, NO_GLOBAL_NODE, NO_GLOBAL_NODE],
         };
         if part[ids[0] as usize] == me {
             out.push(ids);
         }
     }
-    Ok(out)
+    out
 }
 
 /// This rank's contact share of `model`'s pairs.
@@ -145,7 +140,7 @@ fn rank_pairs(model: &Model, part: &[u32], me: u32) -> Result<Vec<RankPair>> {
             .unwrap_or_else(|| Schedule::default_for(self_contact));
         out.push(RankPair {
             slaves: mine.iter().map(|&j| set[j] as u64).collect(),
-            facets: owned_facets(&master.facets, part, me)?,
+            facets: owned_facets(&master.facets, part, me),
             search_radius: pair
                 .search_radius
                 .unwrap_or_else(|| master.mean_facet_size()),
@@ -155,7 +150,7 @@ fn rank_pairs(model: &Model, part: &[u32], me: u32) -> Result<Vec<RankPair>> {
             slave_areas: areas.map(|a| mine.iter().map(|&j| a[j]).collect()),
             balanced: match pair.balanced {
                 Some((s, weight)) => Some(RankBalance {
-                    slave_facets: owned_facets(&model.surface(s)?.facets, part, me)?,
+                    slave_facets: owned_facets(&model.surface(s)?.facets, part, me),
                     weight,
                 }),
                 None => None,
@@ -194,9 +189,6 @@ fn run_into(
             "rigid bodies ([[rigid]] or moving rigid parts)",
             "deformable parts, fixed rigid parts and penalty pairs",
         ));
-    }
-    if model.dim() != 3 {
-        return Err(refuse("a 2D scene", "a 3D scene"));
     }
     if scene.run.adjust_overclosure {
         return Err(refuse(
@@ -298,6 +290,7 @@ fn run_into(
                 positions: own.iter().map(|&l| solver.x[l]).collect(),
                 masses: own.iter().map(|&l| solver.mass[l]).collect(),
                 pairs,
+                two_d: model.dim() == 2,
             },
         )?)
     } else {
