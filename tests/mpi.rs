@@ -322,13 +322,18 @@ fn read(dir: &Path) -> (Value, String) {
 /// and the history agree to `tol`; a rerun with 2 ranks gives the same history bytes. Returns
 /// the 4-rank summary.
 fn scene_across_ranks(scene: &Path, name: &str, tol: f64) -> Value {
+    scene_across(scene, name, tol, &[1, 2, 4])
+}
+
+/// As [`scene_across_ranks`], at each of `rank_counts` ranks.
+fn scene_across(scene: &Path, name: &str, tol: f64, rank_counts: &[usize]) -> Value {
     let base = std::env::temp_dir().join(format!("abut-mpi-{}-{name}", std::process::id()));
     let one = base.join("single");
     abut_run(scene, &one, 0);
     let (single, history) = read(&one);
     let peak = single["peak_force"].as_f64().unwrap_or(0.0);
     let mut last = Value::Null;
-    for ranks in [1, 2, 4] {
+    for &ranks in rank_counts {
         let dir = base.join(format!("ranks{ranks}"));
         abut_run(scene, &dir, ranks);
         let (s, h) = read(&dir);
@@ -418,6 +423,65 @@ fn a_two_d_scene_across_ranks_gives_the_single_process_summary() {
     let _ = std::fs::remove_dir_all(&dir);
 }
 
+/// A scene's text with `edits` (from, to) made, each exactly once, written to `dir/name`.
+fn edited_scene(dir: &Path, scene: &str, name: &str, edits: &[(&str, &str)]) -> std::path::PathBuf {
+    let mut text = std::fs::read_to_string(scenes().join(scene)).unwrap();
+    for (from, to) in edits {
+        assert_eq!(text.matches(from).count(), 1, "{scene}: {from}");
+        text = text.replacen(from, to, 1);
+    }
+    std::fs::create_dir_all(dir).unwrap();
+    let path = dir.join(name);
+    std::fs::write(&path, text).unwrap();
+    path
+}
+
+/// Rigid bodies moving at a set velocity across ranks (issue 34): every rank moves each body
+/// alike and carries its own nodes of it, rank 0 counts its kinetic energy, each rank the
+/// contact forces on its own nodes; the body's columns in the history and its summary are the
+/// single process's. In 2D, the axisymmetric Hertz sphere pushed in for 4 time units on a
+/// coarser mesh, at 1, 2 and 4 ranks to 10⁻⁶ (measured: the contact the same bits, the energies
+/// summed in rank order). In 3D, the block drop with its plate driven up into the falling block
+/// at 0.5 m/s, at 1 and 2 ranks to 10⁻⁵ (measured 3·10⁻⁶): the contact's f32 frame is the
+/// master's lower corner snapped to a power of two, and a moving plate's z has every bit, so
+/// each rank's local contact rounds the gaps in a frame of its own (the single process's, with
+/// a fixed plate, is the same bits: `a_mesh_drop_…`). At 4 ranks the impact carries that
+/// round-off into the contact-limited increment, and the run drifts to 5·10⁻⁵ in time and
+/// 3·10⁻³ in the force curve by the end of contact (docs/BENCHMARKS.md).
+#[test]
+fn a_rigid_body_at_a_set_velocity_across_ranks_gives_the_single_process_summary() {
+    let dir = std::env::temp_dir().join(format!("abut-mpi-bodies-{}", std::process::id()));
+    let plate = edited_scene(
+        &dir,
+        "block_drop.toml",
+        "moving_plate.toml",
+        &[(
+            "divisions = [30, 30, 0]",
+            "divisions = [30, 30, 0]\nmotion = \"velocity\"\nvelocity = [0.0, 0.0, 0.5]\nmass = 1.0e3",
+        )],
+    );
+    let s = scene_across(&plate, "moving-plate", 1e-5, &[1, 2]);
+    let body = &s["bodies"][0];
+    assert!(
+        (body["velocity"][2].as_f64().unwrap() - 0.5).abs() < 1e-12,
+        "{s}"
+    );
+    assert!(s["peak_force"].as_f64().unwrap() > 0.0, "{s}");
+    let sphere = edited_scene(
+        &dir,
+        "hertz_sphere.toml",
+        "hertz_sphere.toml",
+        &[
+            ("end_time = 20.0", "end_time = 4.0"),
+            ("divisions = [79, 79, 0]", "divisions = [24, 24, 0]"),
+            ("grading_core = [22, 22, 1]\n", ""),
+        ],
+    );
+    let s = scene_across_ranks(&sphere, "hertz-sphere", 1e-6);
+    assert!(s["peak_force"].as_f64().unwrap() > 0.0, "{s}");
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
 /// A balanced pair in a scene: the mesh drop with `balanced = 0.5` (the base's nodes against
 /// the box's bottom too, on their owners): the summary is the single process's.
 #[test]
@@ -439,28 +503,45 @@ fn a_balanced_mesh_drop_across_ranks_gives_the_single_process_summary() {
 }
 
 /// What a distributed run cannot do yet is refused by name (kinematic contact: the bar
-/// impact), every rank returns, and mpirun reports the failure.
+/// impact; a free rigid body: the block drop's plate made free), every rank returns, and
+/// mpirun reports the failure.
 #[test]
 fn a_scene_a_distributed_run_cannot_do_is_refused_by_name() {
-    let out = std::env::temp_dir().join(format!("abut-mpi-{}-refused", std::process::id()));
-    let o = mpirun_command()
-        .args(["--allow-run-as-root", "--oversubscribe", "-n", "2"])
-        .arg(env!("CARGO_BIN_EXE_abut"))
-        .arg("run")
-        .arg(scenes().join("bar_impact.toml"))
-        .args(["--backend", "cpu", "--output"])
-        .arg(&out)
-        .output()
-        .expect("mpirun runs");
-    let err = String::from_utf8_lossy(&o.stderr);
-    assert!(!o.status.success(), "{err}");
-    // (mpirun stops the other rank once one has failed; that the run ends shows that neither
-    // was left waiting)
-    assert!(
-        err.contains("kinematic contact runs in one process"),
-        "the rank says why: {err}"
+    let dir = std::env::temp_dir().join(format!("abut-mpi-{}-refused", std::process::id()));
+    let free = edited_scene(
+        &dir,
+        "block_drop.toml",
+        "free_plate.toml",
+        &[(
+            "divisions = [30, 30, 0]",
+            "divisions = [30, 30, 0]\nmotion = \"free\"\nmass = 1.0e3",
+        )],
     );
-    assert!(!out.join("summary.json").exists());
+    for (scene, says) in [
+        (
+            scenes().join("bar_impact.toml"),
+            "kinematic contact runs in one process",
+        ),
+        (free, "free rigid body plate"),
+    ] {
+        let out = dir.join("out");
+        let o = mpirun_command()
+            .args(["--allow-run-as-root", "--oversubscribe", "-n", "2"])
+            .arg(env!("CARGO_BIN_EXE_abut"))
+            .arg("run")
+            .arg(&scene)
+            .args(["--backend", "cpu", "--output"])
+            .arg(&out)
+            .output()
+            .expect("mpirun runs");
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert!(!o.status.success(), "{err}");
+        // (mpirun stops the other rank once one has failed; that the run ends shows that
+        // neither was left waiting)
+        assert!(err.contains(says), "the rank says why: {err}");
+        assert!(!out.join("summary.json").exists());
+    }
+    let _ = std::fs::remove_dir_all(&dir);
 }
 
 /// Every rank on a GPU adapter: the mesh drop under `mpirun -n 2` with each rank's search and

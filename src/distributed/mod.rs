@@ -104,7 +104,8 @@ pub struct RankPair {
     /// This rank's slave nodes of the pair (global ids of nodes it owns; may be empty).
     pub slaves: Vec<u64>,
     /// The master facets this rank owns: 3D triangles (fourth id [`NO_GLOBAL_NODE`]) or quads,
-    /// or in a 2D model segments (third and fourth [`NO_GLOBAL_NODE`]), by global node ids, nodes counter-clockwise seen from the side contact comes from.
+    /// or in a 2D model segments (third and fourth [`NO_GLOBAL_NODE`]), by global node ids,
+    /// nodes counter-clockwise seen from the side contact comes from.
     pub facets: Vec<[u64; 4]>,
     /// Search radius (model length units), the same on every rank.
     pub search_radius: f64,

@@ -120,6 +120,9 @@ pub struct Solver {
     /// The nodes and elements whose energies this solver counts (`None`: all). A rank of a
     /// distributed run counts its own nodes and elements only; the run adds the ranks' up.
     pub(crate) counted: Option<(Vec<bool>, Vec<bool>)>,
+    /// Whether the bodies' kinetic energy counts here (false on all ranks of a distributed run
+    /// but one: every rank moves the held bodies alike).
+    pub(crate) bodies_counted: bool,
 }
 
 impl Solver {
@@ -194,6 +197,7 @@ impl Solver {
             last_power: None,
             carried: vec![None; n],
             counted: None,
+            bodies_counted: true,
         })
     }
 
@@ -420,14 +424,17 @@ impl Solver {
         // rigid bodies: gravity, loads and penalty forces on their nodes (force and moment about
         // the reference point, at the start of the increment)
         let mut body_ext = vec![([0.0; 3], [0.0; 3]); self.bodies.len()];
+        // a rank's share of the model counts its own nodes' forces on a body (the ranks' shares
+        // add up to the body's), and one rank its kinetic energy
+        let own = self.counted.as_ref().map(|(nodes, _)| nodes.as_slice());
         let body_pen: Vec<([f64; 3], [f64; 3])> = self
             .bodies
             .iter()
-            .map(|b| b.resultant(&self.x, &penalty))
+            .map(|b| b.resultant(&self.x, &penalty, own))
             .collect();
         for (k, b) in self.bodies.iter_mut().enumerate() {
             let (fp, mp) = body_pen[k];
-            let (fl, ml) = b.resultant(&self.x, &self.loads);
+            let (fl, ml) = b.resultant(&self.x, &self.loads, own);
             let ml = [0, 1, 2].map(|a| factor * (ml[a] + b.moment[a]));
             let g = self.gravity.map(|g| g * b.mass);
             let f_ext = [0, 1, 2].map(|a| factor * (fl[a] + b.load[a]) + g[a]);
@@ -480,7 +487,8 @@ impl Solver {
                         dv[a] = states[k].velocity[a] - pred[k].velocity[a];
                         dw[a] = states[k].angular_velocity[a] - pred[k].angular_velocity[a];
                     }
-                    let (j, h) = b.resultant(&self.x, &kinematic);
+                    let own = self.counted.as_ref().map(|(nodes, _)| nodes.as_slice());
+                    let (j, h) = b.resultant(&self.x, &kinematic, own);
                     let iw = rigid::world_inertia(&b.state.rotation, &b.inertia);
                     let from_nodes = rigid::solve3(&iw, h);
                     let mut force = [0.0; 3];
@@ -543,7 +551,9 @@ impl Solver {
                     b.state.angular_velocity[a],
                 )
             });
-            kinetic += b.kinetic(v_now, w_now);
+            if self.bodies_counted {
+                kinetic += b.kinetic(v_now, w_now);
+            }
             let (fp, mp) = body_pen[k];
             let (fk, mk) = body_kin[k];
             let (fe, me) = body_ext[k];

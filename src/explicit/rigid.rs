@@ -229,10 +229,20 @@ impl SolverBody {
 
     /// The resultant force and moment (about the reference point) of nodal forces `f` on the
     /// carried nodes at positions `x`.
-    pub(crate) fn resultant(&self, x: &[[f64; 3]], f: &[[f64; 3]]) -> ([f64; 3], [f64; 3]) {
+    /// Only the nodes `counted` marks, when given (a rank's own nodes: the ranks' shares add up
+    /// to the body's).
+    pub(crate) fn resultant(
+        &self,
+        x: &[[f64; 3]],
+        f: &[[f64; 3]],
+        counted: Option<&[bool]>,
+    ) -> ([f64; 3], [f64; 3]) {
         let mut force = V3::new(0.0, 0.0, 0.0);
         let mut moment = V3::new(0.0, 0.0, 0.0);
         for &n in &self.nodes {
+            if counted.is_some_and(|c| !c[n as usize]) {
+                continue;
+            }
             let fi = v3(f[n as usize]);
             force = force + fi;
             moment = moment + (v3(x[n as usize]) - v3(self.state.position)).cross(fi);

@@ -14,10 +14,15 @@
 //! and the elements whose first node is own, added over the ranks in rank order; the stable
 //! increment is the minimum over ranks. Rank 0 writes the output files.
 //!
-//! Not distributed (refused by name): rigid bodies (`[[rigid]]`, moving rigid parts), kinematic
-//! and small- or infinitesimal-sliding pairs, pairs against analytical surfaces, 2D scenes,
-//! `adjust_overclosure`. Fixed rigid parts are held nodes and run. VTK frames are not written
-//! (a warning says so). A node that moves past its pair's search radius within one increment
+//! 2D scenes run (the contact's master facets are segments). Fixed rigid parts are held nodes;
+//! rigid bodies held or moving at a set velocity are moved alike by every rank, each carrying
+//! its own nodes of them (a body's nodes belong to no element, so to no halo) and counting the
+//! contact forces on those, rank 0 their kinetic energy. Each increment issues 7 collectives
+//! ([`crate::scene::RankSummary::collectives_per_increment`]).
+//!
+//! Not distributed (refused by name): free rigid bodies, kinematic and small- or
+//! infinitesimal-sliding pairs, pairs against analytical surfaces, `adjust_overclosure`. VTK
+//! frames are not written (a warning says so). A node that moves past its pair's search radius within one increment
 //! stops the run on every rank with the single process's tunnelling error.
 
 use std::path::Path;
@@ -40,7 +45,7 @@ use crate::distributed::{
     DistributedContact, RankBalance, RankModel, RankPair, NO_GLOBAL_NODE,
 };
 use crate::error::{Error, Result};
-use crate::explicit::{Element, LoadCurve, Prescribed, Solver};
+use crate::explicit::{BodyMotion, Element, LoadCurve, Prescribed, Solver};
 use crate::model::Schedule;
 use crate::model::{Enforce, Facet, Model, Sliding};
 
@@ -184,10 +189,12 @@ fn run_into(
     // every rank builds the same scene, so every rank refuses the same things
     let built = scene.build()?;
     let (g, model) = (&built.solver, &built.model);
-    if !g.bodies.is_empty() {
+    if let Some(k) = g.bodies.iter().position(|b| b.motion == BodyMotion::Free) {
+        let name = built.bodies.iter().find(|b| b.1 == k).map_or("", |b| &b.0);
         return Err(refuse(
-            "rigid bodies ([[rigid]] or moving rigid parts)",
-            "deformable parts, fixed rigid parts and penalty pairs",
+            &format!("free rigid body {name}"),
+            "rigid bodies held or moving at a set velocity (free rigid bodies run in one \
+             process)",
         ));
     }
     if scene.run.adjust_overclosure {
@@ -260,6 +267,22 @@ fn run_into(
             .map(|&k| owned[g.elements[k].nodes()[0] as usize])
             .collect(),
     ));
+    // the rigid bodies, held or moving at a set velocity: every rank moves them alike and
+    // carries its own nodes of theirs (a body's nodes belong to no element, so to no halo);
+    // rank 0 counts their kinetic energy, each rank the contact forces on its own nodes
+    for b in &g.bodies {
+        let mut local = b.clone();
+        (local.nodes, local.offsets) = b
+            .nodes
+            .iter()
+            .zip(&b.offsets)
+            .filter(|(&n, _)| is_local[n as usize])
+            .map(|(&n, &o)| (local_of[n as usize], o))
+            .unzip();
+        solver.add_body(local)?;
+    }
+    solver.bodies_counted = me == 0;
+    let bodies0: Vec<[f64; 3]> = g.bodies.iter().map(|b| b.state.position).collect();
     let own: Vec<usize> = (0..nodes.len()).filter(|&l| owned[nodes[l]]).collect();
     // the halo plan: ask each owner for its nodes held here; learn which own nodes to send where
     let mut asks: Vec<Vec<u64>> = vec![Vec::new(); size];
@@ -354,6 +377,9 @@ fn run_into(
         own_slaves: &own_slaves,
         part_nodes: &part_nodes,
         x0: &x0,
+        bodies: &built.bodies,
+        bodies0: &bodies0,
+        at_peak: bodies0.clone(),
         history,
         halo_bytes: 0,
         contact_bytes: 0,
@@ -372,6 +398,7 @@ fn run_into(
         halo_bytes,
         contact_bytes,
         energy,
+        at_peak,
         ..
     } = rank;
     let k = account.k;
@@ -509,7 +536,7 @@ fn run_into(
         energies: [kinetic, internal, external_work, contact_work],
         frictional_dissipation: friction,
         parts,
-        bodies: Vec::new(),
+        bodies: super::run::body_summaries(&solver, &built.bodies, &bodies0, &at_peak),
         contact_nodes,
         anchored_slaves: 0,
         unanchored_slaves: Vec::new(),

@@ -424,15 +424,7 @@ fn ends(
             stress_max: hi,
         });
     }
-    let bodies = body_names
-        .iter()
-        .map(|(name, k)| BodySummary {
-            name: name.clone(),
-            position: solver.bodies[*k].state.position,
-            velocity: solver.bodies[*k].state.velocity,
-            displacement_at_peak_force: [0, 1, 2].map(|a| at_peak[*k][a] - bodies0[*k][a]),
-        })
-        .collect();
+    let bodies = body_summaries(solver, body_names, bodies0, at_peak);
     let mut contact_nodes = Vec::new();
     let mut friction = 0.0;
     if let Some(c) = contact {
@@ -536,4 +528,23 @@ fn part_motion(
         }
     }
     (u, v)
+}
+
+/// Each rigid body's end state (`names`: name and index), and its displacement from `bodies0`
+/// to `at_peak` (the reference points at the start and when the contact force peaked).
+pub(super) fn body_summaries(
+    solver: &Solver,
+    names: &[(String, usize)],
+    bodies0: &[[f64; 3]],
+    at_peak: &[[f64; 3]],
+) -> Vec<BodySummary> {
+    names
+        .iter()
+        .map(|(name, k)| BodySummary {
+            name: name.clone(),
+            position: solver.bodies[*k].state.position,
+            velocity: solver.bodies[*k].state.velocity,
+            displacement_at_peak_force: [0, 1, 2].map(|a| at_peak[*k][a] - bodies0[*k][a]),
+        })
+        .collect()
 }

@@ -58,6 +58,12 @@ pub(super) struct Rank<'a> {
     pub(super) own_slaves: &'a [usize],
     pub(super) part_nodes: &'a PartNodes,
     pub(super) x0: &'a [[f64; 3]],
+    /// The rigid bodies' names and indices, as the history lists them.
+    pub(super) bodies: &'a [(String, usize)],
+    /// The bodies' reference points at the start.
+    pub(super) bodies0: &'a [[f64; 3]],
+    /// The bodies' reference points when the contact force peaked.
+    pub(super) at_peak: Vec<[f64; 3]>,
     /// Rank 0's history file.
     pub(super) history: Option<std::io::BufWriter<std::fs::File>>,
     pub(super) halo_bytes: usize,
@@ -177,12 +183,27 @@ impl Ranks for Rank<'_> {
                 .fold(0.0f64, |m, x| m.max(x.abs()))
                 .max(self.floor),
             balance,
-            moved: Vec::new(),
+            // the bodies' displacements on rows: the same on every rank
+            moved: if row {
+                (solver.bodies.iter().zip(self.bodies0))
+                    .map(|(b, p0)| std::array::from_fn(|a| b.state.position[a] - p0[a]))
+                    .collect()
+            } else {
+                Vec::new()
+            },
             kinetic_internal: [kinetic, internal],
         })
     }
 
-    fn output(&mut self, _k: usize, row: bool, force: f64, _peak: bool) -> Result<()> {
+    fn output(&mut self, _k: usize, row: bool, force: f64, peak: bool) -> Result<()> {
+        if peak {
+            self.at_peak = self
+                .solver
+                .bodies
+                .iter()
+                .map(|b| b.state.position)
+                .collect();
+        }
         if !row {
             return Ok(());
         }
@@ -202,6 +223,16 @@ impl Ranks for Rank<'_> {
             );
             for c in &self.last[8..] {
                 line.push_str(&format!(",{c}"));
+            }
+            // the bodies: the same state on every rank
+            for (_, k) in self.bodies {
+                let b = &self.solver.bodies[*k].state;
+                for a in 0..3 {
+                    line.push_str(&format!(",{}", b.position[a] - self.bodies0[*k][a]));
+                }
+                for a in 0..3 {
+                    line.push_str(&format!(",{}", b.velocity[a]));
+                }
             }
             if let Err(e) = writeln!(f, "{line}") {
                 fault = Some(output_error(e));
