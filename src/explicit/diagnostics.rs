@@ -7,6 +7,18 @@ use super::*;
 pub const ENERGY_FLOOR: f64 = 1e-12;
 
 impl Solver {
+    /// The largest of the kinetic, internal, external, contact and dissipated energies now
+    /// (energy units).
+    pub fn energy_scale(&self) -> f64 {
+        let e = &self.energy;
+        e.kinetic
+            .abs()
+            .max(e.internal.abs())
+            .max(e.external_work.abs())
+            .max(e.contact_work.abs())
+            .max(e.damping.abs())
+    }
+
     /// What to look at when the solution runs away: the largest overclosure contact resolved
     /// so far and when (an initial one resolved within one increment strains the elements
     /// under it), and the elements' stable increment.

@@ -588,16 +588,4 @@ impl Solver {
         }
         self.check_diverged()
     }
-
-    /// The largest of the kinetic, internal, external, contact and dissipated energies now
-    /// (energy units).
-    pub fn energy_scale(&self) -> f64 {
-        let e = &self.energy;
-        e.kinetic
-            .abs()
-            .max(e.internal.abs())
-            .max(e.external_work.abs())
-            .max(e.contact_work.abs())
-            .max(e.damping.abs())
-    }
 }
