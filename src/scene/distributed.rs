@@ -22,8 +22,9 @@
 //!
 //! Not distributed (refused by name): free rigid bodies, kinematic and small- or
 //! infinitesimal-sliding pairs, pairs against analytical surfaces, `adjust_overclosure`. VTK
-//! frames are not written (a warning says so). A node that moves past its pair's search radius within one increment
-//! stops the run on every rank with the single process's tunnelling error.
+//! frames are not written (a warning says so). A node that moves past its pair's search radius
+//! within one increment stops the run on every rank with the single process's tunnelling
+//! error.
 
 use std::path::Path;
 

@@ -199,11 +199,7 @@ impl Ranks for OneProcess<'_> {
             }
         }
         let moved = if row {
-            s.bodies
-                .iter()
-                .zip(self.bodies0)
-                .map(|(b, p0)| std::array::from_fn(|a| b.state.position[a] - p0[a]))
-                .collect()
+            body_displacements(s, self.bodies0)
         } else {
             Vec::new()
         };
@@ -360,6 +356,18 @@ fn history_row(
             row.push_str(&format!(",{c}"));
         }
     }
+    push_body_columns(&mut row, solver, bodies, bodies0);
+    row
+}
+
+/// Each rigid body's history columns (`bodies`: name and index): its displacement from
+/// `bodies0` and its velocity, appended to `row`.
+pub(super) fn push_body_columns(
+    row: &mut String,
+    solver: &Solver,
+    bodies: &[(String, usize)],
+    bodies0: &[[f64; 3]],
+) {
     for (_, k) in bodies {
         let b = &solver.bodies[*k].state;
         for a in 0..3 {
@@ -369,7 +377,13 @@ fn history_row(
             row.push_str(&format!(",{}", b.velocity[a]));
         }
     }
-    row
+}
+
+/// Every rigid body's displacement from `bodies0` (a history row's `Sums::moved`).
+pub(super) fn body_displacements(solver: &Solver, bodies0: &[[f64; 3]]) -> Vec<[f64; 3]> {
+    (solver.bodies.iter().zip(bodies0))
+        .map(|(b, p0)| std::array::from_fn(|a| b.state.position[a] - p0[a]))
+        .collect()
 }
 
 /// What the run knows at its end beside the account: the parts, bodies and contact nodes, the

@@ -13,6 +13,7 @@ use crate::explicit::Solver;
 use crate::scene::account::Account;
 use crate::scene::increments::{Limits, Ranks, Sums};
 use crate::scene::output_error;
+use crate::scene::run::{body_displacements, push_body_columns};
 
 /// Each part's own nodes (local indices), its whole mass and its node count.
 pub(super) type PartNodes = [(Vec<usize>, f64, usize)];
@@ -185,9 +186,7 @@ impl Ranks for Rank<'_> {
             balance,
             // the bodies' displacements on rows: the same on every rank
             moved: if row {
-                (solver.bodies.iter().zip(self.bodies0))
-                    .map(|(b, p0)| std::array::from_fn(|a| b.state.position[a] - p0[a]))
-                    .collect()
+                body_displacements(solver, self.bodies0)
             } else {
                 Vec::new()
             },
@@ -225,15 +224,7 @@ impl Ranks for Rank<'_> {
                 line.push_str(&format!(",{c}"));
             }
             // the bodies: the same state on every rank
-            for (_, k) in self.bodies {
-                let b = &self.solver.bodies[*k].state;
-                for a in 0..3 {
-                    line.push_str(&format!(",{}", b.position[a] - self.bodies0[*k][a]));
-                }
-                for a in 0..3 {
-                    line.push_str(&format!(",{}", b.velocity[a]));
-                }
-            }
+            push_body_columns(&mut line, &self.solver, self.bodies, self.bodies0);
             if let Err(e) = writeln!(f, "{line}") {
                 fault = Some(output_error(e));
             }
