@@ -7,14 +7,16 @@ use crate::device::Device;
 use crate::error::{Error, Result};
 use crate::geometry::{closest_on_facet, V3};
 use crate::kinematic::{
-    anchored_pass, facets_from, friction_pass, meshed_pass, rigid_pass, BodyState,
-    FrictionCorrection, SlaveCorrection, PASSES,
+    anchored_pass, facets_from, friction_pass, meshed_pass, BodyState, FrictionCorrection,
+    SlaveCorrection, PASSES,
 };
 use crate::model::{validate_positions, Model, PairId};
 use crate::model::{BodyId, Enforce, MasterSurface, PressureOverclosure, RigidBody, RigidPairId};
 use crate::penalty::PenaltySetup;
 use crate::search::{GlobalSearch, SearchResult, SearchStage};
 
+#[cfg(feature = "mpi")]
+mod anchors;
 mod exec;
 mod kinematic_step;
 mod overclosure;
@@ -75,6 +77,9 @@ struct RigidRun {
     areas: Vec<f64>,
     law: Option<PressureOverclosure>,
     output: PairOutput,
+    /// Each slave's place in the pair's whole slave list (its index here, unless a
+    /// distributed run holds the others elsewhere).
+    keys: Vec<u64>,
 }
 
 /// Search and enforcement of every pair of a model, once per increment.
@@ -258,6 +263,7 @@ impl Contact {
                 id: RigidPairId(k),
                 body: rp.body,
                 spec: model.body(rp.body)?.clone(),
+                keys: (0..slaves.len() as u64).collect(),
                 slaves: slaves.clone(),
                 areas,
                 law: rp.softened.clone(),
@@ -300,22 +306,14 @@ impl Contact {
     /// friction into another Contact over the same slaves (a rebuilt local model of a
     /// distributed run). Reads back from the device on a GPU.
     pub fn penalty_states(&self, pair: PairId) -> Result<Vec<Vec<SlaveState>>> {
-        let mut out = Vec::new();
-        for (k, p) in self.pairs.iter().enumerate().filter(|(_, p)| p.id == pair) {
-            out.push(p.map.to_caller(&self.exec.penalty_state(k)?));
-        }
-        if out.is_empty() {
-            return Err(Error::UnknownId {
-                what: "penalty pair",
-                id: pair.0,
-            });
-        }
-        Ok(out)
+        self.penalty_runs(pair)?
+            .into_iter()
+            .map(|k| Ok(self.pairs[k].map.to_caller(&self.exec.penalty_state(k)?)))
+            .collect()
     }
 
-    /// Replaces the per-slave state of penalty pair `pair` (as [`Contact::penalty_states`]
-    /// gives it: one list per pass, each as long as that pass's slaves).
-    pub fn set_penalty_states(&mut self, pair: PairId, states: &[Vec<SlaveState>]) -> Result<()> {
+    /// The runs (passes) of penalty pair `pair`, in order; errors when it has none.
+    fn penalty_runs(&self, pair: PairId) -> Result<Vec<usize>> {
         let runs: Vec<usize> = (0..self.pairs.len())
             .filter(|&k| self.pairs[k].id == pair)
             .collect();
@@ -325,6 +323,13 @@ impl Contact {
                 id: pair.0,
             });
         }
+        Ok(runs)
+    }
+
+    /// Replaces the per-slave state of penalty pair `pair` (as [`Contact::penalty_states`]
+    /// gives it: one list per pass, each as long as that pass's slaves).
+    pub fn set_penalty_states(&mut self, pair: PairId, states: &[Vec<SlaveState>]) -> Result<()> {
+        let runs = self.penalty_runs(pair)?;
         if runs.len() != states.len() {
             return Err(Error::LengthMismatch {
                 what: "penalty states (one list per pass of the pair)",
@@ -443,19 +448,11 @@ impl Contact {
     /// order the pass keeps them inside abut ([`crate::model::SlaveOrder`]); every result comes
     /// back in the node set's order whatever this is.
     pub fn pass_slaves(&self, pair: PairId) -> Result<Vec<Vec<u32>>> {
-        let out: Vec<Vec<u32>> = self
-            .pairs
-            .iter()
-            .filter(|p| p.id == pair)
-            .map(|p| p.search.slaves().to_vec())
-            .collect();
-        if out.is_empty() {
-            return Err(Error::UnknownId {
-                what: "penalty pair",
-                id: pair.0,
-            });
-        }
-        Ok(out)
+        Ok(self
+            .penalty_runs(pair)?
+            .into_iter()
+            .map(|k| self.pairs[k].search.slaves().to_vec())
+            .collect())
     }
 
     /// The global search's structure of each pass of pair `pair` (two for a balanced pair),

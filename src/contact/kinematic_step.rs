@@ -4,6 +4,7 @@
 
 use super::report::fast_slaves;
 use super::*;
+use crate::kinematic::{rigid_pass_shared, Pushed};
 
 impl Contact {
     /// One kinematic increment (seed: "Kinematic contact algorithm"): `x` are the positions
@@ -18,6 +19,20 @@ impl Contact {
         v: &mut [[f64; 3]],
         bodies: &mut [BodyState],
         dt: f64,
+    ) -> Result<&KinematicReport> {
+        self.kinematic_step_shared(x, v, bodies, dt, &mut |_, rows| Ok(rows))
+    }
+
+    /// [`Contact::kinematic_step`] with some of each rigid pair's slaves held elsewhere (a
+    /// distributed run): `share(k, rows)` turns rigid pair `k`'s pushed slaves here into every
+    /// pushed slave of the pair ([`crate::kinematic::rigid_pass_shared`]).
+    pub(crate) fn kinematic_step_shared(
+        &mut self,
+        x: &mut [[f64; 3]],
+        v: &mut [[f64; 3]],
+        bodies: &mut [BodyState],
+        dt: f64,
+        share: &mut dyn FnMut(usize, Vec<Pushed>) -> Result<Vec<Pushed>>,
     ) -> Result<&KinematicReport> {
         positive_dt(dt)?;
         for (what, a) in [
@@ -239,23 +254,23 @@ impl Contact {
             }
             kr.output.frictional_dissipation = kr.dissipated;
         }
-        for rr in &mut self.rigid {
+        for (k, rr) in self.rigid.iter_mut().enumerate() {
             let body = &mut bodies[rr.body.0];
             let mut first: Option<Vec<SlaveCorrection>> = None;
             let passes = if rr.law.is_some() { 1 } else { PASSES };
+            let mut pair_share = |rows| share(k, rows);
             for _ in 0..passes {
-                let c = rigid_pass(
+                let (c, _) = rigid_pass_shared(
                     &rr.spec.surface,
-                    rr.spec.mass,
-                    &rr.spec.inertia,
+                    (rr.spec.mass, &rr.spec.inertia),
                     body,
                     masses,
-                    x,
-                    v,
-                    &rr.slaves,
+                    (x, v),
+                    (&rr.slaves, &rr.keys),
                     &rr.areas,
                     rr.law.as_ref(),
                     dt,
+                    &mut pair_share,
                 )?;
                 first.get_or_insert(c);
             }
@@ -263,18 +278,17 @@ impl Contact {
             let mut xs = x.to_vec();
             let mut vs = v.to_vec();
             let mut probe = *body;
-            let after = rigid_pass(
+            let (after, _) = rigid_pass_shared(
                 &rr.spec.surface,
-                rr.spec.mass,
-                &rr.spec.inertia,
+                (rr.spec.mass, &rr.spec.inertia),
                 &mut probe,
                 masses,
-                &mut xs,
-                &mut vs,
-                &rr.slaves,
+                (&mut xs, &mut vs),
+                (&rr.slaves, &rr.keys),
                 &rr.areas,
                 None,
                 dt,
+                &mut pair_share,
             )?;
             let left = after.iter().map(|a| a.overclosure).fold(0.0f64, f64::max);
             report.max_overclosure_after = report.max_overclosure_after.max(left);

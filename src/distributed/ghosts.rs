@@ -62,20 +62,54 @@ impl DistributedContact {
             f64::NEG_INFINITY,
             self.longest_local_edge(x),
         ];
+        let mut cover = |p: [f64; 3]| {
+            for a in 0..3 {
+                mine[a] = mine[a].min(p[a]);
+                mine[3 + a] = mine[3 + a].max(p[a]);
+            }
+        };
         for p in &self.pairs {
             for &s in &p.slaves {
-                for a in 0..3 {
-                    mine[a] = mine[a].min(x[s][a]);
-                    mine[3 + a] = mine[3 + a].max(x[s][a]);
+                cover(x[s]);
+            }
+        }
+        // small sliding: the anchored facets stay in the local model (with the facets around
+        // them) however far they are from the slave (at own positions now, ghosts' last)
+        let ghost_of: HashMap<u64, usize> = self
+            .ghost_ids
+            .iter()
+            .enumerate()
+            .map(|(k, &g)| (g, k))
+            .collect();
+        for a in self
+            .pairs
+            .iter()
+            .filter_map(|p| p.anchors.as_ref())
+            .flatten()
+        {
+            for &g in a.facet.iter().filter(|&&g| g != NO_GLOBAL_NODE) {
+                if let Some(&i) = self.index.get(&g) {
+                    cover(x[i]);
+                } else if let Some(&k) = ghost_of.get(&g) {
+                    cover(self.ghost_x[k]);
                 }
             }
         }
         let boxes = all_gather_fixed(&self.comm, &mine);
         let longest = boxes.chunks_exact(7).map(|b| b[6]).fold(0.0f64, f64::max);
         self.h_max = self.h_max.max(longest);
-        let grow = self.pairs.iter().map(|p| p.radius).fold(0.0f64, f64::max)
+        let mut grow = self.pairs.iter().map(|p| p.radius).fold(0.0f64, f64::max)
             + 2.0 * self.budget()
             + 2.0 * self.h_max;
+        // small sliding not anchored yet: as far as the anchoring search reaches, with the
+        // facets around the facet it finds (no reach stated: every master node)
+        for p in self
+            .pairs
+            .iter()
+            .filter(|p| p.anchored() && p.anchors.is_none())
+        {
+            grow = grow.max(p.anchor_reach.unwrap_or(f64::INFINITY) + 2.0 * self.h_max);
+        }
         let me = self.comm.rank() as usize;
         self.send = vec![Vec::new(); size];
         for r in (0..size).filter(|&r| r != me) {
@@ -84,6 +118,10 @@ impl DistributedContact {
                 [b[0] - grow, b[1] - grow, b[2] - grow],
                 [b[3] + grow, b[4] + grow, b[5] + grow],
             );
+            if b[0] > b[3] {
+                // a rank without slaves needs no ghosts
+                continue;
+            }
             for &i in &self.master_nodes {
                 if (0..3).all(|a| x[i][a] >= lo[a] && x[i][a] <= hi[a]) {
                     self.send[r].push(i);
@@ -189,6 +227,7 @@ impl DistributedContact {
                 model.add_pair(
                     Pair::new(set, surf)
                         .schedule(schedule)
+                        .sliding(p.sliding)
                         .search_radius(p.radius)
                         .enforce(Enforce::Penalty(p.penalty.clone()))
                         .friction(p.friction.clone())
@@ -212,6 +251,10 @@ impl DistributedContact {
         } else {
             None
         };
+        let mut contact = self.contact.take();
+        let put = self.put_anchors(contact.as_mut(), &local_of);
+        self.contact = contact;
+        put?;
         self.anchor = positions;
         self.local_facets = local_facets;
         Ok(())

@@ -44,9 +44,12 @@ use crate::device::Device;
 use crate::error::{Error, Result};
 use crate::model::Schedule;
 use crate::model::{
-    Enforce, Facet, Friction, MasterSurface, Model, Pair, PairId, Penalty, Surface,
+    Enforce, Facet, Friction, MasterSurface, Model, Pair, PairId, Penalty, Sliding, Surface,
 };
+use crate::search::KeyedAnchor;
 
+mod anchors;
+pub use anchors::PassAnchoring;
 mod collectives;
 mod ghosts;
 mod step;
@@ -121,6 +124,16 @@ pub struct RankPair {
     /// Makes the pair balanced ([`crate::Pair::balanced`]): the slave surface's share and the
     /// weight of the slave-on-master pass.
     pub balanced: Option<RankBalance>,
+    /// The sliding formulation, the same on every rank. Small and infinitesimal sliding anchor
+    /// each slave once, at the first increment, on the nearest master facet within
+    /// `anchor_reach` (as [`crate::Pair::sliding`]); the anchor stays with the slave's rank
+    /// through every rebuild of its local model, keyed by global node ids.
+    pub sliding: Sliding,
+    /// Small sliding: how far the anchoring search reaches (model length units, the same on
+    /// every rank); `None`: every master facet, however far a slave starts, as a single
+    /// process's pair without a stated search radius — the first local models then hold
+    /// every master node near no rank's slaves as well (O(surface) per rank, once).
+    pub anchor_reach: Option<f64>,
 }
 
 /// The slave side of a balanced pair on one rank.
@@ -147,6 +160,8 @@ impl RankPair {
             search_interval: 100,
             slave_areas: None,
             balanced: None,
+            sliding: Sliding::Finite,
+            anchor_reach: None,
         }
     }
 }
@@ -277,6 +292,19 @@ struct PairTopology {
     local: Option<PairId>,
     /// The [`RankModel::pairs`] index it is a pass of, and whether it is the reverse pass.
     of: (usize, bool),
+    sliding: Sliding,
+    anchor_reach: Option<f64>,
+    /// Small sliding: each slave's anchor (in `slaves` order) once found, its facet and node by
+    /// global ids ([`NO_GLOBAL_NODE`] pads; all of them: unanchored), carried through rebuilds.
+    anchors: Option<Vec<GlobalAnchor>>,
+}
+
+/// A slave's anchor keyed by global node ids: its facet's nodes, its nearest node, the rest.
+#[derive(Clone, Copy, Debug)]
+struct GlobalAnchor {
+    facet: [u64; 4],
+    node: u64,
+    anchor: KeyedAnchor,
 }
 
 fn bad(name: &'static str, value: String, expected: &'static str) -> Error {
@@ -326,7 +354,8 @@ impl DistributedContact {
             ));
         }
         let (index, slaves_of) = valid.expect("agreed: every share valid");
-        // balanced or not, the same on every rank (the passes' collectives must match)
+        // balanced or not, and the sliding, the same on every rank (the passes' collectives
+        // and the ghost regions must match)
         for (k, p) in model.pairs.iter().enumerate() {
             let w = p.balanced.as_ref().map_or(-1.0, |b| b.weight);
             if all_min(&comm, w) != all_max(&comm, w) {
@@ -334,6 +363,19 @@ impl DistributedContact {
                     "balanced",
                     format!("pair {k}"),
                     "the same balance and weight on every rank",
+                ));
+            }
+            let sliding = match p.sliding {
+                Sliding::Finite => -1.0,
+                Sliding::Small => -2.0,
+                Sliding::Infinitesimal => -3.0,
+            };
+            let how = [sliding, p.anchor_reach.unwrap_or(0.0)];
+            if how.iter().any(|&v| all_min(&comm, v) != all_max(&comm, v)) {
+                return Err(bad(
+                    "sliding",
+                    format!("pair {k}"),
+                    "the same sliding and anchor reach on every rank",
                 ));
             }
         }
@@ -399,6 +441,9 @@ impl DistributedContact {
                     interval: p.search_interval,
                     local: None,
                     of: (k, reverse),
+                    sliding: p.sliding,
+                    anchor_reach: p.anchor_reach,
+                    anchors: None,
                 };
             let weight = slave.as_ref().map_or(1.0, |s| s.1);
             pairs.push(pass(slaves, areas, weight, master, false));

@@ -123,6 +123,7 @@ impl DistributedContact {
             let lx: Vec<[f64; 3]> = x.iter().chain(&gx).copied().collect();
             let lv: Vec<[f64; 3]> = v.iter().chain(&gv).copied().collect();
             match c.penalty_step(&lx, &lv, dt) {
+                Err(e) => fault = Some(e),
                 Ok(r) => {
                     forces.copy_from_slice(&r.forces[..n_own]);
                     ghost_forces.copy_from_slice(&r.forces[n_own..]);
@@ -153,7 +154,10 @@ impl DistributedContact {
                         );
                     }
                 }
-                Err(e) => fault = Some(e),
+            }
+            if fault.is_none() {
+                // small sliding: the anchors the first increment found, kept by global ids
+                fault = self.take_anchors().err();
             }
         }
         // ghosts' forces back to their owners, added there in rank order

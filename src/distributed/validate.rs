@@ -46,6 +46,13 @@ pub(super) fn validate(model: &RankModel) -> Result<Validated> {
                 "finite and positive",
             ));
         }
+        if let Some(r) = p.anchor_reach.filter(|r| !(*r > 0.0 && r.is_finite())) {
+            return Err(bad(
+                "anchor_reach",
+                format!("{r} (pair {k})"),
+                "finite and positive, or none",
+            ));
+        }
         if p.search_interval == 0 {
             return Err(bad("search_interval", "0".into(), "at least 1"));
         }

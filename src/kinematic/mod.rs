@@ -22,7 +22,7 @@ use crate::model::{MasterSurface, PressureOverclosure};
 use crate::search::SearchResult;
 
 mod rigid;
-pub use rigid::{rigid_pass, to_body, to_model};
+pub use rigid::{rigid_pass, rigid_pass_shared, to_body, to_model, Pushed, ShareRows};
 
 /// Correction passes of a meshed pair per increment (the first from the search, the others
 /// re-projecting onto the same facets at the corrected positions).

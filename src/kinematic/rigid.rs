@@ -8,15 +8,31 @@ use crate::geometry::V3;
 use crate::kinematic::BodyState;
 use crate::model::{Analytical, PressureOverclosure};
 
-/// A slave the correction pushes: its index in the pair, its node, the surface's normal at
-/// it, its overclosure and its arm from the body's reference point (model frame).
-struct Pushed {
-    index: usize,
-    node: u32,
-    normal: V3<f64>,
-    overclosure: f64,
-    arm: V3<f64>,
+/// A slave the correction pushes: its place in the pair's whole slave list (the order every
+/// sum over the pushed slaves runs in), its index among the slaves given here (none: another
+/// rank's), its mass and area, the surface's normal at it, its overclosure and its arm from
+/// the body's reference point (model frame).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Pushed {
+    /// The slave's place in the pair's whole slave list.
+    pub key: u64,
+    /// Its index among the slaves of this call, `None` for a slave held elsewhere.
+    pub index: Option<usize>,
+    /// Its lumped mass.
+    pub mass: f64,
+    /// Its tributary area.
+    pub area: f64,
+    /// The surface's unit normal at it (model frame).
+    pub normal: V3<f64>,
+    /// Its overclosure (positive = penetrating).
+    pub overclosure: f64,
+    /// Its arm from the body's reference point (model frame).
+    pub arm: V3<f64>,
 }
+
+/// Every pushed slave of a pair, from this call's own (see [`rigid_pass_shared`]): the identity
+/// in one process; across ranks, every rank's, gathered and ordered by [`Pushed::key`].
+pub type ShareRows<'a> = dyn FnMut(Vec<Pushed>) -> Result<Vec<Pushed>> + 'a;
 
 /// Rotates a body-frame vector into the model frame.
 pub fn to_model(r: &[[f64; 3]; 3], v: V3<f64>) -> V3<f64> {
@@ -86,35 +102,77 @@ pub fn rigid_pass(
     law: Option<&PressureOverclosure>,
     dt: f64,
 ) -> Result<Vec<SlaveCorrection>> {
+    let keys: Vec<u64> = (0..slaves.len() as u64).collect();
+    let (out, _) = rigid_pass_shared(
+        surface,
+        (mass, inertia),
+        body,
+        masses,
+        (x, v),
+        (slaves, &keys),
+        areas,
+        law,
+        dt,
+        &mut Ok,
+    )?;
+    Ok(out)
+}
+
+/// [`rigid_pass`] for some of a pair's slaves (`slaves`, each with its place in the pair's
+/// whole slave list, `keys`), the others held elsewhere: `share` turns the pushed slaves here
+/// into every pushed slave of the pair, ordered by key, so the body's correction is the one
+/// all of them make together (the same bits wherever it is computed). Corrects `x`, `v` of
+/// the slaves here and `body`; returns their corrections and the largest overclosure of any
+/// pushed slave of the pair.
+#[allow(clippy::too_many_arguments)]
+pub fn rigid_pass_shared(
+    surface: &Analytical,
+    (mass, inertia): (f64, &[[f64; 3]; 3]),
+    body: &mut BodyState,
+    masses: &[f64],
+    (x, v): (&mut [[f64; 3]], &mut [[f64; 3]]),
+    (slaves, keys): (&[u32], &[u64]),
+    areas: &[f64],
+    law: Option<&PressureOverclosure>,
+    dt: f64,
+    share: &mut ShareRows,
+) -> Result<(Vec<SlaveCorrection>, f64)> {
     let xb = V3::from_array(body.position);
     let r = body.rotation;
     let mut out = vec![SlaveCorrection::default(); slaves.len()];
-    // the slaves pushed: (index, node, normal, overclosure, arm)
-    let candidates: Vec<Pushed> = slaves
+    // the slaves pushed here, then every one of the pair's
+    let mine: Vec<Pushed> = slaves
         .iter()
         .enumerate()
         .filter_map(|(k, &s)| {
             let p = V3::from_array(x[s as usize]);
             let (gap, nb) = surface.gap(to_body(&r, p - xb));
             pushed(law, -gap).then(|| Pushed {
-                index: k,
-                node: s,
+                key: keys[k],
+                index: Some(k),
+                mass: masses[s as usize],
+                area: areas[k],
                 normal: to_model(&r, nb),
                 overclosure: -gap,
                 arm: p - xb,
             })
         })
         .collect();
+    let candidates = share(mine)?;
+    let deepest = candidates
+        .iter()
+        .map(|p| p.overclosure)
+        .fold(0.0f64, f64::max);
     if candidates.is_empty() {
-        return Ok(out);
+        return Ok((out, deepest));
     }
-    let g = generalized_mass(mass, inertia, &r, masses, &candidates);
+    let g = generalized_mass(mass, inertia, &r, &candidates);
     // the share of a push the contact transmits when every pushed slave pushes alike: the
     // body (slaves attached) takes back n_k·(Δa + Δα × r_k) of it
     let shares: Vec<f64> = if law.is_some() {
         let (mut f, mut m) = (V3::zero(), V3::zero());
         for p in &candidates {
-            let ms = masses[p.node as usize];
+            let ms = p.mass;
             f = f + p.normal * ms;
             m = m + p.arm.cross(p.normal * ms);
         }
@@ -130,23 +188,23 @@ pub fn rigid_pass(
     let (mut f, mut m) = (V3::zero(), V3::zero());
     let mut active = Vec::new();
     for (p, share) in candidates.into_iter().zip(shares) {
-        let (k, s, n, h, rs) = (p.index, p.node, p.normal, p.overclosure, p.arm);
-        let ms = masses[s as usize];
-        let Some(target) = push_target(law, h, ms * share, areas[k], dt) else {
+        let (n, h, rs, ms) = (p.normal, p.overclosure, p.arm, p.mass);
+        let Some(target) = push_target(law, h, ms * share, p.area, dt) else {
             continue;
         };
         let fs = ms * (h - target) / (dt * dt);
         f = f + n * fs;
         m = m + rs.cross(n * fs);
+        let Some(k) = p.index else { continue };
         out[k] = SlaveCorrection {
             overclosure: h,
             target,
             force: fs,
             normal: n.to_array(),
-            energy: law.map_or(0.0, |l| law_energy(l, target) * areas[k]),
+            energy: law.map_or(0.0, |l| law_energy(l, target) * p.area),
             applied: [0.0; 3],
         };
-        active.push((k, s, n, h - target, rs));
+        active.push((k, slaves[k], n, h - target, rs));
     }
     let u = solve6(g, [f.x, f.y, f.z, m.x, m.y, m.z])?;
     let (da, dal) = (V3::new(u[0], u[1], u[2]), V3::new(u[3], u[4], u[5]));
@@ -168,24 +226,23 @@ pub fn rigid_pass(
         body.angular_velocity[c] += (dal * dt).to_array()[c];
     }
     body.rotation = rotate(dal * (dt * dt), body.rotation);
-    Ok(out)
+    Ok((out, deepest))
 }
 
 /// The generalized mass (6×6, about the reference point, model frame) of a rigid body of
 /// `mass` and body-frame `inertia` at rotation `r`, with the pushed slaves `attached` (their
-/// node and arm) added as point masses.
+/// mass and arm) added as point masses.
 fn generalized_mass(
     mass: f64,
     inertia: &[[f64; 3]; 3],
     r: &[[f64; 3]; 3],
-    masses: &[f64],
     attached: &[Pushed],
 ) -> [[f64; 6]; 6] {
     let mut m_add = 0.0;
     let mut s1 = V3::zero(); // Σ m r
     let mut i_add = [[0.0; 3]; 3];
     for p in attached {
-        let (ms, rs) = (masses[p.node as usize], &p.arm);
+        let (ms, rs) = (p.mass, &p.arm);
         m_add += ms;
         s1 = s1 + *rs * ms;
         let r2 = rs.length2();

@@ -20,8 +20,11 @@
 //! contact forces on those, rank 0 their kinetic energy. Each increment issues 7 collectives
 //! ([`crate::scene::RankSummary::collectives_per_increment`]).
 //!
-//! Not distributed (refused by name): free rigid bodies, kinematic and small- or
-//! infinitesimal-sliding pairs, pairs against analytical surfaces, `adjust_overclosure`. VTK
+//! Small- and infinitesimal-sliding pairs anchor each slave once, on the rank that owns it,
+//! and keep the anchor through every rebuild of the rank's local model.
+//!
+//! Not distributed (refused by name): free rigid bodies, kinematic pairs, pairs against
+//! analytical surfaces, `adjust_overclosure`. VTK
 //! frames are not written (a warning says so). A node that moves past its pair's search radius
 //! within one increment stops the run on every rank with the single process's tunnelling
 //! error.
@@ -31,7 +34,9 @@ use std::path::Path;
 use mpi::topology::SimpleCommunicator;
 use mpi::traits::*;
 
+mod anchoring;
 mod rank;
+use anchoring::anchoring_over_ranks;
 use rank::{part_sums, Rank};
 
 use super::account::{Account, Ends};
@@ -48,7 +53,7 @@ use crate::distributed::{
 use crate::error::{Error, Result};
 use crate::explicit::{BodyMotion, Element, LoadCurve, Prescribed, Solver};
 use crate::model::Schedule;
-use crate::model::{Enforce, Facet, Model, Sliding};
+use crate::model::{Enforce, Facet, Model};
 
 fn refuse(what: &str, expected: &'static str) -> Error {
     Error::BadParameter {
@@ -127,12 +132,6 @@ fn rank_pairs(model: &Model, part: &[u32], me: u32) -> Result<Vec<RankPair>> {
                 "penalty pairs (kinematic contact runs in one process)",
             ));
         };
-        if pair.sliding != Sliding::Finite {
-            return Err(refuse(
-                &format!("small-sliding contact pair {k}"),
-                "finite-sliding pairs",
-            ));
-        }
         let master = model.surface(pair.master)?;
         let set = model.node_set(pair.slave)?;
         let areas = model.node_set_areas(pair.slave)?;
@@ -161,6 +160,8 @@ fn rank_pairs(model: &Model, part: &[u32], me: u32) -> Result<Vec<RankPair>> {
                 }),
                 None => None,
             },
+            sliding: pair.sliding,
+            anchor_reach: pair.search_radius,
         });
     }
     Ok(out)
@@ -510,7 +511,11 @@ fn run_into(
         })
         .collect();
     let friction = sum_over_ranks(comm, &[dissipated])[0];
+    let anchoring = anchoring_over_ranks(comm, model, contact.as_ref())?;
     let mut warnings = Vec::new();
+    for a in anchoring.iter().filter(|a| !a.unanchored.is_empty()) {
+        warnings.push(super::run::unanchored_warning(a));
+    }
     if scene.run.vtk_every > 0 && has_contact {
         warnings.push(
             "run.vtk_every: a distributed run writes no VTK frames (run the scene in one \
@@ -539,8 +544,11 @@ fn run_into(
         parts,
         bodies: super::run::body_summaries(&solver, &built.bodies, &bodies0, &at_peak),
         contact_nodes,
-        anchored_slaves: 0,
-        unanchored_slaves: Vec::new(),
+        anchored_slaves: anchoring.iter().map(|a| a.anchored).sum(),
+        unanchored_slaves: anchoring
+            .iter()
+            .flat_map(|a| a.unanchored.iter().copied())
+            .collect(),
         warnings,
         global_searches: contact.as_ref().map_or(0, |c| c.global_searches()),
         ranks,

@@ -483,20 +483,7 @@ fn ends(
         ));
     }
     for a in anchoring.iter().filter(|a| !a.unanchored.is_empty()) {
-        let shown: Vec<String> = a.unanchored.iter().take(8).map(|n| n.to_string()).collect();
-        warnings.push(format!(
-            "contact pair {}: {} of {} slave nodes project onto no master facet and are not \
-             constrained (small sliding anchors each slave once, at the start): nodes {}{}",
-            a.pair.0,
-            a.unanchored.len(),
-            a.slaves,
-            shown.join(", "),
-            if a.unanchored.len() > shown.len() {
-                ", …"
-            } else {
-                ""
-            }
-        ));
+        warnings.push(unanchored_warning(a));
     }
     let e = solver.energy;
     Ends {
@@ -561,4 +548,22 @@ pub(super) fn body_summaries(
             displacement_at_peak_force: [0, 1, 2].map(|a| at_peak[*k][a] - bodies0[*k][a]),
         })
         .collect()
+}
+
+/// The warning about the slaves of an anchored pass that no master facet anchors.
+pub(super) fn unanchored_warning(a: &crate::Anchoring) -> String {
+    let shown: Vec<String> = a.unanchored.iter().take(8).map(|n| n.to_string()).collect();
+    format!(
+        "contact pair {}: {} of {} slave nodes project onto no master facet and are not \
+         constrained (small sliding anchors each slave once, at the start): nodes {}{}",
+        a.pair.0,
+        a.unanchored.len(),
+        a.slaves,
+        shown.join(", "),
+        if a.unanchored.len() > shown.len() {
+            ", …"
+        } else {
+            ""
+        }
+    )
 }

@@ -169,3 +169,95 @@ impl SearchStage {
             .count()
     }
 }
+
+/// Small sliding: one slave's anchor keyed by model node ids — its facet by that facet's nodes
+/// — so that it can be carried into another search over the same slave against a master
+/// holding the same facet under other indices (a distributed run's rebuilt local model).
+#[cfg(feature = "mpi")]
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(crate) struct KeyedAnchor {
+    /// The anchored facet's nodes (model node ids, as the master surface lists them; `u32::MAX`
+    /// pads a triangle or a segment); all `u32::MAX` when the slave is unanchored.
+    pub facet: [u32; 4],
+    /// The anchor with its facet index left as the search that found it numbered it (its
+    /// `node` is a model node id).
+    pub anchor: layout::Anchor,
+}
+
+#[cfg(feature = "mpi")]
+impl SearchStage {
+    /// Small sliding: each slave's anchor keyed by model node ids, in this search's slave
+    /// order ([`Self::slaves`]); `None` before the first increment and for finite sliding.
+    pub(crate) fn keyed_anchors(&self) -> Option<Vec<KeyedAnchor>> {
+        let anchors = self.anchors.as_ref()?;
+        Some(
+            anchors
+                .iter()
+                .map(|a| KeyedAnchor {
+                    facet: if a.facet == NO_FACET {
+                        [u32::MAX; 4]
+                    } else {
+                        self.facets[a.facet as usize]
+                    },
+                    anchor: *a,
+                })
+                .collect(),
+        )
+    }
+
+    /// Small sliding: installs anchors found by another search over the same slaves (in this
+    /// search's slave order, as [`Self::keyed_anchors`] gives them), each facet looked up by
+    /// its nodes; the first increment then anchors nothing. Before the first increment.
+    /// Errors: a count other than the slaves', or a facet this master does not hold (naming
+    /// the slave).
+    pub(crate) fn set_keyed_anchors(&mut self, keyed: &[KeyedAnchor]) -> Result<()> {
+        if keyed.len() != self.slave_ids.len() {
+            return Err(Error::LengthMismatch {
+                what: "anchors (one per slave)",
+                expected: self.slave_ids.len(),
+                got: keyed.len(),
+            });
+        }
+        let index: std::collections::HashMap<[u32; 4], u32> = self
+            .facets
+            .iter()
+            .enumerate()
+            .map(|(k, f)| (*f, k as u32))
+            .collect();
+        let mut anchors = Vec::with_capacity(keyed.len());
+        for (k, a) in keyed.iter().enumerate() {
+            let mut anchor = a.anchor;
+            anchor.facet = if a.facet == [u32::MAX; 4] {
+                NO_FACET
+            } else {
+                *index.get(&a.facet).ok_or_else(|| Error::BadParameter {
+                    name: "anchor",
+                    value: format!("slave node {}: facet {:?}", self.slave_ids[k], a.facet),
+                    expected: "a facet of this search's master surface",
+                })?
+            };
+            anchors.push(anchor);
+        }
+        self.anchors = Some(anchors);
+        Ok(())
+    }
+}
+
+#[cfg(feature = "mpi")]
+impl KeyedAnchor {
+    /// A slave anchored nowhere (not constrained).
+    pub(crate) fn unanchored() -> Self {
+        Self {
+            facet: [u32::MAX; 4],
+            anchor: layout::Anchor {
+                facet: NO_FACET,
+                node: u32::MAX,
+                flags: 0,
+                _pad: 0,
+                weights: [0.0; 4],
+                normal0: [0.0; 4],
+                facet_normal0: [0.0; 4],
+            },
+        }
+    }
+}

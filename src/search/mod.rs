@@ -21,6 +21,8 @@ mod structure;
 pub(crate) mod tree;
 
 pub use crate::plan::{frame, Prepared};
+#[cfg(feature = "mpi")]
+pub(crate) use anchors::KeyedAnchor;
 
 use crate::abi::search as layout;
 use crate::abi::status::Status;

@@ -19,8 +19,11 @@ impl SearchStage {
         caller_frame: bool,
     ) -> Result<()> {
         let anchored = self.is_anchored();
-        if anchored && self.anchors.is_none() {
-            self.anchor(exec, positions)?;
+        match &self.anchors {
+            None if anchored => self.anchor(exec, positions)?,
+            // carried from another search over the same slaves (`set_keyed_anchors`)
+            Some(anchors) if anchored => exec.set_anchors(anchors)?,
+            _ => {}
         }
         let prep = self.prepare(positions)?;
         let origin = prep.frame;

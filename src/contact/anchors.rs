@@ -1,0 +1,68 @@
+//! Small and infinitesimal sliding: a penalty pair's anchors taken out of one Contact and put
+//! into another over the same slaves, keyed by model node ids (a distributed run's local model,
+//! rebuilt with other ghosts, keeps the anchors its first search found).
+
+use super::Contact;
+use crate::error::{Error, Result};
+use crate::model::PairId;
+use crate::search::KeyedAnchor;
+
+impl Contact {
+    /// Small sliding: the anchors of each pass of penalty pair `pair` (two for a balanced
+    /// pair), each in the node set's order and keyed by model node ids; `None` for a pass not
+    /// anchored yet (before the first increment, or finite sliding).
+    pub(crate) fn penalty_anchors(&self, pair: PairId) -> Result<Vec<Option<Vec<KeyedAnchor>>>> {
+        Ok(self
+            .penalty_runs(pair)?
+            .into_iter()
+            .map(|k| {
+                let p = &self.pairs[k];
+                p.search.keyed_anchors().map(|a| p.map.to_caller(&a))
+            })
+            .collect())
+    }
+
+    /// Small sliding: installs anchors found by another Contact over the same slaves (as
+    /// [`Contact::penalty_anchors`] gives them; `None` leaves a pass to anchor at its first
+    /// increment). Before the first increment. Errors: an unknown pair, a count of passes or
+    /// slaves other than the pair's, a facet the pass's master does not hold.
+    pub(crate) fn set_penalty_anchors(
+        &mut self,
+        pair: PairId,
+        anchors: &[Option<Vec<KeyedAnchor>>],
+    ) -> Result<()> {
+        let runs = self.penalty_runs(pair)?;
+        if runs.len() != anchors.len() {
+            return Err(Error::LengthMismatch {
+                what: "anchors (one list per pass of the pair)",
+                expected: runs.len(),
+                got: anchors.len(),
+            });
+        }
+        for (&k, a) in runs.iter().zip(anchors) {
+            if let Some(a) = a {
+                let p = &mut self.pairs[k];
+                if a.len() != p.output.slaves.len() {
+                    return Err(Error::LengthMismatch {
+                        what: "anchors (one per slave of the pass)",
+                        expected: p.output.slaves.len(),
+                        got: a.len(),
+                    });
+                }
+                let a = p.map.to_pass(a);
+                p.search.set_keyed_anchors(&a)?;
+            }
+        }
+        Ok(())
+    }
+
+    /// Small sliding: how far the anchoring search of each pass of penalty pair `pair`
+    /// reaches (as [`crate::search::SearchStage::set_anchor_reach`]; `None`: every master
+    /// facet). Before the first increment.
+    pub(crate) fn set_anchor_reach(&mut self, pair: PairId, reach: Option<f64>) -> Result<()> {
+        for k in self.penalty_runs(pair)? {
+            self.pairs[k].search.set_anchor_reach(reach);
+        }
+        Ok(())
+    }
+}
