@@ -7,8 +7,8 @@ use crate::device::Device;
 use crate::error::{Error, Result};
 use crate::geometry::{closest_on_facet, V3};
 use crate::kinematic::{
-    anchored_pass, facets_from, friction_pass, meshed_pass, BodyState, FrictionCorrection,
-    SlaveCorrection, PASSES,
+    anchored_pass, facets_from, friction_pass, meshed_pass, rigid_pass, BodyState,
+    FrictionCorrection, SlaveCorrection, PASSES,
 };
 use crate::model::{validate_positions, Model, PairId};
 use crate::model::{BodyId, Enforce, MasterSurface, PressureOverclosure, RigidBody, RigidPairId};
@@ -18,6 +18,8 @@ use crate::search::{GlobalSearch, SearchResult, SearchStage};
 #[cfg(feature = "mpi")]
 mod anchors;
 mod exec;
+#[cfg(feature = "mpi")]
+mod kinematic_share;
 mod kinematic_step;
 mod overclosure;
 mod report;
@@ -77,9 +79,6 @@ struct RigidRun {
     areas: Vec<f64>,
     law: Option<PressureOverclosure>,
     output: PairOutput,
-    /// Each slave's place in the pair's whole slave list (its index here, unless a
-    /// distributed run holds the others elsewhere).
-    keys: Vec<u64>,
 }
 
 /// Search and enforcement of every pair of a model, once per increment.
@@ -263,7 +262,6 @@ impl Contact {
                 id: RigidPairId(k),
                 body: rp.body,
                 spec: model.body(rp.body)?.clone(),
-                keys: (0..slaves.len() as u64).collect(),
                 slaves: slaves.clone(),
                 areas,
                 law: rp.softened.clone(),

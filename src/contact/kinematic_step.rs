@@ -4,7 +4,6 @@
 
 use super::report::fast_slaves;
 use super::*;
-use crate::kinematic::{rigid_pass_shared, Pushed};
 
 impl Contact {
     /// One kinematic increment (seed: "Kinematic contact algorithm"): `x` are the positions
@@ -19,20 +18,6 @@ impl Contact {
         v: &mut [[f64; 3]],
         bodies: &mut [BodyState],
         dt: f64,
-    ) -> Result<&KinematicReport> {
-        self.kinematic_step_shared(x, v, bodies, dt, &mut |_, rows| Ok(rows))
-    }
-
-    /// [`Contact::kinematic_step`] with some of each rigid pair's slaves held elsewhere (a
-    /// distributed run): `share(k, rows)` turns rigid pair `k`'s pushed slaves here into every
-    /// pushed slave of the pair ([`crate::kinematic::rigid_pass_shared`]).
-    pub(crate) fn kinematic_step_shared(
-        &mut self,
-        x: &mut [[f64; 3]],
-        v: &mut [[f64; 3]],
-        bodies: &mut [BodyState],
-        dt: f64,
-        share: &mut dyn FnMut(usize, Vec<Pushed>) -> Result<Vec<Pushed>>,
     ) -> Result<&KinematicReport> {
         positive_dt(dt)?;
         for (what, a) in [
@@ -254,23 +239,23 @@ impl Contact {
             }
             kr.output.frictional_dissipation = kr.dissipated;
         }
-        for (k, rr) in self.rigid.iter_mut().enumerate() {
+        for rr in &mut self.rigid {
             let body = &mut bodies[rr.body.0];
             let mut first: Option<Vec<SlaveCorrection>> = None;
             let passes = if rr.law.is_some() { 1 } else { PASSES };
-            let mut pair_share = |rows| share(k, rows);
             for _ in 0..passes {
-                let (c, _) = rigid_pass_shared(
+                let c = rigid_pass(
                     &rr.spec.surface,
-                    (rr.spec.mass, &rr.spec.inertia),
+                    rr.spec.mass,
+                    &rr.spec.inertia,
                     body,
                     masses,
-                    (x, v),
-                    (&rr.slaves, &rr.keys),
+                    x,
+                    v,
+                    &rr.slaves,
                     &rr.areas,
                     rr.law.as_ref(),
                     dt,
-                    &mut pair_share,
                 )?;
                 first.get_or_insert(c);
             }
@@ -278,17 +263,18 @@ impl Contact {
             let mut xs = x.to_vec();
             let mut vs = v.to_vec();
             let mut probe = *body;
-            let (after, _) = rigid_pass_shared(
+            let after = rigid_pass(
                 &rr.spec.surface,
-                (rr.spec.mass, &rr.spec.inertia),
+                rr.spec.mass,
+                &rr.spec.inertia,
                 &mut probe,
                 masses,
-                (&mut xs, &mut vs),
-                (&rr.slaves, &rr.keys),
+                &mut xs,
+                &mut vs,
+                &rr.slaves,
                 &rr.areas,
                 None,
                 dt,
-                &mut pair_share,
             )?;
             let left = after.iter().map(|a| a.overclosure).fold(0.0f64, f64::max);
             report.max_overclosure_after = report.max_overclosure_after.max(left);

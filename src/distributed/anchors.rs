@@ -13,12 +13,26 @@ impl PairTopology {
 
 impl DistributedContact {
     /// The global id of local node `l` of the current local model.
-    fn global_of(&self, l: u32) -> u64 {
+    pub(super) fn global_of(&self, l: u32) -> u64 {
         let n_own = self.ids.len();
         match l {
             u32::MAX => NO_GLOBAL_NODE,
             l if (l as usize) < n_own => self.ids[l as usize],
             l => self.ghost_ids[l as usize - n_own],
+        }
+    }
+
+    /// A fast node of the local contact, by global id and the pair it is a pass of.
+    pub(super) fn fast_global(&self, f: &crate::FastNode) -> FastGlobalNode {
+        FastGlobalNode {
+            node: self.global_of(f.node as u32),
+            pair: self
+                .pairs
+                .iter()
+                .find(|p| p.local == Some(f.pair))
+                .map_or(0, |p| p.of.0),
+            distance: f.distance,
+            radius: f.radius,
         }
     }
 

@@ -169,18 +169,17 @@ impl DistributedContact {
             Model::new_3d()
         };
         let positions: Vec<[f64; 3]> = x.iter().chain(gx).copied().collect();
-        let masses: Vec<f64> = self
-            .masses
-            .iter()
-            .chain(&self.ghost_masses)
-            .copied()
-            .collect();
-        model.add_nodes(&positions, &masses)?;
+        model.add_nodes(&positions, &self.local_masses())?;
         // the friction each slave carries, from the contact being replaced (same slaves, same
         // order: a slave never changes rank)
         let mut carried = Vec::with_capacity(self.pairs.len());
-        for p in &self.pairs {
-            carried.push(match (self.contact.as_ref(), p.local) {
+        for p in self.pairs.iter_mut() {
+            carried.push(match (self.contact.as_mut(), p.local) {
+                (Some(c), Some(id)) if p.kinematic.is_some() => {
+                    // a kinematic pair carries its slaves' behind-a-free-edge flags
+                    p.behind = Some(c.kinematic_behind(id)?);
+                    None
+                }
                 (Some(c), Some(id)) => Some(c.penalty_states(id)?),
                 _ => None,
             });
@@ -229,7 +228,10 @@ impl DistributedContact {
                         .schedule(schedule)
                         .sliding(p.sliding)
                         .search_radius(p.radius)
-                        .enforce(Enforce::Penalty(p.penalty.clone()))
+                        .enforce(match &p.kinematic {
+                            Some(k) => Enforce::Kinematic(k.clone()),
+                            None => Enforce::Penalty(p.penalty.clone()),
+                        })
                         .friction(p.friction.clone())
                         .pass_weight(p.weight),
                 )?,
@@ -245,6 +247,9 @@ impl DistributedContact {
             for (p, states) in self.pairs.iter().zip(carried) {
                 if let (Some(id), Some(s)) = (p.local, states) {
                     c.set_penalty_states(id, &s)?;
+                }
+                if let (Some(id), Some(b)) = (p.local, &p.behind) {
+                    c.set_kinematic_behind(id, b)?;
                 }
             }
             Some(c)

@@ -1,5 +1,8 @@
-//! (feature `mpi`) Penalty contact across MPI ranks: one model split over processes, each rank
-//! holding its own nodes and running abut's search and enforcement on its own device.
+//! (feature `mpi`) Contact across MPI ranks: one model split over processes, each rank
+//! holding its own nodes and running abut's search and enforcement on its own device —
+//! penalty and kinematic pairs (finite, small and infinitesimal sliding; pure, balanced and
+//! self-contact penalty pairs), and kinematic contact against analytical surfaces
+//! ([`DistributedRigid`]).
 //!
 //! Each rank gives a [`RankModel`]: the nodes it owns (global ids, positions, masses) and, per
 //! pair, its own slave nodes and the master facets it owns (by global node ids; their nodes may
@@ -28,6 +31,13 @@
 //! the master nodes' owners, each with its tributary area on the whole master surface): every
 //! contact of either pass is enforced once, by the rank that owns its slave node.
 //!
+//! Small and infinitesimal sliding anchor each slave once, on its rank's local model, and
+//! keep the anchor by global node ids through every rebuild (the anchored facets stay among
+//! the rank's ghosts). A kinematic pair ([`RankPair::kinematic`]) runs after the solver's
+//! prediction ([`DistributedContact::kinematic_step`]): each rank corrects its own slaves, and
+//! the master nodes' shares of the corrections are summed on their owners in the pair's slave
+//! order — the single process's bits — and sent back to the ranks holding them as ghosts.
+//!
 //! Slave areas (the penalty's area per slave) are fixed at construction from the whole surface
 //! at the start positions, as a single process fixes them when it builds its contact: the
 //! given [`RankPair::slave_areas`], else the mean area of the whole master surface's facets.
@@ -42,6 +52,7 @@ use mpi::Count;
 use crate::contact::Contact;
 use crate::device::Device;
 use crate::error::{Error, Result};
+use crate::model::Kinematic;
 use crate::model::Schedule;
 use crate::model::{
     Enforce, Facet, Friction, MasterSurface, Model, Pair, PairId, Penalty, Sliding, Surface,
@@ -51,7 +62,13 @@ use crate::search::KeyedAnchor;
 mod anchors;
 pub use anchors::PassAnchoring;
 mod collectives;
+mod rigid;
+pub use rigid::{DistributedRigid, RankRigidPair};
 mod ghosts;
+mod outputs;
+pub use outputs::SlaveOutput;
+mod kinematic;
+pub use kinematic::KinematicStep;
 mod step;
 mod validate;
 
@@ -134,6 +151,13 @@ pub struct RankPair {
     /// process's pair without a stated search radius — the first local models then hold
     /// every master node near no rank's slaves as well (O(surface) per rank, once).
     pub anchor_reach: Option<f64>,
+    /// `Some`: the pair is enforced kinematically (the seed's predictor/corrector,
+    /// [`DistributedContact::kinematic_step`]; `penalty` unused); pure and finite sliding.
+    pub kinematic: Option<Kinematic>,
+    /// Each slave's place in the pair's whole slave list (one per entry of `slaves`, unique
+    /// over the ranks): a kinematic pair's sums over its slaves run in this order, the single
+    /// process's for its node set's order; `None`: the slaves' global ids.
+    pub slave_keys: Option<Vec<u64>>,
 }
 
 /// The slave side of a balanced pair on one rank.
@@ -162,6 +186,8 @@ impl RankPair {
             balanced: None,
             sliding: Sliding::Finite,
             anchor_reach: None,
+            kinematic: None,
+            slave_keys: None,
         }
     }
 }
@@ -211,20 +237,36 @@ pub struct FastGlobalNode {
     pub radius: f64,
 }
 
-/// A slave node of this rank in contact after the last increment (see
-/// [`DistributedContact::request_outputs`]).
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct SlaveOutput {
-    /// The pair ([`RankModel::pairs`] index; a balanced pair's two passes both report here).
-    pub pair: usize,
-    /// Whether it is a balanced pair's second pass (the slave a master node).
-    pub reverse: bool,
-    /// The slave's global node id.
-    pub node: u64,
-    /// Contact pressure (force over tributary area).
-    pub pressure: f64,
-    /// The contact force on the slave.
-    pub force: [f64; 3],
+impl FastGlobalNode {
+    /// A rank's fastest node as it travels in an agreement's record: its distance over its
+    /// radius (−1: none), global id, pair, distance and radius.
+    fn record(&self) -> [f64; 5] {
+        [
+            self.distance / self.radius,
+            self.node as f64,
+            self.pair as f64,
+            self.distance,
+            self.radius,
+        ]
+    }
+
+    /// The fastest of every rank's records (each `record` at `at` in its row), the first rank's
+    /// of equal ones; none where no rank's node moved past its radius.
+    fn fastest_of(rows: &[Vec<f64>], at: usize) -> Option<Self> {
+        rows.iter()
+            .map(|r| &r[at..at + 5])
+            .filter(|f| f[0] > 1.0)
+            .fold(None::<&[f64]>, |best, f| match best {
+                Some(b) if b[0] >= f[0] => Some(b),
+                _ => Some(f),
+            })
+            .map(|f| Self {
+                node: f[1] as u64,
+                pair: f[2] as usize,
+                distance: f[3],
+                radius: f[4],
+            })
+    }
 }
 
 /// A rank's contact: its local model of own and ghost nodes, and the exchange plan with its
@@ -297,6 +339,35 @@ struct PairTopology {
     /// Small sliding: each slave's anchor (in `slaves` order) once found, its facet and node by
     /// global ids ([`NO_GLOBAL_NODE`] pads; all of them: unanchored), carried through rebuilds.
     anchors: Option<Vec<GlobalAnchor>>,
+    /// Kinematic enforcement (`None`: penalty).
+    kinematic: Option<Kinematic>,
+    /// Each slave's place in the pair's whole slave list (the order a kinematic pair's sums
+    /// over its slaves run in).
+    keys: Vec<u64>,
+    /// A kinematic pair: the energy its friction dissipated on this rank's nodes.
+    dissipated: f64,
+    /// A kinematic pair: each slave's contact pressure and force after the last increment.
+    corrections: Vec<(f64, [f64; 3])>,
+    /// A kinematic pair: each slave's behind-a-free-edge flag, carried through rebuilds.
+    behind: Option<Vec<bool>>,
+}
+
+impl PairTopology {
+    /// A kinematic pair's Coulomb friction (μ static, μ kinetic, decay), if any.
+    fn coulomb(&self) -> Option<(f64, f64, f64)> {
+        match (&self.kinematic, &self.friction) {
+            (
+                Some(_),
+                Friction::Coulomb {
+                    mu,
+                    mu_kinetic,
+                    decay,
+                    ..
+                },
+            ) => Some((*mu, *mu_kinetic, *decay)),
+            _ => None,
+        }
+    }
 }
 
 /// A slave's anchor keyed by global node ids: its facet's nodes, its nearest node, the rest.
@@ -431,6 +502,10 @@ impl DistributedContact {
             };
             let pass =
                 |slaves: Vec<usize>, areas: Vec<f64>, weight: f64, facets, reverse| PairTopology {
+                    keys: match (&p.slave_keys, reverse) {
+                        (Some(k), false) => k.clone(),
+                        _ => slaves.iter().map(|&i| model.ids[i]).collect(),
+                    },
                     slaves,
                     areas,
                     weight,
@@ -444,6 +519,10 @@ impl DistributedContact {
                     sliding: p.sliding,
                     anchor_reach: p.anchor_reach,
                     anchors: None,
+                    kinematic: p.kinematic.clone(),
+                    dissipated: 0.0,
+                    corrections: Vec::new(),
+                    behind: None,
                 };
             let weight = slave.as_ref().map_or(1.0, |s| s.1);
             pairs.push(pass(slaves, areas, weight, master, false));
@@ -529,45 +608,5 @@ impl DistributedContact {
     /// changed this rank's ghosts (an unchanged ghost set keeps the local contact).
     pub fn rebuilds(&self) -> u64 {
         self.rebuilds
-    }
-
-    /// Whether the next increments compute per-slave outputs for [`Self::contact_outputs`]
-    /// (as [`Contact::request_outputs`]; off by default).
-    pub fn request_outputs(&mut self, on: bool) {
-        self.outputs = on;
-        if let Some(c) = self.contact.as_mut() {
-            c.request_outputs(on);
-        }
-    }
-
-    /// This rank's slaves in contact after the last increment (outputs requested before it), in
-    /// pass order and each pass's slave order; and the energy its slaves' friction has
-    /// dissipated since the start (carried through the rebuilds; every increment, requested or
-    /// not, on the CPU path; with outputs on a GPU).
-    pub fn contact_outputs(&self) -> (Vec<SlaveOutput>, f64) {
-        let (mut list, mut dissipated) = (Vec::new(), 0.0);
-        let Some(c) = self.contact.as_ref() else {
-            return (list, dissipated);
-        };
-        let outs = c.outputs();
-        for p in &self.pairs {
-            let Some(id) = p.local else { continue };
-            for (_, o) in outs.iter().filter(|(k, _)| *k == id) {
-                dissipated += o.frictional_dissipation;
-                for (k, &i) in p.slaves.iter().enumerate() {
-                    let pressure = o.cpress.get(k).copied().unwrap_or(0.0);
-                    if pressure > 0.0 {
-                        list.push(SlaveOutput {
-                            pair: p.of.0,
-                            reverse: p.of.1,
-                            node: self.ids[i],
-                            pressure,
-                            force: o.force.get(k).copied().unwrap_or([0.0; 3]),
-                        });
-                    }
-                }
-            }
-        }
-        (list, dissipated)
     }
 }

@@ -73,29 +73,8 @@ impl DistributedContact {
         }
         self.since_search += 1;
         // the ghosts' state from their owners
-        let state_out: Vec<Vec<f64>> = self
-            .send
-            .iter()
-            .map(|l| {
-                l.iter()
-                    .flat_map(|&i| [x[i][0], x[i][1], x[i][2], v[i][0], v[i][1], v[i][2]])
-                    .collect()
-            })
-            .collect();
-        bytes += 8 * state_out.iter().map(Vec::len).sum::<usize>();
-        let counts: Vec<usize> = self.recv.iter().map(|&c| 6 * c).collect();
-        let state_in: Vec<f64> = exchange_known(&self.comm, &state_out, &counts)
-            .into_iter()
-            .flatten()
-            .collect();
-        let gx: Vec<[f64; 3]> = state_in
-            .chunks_exact(6)
-            .map(|c| [c[0], c[1], c[2]])
-            .collect();
-        let gv: Vec<[f64; 3]> = state_in
-            .chunks_exact(6)
-            .map(|c| [c[3], c[4], c[5]])
-            .collect();
+        let (gx, gv) = self.ghost_state(x, v);
+        bytes += 48 * self.send.iter().map(Vec::len).sum::<usize>();
         self.ghost_x.clone_from(&gx);
         if global {
             if self.started && ghost_ids == self.ghost_ids {
@@ -132,26 +111,7 @@ impl DistributedContact {
                     active = r.active;
                     let rep = c.report();
                     if let Some(f) = rep.fastest {
-                        let node = if f.node < n_own {
-                            self.ids[f.node]
-                        } else {
-                            self.ghost_ids[f.node - n_own]
-                        };
-                        let pair = self
-                            .pairs
-                            .iter()
-                            .find(|p| p.local == Some(f.pair))
-                            .map_or(0, |p| p.of.0);
-                        fast = (
-                            rep.fast_nodes,
-                            [
-                                f.distance / f.radius,
-                                node as f64,
-                                pair as f64,
-                                f.distance,
-                                f.radius,
-                            ],
-                        );
+                        fast = (rep.fast_nodes, self.fast_global(&f).record());
                     }
                 }
             }
@@ -197,20 +157,7 @@ impl DistributedContact {
             f4,
         ];
         let rows = agree_and_gather(&self.comm, fault, &record)?;
-        let fastest = rows
-            .iter()
-            .map(|r| &r[4..9])
-            .filter(|f| f[0] > 1.0)
-            .fold(None::<&[f64]>, |best, f| match best {
-                Some(b) if b[0] >= f[0] => Some(b),
-                _ => Some(f),
-            })
-            .map(|f| FastGlobalNode {
-                node: f[1] as u64,
-                pair: f[2] as usize,
-                distance: f[3],
-                radius: f[4],
-            });
+        let fastest = FastGlobalNode::fastest_of(&rows, 4);
         self.last = DistributedStep {
             forces,
             stable_dt: rows.iter().map(|r| r[0]).fold(f64::INFINITY, f64::min),
@@ -224,5 +171,40 @@ impl DistributedContact {
             collectives: collectives_issued() - issued_before,
         };
         Ok(&self.last)
+    }
+
+    /// The ghosts' state (positions, velocities) from their owners, own nodes at `x`, `v`
+    /// (one collective).
+    pub(super) fn ghost_state(
+        &self,
+        x: &[[f64; 3]],
+        v: &[[f64; 3]],
+    ) -> (Vec<[f64; 3]>, Vec<[f64; 3]>) {
+        let out: Vec<Vec<f64>> = self
+            .send
+            .iter()
+            .map(|l| {
+                l.iter()
+                    .flat_map(|&i| [x[i][0], x[i][1], x[i][2], v[i][0], v[i][1], v[i][2]])
+                    .collect()
+            })
+            .collect();
+        let counts: Vec<usize> = self.recv.iter().map(|&c| 6 * c).collect();
+        let flat: Vec<f64> = exchange_known(&self.comm, &out, &counts)
+            .into_iter()
+            .flatten()
+            .collect();
+        let gx = flat.chunks_exact(6).map(|c| [c[0], c[1], c[2]]).collect();
+        let gv = flat.chunks_exact(6).map(|c| [c[3], c[4], c[5]]).collect();
+        (gx, gv)
+    }
+
+    /// The masses of the local model's nodes: own, then ghosts.
+    pub(super) fn local_masses(&self) -> Vec<f64> {
+        self.masses
+            .iter()
+            .chain(&self.ghost_masses)
+            .copied()
+            .collect()
     }
 }

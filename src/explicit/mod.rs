@@ -4,6 +4,7 @@
 //! prescribed motions, mass-proportional damping and linear bulk viscosity, penalty and
 //! kinematic contact through [`crate::Contact`], and energy bookkeeping with the balance error.
 
+mod corrector;
 mod diagnostics;
 pub mod elements;
 pub mod hexahedron;
@@ -12,6 +13,7 @@ mod rigid;
 
 pub use prescribed::{Amplitude, LoadCurve, Motion, Prescribed};
 
+pub use corrector::KinematicCorrector;
 pub use elements::{Element, Material};
 pub use hexahedron::{Hex8, Integration};
 pub use rigid::{BodyMotion, SolverBody};
@@ -295,32 +297,12 @@ impl Solver {
         (f, w)
     }
 
-    /// One central-difference increment of `dt` (the first moves velocities by half an
-    /// increment, Abaqus' start), with penalty forces and kinematic corrections from
-    /// `contact` when given.
-    pub fn step(&mut self, dt: f64, contact: Option<&mut Contact>) -> Result<()> {
-        self.advance(dt, contact, None)
-    }
-
-    /// One increment as [`Solver::step`], with contact forces the host computed itself (one per
-    /// node, taken as penalty forces: in the velocity update, the contact work and
-    /// [`Solver::contact_force`]) — a distributed contact's, say.
-    pub fn step_with_forces(&mut self, dt: f64, contact_forces: &[[f64; 3]]) -> Result<()> {
-        if contact_forces.len() != self.x.len() {
-            return Err(Error::LengthMismatch {
-                what: "contact forces (one per node)",
-                expected: self.x.len(),
-                got: contact_forces.len(),
-            });
-        }
-        self.advance(dt, None, Some(contact_forces))
-    }
-
     fn advance(
         &mut self,
         dt: f64,
         mut contact: Option<&mut Contact>,
         given: Option<&[[f64; 3]]>,
+        corrector: Option<&mut dyn KinematicCorrector>,
     ) -> Result<()> {
         if !(dt.is_finite() && dt > 0.0) {
             return Err(Error::BadParameter {
@@ -439,8 +421,10 @@ impl Solver {
             let g = self.gravity.map(|g| g * b.mass);
             let f_ext = [0, 1, 2].map(|a| factor * (fl[a] + b.load[a]) + g[a]);
             let moving = b.motion == BodyMotion::Free;
+            // the body's own loads and weight act on every rank alike: one counts their work
+            let whole = if self.bodies_counted { 1.0 } else { 0.0 };
             body_ext[k] = if moving {
-                (f_ext, ml)
+                (f_ext.map(|f| whole * f), ml.map(|m| whole * m))
             } else {
                 ([0.0; 3], [0.0; 3])
             };
@@ -456,17 +440,23 @@ impl Solver {
         // would have in the velocity update
         let mut kinematic = vec![[0.0; 3]; n];
         let mut body_kin = vec![([0.0; 3], [0.0; 3]); self.bodies.len()];
-        // the predicted state, before contact searches it
-        self.check_diverged()?;
-        if let Some(c) = contact {
-            if c.has_kinematic_pairs() {
+        // the predicted state, before contact searches it (agreed over a corrector's ranks)
+        let corrector = corrector
+            .or(contact.map(|c| c as &mut dyn KinematicCorrector))
+            .filter(|c| c.has_kinematic_pairs());
+        let diverged = self.check_diverged().err();
+        let diverged = match (&corrector, diverged) {
+            (None, Some(e)) => return Err(e),
+            (_, d) => d,
+        };
+        if let Some(c) = corrector {
+            c.agree(diverged)?;
+            {
                 let v_pred = self.v.clone();
                 let x_pred = self.x.clone();
                 let pred: Vec<BodyState> = self.body_states();
                 let mut states = pred.clone();
-                let h = c
-                    .kinematic_step(&mut self.x, &mut self.v, &mut states, dt)?
-                    .max_overclosure;
+                let h = c.correct(&mut self.x, &mut self.v, &mut states, dt)?;
                 self.note_overclosure(h);
                 for i in 0..n {
                     for a in 0..3 {
@@ -494,9 +484,11 @@ impl Solver {
                     let mut force = [0.0; 3];
                     let mut moment = [0.0; 3];
                     let lw = rigid::rotate(&iw, dw);
+                    // the body's own correction is every rank's: one counts its work
+                    let whole = if self.bodies_counted { 1.0 } else { 0.0 };
                     for a in 0..3 {
-                        force[a] = b.mass * dv[a] / dv_scale + j[a];
-                        moment[a] = lw[a] / dv_scale + h[a];
+                        force[a] = whole * b.mass * dv[a] / dv_scale + j[a];
+                        moment[a] = whole * lw[a] / dv_scale + h[a];
                     }
                     body_kin[k] = (force, moment);
                     if b.motion == BodyMotion::Free {

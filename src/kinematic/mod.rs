@@ -93,7 +93,7 @@ pub fn softened_target(law: &PressureOverclosure, h: f64, mass: f64, area: f64, 
 
 /// Whether a slave at overclosure `h` is pushed at all: past the law's start (softened) or
 /// penetrating (hard).
-fn pushed(law: Option<&PressureOverclosure>, h: f64) -> bool {
+pub(crate) fn pushed(law: Option<&PressureOverclosure>, h: f64) -> bool {
     h > law.map_or(0.0, |l| l.start())
 }
 
@@ -101,7 +101,7 @@ fn pushed(law: Option<&PressureOverclosure>, h: f64) -> bool {
 /// contact, the softened law's balance otherwise), or `None` when it needs no push. `mass` is
 /// the slave's effective (two-body) mass: the force the contact transmits for a push of
 /// `h − h'` is `mass·(h − h')/dt²`.
-fn push_target(
+pub(crate) fn push_target(
     law: Option<&PressureOverclosure>,
     h: f64,
     mass: f64,
@@ -355,7 +355,6 @@ pub fn friction_pass(
     mu: (f64, f64, f64),
     dt: f64,
 ) -> FrictionCorrection {
-    let (mu_s, mu_k, decay) = mu;
     let mut out = FrictionCorrection {
         force: vec![[0.0; 3]; slaves.len()],
         stick: vec![false; slaves.len()],
@@ -371,48 +370,74 @@ pub fn friction_pass(
             continue;
         }
         let nodes = master.facets[*f as usize].nodes();
-        let xs: Vec<V3<f64>> = nodes
-            .iter()
-            .map(|&n| V3::from_array(x[n as usize]))
-            .collect();
-        let pr = closest_on_facet(V3::from_array(x[s as usize]), &xs);
-        let n = pr.normal;
-        let mut v_rel = V3::from_array(v[s as usize]);
-        let mut inv_m = 1.0 / masses[s as usize];
-        for (j, &m) in nodes.iter().enumerate() {
-            v_rel = v_rel - V3::from_array(v[m as usize]) * pr.weights[j];
-            inv_m += pr.weights[j] * pr.weights[j] / masses[m as usize];
-        }
-        let v_t = v_rel - n * v_rel.dot(n);
-        let speed = v_t.length2().sqrt();
-        if speed == 0.0 {
-            out.stick[k] = true;
-            continue;
-        }
-        let mu = mu_k + (mu_s - mu_k) * (-decay * speed).exp();
-        let stick = speed / (inv_m * dt);
-        let f = stick.min(mu * f_n);
-        out.stick[k] = stick <= mu * f_n;
-        let ft = v_t * (-f / speed);
+        let (ft, weights, stick) = slave_friction(mu, (x, v, masses), s as usize, nodes, f_n, dt);
+        out.stick[k] = stick;
+        let Some(ft) = ft else { continue };
         out.force[k] = ft.to_array();
         dv[s as usize] = dv[s as usize] + ft * (dt / masses[s as usize]);
         for (j, &m) in nodes.iter().enumerate() {
-            dv[m as usize] = dv[m as usize] - ft * (pr.weights[j] * dt / masses[m as usize]);
+            dv[m as usize] = dv[m as usize] - ft * (weights[j] * dt / masses[m as usize]);
         }
     }
     for (i, d) in dv.iter().enumerate() {
-        let d = d.to_array();
-        if d == [0.0; 3] {
-            continue;
-        }
-        let before = V3::from_array(v[i]).length2();
-        for a in 0..3 {
-            v[i][a] += d[a];
-            x[i][a] += d[a] * dt;
-        }
-        out.dissipation += 0.5 * masses[i] * (before - V3::from_array(v[i]).length2());
+        out.dissipation += change_velocity((x, v), masses[i], i, d.to_array(), dt);
     }
     out
+}
+
+/// One slave's Coulomb friction ([`friction_pass`]): slave `s` on the facet of `nodes` at
+/// positions `x`, velocities `v`, masses `masses`, pressed by the normal force `f_n`. Returns
+/// its tangential force (none where it does not slide relative to the facet), the facet's
+/// weights at it, and whether the force stops its slip (stick).
+pub(crate) fn slave_friction(
+    (mu_s, mu_k, decay): (f64, f64, f64),
+    (x, v, masses): (&[[f64; 3]], &[[f64; 3]], &[f64]),
+    s: usize,
+    nodes: &[u32],
+    f_n: f64,
+    dt: f64,
+) -> (Option<V3<f64>>, [f64; 4], bool) {
+    let xs: Vec<V3<f64>> = nodes
+        .iter()
+        .map(|&n| V3::from_array(x[n as usize]))
+        .collect();
+    let pr = closest_on_facet(V3::from_array(x[s]), &xs);
+    let n = pr.normal;
+    let mut v_rel = V3::from_array(v[s]);
+    let mut inv_m = 1.0 / masses[s];
+    for (j, &m) in nodes.iter().enumerate() {
+        v_rel = v_rel - V3::from_array(v[m as usize]) * pr.weights[j];
+        inv_m += pr.weights[j] * pr.weights[j] / masses[m as usize];
+    }
+    let v_t = v_rel - n * v_rel.dot(n);
+    let speed = v_t.length2().sqrt();
+    if speed == 0.0 {
+        return (None, pr.weights, true);
+    }
+    let mu = mu_k + (mu_s - mu_k) * (-decay * speed).exp();
+    let stick = speed / (inv_m * dt);
+    let f = stick.min(mu * f_n);
+    (Some(v_t * (-f / speed)), pr.weights, stick <= mu * f_n)
+}
+
+/// Node `i` (mass `m`) moved by the velocity change `d` over the increment `dt` (`v += d`,
+/// `x += d·dt`; nothing where `d` is zero); returns the kinetic energy it removed.
+pub(crate) fn change_velocity(
+    (x, v): (&mut [[f64; 3]], &mut [[f64; 3]]),
+    m: f64,
+    i: usize,
+    d: [f64; 3],
+    dt: f64,
+) -> f64 {
+    if d == [0.0; 3] {
+        return 0.0;
+    }
+    let before = V3::from_array(v[i]).length2();
+    for a in 0..3 {
+        v[i][a] += d[a];
+        x[i][a] += d[a] * dt;
+    }
+    0.5 * m * (before - V3::from_array(v[i]).length2())
 }
 
 /// The facet of each slave from a search result. A slave beside a free edge of the master is

@@ -17,15 +17,18 @@
 //! 2D scenes run (the contact's master facets are segments). Fixed rigid parts are held nodes;
 //! rigid bodies held or moving at a set velocity are moved alike by every rank, each carrying
 //! its own nodes of them (a body's nodes belong to no element, so to no halo) and counting the
-//! contact forces on those, rank 0 their kinetic energy. Each increment issues 7 collectives
-//! ([`crate::scene::RankSummary::collectives_per_increment`]).
+//! contact forces on those, rank 0 their kinetic energy. An increment of penalty contact issues
+//! 7 collectives ([`crate::scene::RankSummary::collectives_per_increment`]).
 //!
 //! Small- and infinitesimal-sliding pairs anchor each slave once, on the rank that owns it,
-//! and keep the anchor through every rebuild of the rank's local model.
+//! and keep the anchor through every rebuild of the rank's local model. Kinematic pairs and
+//! pairs against analytical surfaces (their bodies free, held or at a set velocity) correct
+//! the solver's prediction with every rank's share ([`DistributedContact::kinematic_step`],
+//! [`DistributedRigid`]): the single process's arithmetic, at 11–26 collectives an increment.
 //!
-//! Not distributed (refused by name): free rigid bodies, kinematic pairs, pairs against
-//! analytical surfaces, `adjust_overclosure`. VTK
-//! frames are not written (a warning says so). A node that moves past its pair's search radius
+//! Not distributed (refused by name): free rigid bodies of mesh nodes, balanced and
+//! small-sliding kinematic pairs, `adjust_overclosure`. VTK frames are not written (a warning
+//! says so). A node that moves past its pair's search radius
 //! within one increment stops the run on every rank with the single process's tunnelling
 //! error.
 
@@ -36,8 +39,10 @@ use mpi::traits::*;
 
 mod anchoring;
 mod rank;
+mod share;
 use anchoring::anchoring_over_ranks;
 use rank::{part_sums, Rank};
+use share::{rank_pairs, rank_rigid_pairs};
 
 use super::account::{Account, Ends};
 use super::increments;
@@ -48,12 +53,10 @@ use super::{
 use crate::device::Device;
 use crate::distributed::{
     agree, all_gather, all_gather_fixed, all_max, all_min, collectives_issued, exchange,
-    DistributedContact, RankBalance, RankModel, RankPair, NO_GLOBAL_NODE,
+    DistributedContact, DistributedRigid, RankModel,
 };
 use crate::error::{Error, Result};
 use crate::explicit::{BodyMotion, Element, LoadCurve, Prescribed, Solver};
-use crate::model::Schedule;
-use crate::model::{Enforce, Facet, Model};
 
 fn refuse(what: &str, expected: &'static str) -> Error {
     Error::BadParameter {
@@ -100,73 +103,6 @@ fn renumbered(e: &Element, local_of: &[u32]) -> Element {
     e
 }
 
-/// The facets of `facets` this rank owns (those whose first node it owns), by global ids.
-fn owned_facets(facets: &[Facet], part: &[u32], me: u32) -> Vec<[u64; 4]> {
-    let mut out = Vec::new();
-    for f in facets {
-        let ids: [u64; 4] = match f {
-            Facet::Triangle(n) => [n[0] as u64, n[1] as u64, n[2] as u64, NO_GLOBAL_NODE],
-            Facet::Quad(n) => n.map(|k| k as u64),
-            Facet::Segment(n) => [n[0] as u64, n[1] as u64, NO_GLOBAL_NODE, NO_GLOBAL_NODE],
-        };
-        if part[ids[0] as usize] == me {
-            out.push(ids);
-        }
-    }
-    out
-}
-
-/// This rank's contact share of `model`'s pairs.
-fn rank_pairs(model: &Model, part: &[u32], me: u32) -> Result<Vec<RankPair>> {
-    if !model.rigid_pairs().is_empty() {
-        return Err(refuse(
-            "a pair against an analytical surface",
-            "pairs of node sets against meshed surfaces",
-        ));
-    }
-    let mut out = Vec::new();
-    for (k, pair) in model.pairs().iter().enumerate() {
-        let Enforce::Penalty(penalty) = &pair.enforce else {
-            return Err(refuse(
-                &format!("kinematic contact pair {k}"),
-                "penalty pairs (kinematic contact runs in one process)",
-            ));
-        };
-        let master = model.surface(pair.master)?;
-        let set = model.node_set(pair.slave)?;
-        let areas = model.node_set_areas(pair.slave)?;
-        let mine: Vec<usize> = (0..set.len())
-            .filter(|&j| part[set[j] as usize] == me)
-            .collect();
-        let master_nodes = master.nodes();
-        let self_contact = set.iter().any(|s| master_nodes.binary_search(s).is_ok());
-        let schedule = pair
-            .schedule
-            .unwrap_or_else(|| Schedule::default_for(self_contact));
-        out.push(RankPair {
-            slaves: mine.iter().map(|&j| set[j] as u64).collect(),
-            facets: owned_facets(&master.facets, part, me),
-            search_radius: pair
-                .search_radius
-                .unwrap_or_else(|| master.mean_facet_size()),
-            penalty: penalty.clone(),
-            friction: pair.friction.clone(),
-            search_interval: schedule.interval,
-            slave_areas: areas.map(|a| mine.iter().map(|&j| a[j]).collect()),
-            balanced: match pair.balanced {
-                Some((s, weight)) => Some(RankBalance {
-                    slave_facets: owned_facets(&model.surface(s)?.facets, part, me),
-                    weight,
-                }),
-                None => None,
-            },
-            sliding: pair.sliding,
-            anchor_reach: pair.search_radius,
-        });
-    }
-    Ok(out)
-}
-
 /// Runs `scene` as one rank of `comm` on `device` (collective: every rank calls it with the
 /// same scene). Rank 0 writes `history.csv` and `summary.json` to `output` as [`super::run`]
 /// does; every rank returns the same summary. Errors are returned on every rank.
@@ -191,12 +127,16 @@ fn run_into(
     // every rank builds the same scene, so every rank refuses the same things
     let built = scene.build()?;
     let (g, model) = (&built.solver, &built.model);
-    if let Some(k) = g.bodies.iter().position(|b| b.motion == BodyMotion::Free) {
+    // a free body of mesh nodes would need its resultant summed over the ranks that hold
+    // them; an analytical one carries no node, and every rank moves it alike
+    let free_meshed =
+        |b: &&crate::explicit::SolverBody| b.motion == BodyMotion::Free && !b.nodes.is_empty();
+    if let Some(k) = g.bodies.iter().position(|b| free_meshed(&b)) {
         let name = built.bodies.iter().find(|b| b.1 == k).map_or("", |b| &b.0);
         return Err(refuse(
             &format!("free rigid body {name}"),
-            "rigid bodies held or moving at a set velocity (free rigid bodies run in one \
-             process)",
+            "rigid bodies held or moving at a set velocity, or free analytical ones (free \
+             rigid bodies of mesh nodes run in one process)",
         ));
     }
     if scene.run.adjust_overclosure {
@@ -321,6 +261,18 @@ fn run_into(
     } else {
         None
     };
+    // kinematic contact against analytical surfaces: every rank takes part in each pair
+    let rigid_pairs = rank_rigid_pairs(model, &part, me, &local_of)?;
+    let rigid = if rigid_pairs.is_empty() {
+        None
+    } else {
+        Some(DistributedRigid::new(
+            comm,
+            solver.mass.clone(),
+            rigid_pairs,
+        )?)
+    };
+    let has_contact = has_contact || rigid.is_some();
     // the slave nodes this rank owns (local indices), for the total contact force
     let mut slaves: Vec<u32> = built.slaves.iter().flatten().copied().collect();
     slaves.sort_unstable();
@@ -372,6 +324,7 @@ fn run_into(
         comm,
         solver,
         contact,
+        rigid,
         own: &own,
         send: &send,
         halo_in: &halo_in,
@@ -396,6 +349,7 @@ fn run_into(
     let Rank {
         solver,
         contact,
+        rigid,
         history,
         halo_bytes,
         contact_bytes,
@@ -480,23 +434,31 @@ fn run_into(
         .as_ref()
         .map(|c| c.contact_outputs())
         .unwrap_or_default();
-    let flat: Vec<f64> = outs
+    let row = |pair: usize, reverse: bool, l: usize, pressure: f64, f: [f64; 3]| {
+        let x = solver.x[l];
+        let fm = (0..3).map(|a| f[a] * f[a]).sum::<f64>().sqrt();
+        let node = nodes[l] as f64;
+        [
+            pair as f64,
+            reverse as u8 as f64,
+            node,
+            pressure,
+            fm,
+            x[0],
+            x[1],
+            x[2],
+        ]
+    };
+    let meshed = outs.iter().flat_map(|o| {
+        let l = local_of[o.node as usize] as usize;
+        row(o.pair, o.reverse, l, o.pressure, o.force)
+    });
+    // against analytical surfaces: numbered after the meshed pairs, as in one process
+    let analytical = rigid
         .iter()
-        .flat_map(|o| {
-            let x = solver.x[local_of[o.node as usize] as usize];
-            let fm = (0..3).map(|a| o.force[a] * o.force[a]).sum::<f64>().sqrt();
-            [
-                o.pair as f64,
-                o.reverse as u8 as f64,
-                o.node as f64,
-                o.pressure,
-                fm,
-                x[0],
-                x[1],
-                x[2],
-            ]
-        })
-        .collect();
+        .flat_map(|r| r.contact_outputs())
+        .flat_map(|(k, l, p, f)| row(model.pairs().len() + k, false, l as usize, p, f));
+    let flat: Vec<f64> = meshed.chain(analytical).collect();
     let (all, _) = all_gather(comm, &flat);
     let mut rows: Vec<&[f64]> = all.chunks_exact(8).collect();
     rows.sort_by(|a, b| a[..3].partial_cmp(&b[..3]).expect("finite keys"));

@@ -7,9 +7,12 @@ use std::io::Write as _;
 use mpi::topology::SimpleCommunicator;
 
 use super::sum_over_ranks;
-use crate::distributed::{agree, all_max, exchange_known, DistributedContact};
+use crate::distributed::{
+    agree, all_max, exchange_known, DistributedContact, DistributedRigid, FastGlobalNode,
+};
 use crate::error::{Error, Result};
-use crate::explicit::Solver;
+use crate::explicit::{KinematicCorrector, Solver};
+use crate::kinematic::BodyState;
 use crate::scene::account::Account;
 use crate::scene::increments::{Limits, Ranks, Sums};
 use crate::scene::output_error;
@@ -47,6 +50,8 @@ pub(super) struct Rank<'a> {
     pub(super) comm: &'a SimpleCommunicator,
     pub(super) solver: Solver,
     pub(super) contact: Option<DistributedContact>,
+    /// Kinematic contact against analytical surfaces (every rank has it, or none).
+    pub(super) rigid: Option<DistributedRigid>,
     /// Own nodes (local indices).
     pub(super) own: &'a [usize],
     /// The own nodes (local indices) each rank holds as halo.
@@ -102,23 +107,35 @@ impl Ranks for Rank<'_> {
             self.contact_bytes += r.bytes_sent;
             // the same on every rank: every rank returns it
             if let Some(f) = r.fastest {
-                return Err(Error::Tunnelling {
-                    increment: k as u64 + 1,
-                    time: t_start,
-                    node: f.node as usize,
-                    pair: f.pair,
-                    distance: f.distance,
-                    radius: f.radius,
-                    more: if r.fast_nodes > 1 {
-                        format!(" ({} more nodes move that far)", r.fast_nodes - 1)
-                    } else {
-                        String::new()
-                    },
-                });
+                return Err(tunnelling(&f, r.fast_nodes, k, t_start));
             }
         }
-        let stepped = solver.step_with_forces(step, &f);
+        let kinematic = self.rigid.is_some()
+            || self
+                .contact
+                .as_ref()
+                .is_some_and(|c| c.has_kinematic_pairs());
+        let mut fastest = None;
+        let stepped = if kinematic {
+            let mut corrector = RankCorrector {
+                contact: self.contact.as_mut(),
+                rigid: self.rigid.as_mut(),
+                own: self.own,
+                deepest: 0.0,
+                fast: (0, None),
+            };
+            let stepped = solver.step_with_forces_and(step, &f, &mut corrector);
+            limits.kinematic = Some(corrector.deepest);
+            fastest = corrector.fast.1.map(|f| (f, corrector.fast.0));
+            stepped
+        } else {
+            solver.step_with_forces(step, &f)
+        };
         agree(self.comm, stepped.err())?;
+        // a kinematic pair's slave past its search radius: the same on every rank
+        if let Some((f, count)) = fastest {
+            return Err(tunnelling(&f, count, k, t_start));
+        }
         // the halo from the owners
         let out: Vec<Vec<f64>> = self
             .send
@@ -230,5 +247,80 @@ impl Ranks for Rank<'_> {
             }
         }
         agree(self.comm, fault)
+    }
+}
+
+/// The single process's error for `count` nodes past their search radius in increment `k`
+/// (from 0) starting at `t_start`, the fastest `f`.
+fn tunnelling(f: &FastGlobalNode, count: usize, k: usize, t_start: f64) -> Error {
+    Error::Tunnelling {
+        increment: k as u64 + 1,
+        time: t_start,
+        node: f.node as usize,
+        pair: f.pair,
+        distance: f.distance,
+        radius: f.radius,
+        more: if count > 1 {
+            format!(" ({} more nodes move that far)", count - 1)
+        } else {
+            String::new()
+        },
+    }
+}
+
+/// A rank's kinematic contact as the solver's corrector: the meshed kinematic pairs of its
+/// distributed contact (its own nodes), then the pairs against analytical surfaces, in the
+/// order one process corrects them.
+struct RankCorrector<'a> {
+    contact: Option<&'a mut DistributedContact>,
+    rigid: Option<&'a mut DistributedRigid>,
+    /// Own nodes (local indices), in the distributed contact's order.
+    own: &'a [usize],
+    /// The largest overclosure corrected, over every rank.
+    deepest: f64,
+    /// Kinematic slaves past their search radius, and the fastest (every rank's).
+    fast: (usize, Option<FastGlobalNode>),
+}
+
+impl KinematicCorrector for RankCorrector<'_> {
+    fn has_kinematic_pairs(&self) -> bool {
+        self.rigid.is_some()
+            || self
+                .contact
+                .as_ref()
+                .is_some_and(|c| c.has_kinematic_pairs())
+    }
+
+    fn agree(&mut self, fault: Option<Error>) -> Result<()> {
+        match (&self.contact, &mut self.rigid) {
+            (Some(c), _) => c.agree(fault),
+            (None, Some(r)) => r.agree(fault),
+            (None, None) => fault.map_or(Ok(()), Err),
+        }
+    }
+
+    fn correct(
+        &mut self,
+        x: &mut [[f64; 3]],
+        v: &mut [[f64; 3]],
+        bodies: &mut [BodyState],
+        dt: f64,
+    ) -> Result<f64> {
+        let mut deepest = 0.0f64;
+        if let Some(c) = self.contact.as_mut().filter(|c| c.has_kinematic_pairs()) {
+            let mut ox: Vec<[f64; 3]> = self.own.iter().map(|&l| x[l]).collect();
+            let mut ov: Vec<[f64; 3]> = self.own.iter().map(|&l| v[l]).collect();
+            let r = c.kinematic_step(&mut ox, &mut ov, dt)?;
+            for (j, &l) in self.own.iter().enumerate() {
+                (x[l], v[l]) = (ox[j], ov[j]);
+            }
+            deepest = r.max_overclosure;
+            self.fast = (r.fast_nodes, r.fastest);
+        }
+        if let Some(r) = self.rigid.as_mut() {
+            deepest = deepest.max(r.correct(x, v, bodies, dt)?);
+        }
+        self.deepest = deepest;
+        Ok(deepest)
     }
 }

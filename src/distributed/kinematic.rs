@@ -1,0 +1,432 @@
+//! Kinematic pairs across ranks: the seed's predictor/corrector with the master nodes'
+//! corrections summed on their owners.
+//!
+//! Each rank searches its own slaves against its local model at the predicted positions (the
+//! ghosts' predicted state from their owners), and computes each pushed slave's resisting force
+//! and the shares of it its facet's nodes take. Those shares go to the nodes' owners, which add
+//! them in the pair's slave order — the single process's order, so the sums are its bits — and
+//! send each sum back to every rank holding the node as a ghost; every holder then has the
+//! node's acceleration correction, and each rank corrects its own slaves onto the corrected
+//! master and its own master nodes. A softened law's transmitted shares (the masses the pushed
+//! slaves add to each master node) and Coulomb friction's velocity changes are summed the same
+//! way. Hard contact repeats the correction on the corrected geometry (`PASSES` times), each pass
+//! with the ghosts' corrected state from their owners.
+
+use super::collectives::{agree_and_gather, exchange, exchange_known};
+use super::*;
+use crate::geometry::{closest_on_facet, V3};
+use crate::kinematic::{change_velocity, push_target, pushed, slave_friction, PASSES};
+use crate::model::Kinematic;
+
+/// What a rank's kinematic correction of one increment left, the same on every rank where it
+/// says so.
+#[derive(Clone, Debug, Default)]
+pub struct KinematicStep {
+    /// The largest overclosure corrected, over every rank (model length units).
+    pub max_overclosure: f64,
+    /// Slaves of kinematic pairs that moved farther than their pair's search radius relative
+    /// to the master near them (all ranks).
+    pub fast_nodes: usize,
+    /// The fastest of them, by global id (the same on every rank).
+    pub fastest: Option<FastGlobalNode>,
+}
+
+/// One pushed slave's contact on a rank: its place in the pair's slave list, its own index
+/// and local node, its facet's local nodes and count, and the geometry.
+struct Touch {
+    key: u64,
+    slave: usize,
+    node: usize,
+    nodes: [u32; 4],
+    count: usize,
+    normal: V3<f64>,
+    weights: [f64; 4],
+    overclosure: f64,
+}
+
+impl DistributedContact {
+    /// Whether any pair is kinematic (the same on every rank).
+    pub fn has_kinematic_pairs(&self) -> bool {
+        self.pairs.iter().any(|p| p.kinematic.is_some())
+    }
+
+    /// Whether every rank got on (one collective; see the module's agreement on faults).
+    pub fn agree(&self, fault: Option<Error>) -> Result<()> {
+        agree(&self.comm, fault)
+    }
+
+    /// The kinematic pairs' correction of one increment (collective): `x` the positions this
+    /// rank predicted for its own nodes at the end of the increment `dt` without contact, `v`
+    /// the velocities that took them there ([`RankModel::ids`] order), both corrected in place
+    /// as one process corrects them. Call after [`Self::step`] of the same increment.
+    pub fn kinematic_step(
+        &mut self,
+        x: &mut [[f64; 3]],
+        v: &mut [[f64; 3]],
+        dt: f64,
+    ) -> Result<KinematicStep> {
+        let mut deepest = 0.0f64;
+        let mut fault = None;
+        let mut fast = (0usize, [-1.0, 0.0, 0.0, 0.0, 0.0]);
+        for k in 0..self.pairs.len() {
+            let Some(law) = self.pairs[k].kinematic.clone() else {
+                continue;
+            };
+            match self.kinematic_pair(k, &law, x, v, dt, &mut fast) {
+                Ok(h) => deepest = deepest.max(h),
+                Err(e) => fault = fault.or(Some(e)),
+            }
+        }
+        let [f0, f1, f2, f3, f4] = fast.1;
+        let record = [deepest, fast.0 as f64, f0, f1, f2, f3, f4];
+        let rows = agree_and_gather(&self.comm, fault, &record)?;
+        let fastest = FastGlobalNode::fastest_of(&rows, 2);
+        Ok(KinematicStep {
+            max_overclosure: rows.iter().map(|r| r[0]).fold(0.0, f64::max),
+            fast_nodes: rows.iter().map(|r| r[1] as usize).sum(),
+            fastest,
+        })
+    }
+
+    /// Sums over the ranks of per-node contributions (`(local node, key, values)`), each
+    /// node's on its owner in key order, starting from zero: every own node's sum, and every
+    /// ghost's from its owner; `None` where no rank contributed (three collectives).
+    fn node_sums<const K: usize>(
+        &self,
+        contributions: Vec<(usize, u64, [f64; K])>,
+    ) -> Vec<Option<[f64; K]>> {
+        let (n_own, size) = (self.ids.len(), self.comm.size() as usize);
+        let me = self.comm.rank() as usize;
+        // the owner of each ghost: ghosts are numbered by source rank
+        let mut owner_of = Vec::with_capacity(self.ghost_ids.len());
+        for (r, &c) in self.recv.iter().enumerate() {
+            owner_of.extend(std::iter::repeat_n(r, c));
+        }
+        let mut out: Vec<Vec<f64>> = vec![Vec::new(); size];
+        let mut rows: Vec<(usize, u64, [f64; K])> = Vec::new();
+        for (l, key, values) in contributions {
+            if l < n_own {
+                rows.push((l, key, values));
+            } else {
+                let o = owner_of[l - n_own];
+                debug_assert_ne!(o, me);
+                out[o].push(self.ghost_ids[l - n_own] as f64);
+                out[o].push(key as f64);
+                out[o].extend(values);
+            }
+        }
+        for list in exchange(&self.comm, &out) {
+            for r in list.chunks_exact(K + 2) {
+                // a ghost's owner: the node is this rank's
+                let Some(&l) = self.index.get(&(r[0] as u64)) else {
+                    continue;
+                };
+                let mut values = [0.0; K];
+                values.copy_from_slice(&r[2..]);
+                rows.push((l, r[1] as u64, values));
+            }
+        }
+        rows.sort_by_key(|r| (r.0, r.1));
+        let mut sums: Vec<Option<[f64; K]>> = vec![None; n_own + self.ghost_ids.len()];
+        for (l, _, values) in rows {
+            let s = sums[l].get_or_insert([0.0; K]);
+            for (a, b) in s.iter_mut().zip(values) {
+                *a += b;
+            }
+        }
+        // each sum to the ranks holding the node as a ghost: a flag, then the values
+        let back: Vec<Vec<f64>> = self
+            .send
+            .iter()
+            .map(|l| {
+                l.iter()
+                    .flat_map(|&i| match sums[i] {
+                        Some(s) => std::iter::once(1.0).chain(s),
+                        None => std::iter::once(0.0).chain([0.0; K]),
+                    })
+                    .collect()
+            })
+            .collect();
+        let counts: Vec<usize> = self.recv.iter().map(|&c| (K + 1) * c).collect();
+        let came: Vec<f64> = exchange_known(&self.comm, &back, &counts)
+            .into_iter()
+            .flatten()
+            .collect();
+        for (g, r) in came.chunks_exact(K + 1).enumerate() {
+            if r[0] != 0.0 {
+                let mut values = [0.0; K];
+                values.copy_from_slice(&r[1..]);
+                sums[n_own + g] = Some(values);
+            }
+        }
+        sums
+    }
+
+    /// One kinematic pair's correction; returns the largest overclosure this rank corrected.
+    fn kinematic_pair(
+        &mut self,
+        k: usize,
+        law: &Kinematic,
+        x: &mut [[f64; 3]],
+        v: &mut [[f64; 3]],
+        dt: f64,
+        fast: &mut (usize, [f64; 5]),
+    ) -> Result<f64> {
+        let n_own = self.ids.len();
+        let law = law.softened.as_ref();
+        let (mut gx, gv) = self.ghost_state(x, v);
+        let masses = self.local_masses();
+        // this rank's contacts at the predicted positions (a search fault is agreed on at the
+        // end; the exchanges go on without its slaves)
+        let mut fault = None;
+        let touches = |lx: &[[f64; 3]], contacts: &[Option<(usize, u64, [u32; 4])>]| {
+            let mut out = Vec::new();
+            for (s, c) in contacts.iter().enumerate() {
+                let Some((node, key, nodes)) = *c else {
+                    continue;
+                };
+                let count = facet_node_count(&nodes, u32::MAX);
+                let xs: Vec<V3<f64>> = nodes[..count]
+                    .iter()
+                    .map(|&n| V3::from_array(lx[n as usize]))
+                    .collect();
+                let p = V3::from_array(lx[node]);
+                let pr = closest_on_facet(p, &xs);
+                out.push(Touch {
+                    key,
+                    slave: s,
+                    node,
+                    nodes,
+                    count,
+                    normal: pr.normal,
+                    weights: pr.weights,
+                    overclosure: -pr.gap(p),
+                });
+            }
+            out
+        };
+        let p = &self.pairs[k];
+        let (id, slaves, keys) = (p.local, p.slaves.clone(), p.keys.clone());
+        let mut contacts: Vec<Option<(usize, u64, [u32; 4])>> = vec![None; slaves.len()];
+        let mut areas = vec![0.0; slaves.len()];
+        if let (Some(c), Some(id)) = (self.contact.as_mut(), id) {
+            let lx: Vec<[f64; 3]> = x.iter().chain(&gx).copied().collect();
+            let lv: Vec<[f64; 3]> = v.iter().chain(&gv).copied().collect();
+            match c.kinematic_contacts(id, &lx, &lv, dt) {
+                Ok(kc) => {
+                    // the local pair's slaves are this pass's, in the same order
+                    for (s, f) in kc.facets.iter().enumerate() {
+                        contacts[s] = f.map(|f| (kc.slaves[s] as usize, keys[s], f));
+                    }
+                    areas = kc.areas;
+                    let (count, top) = kc.fast;
+                    fast.0 += count;
+                    if let Some(t) = top.filter(|_| count > 0) {
+                        let t = self.fast_global(&t).record();
+                        if t[0] > fast.1[0] {
+                            fast.1 = t;
+                        }
+                    }
+                }
+                Err(e) => fault = Some(e),
+            }
+        }
+        let passes = if law.is_some() { 1 } else { PASSES };
+        let mut normal_force = vec![0.0; slaves.len()];
+        let mut first: Option<Vec<crate::kinematic::SlaveCorrection>> = None;
+        for pass in 0..passes {
+            if pass > 0 {
+                gx = self.ghost_state(x, v).0;
+            }
+            let lx: Vec<[f64; 3]> = x.iter().chain(&gx).copied().collect();
+            let touch = touches(&lx, &contacts);
+            // a softened law: the masses the pushed slaves add to each master node
+            let shares: Vec<f64> = if law.is_some() {
+                let added = self.node_sums(
+                    touch
+                        .iter()
+                        .filter(|t| pushed(law, t.overclosure))
+                        .flat_map(|t| {
+                            let ms = masses[t.node];
+                            (0..t.count)
+                                .map(move |j| (t.nodes[j] as usize, t.key, [t.weights[j] * ms]))
+                        })
+                        .collect(),
+                );
+                touch
+                    .iter()
+                    .map(|t| {
+                        if !pushed(law, t.overclosure) {
+                            return 1.0;
+                        }
+                        let taken: f64 = (0..t.count)
+                            .map(|j| {
+                                let n = t.nodes[j] as usize;
+                                let s_j = added[n].map_or(0.0, |a| a[0]);
+                                t.weights[j] * s_j / (masses[n] + s_j)
+                            })
+                            .sum();
+                        (1.0 - taken).max(f64::MIN_POSITIVE)
+                    })
+                    .collect()
+            } else {
+                vec![1.0; touch.len()]
+            };
+            // each pushed slave's resisting force, its facet nodes' shares of it
+            let mut out = vec![crate::kinematic::SlaveCorrection::default(); slaves.len()];
+            let mut push_of = vec![0.0; slaves.len()];
+            let mut parts = Vec::new();
+            for (t, share) in touch.iter().zip(&shares) {
+                let ms = masses[t.node];
+                let Some(target) = push_target(law, t.overclosure, ms * share, areas[t.slave], dt)
+                else {
+                    continue;
+                };
+                let fs = ms * (t.overclosure - target) / (dt * dt);
+                for j in 0..t.count {
+                    // the single process subtracts each share from its node's sum
+                    let f = (t.normal * (t.weights[j] * fs)) * -1.0;
+                    parts.push((
+                        t.nodes[j] as usize,
+                        t.key,
+                        [f.x, f.y, f.z, t.weights[j] * ms],
+                    ));
+                }
+                out[t.slave] = crate::kinematic::SlaveCorrection {
+                    overclosure: t.overclosure,
+                    target,
+                    force: fs,
+                    normal: t.normal.to_array(),
+                    energy: law.map_or(0.0, |l| {
+                        crate::kinematic::law_energy(l, target) * areas[t.slave]
+                    }),
+                    applied: [0.0; 3],
+                };
+                push_of[t.slave] = t.overclosure - target;
+            }
+            let sums = self.node_sums(parts);
+            let da: Vec<Option<V3<f64>>> = sums
+                .iter()
+                .zip(&masses)
+                .map(|(s, &m)| s.map(|s| V3::new(s[0], s[1], s[2]) * (1.0 / (m + s[3]))))
+                .collect();
+            let mut dx = vec![[0.0; 3]; n_own];
+            for (i, d) in dx.iter_mut().enumerate() {
+                if let Some(a) = da[i] {
+                    let d3 = a * (dt * dt);
+                    for (c, value) in d.iter_mut().zip(d3.to_array()) {
+                        *c += value;
+                    }
+                }
+            }
+            for t in &touch {
+                if out[t.slave].force <= 0.0 {
+                    continue;
+                }
+                let mut d = t.normal * push_of[t.slave];
+                for j in 0..t.count {
+                    let a = da[t.nodes[j] as usize].unwrap_or(V3::zero());
+                    d = d + a * (t.weights[j] * dt * dt);
+                }
+                for (c, value) in dx[t.node].iter_mut().zip(d.to_array()) {
+                    *c += value;
+                }
+                out[t.slave].applied = (d * (masses[t.node] / (dt * dt))).to_array();
+            }
+            for i in 0..n_own {
+                for a in 0..3 {
+                    x[i][a] += dx[i][a];
+                    v[i][a] += dx[i][a] / dt;
+                }
+            }
+            for (f, c) in normal_force.iter_mut().zip(&out) {
+                let along: f64 = (0..3).map(|a| c.applied[a] * c.normal[a]).sum();
+                *f += along.max(0.0);
+            }
+            first.get_or_insert(out);
+        }
+        let first = first.unwrap_or_default();
+        let mut friction = vec![[0.0; 3]; slaves.len()];
+        if let Some(mu) = self.pairs[k].coulomb() {
+            let (gx, gv) = self.ghost_state(x, v);
+            let lx: Vec<[f64; 3]> = x.iter().chain(&gx).copied().collect();
+            let lv: Vec<[f64; 3]> = v.iter().chain(&gv).copied().collect();
+            let dissipated = self.friction(
+                mu,
+                &contacts,
+                &normal_force,
+                (&lx, &lv),
+                &masses,
+                dt,
+                (x, v),
+                &mut friction,
+            );
+            self.pairs[k].dissipated += dissipated;
+        }
+        let p = &mut self.pairs[k];
+        p.corrections = first
+            .iter()
+            .zip(&friction)
+            .zip(&areas)
+            .map(|((c, f), &a)| {
+                let along: f64 = (0..3).map(|j| c.applied[j] * c.normal[j]).sum();
+                (along / a, [0, 1, 2].map(|j| c.applied[j] + f[j]))
+            })
+            .collect();
+        if let Some(e) = fault {
+            return Err(e);
+        }
+        Ok(first
+            .iter()
+            .filter(|c| c.force > 0.0)
+            .map(|c| c.overclosure)
+            .fold(0.0, f64::max))
+    }
+
+    /// Coulomb friction after the normal correction, as [`crate::kinematic::friction_pass`]:
+    /// each slave's tangential force at the corrected state `(lx, lv)` (own and ghost nodes),
+    /// its velocity changes and its facet nodes' summed on their owners in slave order, and
+    /// applied to own nodes (`x`, `v`); each slave's force into `force`. Returns the energy it
+    /// dissipated on this rank's nodes.
+    #[allow(clippy::too_many_arguments)]
+    fn friction(
+        &self,
+        mu: (f64, f64, f64),
+        contacts: &[Option<(usize, u64, [u32; 4])>],
+        normal_force: &[f64],
+        (lx, lv): (&[[f64; 3]], &[[f64; 3]]),
+        masses: &[f64],
+        dt: f64,
+        (x, v): (&mut [[f64; 3]], &mut [[f64; 3]]),
+        force: &mut [[f64; 3]],
+    ) -> f64 {
+        let mut parts = Vec::new();
+        for (k, c) in contacts.iter().enumerate() {
+            let (Some((s, key, nodes)), &f_n) = (*c, &normal_force[k]) else {
+                continue;
+            };
+            if f_n <= 0.0 {
+                continue;
+            }
+            let nodes = &nodes[..facet_node_count(&nodes, u32::MAX)];
+            let (ft, weights, _) = slave_friction(mu, (lx, lv, masses), s, nodes, f_n, dt);
+            let Some(ft) = ft else { continue };
+            force[k] = ft.to_array();
+            let d = ft * (dt / masses[s]);
+            parts.push((s, key, [d.x, d.y, d.z]));
+            for (j, &m) in nodes.iter().enumerate() {
+                // the single process subtracts each share from its node's sum
+                let d = (ft * (weights[j] * dt / masses[m as usize])) * -1.0;
+                parts.push((m as usize, key, [d.x, d.y, d.z]));
+            }
+        }
+        let dv = self.node_sums(parts);
+        let mut dissipated = 0.0;
+        for (i, d) in dv.iter().take(x.len()).enumerate() {
+            if let Some(d) = *d {
+                dissipated += change_velocity((&mut *x, &mut *v), self.masses[i], i, d, dt);
+            }
+        }
+        dissipated
+    }
+}
