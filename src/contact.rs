@@ -20,6 +20,8 @@ mod anchors;
 mod exec;
 #[cfg(feature = "mpi")]
 mod kinematic_share;
+#[cfg(feature = "mpi")]
+pub(crate) use kinematic_share::AnchorPlane;
 mod kinematic_step;
 mod overclosure;
 mod report;

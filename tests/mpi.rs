@@ -596,8 +596,9 @@ fn kinematic_contact_against_analytical_surfaces_across_ranks_gives_the_single_p
 /// ranks holding them as ghosts, and hard contact is corrected again on the corrected
 /// geometry with the ghosts' corrected state. The two-bar impact (VERIFICATION §1: at 2 ranks
 /// the slave's bar on one rank and its master node on the other) and the block drop made
-/// kinematic with its friction of 0.3 (12 ms: 289 slaves in contact at the end), at 1, 2 and
-/// 4 ranks to 10⁻¹²: the same arithmetic, the energies summed in rank order.
+/// kinematic with its friction of 0.3 (12 ms: 289 slaves in contact at the end), made a
+/// balanced kinematic pair, and made a small-sliding one, at 1, 2 and 4 ranks to 10⁻¹²: the
+/// same arithmetic, the energies summed in rank order.
 #[test]
 fn kinematic_pairs_across_ranks_give_the_single_process_summary() {
     let dir = std::env::temp_dir().join(format!("abut-mpi-kinematic-{}", std::process::id()));
@@ -625,6 +626,43 @@ fn kinematic_pairs_across_ranks_give_the_single_process_summary() {
     let s = scene_across_calls(&block, "kinematic-drop", 1e-12, &[1, 2, 4], 24.0..27.0);
     assert_eq!(s["contact_nodes"].as_array().unwrap().len(), 289, "{s}");
     assert!(s["frictional_dissipation"].as_f64().unwrap() > 0.0, "{s}");
+    // balanced (frictionless): the plate's nodes against the block's bottom too, each pass
+    // summed on the owners, the two corrections weighted as in one process
+    let balanced = edited_scene(
+        &dir,
+        "block_drop.toml",
+        "balanced_kinematic_drop.toml",
+        &[
+            ("friction = 0.3", "enforce = \"kinematic\"\nbalanced = 0.5"),
+            ("end_time = 0.15", "end_time = 0.012"),
+        ],
+    );
+    let s = scene_across_calls(
+        &balanced,
+        "balanced-kinematic",
+        1e-12,
+        &[1, 2, 4],
+        29.0..32.0,
+    );
+    assert_eq!(s["contact_nodes"].as_array().unwrap().len(), 289, "{s}");
+    // small sliding (the block over the plate's free edge: 136 slaves anchored), one
+    // correction on the anchors' planes, the anchors kept through the local models' rebuilds
+    let anchored = edited_scene(
+        &dir,
+        "block_drop.toml",
+        "small_sliding_kinematic.toml",
+        &[
+            (
+                "friction = 0.3",
+                "enforce = \"kinematic\"\nsliding = \"small\"",
+            ),
+            ("end_time = 0.15", "end_time = 0.03"),
+            ("origin = [0.0, 0.0, 0.001]", "origin = [0.75, 0.0, 0.001]"),
+        ],
+    );
+    let s = scene_across_calls(&anchored, "small-kinematic", 1e-12, &[1, 2, 4], 12.0..15.0);
+    assert_eq!(s["anchored_slaves"], 136, "{s}");
+    assert!(!s["contact_nodes"].as_array().unwrap().is_empty(), "{s}");
     let _ = std::fs::remove_dir_all(&dir);
 }
 
@@ -648,8 +686,9 @@ fn a_balanced_mesh_drop_across_ranks_gives_the_single_process_summary() {
     let _ = std::fs::remove_dir_all(&dir);
 }
 
-/// What a distributed run cannot do yet is refused by name (a balanced kinematic pair; a free
-/// rigid body of mesh nodes: the block drop's plate made free), every rank returns, and
+/// What a distributed run cannot do yet is refused by name (a free rigid body of mesh nodes:
+/// the block drop's plate made free; the start's overclosure adjustment), every rank returns,
+/// and
 /// mpirun reports the failure.
 #[test]
 fn a_scene_a_distributed_run_cannot_do_is_refused_by_name() {
@@ -663,15 +702,18 @@ fn a_scene_a_distributed_run_cannot_do_is_refused_by_name() {
             "divisions = [30, 30, 0]\nmotion = \"free\"\nmass = 1.0e3",
         )],
     );
-    let balanced = edited_scene(
+    let adjusted = edited_scene(
         &dir,
         "block_drop.toml",
-        "balanced_kinematic.toml",
-        &[("friction = 0.3", "enforce = \"kinematic\"\nbalanced = 0.5")],
+        "adjusted.toml",
+        &[(
+            "end_time = 0.15",
+            "end_time = 0.15\nadjust_overclosure = true",
+        )],
     );
     for (scene, says) in [
-        (balanced, "balanced kinematic contact pair 0"),
         (free, "free rigid body plate"),
+        (adjusted, "run.adjust_overclosure"),
     ] {
         let out = dir.join("out");
         let o = mpirun_command()

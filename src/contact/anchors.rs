@@ -1,5 +1,5 @@
-//! Small and infinitesimal sliding: a penalty pair's anchors taken out of one Contact and put
-//! into another over the same slaves, keyed by model node ids (a distributed run's local model,
+//! Small and infinitesimal sliding: a pair's anchors (penalty or kinematic) taken out of one
+//! Contact and put into another over the same slaves, keyed by model node ids (a distributed run's local model,
 //! rebuilt with other ghosts, keeps the anchors its first search found).
 
 use super::Contact;
@@ -8,10 +8,14 @@ use crate::model::PairId;
 use crate::search::KeyedAnchor;
 
 impl Contact {
-    /// Small sliding: the anchors of each pass of penalty pair `pair` (two for a balanced
-    /// pair), each in the node set's order and keyed by model node ids; `None` for a pass not
+    /// Small sliding: the anchors of each pass of pair `pair` (two for a balanced penalty
+    /// pair; one for a kinematic pair), each in the node set's order and keyed by model node ids; `None` for a pass not
     /// anchored yet (before the first increment, or finite sliding).
     pub(crate) fn penalty_anchors(&self, pair: PairId) -> Result<Vec<Option<Vec<KeyedAnchor>>>> {
+        // a kinematic pair: one pass, in the node set's order
+        if let Some(kr) = self.kinematic.iter().find(|k| k.id == pair) {
+            return Ok(vec![kr.search.keyed_anchors()]);
+        }
         Ok(self
             .penalty_runs(pair)?
             .into_iter()
@@ -31,6 +35,12 @@ impl Contact {
         pair: PairId,
         anchors: &[Option<Vec<KeyedAnchor>>],
     ) -> Result<()> {
+        if let Some(kr) = self.kinematic.iter_mut().find(|k| k.id == pair) {
+            if let [Some(a)] = anchors {
+                kr.search.set_keyed_anchors(a)?;
+            }
+            return Ok(());
+        }
         let runs = self.penalty_runs(pair)?;
         if runs.len() != anchors.len() {
             return Err(Error::LengthMismatch {
@@ -60,6 +70,10 @@ impl Contact {
     /// reaches (as [`crate::search::SearchStage::set_anchor_reach`]; `None`: every master
     /// facet). Before the first increment.
     pub(crate) fn set_anchor_reach(&mut self, pair: PairId, reach: Option<f64>) -> Result<()> {
+        if let Some(kr) = self.kinematic.iter_mut().find(|k| k.id == pair) {
+            kr.search.set_anchor_reach(reach);
+            return Ok(());
+        }
         for k in self.penalty_runs(pair)? {
             self.pairs[k].search.set_anchor_reach(reach);
         }

@@ -9,6 +9,10 @@ use crate::kinematic::facets_from;
 use crate::model::PairId;
 use crate::FastNode;
 
+/// Small sliding: an anchored slave's plane (normal, weights, overclosure) as the search gave
+/// it; none where it has no anchor.
+pub(crate) type AnchorPlane = Option<([f64; 3], [f64; 4], f64)>;
+
 /// A kinematic pair's contacts at the predicted positions, as its corrections use them.
 pub(crate) struct KinematicContacts {
     /// The pair's slaves (model node ids), in the order of the node set.
@@ -21,6 +25,9 @@ pub(crate) struct KinematicContacts {
     /// Slaves that moved farther than the radius relative to the master near them, and the
     /// fastest.
     pub fast: (usize, Option<FastNode>),
+    /// Small sliding: each anchored slave's plane at the predicted positions (normal, weights,
+    /// overclosure), which its one correction uses as it is.
+    pub anchored: Option<Vec<AnchorPlane>>,
 }
 
 impl Contact {
@@ -47,20 +54,34 @@ impl Contact {
         let result = kr.search.step(x)?;
         let order = 0..result.raw.len();
         let fast = fast_slaves(kr.id, &kr.search, &result.raw, order, v, dt);
-        let facets = facets_from(&result, &mut kr.behind.0)
-            .into_iter()
-            .map(|f| {
-                let nodes = kr.master.facets[f? as usize].nodes();
-                let mut padded = [u32::MAX; 4];
-                padded[..nodes.len()].copy_from_slice(nodes);
-                Some(padded)
-            })
-            .collect();
+        let pad = |f: u32| {
+            let nodes = kr.master.facets[f as usize].nodes();
+            let mut padded = [u32::MAX; 4];
+            padded[..nodes.len()].copy_from_slice(nodes);
+            padded
+        };
+        // small sliding, pure: the anchors' planes as the search gives them (`anchored_pass`)
+        let (facets, anchored) = if kr.anchored && kr.back.is_none() {
+            let contacts: Vec<_> = result.contacts().collect();
+            (
+                contacts.iter().map(|c| c.map(|c| pad(c.facet))).collect(),
+                Some(
+                    contacts
+                        .iter()
+                        .map(|c| c.map(|c| (c.normal, c.weights, -c.gap)))
+                        .collect(),
+                ),
+            )
+        } else {
+            let facets = facets_from(&result, &mut kr.behind.0);
+            (facets.into_iter().map(|f| f.map(pad)).collect(), None)
+        };
         Ok(KinematicContacts {
             slaves: kr.slaves.clone(),
             facets,
             areas: kr.areas.clone(),
             fast,
+            anchored,
         })
     }
 

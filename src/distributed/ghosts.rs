@@ -233,7 +233,12 @@ impl DistributedContact {
                             None => Enforce::Penalty(p.penalty.clone()),
                         })
                         .friction(p.friction.clone())
-                        .pass_weight(p.weight),
+                        .pass_weight(if p.kinematic.is_some() {
+                            // a kinematic pass is weighed by the correction itself
+                            1.0
+                        } else {
+                            p.weight
+                        }),
                 )?,
             );
             any = true;

@@ -15,8 +15,11 @@
 use super::collectives::{agree_and_gather, exchange, exchange_known};
 use super::*;
 use crate::geometry::{closest_on_facet, V3};
-use crate::kinematic::{change_velocity, push_target, pushed, slave_friction, PASSES};
+use crate::kinematic::{
+    change_velocity, law_energy, push_target, pushed, slave_friction, SlaveCorrection, PASSES,
+};
 use crate::model::Kinematic;
+use crate::model::PressureOverclosure;
 
 /// What a rank's kinematic correction of one increment left, the same on every rank where it
 /// says so.
@@ -44,6 +47,53 @@ struct Touch {
     overclosure: f64,
 }
 
+/// A slave's contact in a kinematic pass: its local node, its key and its facet's local nodes
+/// (`u32::MAX` pads); none where it has none.
+type Contact1 = Option<(usize, u64, [u32; 4])>;
+
+/// Small sliding: an anchored slave's plane as the search gave it.
+type Plane = crate::contact::AnchorPlane;
+
+/// The pushed-or-not geometry of each slave with a contact: on its facet at the local
+/// positions `lx`, or its anchor's plane (`planes`, small sliding).
+fn touches(lx: &[[f64; 3]], contacts: &[Contact1], planes: Option<&[Plane]>) -> Vec<Touch> {
+    let mut out = Vec::new();
+    for (s, c) in contacts.iter().enumerate() {
+        let Some((node, key, nodes)) = *c else {
+            continue;
+        };
+        let count = facet_node_count(&nodes, u32::MAX);
+        let (normal, weights, overclosure) = match planes {
+            Some(planes) => {
+                let Some((normal, weights, overclosure)) = planes[s] else {
+                    continue;
+                };
+                (V3::from_array(normal), weights, overclosure)
+            }
+            None => {
+                let xs: Vec<V3<f64>> = nodes[..count]
+                    .iter()
+                    .map(|&n| V3::from_array(lx[n as usize]))
+                    .collect();
+                let p = V3::from_array(lx[node]);
+                let pr = closest_on_facet(p, &xs);
+                (pr.normal, pr.weights, -pr.gap(p))
+            }
+        };
+        out.push(Touch {
+            key,
+            slave: s,
+            node,
+            nodes,
+            count,
+            normal,
+            weights,
+            overclosure,
+        });
+    }
+    out
+}
+
 impl DistributedContact {
     /// Whether any pair is kinematic (the same on every rank).
     pub fn has_kinematic_pairs(&self) -> bool {
@@ -69,10 +119,18 @@ impl DistributedContact {
         let mut fault = None;
         let mut fast = (0usize, [-1.0, 0.0, 0.0, 0.0, 0.0]);
         for k in 0..self.pairs.len() {
-            let Some(law) = self.pairs[k].kinematic.clone() else {
+            let p = &self.pairs[k];
+            let (Some(law), false) = (p.kinematic.clone(), p.of.1) else {
                 continue;
             };
-            match self.kinematic_pair(k, &law, x, v, dt, &mut fast) {
+            // a balanced pair: its second pass (the master's nodes on the slave surface) is
+            // the next, weighted 1 − w
+            let partner = self
+                .pairs
+                .get(k + 1)
+                .filter(|q| q.of == (p.of.0, true))
+                .map(|_| (k + 1, p.weight));
+            match self.kinematic_pair(k, partner, &law, x, v, dt, &mut fast) {
                 Ok(h) => deepest = deepest.max(h),
                 Err(e) => fault = fault.or(Some(e)),
             }
@@ -162,181 +220,212 @@ impl DistributedContact {
         sums
     }
 
-    /// One kinematic pair's correction; returns the largest overclosure this rank corrected.
+    /// This rank's contacts of kinematic pass `k` at the predicted positions (own `x`, `v`;
+    /// ghosts `gx`, `gv`): per slave its local node, key and facet (none: no contact), and the
+    /// slaves' areas. A search fault goes to `fault`, agreed on at the end: the exchanges go
+    /// on without this pass's slaves.
+    #[allow(clippy::too_many_arguments)]
+    fn pass_contacts(
+        &mut self,
+        k: usize,
+        (x, gx): (&[[f64; 3]], &[[f64; 3]]),
+        (v, gv): (&[[f64; 3]], &[[f64; 3]]),
+        dt: f64,
+        fast: &mut (usize, [f64; 5]),
+        fault: &mut Option<Error>,
+    ) -> (Vec<Contact1>, Vec<f64>, Option<Vec<Plane>>) {
+        let p = &self.pairs[k];
+        let (id, n, keys) = (p.local, p.slaves.len(), p.keys.clone());
+        let mut contacts: Vec<Contact1> = vec![None; n];
+        let mut areas = vec![0.0; n];
+        let mut planes = None;
+        let (Some(c), Some(id)) = (self.contact.as_mut(), id) else {
+            return (contacts, areas, planes);
+        };
+        let lx: Vec<[f64; 3]> = x.iter().chain(gx).copied().collect();
+        let lv: Vec<[f64; 3]> = v.iter().chain(gv).copied().collect();
+        match c.kinematic_contacts(id, &lx, &lv, dt) {
+            Ok(kc) => {
+                // the local pair's slaves are this pass's, in the same order
+                for (s, f) in kc.facets.iter().enumerate() {
+                    contacts[s] = f.map(|f| (kc.slaves[s] as usize, keys[s], f));
+                }
+                areas = kc.areas;
+                if kc.anchored.is_some() {
+                    planes = kc.anchored;
+                }
+                let (count, top) = kc.fast;
+                fast.0 += count;
+                if let Some(t) = top.filter(|_| count > 0) {
+                    let t = self.fast_global(&t).record();
+                    if t[0] > fast.1[0] {
+                        fast.1 = t;
+                    }
+                }
+            }
+            Err(e) => *fault = fault.take().or(Some(e)),
+        }
+        (contacts, areas, planes)
+    }
+
+    /// One correction of a pass with `contacts` (and slave `areas`) at the local positions
+    /// `lx` (masses `masses`): each own node's displacement and each slave's correction, as
+    /// [`crate::kinematic::meshed_pass`] gives them — the master nodes' sums on their owners
+    /// (three collectives; six with a softened law).
+    #[allow(clippy::too_many_arguments)]
+    fn correction(
+        &self,
+        contacts: &[Contact1],
+        areas: &[f64],
+        law: Option<&PressureOverclosure>,
+        (lx, planes): (&[[f64; 3]], Option<&[Plane]>),
+        masses: &[f64],
+        dt: f64,
+    ) -> (Vec<[f64; 3]>, Vec<SlaveCorrection>) {
+        let n_own = self.ids.len();
+        let touch = touches(lx, contacts, planes);
+        // a softened law: the masses the pushed slaves add to each master node
+        let shares: Vec<f64> = if law.is_some() {
+            let added = self.node_sums(
+                touch
+                    .iter()
+                    .filter(|t| pushed(law, t.overclosure))
+                    .flat_map(|t| {
+                        let ms = masses[t.node];
+                        (0..t.count).map(move |j| (t.nodes[j] as usize, t.key, [t.weights[j] * ms]))
+                    })
+                    .collect(),
+            );
+            touch
+                .iter()
+                .map(|t| {
+                    if !pushed(law, t.overclosure) {
+                        return 1.0;
+                    }
+                    let taken: f64 = (0..t.count)
+                        .map(|j| {
+                            let n = t.nodes[j] as usize;
+                            let s_j = added[n].map_or(0.0, |a| a[0]);
+                            t.weights[j] * s_j / (masses[n] + s_j)
+                        })
+                        .sum();
+                    (1.0 - taken).max(f64::MIN_POSITIVE)
+                })
+                .collect()
+        } else {
+            vec![1.0; touch.len()]
+        };
+        // each pushed slave's resisting force, its facet nodes' shares of it
+        let mut out = vec![SlaveCorrection::default(); contacts.len()];
+        let mut push_of = vec![0.0; contacts.len()];
+        let mut parts = Vec::new();
+        for (t, share) in touch.iter().zip(&shares) {
+            let ms = masses[t.node];
+            let Some(target) = push_target(law, t.overclosure, ms * share, areas[t.slave], dt)
+            else {
+                continue;
+            };
+            let fs = ms * (t.overclosure - target) / (dt * dt);
+            for j in 0..t.count {
+                // the single process subtracts each share from its node's sum
+                let f = (t.normal * (t.weights[j] * fs)) * -1.0;
+                parts.push((
+                    t.nodes[j] as usize,
+                    t.key,
+                    [f.x, f.y, f.z, t.weights[j] * ms],
+                ));
+            }
+            out[t.slave] = SlaveCorrection {
+                overclosure: t.overclosure,
+                target,
+                force: fs,
+                normal: t.normal.to_array(),
+                energy: law.map_or(0.0, |l| law_energy(l, target) * areas[t.slave]),
+                applied: [0.0; 3],
+            };
+            push_of[t.slave] = t.overclosure - target;
+        }
+        let sums = self.node_sums(parts);
+        let da: Vec<Option<V3<f64>>> = sums
+            .iter()
+            .zip(masses)
+            .map(|(s, &m)| s.map(|s| V3::new(s[0], s[1], s[2]) * (1.0 / (m + s[3]))))
+            .collect();
+        let mut dx = vec![[0.0; 3]; n_own];
+        for (d, a) in dx.iter_mut().zip(&da) {
+            if let Some(a) = a {
+                let d3 = *a * (dt * dt);
+                for (c, value) in d.iter_mut().zip(d3.to_array()) {
+                    *c += value;
+                }
+            }
+        }
+        for t in &touch {
+            if out[t.slave].force <= 0.0 {
+                continue;
+            }
+            let mut d = t.normal * push_of[t.slave];
+            for j in 0..t.count {
+                let a = da[t.nodes[j] as usize].unwrap_or(V3::zero());
+                d = d + a * (t.weights[j] * dt * dt);
+            }
+            for (c, value) in dx[t.node].iter_mut().zip(d.to_array()) {
+                *c += value;
+            }
+            out[t.slave].applied = (d * (masses[t.node] / (dt * dt))).to_array();
+        }
+        (dx, out)
+    }
+
+    /// One kinematic pair's correction, its pass `k` and, for a balanced pair, the second pass
+    /// `partner` with the first pass's weight; returns the largest overclosure this rank
+    /// corrected.
+    #[allow(clippy::too_many_arguments)]
     fn kinematic_pair(
         &mut self,
         k: usize,
+        partner: Option<(usize, f64)>,
         law: &Kinematic,
         x: &mut [[f64; 3]],
         v: &mut [[f64; 3]],
         dt: f64,
         fast: &mut (usize, [f64; 5]),
     ) -> Result<f64> {
-        let n_own = self.ids.len();
         let law = law.softened.as_ref();
-        let (mut gx, gv) = self.ghost_state(x, v);
+        let (gx, gv) = self.ghost_state(x, v);
         let masses = self.local_masses();
-        // this rank's contacts at the predicted positions (a search fault is agreed on at the
-        // end; the exchanges go on without its slaves)
         let mut fault = None;
-        let touches = |lx: &[[f64; 3]], contacts: &[Option<(usize, u64, [u32; 4])>]| {
-            let mut out = Vec::new();
-            for (s, c) in contacts.iter().enumerate() {
-                let Some((node, key, nodes)) = *c else {
-                    continue;
-                };
-                let count = facet_node_count(&nodes, u32::MAX);
-                let xs: Vec<V3<f64>> = nodes[..count]
-                    .iter()
-                    .map(|&n| V3::from_array(lx[n as usize]))
-                    .collect();
-                let p = V3::from_array(lx[node]);
-                let pr = closest_on_facet(p, &xs);
-                out.push(Touch {
-                    key,
-                    slave: s,
-                    node,
-                    nodes,
-                    count,
-                    normal: pr.normal,
-                    weights: pr.weights,
-                    overclosure: -pr.gap(p),
-                });
-            }
-            out
-        };
-        let p = &self.pairs[k];
-        let (id, slaves, keys) = (p.local, p.slaves.clone(), p.keys.clone());
-        let mut contacts: Vec<Option<(usize, u64, [u32; 4])>> = vec![None; slaves.len()];
-        let mut areas = vec![0.0; slaves.len()];
-        if let (Some(c), Some(id)) = (self.contact.as_mut(), id) {
-            let lx: Vec<[f64; 3]> = x.iter().chain(&gx).copied().collect();
-            let lv: Vec<[f64; 3]> = v.iter().chain(&gv).copied().collect();
-            match c.kinematic_contacts(id, &lx, &lv, dt) {
-                Ok(kc) => {
-                    // the local pair's slaves are this pass's, in the same order
-                    for (s, f) in kc.facets.iter().enumerate() {
-                        contacts[s] = f.map(|f| (kc.slaves[s] as usize, keys[s], f));
-                    }
-                    areas = kc.areas;
-                    let (count, top) = kc.fast;
-                    fast.0 += count;
-                    if let Some(t) = top.filter(|_| count > 0) {
-                        let t = self.fast_global(&t).record();
-                        if t[0] > fast.1[0] {
-                            fast.1 = t;
-                        }
-                    }
-                }
-                Err(e) => fault = Some(e),
-            }
-        }
-        let passes = if law.is_some() { 1 } else { PASSES };
-        let mut normal_force = vec![0.0; slaves.len()];
-        let mut first: Option<Vec<crate::kinematic::SlaveCorrection>> = None;
+        let (contacts, areas, planes) =
+            self.pass_contacts(k, (x, &gx), (v, &gv), dt, fast, &mut fault);
+        let back = partner.map(|(b, w)| {
+            let (c, a, _) = self.pass_contacts(b, (x, &gx), (v, &gv), dt, fast, &mut fault);
+            (c, a, w)
+        });
+        // hard contact is corrected again on the corrected geometry (not on anchors' planes)
+        let anchored = self.pairs[k].anchored();
+        let passes = if law.is_some() || anchored { 1 } else { PASSES };
+        let mut normal_force = vec![0.0; contacts.len()];
+        let mut first: Option<Vec<SlaveCorrection>> = None;
+        let mut gx = gx;
         for pass in 0..passes {
             if pass > 0 {
                 gx = self.ghost_state(x, v).0;
             }
             let lx: Vec<[f64; 3]> = x.iter().chain(&gx).copied().collect();
-            let touch = touches(&lx, &contacts);
-            // a softened law: the masses the pushed slaves add to each master node
-            let shares: Vec<f64> = if law.is_some() {
-                let added = self.node_sums(
-                    touch
-                        .iter()
-                        .filter(|t| pushed(law, t.overclosure))
-                        .flat_map(|t| {
-                            let ms = masses[t.node];
-                            (0..t.count)
-                                .map(move |j| (t.nodes[j] as usize, t.key, [t.weights[j] * ms]))
-                        })
-                        .collect(),
-                );
-                touch
-                    .iter()
-                    .map(|t| {
-                        if !pushed(law, t.overclosure) {
-                            return 1.0;
-                        }
-                        let taken: f64 = (0..t.count)
-                            .map(|j| {
-                                let n = t.nodes[j] as usize;
-                                let s_j = added[n].map_or(0.0, |a| a[0]);
-                                t.weights[j] * s_j / (masses[n] + s_j)
-                            })
-                            .sum();
-                        (1.0 - taken).max(f64::MIN_POSITIVE)
-                    })
-                    .collect()
-            } else {
-                vec![1.0; touch.len()]
-            };
-            // each pushed slave's resisting force, its facet nodes' shares of it
-            let mut out = vec![crate::kinematic::SlaveCorrection::default(); slaves.len()];
-            let mut push_of = vec![0.0; slaves.len()];
-            let mut parts = Vec::new();
-            for (t, share) in touch.iter().zip(&shares) {
-                let ms = masses[t.node];
-                let Some(target) = push_target(law, t.overclosure, ms * share, areas[t.slave], dt)
-                else {
-                    continue;
-                };
-                let fs = ms * (t.overclosure - target) / (dt * dt);
-                for j in 0..t.count {
-                    // the single process subtracts each share from its node's sum
-                    let f = (t.normal * (t.weights[j] * fs)) * -1.0;
-                    parts.push((
-                        t.nodes[j] as usize,
-                        t.key,
-                        [f.x, f.y, f.z, t.weights[j] * ms],
-                    ));
-                }
-                out[t.slave] = crate::kinematic::SlaveCorrection {
-                    overclosure: t.overclosure,
-                    target,
-                    force: fs,
-                    normal: t.normal.to_array(),
-                    energy: law.map_or(0.0, |l| {
-                        crate::kinematic::law_energy(l, target) * areas[t.slave]
-                    }),
-                    applied: [0.0; 3],
-                };
-                push_of[t.slave] = t.overclosure - target;
-            }
-            let sums = self.node_sums(parts);
-            let da: Vec<Option<V3<f64>>> = sums
-                .iter()
-                .zip(&masses)
-                .map(|(s, &m)| s.map(|s| V3::new(s[0], s[1], s[2]) * (1.0 / (m + s[3]))))
-                .collect();
-            let mut dx = vec![[0.0; 3]; n_own];
-            for (i, d) in dx.iter_mut().enumerate() {
-                if let Some(a) = da[i] {
-                    let d3 = a * (dt * dt);
-                    for (c, value) in d.iter_mut().zip(d3.to_array()) {
-                        *c += value;
+            let geometry = (&lx[..], planes.as_deref());
+            let (mut dx, out) = self.correction(&contacts, &areas, law, geometry, &masses, dt);
+            if let Some((bc, ba, w)) = &back {
+                let (dx_b, _) = self.correction(bc, ba, law, (&lx, None), &masses, dt);
+                for (d, b) in dx.iter_mut().zip(&dx_b) {
+                    for a in 0..3 {
+                        d[a] = w * d[a] + (1.0 - w) * b[a];
                     }
                 }
             }
-            for t in &touch {
-                if out[t.slave].force <= 0.0 {
-                    continue;
-                }
-                let mut d = t.normal * push_of[t.slave];
-                for j in 0..t.count {
-                    let a = da[t.nodes[j] as usize].unwrap_or(V3::zero());
-                    d = d + a * (t.weights[j] * dt * dt);
-                }
-                for (c, value) in dx[t.node].iter_mut().zip(d.to_array()) {
-                    *c += value;
-                }
-                out[t.slave].applied = (d * (masses[t.node] / (dt * dt))).to_array();
-            }
-            for i in 0..n_own {
+            for (i, d) in dx.iter().enumerate() {
                 for a in 0..3 {
-                    x[i][a] += dx[i][a];
-                    v[i][a] += dx[i][a] / dt;
+                    x[i][a] += d[a];
+                    v[i][a] += d[a] / dt;
                 }
             }
             for (f, c) in normal_force.iter_mut().zip(&out) {
@@ -346,8 +435,8 @@ impl DistributedContact {
             first.get_or_insert(out);
         }
         let first = first.unwrap_or_default();
-        let mut friction = vec![[0.0; 3]; slaves.len()];
-        if let Some(mu) = self.pairs[k].coulomb() {
+        let mut friction = vec![[0.0; 3]; contacts.len()];
+        if let (Some(mu), None, false) = (self.pairs[k].coulomb(), &back, anchored) {
             let (gx, gv) = self.ghost_state(x, v);
             let lx: Vec<[f64; 3]> = x.iter().chain(&gx).copied().collect();
             let lv: Vec<[f64; 3]> = v.iter().chain(&gv).copied().collect();
@@ -363,8 +452,8 @@ impl DistributedContact {
             );
             self.pairs[k].dissipated += dissipated;
         }
-        let p = &mut self.pairs[k];
-        p.corrections = first
+        // the first pass's corrections are the pair's outputs (a balanced pair's too)
+        self.pairs[k].corrections = first
             .iter()
             .zip(&friction)
             .zip(&areas)
@@ -392,7 +481,7 @@ impl DistributedContact {
     fn friction(
         &self,
         mu: (f64, f64, f64),
-        contacts: &[Option<(usize, u64, [u32; 4])>],
+        contacts: &[Contact1],
         normal_force: &[f64],
         (lx, lv): (&[[f64; 3]], &[[f64; 3]]),
         masses: &[f64],

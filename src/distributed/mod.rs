@@ -1,8 +1,7 @@
 //! (feature `mpi`) Contact across MPI ranks: one model split over processes, each rank
 //! holding its own nodes and running abut's search and enforcement on its own device —
-//! penalty and kinematic pairs (finite, small and infinitesimal sliding; pure, balanced and
-//! self-contact penalty pairs), and kinematic contact against analytical surfaces
-//! ([`DistributedRigid`]).
+//! penalty and kinematic pairs (finite, small and infinitesimal sliding; pure and balanced;
+//! self-contact), and kinematic contact against analytical surfaces ([`DistributedRigid`]).
 //!
 //! Each rank gives a [`RankModel`]: the nodes it owns (global ids, positions, masses) and, per
 //! pair, its own slave nodes and the master facets it owns (by global node ids; their nodes may

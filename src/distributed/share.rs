@@ -54,7 +54,8 @@ pub struct RankPair {
     /// every master node near no rank's slaves as well (O(surface) per rank, once).
     pub anchor_reach: Option<f64>,
     /// `Some`: the pair is enforced kinematically (the seed's predictor/corrector,
-    /// [`super::DistributedContact::kinematic_step`]; `penalty` unused); pure and finite sliding.
+    /// [`super::DistributedContact::kinematic_step`]; `penalty` unused); finite sliding, pure or
+    /// balanced.
     pub kinematic: Option<Kinematic>,
     /// Each slave's place in the pair's whole slave list (one per entry of `slaves`, unique
     /// over the ranks): a kinematic pair's sums over its slaves run in this order, the single

@@ -53,14 +53,6 @@ pub(super) fn validate(model: &RankModel) -> Result<Validated> {
                 "finite and positive, or none",
             ));
         }
-        if p.kinematic.is_some() && (p.balanced.is_some() || p.sliding != Sliding::Finite) {
-            return Err(bad(
-                "kinematic",
-                format!("pair {k}"),
-                "pure, finite-sliding kinematic pairs (balanced or small-sliding kinematic \
-                 contact runs in one process)",
-            ));
-        }
         if let Some(keys) = &p.slave_keys {
             if keys.len() != p.slaves.len() {
                 return Err(Error::LengthMismatch {

@@ -26,9 +26,8 @@
 //! the solver's prediction with every rank's share ([`DistributedContact::kinematic_step`],
 //! [`DistributedRigid`]): the single process's arithmetic, at 11–26 collectives an increment.
 //!
-//! Not distributed (refused by name): free rigid bodies of mesh nodes, balanced and
-//! small-sliding kinematic pairs, `adjust_overclosure`. VTK frames are not written (a warning
-//! says so). A node that moves past its pair's search radius
+//! Not distributed (refused by name): free rigid bodies of mesh nodes, `adjust_overclosure`.
+//! VTK frames are not written (a warning says so). A node that moves past its pair's search radius
 //! within one increment stops the run on every rank with the single process's tunnelling
 //! error.
 

@@ -1,10 +1,9 @@
 //! A rank's contact share of a scene's model: its own slaves of each pair (meshed or against
 //! an analytical surface) and the master facets it owns, by global node ids.
 
-use super::refuse;
 use crate::distributed::{RankBalance, RankPair, RankRigidPair, NO_GLOBAL_NODE};
 use crate::error::Result;
-use crate::model::{Enforce, Facet, Model, Penalty, Schedule, Sliding};
+use crate::model::{Enforce, Facet, Model, Penalty, Schedule};
 
 /// The facets of `facets` this rank owns (those whose first node it owns), by global ids.
 fn owned_facets(facets: &[Facet], part: &[u32], me: u32) -> Vec<[u64; 4]> {
@@ -25,24 +24,11 @@ fn owned_facets(facets: &[Facet], part: &[u32], me: u32) -> Vec<[u64; 4]> {
 /// This rank's contact share of `model`'s pairs.
 pub(super) fn rank_pairs(model: &Model, part: &[u32], me: u32) -> Result<Vec<RankPair>> {
     let mut out = Vec::new();
-    for (k, pair) in model.pairs().iter().enumerate() {
-        let (penalty, kinematic) =
-            match &pair.enforce {
-                Enforce::Penalty(p) => (p.clone(), None),
-                Enforce::Kinematic(_) if pair.balanced.is_some() => return Err(refuse(
-                    &format!("balanced kinematic contact pair {k}"),
-                    "penalty pairs, pure kinematic ones (a balanced kinematic pair runs in one \
-                     process)",
-                )),
-                Enforce::Kinematic(_) if pair.sliding != Sliding::Finite => {
-                    return Err(refuse(
-                        &format!("small-sliding kinematic contact pair {k}"),
-                        "penalty pairs, finite-sliding kinematic ones (small-sliding kinematic \
-                     contact runs in one process)",
-                    ))
-                }
-                Enforce::Kinematic(kin) => (Penalty::default(), Some(kin.clone())),
-            };
+    for pair in model.pairs() {
+        let (penalty, kinematic) = match &pair.enforce {
+            Enforce::Penalty(p) => (p.clone(), None),
+            Enforce::Kinematic(kin) => (Penalty::default(), Some(kin.clone())),
+        };
         let master = model.surface(pair.master)?;
         let set = model.node_set(pair.slave)?;
         let areas = model.node_set_areas(pair.slave)?;
