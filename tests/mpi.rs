@@ -666,6 +666,35 @@ fn kinematic_pairs_across_ranks_give_the_single_process_summary() {
     let _ = std::fs::remove_dir_all(&dir);
 }
 
+/// The start's overclosure adjustment across ranks (`run.adjust_overclosure`): every rank
+/// moves the whole model's overclosed slaves as one process does, then keeps its own and halo
+/// nodes. The block drop started 2 mm into the plate (289 slaves moved, the warning the single
+/// process's), at 1, 2 and 4 ranks to 10⁻¹².
+#[test]
+fn the_overclosure_adjustment_across_ranks_gives_the_single_process_summary() {
+    let dir = std::env::temp_dir().join(format!("abut-mpi-adjusted-{}", std::process::id()));
+    let sunk = edited_scene(
+        &dir,
+        "block_drop.toml",
+        "sunk.toml",
+        &[
+            (
+                "end_time = 0.15",
+                "end_time = 0.03\nadjust_overclosure = true",
+            ),
+            ("origin = [0.0, 0.0, 0.001]", "origin = [0.0, 0.0, -0.002]"),
+        ],
+    );
+    let s = scene_across_ranks(&sunk, "adjusted", 1e-12);
+    let warned = s["warnings"].as_array().unwrap().iter().any(|w| {
+        w.as_str().unwrap().starts_with(
+            "289 slave nodes started overclosed and were moved onto their masters strain-free",
+        )
+    });
+    assert!(warned, "{s}");
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
 /// A balanced pair in a scene: the mesh drop with `balanced = 0.5` (the base's nodes against
 /// the box's bottom too, on their owners): the summary is the single process's.
 #[test]
@@ -687,7 +716,7 @@ fn a_balanced_mesh_drop_across_ranks_gives_the_single_process_summary() {
 }
 
 /// What a distributed run cannot do yet is refused by name (a free rigid body of mesh nodes:
-/// the block drop's plate made free; the start's overclosure adjustment), every rank returns,
+/// the block drop's plate made free, the Hertz sphere's arc made free), every rank returns,
 /// and
 /// mpirun reports the failure.
 #[test]
@@ -702,18 +731,16 @@ fn a_scene_a_distributed_run_cannot_do_is_refused_by_name() {
             "divisions = [30, 30, 0]\nmotion = \"free\"\nmass = 1.0e3",
         )],
     );
-    let adjusted = edited_scene(
+    // in 2D too: the Hertz sphere's arc set free
+    let free_arc = edited_scene(
         &dir,
-        "block_drop.toml",
-        "adjusted.toml",
-        &[(
-            "end_time = 0.15",
-            "end_time = 0.15\nadjust_overclosure = true",
-        )],
+        "hertz_sphere.toml",
+        "free_arc.toml",
+        &[("motion = \"velocity\"", "motion = \"free\"")],
     );
     for (scene, says) in [
         (free, "free rigid body plate"),
-        (adjusted, "run.adjust_overclosure"),
+        (free_arc, "free rigid body sphere"),
     ] {
         let out = dir.join("out");
         let o = mpirun_command()

@@ -26,8 +26,11 @@
 //! the solver's prediction with every rank's share ([`DistributedContact::kinematic_step`],
 //! [`DistributedRigid`]): the single process's arithmetic, at 11–26 collectives an increment.
 //!
-//! Not distributed (refused by name): free rigid bodies of mesh nodes, `adjust_overclosure`.
-//! VTK frames are not written (a warning says so). A node that moves past its pair's search radius
+//! `run.adjust_overclosure`: every rank adjusts the whole model's start as one process does,
+//! then keeps its nodes' positions (once, O(model) on every rank).
+//!
+//! Not distributed (refused by name): free rigid bodies of mesh nodes. VTK frames are not
+//! written (a warning says so). A node that moves past its pair's search radius
 //! within one increment stops the run on every rank with the single process's tunnelling
 //! error.
 
@@ -49,6 +52,7 @@ use super::{
     built_list, clean_run, finish_outputs, open_history, output_error, stress6, ContactNode,
     PartSummary, Progress, RankSummary, Scene, Summary,
 };
+use crate::contact::Contact;
 use crate::device::Device;
 use crate::distributed::{
     agree, all_gather, all_gather_fixed, all_max, all_min, collectives_issued, exchange,
@@ -136,12 +140,6 @@ fn run_into(
             &format!("free rigid body {name}"),
             "rigid bodies held or moving at a set velocity, or free analytical ones (free \
              rigid bodies of mesh nodes run in one process)",
-        ));
-    }
-    if scene.run.adjust_overclosure {
-        return Err(refuse(
-            "run.adjust_overclosure",
-            "a scene without it (the adjustment runs in one process)",
         ));
     }
     let (size, me) = (comm.size() as usize, comm.rank() as u32);
@@ -315,6 +313,26 @@ fn run_into(
 
     let mut account = Account::new(&scene.run, all_min(comm, solver.stable_increment()))?;
     super::run_length::check_length(scene, g, &built.parts, account.dt)?;
+    // the start's overclosure adjustment: every rank moves the whole model's slaves as one
+    // process does (in its order, each on the positions the ones before left), and keeps its
+    // own and halo nodes' (once, O(model) on every rank)
+    let mut adjusted = None;
+    if scene.run.adjust_overclosure && has_contact {
+        let first = account.dt.min(scene.run.end_time - solver.time);
+        let mut x = g.x.clone();
+        let report = Contact::new(device, model)
+            .and_then(|mut c| c.adjust_initial_overclosure(&mut x, &g.body_states(), first));
+        // agreed: a rank's failure stops every rank here
+        let (report, fault) = match report {
+            Ok(r) => (Some(r), None),
+            Err(e) => (None, Some(e)),
+        };
+        agree(comm, fault)?;
+        for (l, &i) in nodes.iter().enumerate() {
+            solver.x[l] = x[i];
+        }
+        adjusted = report;
+    }
     account.ramp = scene
         .quasi_static
         .as_ref()
@@ -474,6 +492,7 @@ fn run_into(
     let friction = sum_over_ranks(comm, &[dissipated])[0];
     let anchoring = anchoring_over_ranks(comm, model, contact.as_ref())?;
     let mut warnings = Vec::new();
+    warnings.extend(adjusted.as_ref().and_then(super::run::adjusted_warning));
     for a in anchoring.iter().filter(|a| !a.unanchored.is_empty()) {
         warnings.push(super::run::unanchored_warning(a));
     }

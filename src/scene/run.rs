@@ -474,14 +474,7 @@ fn ends(
     }
     let anchoring = contact.map(|c| c.anchoring()).unwrap_or_default();
     let mut warnings = Vec::new();
-    if let Some(a) = adjusted.filter(|a| !a.moved.is_empty()) {
-        warnings.push(format!(
-            "{} slave nodes started overclosed and were moved onto their masters strain-free \
-             (run.adjust_overclosure), by up to {:e}",
-            a.moved.len(),
-            a.max_distance
-        ));
-    }
+    warnings.extend(adjusted.as_ref().and_then(adjusted_warning));
     for a in anchoring.iter().filter(|a| !a.unanchored.is_empty()) {
         warnings.push(unanchored_warning(a));
     }
@@ -566,4 +559,16 @@ pub(super) fn unanchored_warning(a: &crate::Anchoring) -> String {
             ""
         }
     )
+}
+
+/// The warning about the slaves the start's overclosure adjustment moved, if it moved any.
+pub(super) fn adjusted_warning(a: &crate::contact::OverclosureReport) -> Option<String> {
+    (!a.moved.is_empty()).then(|| {
+        format!(
+            "{} slave nodes started overclosed and were moved onto their masters strain-free \
+             (run.adjust_overclosure), by up to {:e}",
+            a.moved.len(),
+            a.max_distance
+        )
+    })
 }
