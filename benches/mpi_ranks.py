@@ -10,6 +10,11 @@ so that ranks share the cores alike.
 
     cargo build --release --features mpi
     python3 benches/mpi_ranks.py [--sizes 16,32] [--ranks 1,2,4,8] [--abut target/release/abut]
+        [--enforce penalty|kinematic] [--sliding finite|small]
+
+`--enforce kinematic` runs the contact pair kinematically (the master nodes' corrections summed
+on their owners), `--sliding small` with small sliding (each slave anchored once); the bytes
+then count the correction's exchanges too.
 """
 
 import argparse
@@ -24,15 +29,24 @@ import tempfile
 ROOT = pathlib.Path(__file__).resolve().parent.parent
 
 
-def scene(size: int, work: pathlib.Path) -> pathlib.Path:
-    """The committed scene with the block cut into size x size x size/2 hexahedra."""
+def scene(size: int, work: pathlib.Path, enforce: str, sliding: str) -> pathlib.Path:
+    """The committed scene with the block cut into size x size x size/2 hexahedra, its pair
+    enforced and sliding as asked (kinematic small sliding is frictionless)."""
     text = (ROOT / "scenes" / "block_drop.toml").read_text()
     text, n = re.subn(
         r"divisions = \[16, 16, 8\]", f"divisions = [{size}, {size}, {size // 2}]", text
     )
     if n != 1:
         sys.exit("scenes/block_drop.toml: the block's divisions are not [16, 16, 8]")
-    path = work / f"block_drop_{size}.toml"
+    pair = "friction = 0.3"
+    if enforce == "kinematic" and sliding == "small":
+        pair = 'enforce = "kinematic"\nsliding = "small"'
+    elif enforce == "kinematic":
+        pair += '\nenforce = "kinematic"'
+    elif sliding == "small":
+        pair += '\nsliding = "small"'
+    text = text.replace("friction = 0.3", pair)
+    path = work / f"block_drop_{size}_{enforce}_{sliding}.toml"
     path.write_text(text)
     return path
 
@@ -62,6 +76,8 @@ def main() -> None:
     ap.add_argument("--sizes", default="16,32")
     ap.add_argument("--ranks", default="1,2,4,8")
     ap.add_argument("--abut", default=str(ROOT / "target" / "release" / "abut"))
+    ap.add_argument("--enforce", choices=["penalty", "kinematic"], default="penalty")
+    ap.add_argument("--sliding", choices=["finite", "small"], default="finite")
     args = ap.parse_args()
     sizes = [int(s) for s in args.sizes.split(",")]
     rank_counts = [int(r) for r in args.ranks.split(",")]
@@ -75,7 +91,7 @@ def main() -> None:
     with tempfile.TemporaryDirectory() as tmp:
         work = pathlib.Path(tmp)
         for size in sizes:
-            toml = scene(size, work)
+            toml = scene(size, work, args.enforce, args.sliding)
             tets = 6 * size * size * (size // 2)
             for ranks in [0] + rank_counts:
                 s = run(args.abut, toml, ranks, work / f"out-{size}-{ranks}")

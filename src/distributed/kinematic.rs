@@ -32,6 +32,9 @@ pub struct KinematicStep {
     pub fast_nodes: usize,
     /// The fastest of them, by global id (the same on every rank).
     pub fastest: Option<FastGlobalNode>,
+    /// Bytes this rank sent to other ranks in the correction (the ghosts' state, the master
+    /// nodes' shares and their sums back).
+    pub bytes_sent: usize,
 }
 
 /// One pushed slave's contact on a rank: its place in the pair's slave list, its own index
@@ -118,6 +121,7 @@ impl DistributedContact {
         let mut deepest = 0.0f64;
         let mut fault = None;
         let mut fast = (0usize, [-1.0, 0.0, 0.0, 0.0, 0.0]);
+        self.kinematic_bytes.set(0);
         for k in 0..self.pairs.len() {
             let p = &self.pairs[k];
             let (Some(law), false) = (p.kinematic.clone(), p.of.1) else {
@@ -143,6 +147,7 @@ impl DistributedContact {
             max_overclosure: rows.iter().map(|r| r[0]).fold(0.0, f64::max),
             fast_nodes: rows.iter().map(|r| r[1] as usize).sum(),
             fastest,
+            bytes_sent: self.kinematic_bytes.get(),
         })
     }
 
@@ -173,6 +178,9 @@ impl DistributedContact {
                 out[o].extend(values);
             }
         }
+        let sent = |lists: &[Vec<f64>]| 8 * lists.iter().map(Vec::len).sum::<usize>();
+        self.kinematic_bytes
+            .set(self.kinematic_bytes.get() + sent(&out));
         for list in exchange(&self.comm, &out) {
             for r in list.chunks_exact(K + 2) {
                 // a ghost's owner: the node is this rank's
@@ -206,6 +214,8 @@ impl DistributedContact {
             })
             .collect();
         let counts: Vec<usize> = self.recv.iter().map(|&c| (K + 1) * c).collect();
+        self.kinematic_bytes
+            .set(self.kinematic_bytes.get() + sent(&back));
         let came: Vec<f64> = exchange_known(&self.comm, &back, &counts)
             .into_iter()
             .flatten()

@@ -226,6 +226,8 @@ pub struct DistributedContact {
     /// Local models built (the first, and after every distributed global search that changed
     /// the ghosts).
     rebuilds: u64,
+    /// Bytes the kinematic correction of this increment sent so far.
+    kinematic_bytes: std::cell::Cell<usize>,
 }
 
 /// One pass of a pair on this rank: its own slaves (or, for a balanced pair's second pass, its
@@ -496,6 +498,7 @@ impl DistributedContact {
             searches: 0,
             ghost_ids: Vec::new(),
             rebuilds: 0,
+            kinematic_bytes: std::cell::Cell::new(0),
         })
     }
 

@@ -44,6 +44,8 @@ pub struct DistributedRigid {
     last: Vec<Vec<SlaveCorrection>>,
     /// The largest overclosure the last increment corrected, over every rank.
     deepest: f64,
+    /// Bytes this rank gave the last increment's gathers (its pushed slaves' rows).
+    bytes: usize,
 }
 
 impl DistributedRigid {
@@ -91,6 +93,7 @@ impl DistributedRigid {
             pairs,
             last,
             deepest: 0.0,
+            bytes: 0,
         })
     }
 
@@ -98,6 +101,12 @@ impl DistributedRigid {
     /// units).
     pub fn max_overclosure(&self) -> f64 {
         self.deepest
+    }
+
+    /// Bytes this rank gave the last increment's gathers (its pushed slaves' rows, sent to
+    /// every other rank).
+    pub fn bytes_sent(&self) -> usize {
+        self.bytes
     }
 
     /// This rank's slaves in contact after the last increment: (pair, slave index into the
@@ -183,6 +192,7 @@ impl KinematicCorrector for DistributedRigid {
     ) -> Result<f64> {
         let comm = &self.comm;
         let mut deepest = 0.0f64;
+        let mut bytes = 0;
         for (p, last) in self.pairs.iter().zip(&mut self.last) {
             let body = bodies.get_mut(p.body).ok_or(Error::IndexOutOfRange {
                 what: "rigid body states".into(),
@@ -201,7 +211,10 @@ impl KinematicCorrector for DistributedRigid {
                     &p.areas,
                     p.law.as_ref(),
                     dt,
-                    &mut |rows| Ok(gather_pushed(comm, rows)),
+                    &mut |rows| {
+                        bytes += 8 * ROW * rows.len() * (comm.size() as usize - 1);
+                        Ok(gather_pushed(comm, rows))
+                    },
                 )?;
                 if pass == 0 {
                     for s in c.iter().filter(|s| s.force > 0.0) {
@@ -211,6 +224,7 @@ impl KinematicCorrector for DistributedRigid {
                 }
             }
         }
+        self.bytes = bytes;
         self.deepest = agree_and_max(comm, None, &[deepest])?[0];
         Ok(self.deepest)
     }

@@ -190,6 +190,8 @@ impl DistributedContact {
             })
             .collect();
         let counts: Vec<usize> = self.recv.iter().map(|&c| 6 * c).collect();
+        let sent = 48 * self.send.iter().map(Vec::len).sum::<usize>();
+        self.kinematic_bytes.set(self.kinematic_bytes.get() + sent);
         let flat: Vec<f64> = exchange_known(&self.comm, &out, &counts)
             .into_iter()
             .flatten()

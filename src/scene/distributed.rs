@@ -24,7 +24,7 @@
 //! and keep the anchor through every rebuild of the rank's local model. Kinematic pairs and
 //! pairs against analytical surfaces (their bodies free, held or at a set velocity) correct
 //! the solver's prediction with every rank's share ([`DistributedContact::kinematic_step`],
-//! [`DistributedRigid`]): the single process's arithmetic, at 11–26 collectives an increment.
+//! [`DistributedRigid`]): the single process's arithmetic, at 11–25 collectives an increment.
 //!
 //! `run.adjust_overclosure`: every rank adjusts the whole model's start as one process does,
 //! then keeps its nodes' positions (once, O(model) on every rank).

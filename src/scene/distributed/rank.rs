@@ -123,9 +123,11 @@ impl Ranks for Rank<'_> {
                 own: self.own,
                 deepest: 0.0,
                 fast: (0, None),
+                bytes: 0,
             };
             let stepped = solver.step_with_forces_and(step, &f, &mut corrector);
             limits.kinematic = Some(corrector.deepest);
+            self.contact_bytes += corrector.bytes;
             fastest = corrector.fast.1.map(|f| (f, corrector.fast.0));
             stepped
         } else {
@@ -280,6 +282,8 @@ struct RankCorrector<'a> {
     deepest: f64,
     /// Kinematic slaves past their search radius, and the fastest (every rank's).
     fast: (usize, Option<FastGlobalNode>),
+    /// Bytes the correction sent to other ranks.
+    bytes: usize,
 }
 
 impl KinematicCorrector for RankCorrector<'_> {
@@ -316,9 +320,11 @@ impl KinematicCorrector for RankCorrector<'_> {
             }
             deepest = r.max_overclosure;
             self.fast = (r.fast_nodes, r.fastest);
+            self.bytes += r.bytes_sent;
         }
         if let Some(r) = self.rigid.as_mut() {
             deepest = deepest.max(r.correct(x, v, bodies, dt)?);
+            self.bytes += r.bytes_sent();
         }
         self.deepest = deepest;
         Ok(deepest)
