@@ -763,32 +763,50 @@ fn a_scene_a_distributed_run_cannot_do_is_refused_by_name() {
 }
 
 /// Every rank on a GPU adapter: the mesh drop under `mpirun -n 2` with each rank's search and
-/// penalty on the adapter (lavapipe, llvmpipe's GL) gives the summary and history of a single
+/// penalty on the adapter (lavapipe, llvmpipe's GL), and the block drop made kinematic (each
+/// rank's kinematic search on the adapter, 12 ms), give the summary and history of a single
 /// process on the same adapter.
 #[test]
 fn a_mesh_drop_across_ranks_on_each_gpu_backend_gives_the_single_process_summary() {
+    let dir = std::env::temp_dir().join(format!("abut-mpi-gpu-scenes-{}", std::process::id()));
+    let kinematic = edited_scene(
+        &dir,
+        "block_drop.toml",
+        "kinematic_drop.toml",
+        &[
+            ("friction = 0.3", "friction = 0.3\nenforce = \"kinematic\""),
+            ("end_time = 0.15", "end_time = 0.012"),
+        ],
+    );
     for d in common::gpus() {
         let backend = d.backend_name();
         let backend = backend.as_str();
-        let base =
-            std::env::temp_dir().join(format!("abut-mpi-{}-gpu-{backend}", std::process::id()));
-        let scene = scenes().join("mesh_drop.toml");
-        abut_run_on(&scene, &base.join("single"), 0, Some(backend));
-        abut_run_on(&scene, &base.join("ranks2"), 2, Some(backend));
-        let (single, history) = read(&base.join("single"));
-        let (split, h) = read(&base.join("ranks2"));
-        assert!(
-            split["device"].as_str().unwrap().contains(backend),
-            "{backend}: {}",
-            split["device"]
-        );
-        let peak = single["peak_force"].as_f64().unwrap();
-        assert!(peak > 0.0, "{backend}: no contact");
-        let mut bad = agree(&single, &split, 0.0, 1e-6, "", peak);
-        bad.extend(same_history(&history, &h, 1e-6));
-        assert!(bad.is_empty(), "{backend}, 2 ranks:\n{}", bad.join("\n"));
-        let _ = std::fs::remove_dir_all(&base);
+        for scene in [scenes().join("mesh_drop.toml"), kinematic.clone()] {
+            let base =
+                std::env::temp_dir().join(format!("abut-mpi-{}-gpu-{backend}", std::process::id()));
+            abut_run_on(&scene, &base.join("single"), 0, Some(backend));
+            abut_run_on(&scene, &base.join("ranks2"), 2, Some(backend));
+            let (single, history) = read(&base.join("single"));
+            let (split, h) = read(&base.join("ranks2"));
+            assert!(
+                split["device"].as_str().unwrap().contains(backend),
+                "{backend}: {}",
+                split["device"]
+            );
+            let peak = single["peak_force"].as_f64().unwrap();
+            assert!(peak > 0.0, "{backend}: no contact");
+            let mut bad = agree(&single, &split, 0.0, 1e-6, "", peak);
+            bad.extend(same_history(&history, &h, 1e-6));
+            let name = scene.display();
+            assert!(
+                bad.is_empty(),
+                "{backend}, {name}, 2 ranks:\n{}",
+                bad.join("\n")
+            );
+            let _ = std::fs::remove_dir_all(&base);
+        }
     }
+    let _ = std::fs::remove_dir_all(&dir);
 }
 
 /// A node past its pair's search radius within one increment (the mesh drop's box thrown at
