@@ -453,12 +453,13 @@ fn edited_scene(dir: &Path, scene: &str, name: &str, edits: &[(&str, &str)]) -> 
 /// single process's. In 2D, the axisymmetric Hertz sphere pushed in for 4 time units on a
 /// coarser mesh, at 1, 2 and 4 ranks to 10⁻⁶ (measured: the contact the same bits, the energies
 /// summed in rank order). In 3D, the block drop with its plate driven up into the falling block
-/// at 0.5 m/s, at 1 and 2 ranks to 10⁻⁵ (measured 3·10⁻⁶): the contact's f32 frame is the
-/// master's lower corner snapped to a power of two, and a moving plate's z has every bit, so
-/// each rank's local contact rounds the gaps in a frame of its own (the single process's, with
-/// a fixed plate, is the same bits: `a_mesh_drop_…`). At 4 ranks the impact carries that
-/// round-off into the contact-limited increment, and the run drifts to 5·10⁻⁵ in time and
-/// 3·10⁻³ in the force curve by the end of contact (docs/BENCHMARKS.md).
+/// at 0.5 m/s, at 1 and 2 ranks to 10⁻⁵ (measured 7·10⁻¹⁰ since every rank searches in the
+/// single process's frame): a moving master is searched globally at other increments across
+/// ranks (a node's absolute motion triggers a distributed global search, one process's is
+/// relative to the master), and a global and a local search find the same facet with
+/// last-bit different projections. At 4 ranks the impact carries that round-off into the
+/// contact-limited increment, and the run drifts to 5·10⁻⁵ in time and 3·10⁻³ in the force
+/// curve by the end of contact (docs/BENCHMARKS.md).
 #[test]
 fn a_rigid_body_at_a_set_velocity_across_ranks_gives_the_single_process_summary() {
     let dir = std::env::temp_dir().join(format!("abut-mpi-bodies-{}", std::process::id()));

@@ -1,6 +1,8 @@
-//! Small and infinitesimal sliding: a pair's anchors (penalty or kinematic) taken out of one
-//! Contact and put into another over the same slaves, keyed by model node ids (a distributed run's local model,
-//! rebuilt with other ghosts, keeps the anchors its first search found).
+//! What a distributed run carries into a rank's local contact and sets on it: small and
+//! infinitesimal sliding's anchors (penalty or kinematic) taken out of one Contact and put into
+//! another over the same slaves, keyed by model node ids (a local model rebuilt with other
+//! ghosts keeps the anchors its first search found); and the penalty searches' frames, chosen
+//! from the whole master.
 
 use super::Contact;
 use crate::error::{Error, Result};
@@ -76,6 +78,20 @@ impl Contact {
         }
         for k in self.penalty_runs(pair)? {
             self.pairs[k].search.set_anchor_reach(reach);
+        }
+        Ok(())
+    }
+
+    /// The frame of each penalty pass of pair `pair`: `origin`, chosen where the whole master's
+    /// extent was `span` (see `SearchStage::give_frame`).
+    pub(crate) fn give_search_frame(
+        &mut self,
+        pair: PairId,
+        origin: [f64; 3],
+        span: f64,
+    ) -> Result<()> {
+        for k in self.penalty_runs(pair)? {
+            self.pairs[k].search.give_frame(origin, span);
         }
         Ok(())
     }

@@ -263,6 +263,12 @@ struct PairTopology {
     corrections: Vec<(f64, [f64; 3])>,
     /// A kinematic pair: each slave's behind-a-free-edge flag, carried through rebuilds.
     behind: Option<Vec<bool>>,
+    /// The own nodes (own indices) of the pass's master facets.
+    own_masters: Vec<usize>,
+    /// A penalty pass: its search's frame (origin, and the master's extent it was chosen at)
+    /// as one process's search would choose it from the whole master, the same on every rank
+    /// (see [`DistributedContact::step`]).
+    frame: Option<([f64; 3], f64)>,
 }
 
 impl PairTopology {
@@ -289,6 +295,18 @@ struct GlobalAnchor {
     facet: [u64; 4],
     node: u64,
     anchor: KeyedAnchor,
+}
+
+/// The own nodes (own indices, increasing) of `facets` (global ids).
+fn own_nodes_of(facets: &[[u64; 4]], index: &HashMap<u64, usize>) -> Vec<usize> {
+    let mut own: Vec<usize> = facets
+        .iter()
+        .flatten()
+        .filter_map(|g| index.get(g).copied())
+        .collect();
+    own.sort_unstable();
+    own.dedup();
+    own
 }
 
 fn bad(name: &'static str, value: String, expected: &'static str) -> Error {
@@ -413,30 +431,35 @@ impl DistributedContact {
                 Some(a) => a.clone(),
                 None => vec![whole.mean_facet_area(); slaves.len()],
             };
-            let pass =
-                |slaves: Vec<usize>, areas: Vec<f64>, weight: f64, facets, reverse| PairTopology {
-                    keys: match (&p.slave_keys, reverse) {
-                        (Some(k), false) => k.clone(),
-                        _ => slaves.iter().map(|&i| model.ids[i]).collect(),
-                    },
-                    slaves,
-                    areas,
-                    weight,
-                    facets,
-                    radius: p.search_radius,
-                    penalty: p.penalty.clone(),
-                    friction: p.friction.clone(),
-                    interval: p.search_interval,
-                    local: None,
-                    of: (k, reverse),
-                    sliding: p.sliding,
-                    anchor_reach: p.anchor_reach,
-                    anchors: None,
-                    kinematic: p.kinematic.clone(),
-                    dissipated: 0.0,
-                    corrections: Vec::new(),
-                    behind: None,
-                };
+            let pass = |slaves: Vec<usize>,
+                        areas: Vec<f64>,
+                        weight: f64,
+                        facets: Vec<[u64; 4]>,
+                        reverse| PairTopology {
+                own_masters: own_nodes_of(&facets, &index),
+                frame: None,
+                keys: match (&p.slave_keys, reverse) {
+                    (Some(k), false) => k.clone(),
+                    _ => slaves.iter().map(|&i| model.ids[i]).collect(),
+                },
+                slaves,
+                areas,
+                weight,
+                facets,
+                radius: p.search_radius,
+                penalty: p.penalty.clone(),
+                friction: p.friction.clone(),
+                interval: p.search_interval,
+                local: None,
+                of: (k, reverse),
+                sliding: p.sliding,
+                anchor_reach: p.anchor_reach,
+                anchors: None,
+                kinematic: p.kinematic.clone(),
+                dissipated: 0.0,
+                corrections: Vec::new(),
+                behind: None,
+            };
             let weight = slave.as_ref().map_or(1.0, |s| s.1);
             pairs.push(pass(slaves, areas, weight, master, false));
             if let Some((slave_facets, w)) = slave {

@@ -47,9 +47,13 @@ impl DistributedContact {
         } else {
             0.0
         };
-        // one collective: the faults, the largest motion and the smallest increment
-        let agreed = agree_and_max(&self.comm, fault, &[moved, -dt])?;
+        // one collective: the faults, the largest motion, the smallest increment, and each
+        // penalty pass's master box and whether a master node is far from its frame
+        let mut values = vec![moved, -dt];
+        values.extend(self.frame_records(x));
+        let agreed = agree_and_max(&self.comm, fault, &values)?;
         let (moved, dt_min) = (agreed[0], -agreed[1]);
+        self.move_frames(&agreed[2..]);
         let mut fault = None;
         if self.dt_ref.is_none() {
             // the automatic stiffness' reference: the first increment, on every rank
@@ -99,6 +103,11 @@ impl DistributedContact {
         // the fastest pair node here: (distance / radius, global id, pair, distance, radius)
         let mut fast = (0usize, [-1.0, 0.0, 0.0, 0.0, 0.0]);
         if let Some(c) = self.contact.as_mut() {
+            for p in &self.pairs {
+                if let (Some(id), Some((origin, span))) = (p.local, p.frame) {
+                    c.give_search_frame(id, origin, span)?;
+                }
+            }
             let lx: Vec<[f64; 3]> = x.iter().chain(&gx).copied().collect();
             let lv: Vec<[f64; 3]> = v.iter().chain(&gv).copied().collect();
             match c.penalty_step(&lx, &lv, dt) {
@@ -208,5 +217,66 @@ impl DistributedContact {
             .chain(&self.ghost_masses)
             .copied()
             .collect()
+    }
+
+    /// Per penalty pass, what one process's search frame is decided from, for the agreement
+    /// (each the largest over the ranks): the own master nodes' box at `x` (its lower corner
+    /// negated) and whether one of them is farther from the frame than 16 times the extent it
+    /// was chosen at (1) or not (0).
+    fn frame_records(&self, x: &[[f64; 3]]) -> Vec<f64> {
+        let mut out = Vec::new();
+        for p in self.pairs.iter().filter(|p| p.kinematic.is_none()) {
+            let (mut lo, mut hi) = ([f64::INFINITY; 3], [f64::NEG_INFINITY; 3]);
+            for &i in &p.own_masters {
+                for a in 0..3 {
+                    lo[a] = lo[a].min(x[i][a]);
+                    hi[a] = hi[a].max(x[i][a]);
+                }
+            }
+            let far = p.frame.is_some_and(|(o, span)| {
+                p.own_masters
+                    .iter()
+                    .any(|&i| (0..3).any(|a| (x[i][a] - o[a]).abs() > 16.0 * span))
+            });
+            out.extend([
+                -lo[0],
+                -lo[1],
+                -lo[2],
+                hi[0],
+                hi[1],
+                hi[2],
+                far as u8 as f64,
+            ]);
+        }
+        out
+    }
+
+    /// Each penalty pass's frame from the agreed records ([`Self::frame_records`]): chosen
+    /// from the whole master's box at the first increment, and moved when a master node is far
+    /// from it — where and when one process's search chooses and moves its own
+    /// (`crate::plan::frame::origin`, `SearchStage::rebase_if_far`), so every rank's local
+    /// contact rounds in the single process's frame.
+    fn move_frames(&mut self, records: &[f64]) {
+        let dim = if self.two_d { 2 } else { 3 };
+        let passes = self.pairs.iter_mut().filter(|p| p.kinematic.is_none());
+        for (p, r) in passes.zip(records.chunks_exact(7)) {
+            let (lo, hi) = ([-r[0], -r[1], -r[2]], [r[3], r[4], r[5]]);
+            if p.frame.is_some() && r[6] == 0.0 {
+                continue;
+            }
+            let Ok(origin) = crate::plan::frame::origin(lo, hi, p.radius, dim) else {
+                continue;
+            };
+            if p.frame.is_some_and(|(o, _)| o == origin) {
+                continue;
+            }
+            let span = (0..dim as usize).map(|a| hi[a] - lo[a]).fold(0.0, f64::max);
+            let span = if span > 0.0 && span.is_finite() {
+                span
+            } else {
+                p.radius
+            };
+            p.frame = Some((origin, span));
+        }
     }
 }

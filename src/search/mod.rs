@@ -257,6 +257,10 @@ pub struct SearchStage {
     resident_origin: Option<[f64; 3]>,
     /// Device-resident increments: the master's extent when the frame was chosen.
     resident_span: f64,
+    /// The frame's origin and the master's extent it was chosen at, given by the caller in
+    /// place of this search's own choice (a distributed run's local model: the whole master's,
+    /// the same on every rank); `None`: chosen here.
+    given_frame: Option<([f64; 3], f64)>,
     /// The structure the global search uses (never `Auto`: resolved when set).
     structure: SearchStructure,
     /// The largest side of an active facet's nodes' box at the model's positions (model
@@ -467,6 +471,7 @@ impl SearchStage {
             anchor_reach: None,
             resident_origin: None,
             resident_span: 0.0,
+            given_frame: None,
             structure: SearchStructure::Tree,
             largest_facet,
         };

@@ -31,7 +31,10 @@ impl SearchStage {
         }
         let (lo, hi) = ([lo.x, lo.y, lo.z], [hi.x, hi.y, hi.z]);
         let n_facets = self.facets.len();
-        let frame = crate::plan::frame::origin(lo, hi, self.radius, self.dim)?;
+        let frame = match self.given_frame {
+            Some((origin, _)) => origin,
+            None => crate::plan::frame::origin(lo, hi, self.radius, self.dim)?,
+        };
         let nodes = self.in_frame(positions, frame)?;
         let in_frame = |x: [f64; 3]| {
             let [a, b, c] = [0, 1, 2].map(|k| (x[k] - frame[k]) as f32);

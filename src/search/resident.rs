@@ -34,7 +34,10 @@ impl SearchStage {
         };
         let interval = self.schedule.interval;
         self.resident_origin = Some(origin);
-        self.resident_span = self.master_span(positions);
+        self.resident_span = match self.given_frame {
+            Some((_, span)) => span,
+            None => self.master_span(positions),
+        };
         self.runs = 0;
         exec.make_resident(&prep, interval, anchored, frame)
     }
@@ -132,6 +135,16 @@ impl SearchStage {
         positions: &[[f64; 3]],
     ) -> Result<bool> {
         let o = self.resident_frame();
+        // a frame the caller gives moves when the caller moves it
+        if let Some((origin, span)) = self.given_frame {
+            if origin == o {
+                return Ok(false);
+            }
+            self.resident_origin = Some(origin);
+            self.resident_span = span;
+            exec.request_global();
+            return Ok(true);
+        }
         let reach = 16.0 * self.resident_span;
         let masters = &self.motion_nodes[self.master_start()..];
         let far = masters.iter().any(|&n| {
@@ -186,5 +199,14 @@ impl SearchStage {
     /// The origin of the device-resident frame (model units).
     pub(crate) fn resident_frame(&self) -> [f64; 3] {
         self.resident_origin.unwrap_or([0.0; 3])
+    }
+
+    /// Gives the frame's origin and the master's extent it stands for (see
+    /// `SearchStage::given_frame`): used from the next increment that makes the search
+    /// resident, and a change of it from an increment on is a rebase (a global search), as
+    /// [`Self::rebase_if_far`] makes one.
+    #[cfg(feature = "mpi")]
+    pub(crate) fn give_frame(&mut self, origin: [f64; 3], span: f64) {
+        self.given_frame = Some((origin, span));
     }
 }
