@@ -2,6 +2,7 @@
 //! predictor/corrector): a [`Contact`]'s kinematic pairs in one process, or a rank's share of
 //! them across ranks.
 
+use super::rigid::{fold_rows, ResultantRow};
 use super::Solver;
 use crate::contact::Contact;
 use crate::error::{Error, Result};
@@ -17,6 +18,18 @@ pub trait KinematicCorrector {
     /// none is left waiting in the correction's exchanges.
     fn agree(&mut self, fault: Option<Error>) -> Result<()> {
         fault.map_or(Ok(()), Err)
+    }
+
+    /// Rows of the resultants of free rigid bodies of mesh nodes (`(body, rows)`: the body's
+    /// index, its rows at this rank's nodes, each keyed by its place in this rank's share of
+    /// the body's nodes) made every rank's: each list gathered over the ranks and ordered by
+    /// the node's place in the whole body, so that its sum is one process's. One process has
+    /// them all already.
+    fn share_body_rows(
+        &mut self,
+        rows: Vec<(usize, Vec<ResultantRow>)>,
+    ) -> Result<Vec<Vec<ResultantRow>>> {
+        Ok(rows.into_iter().map(|(_, r)| r).collect())
     }
 
     /// Corrects the predicted positions `x`, velocities `v` and rigid bodies `bodies` (index
@@ -85,5 +98,42 @@ impl Solver {
             });
         }
         self.advance(dt, None, Some(contact_forces), Some(corrector))
+    }
+
+    /// Each rigid body's resultant force and moment (about its reference point) of the nodal
+    /// forces `f` at the current positions: over the nodes this rank counts, and for a free
+    /// body of mesh nodes split over ranks over every rank's, through `share`.
+    pub(super) fn body_resultants<'c>(
+        &self,
+        f: &[[f64; 3]],
+        share: Option<&mut (dyn KinematicCorrector + 'c)>,
+    ) -> Result<Vec<([f64; 3], [f64; 3])>> {
+        let own = self.counted.as_ref().map(|(nodes, _)| nodes.as_slice());
+        let mut out: Vec<_> = self
+            .bodies
+            .iter()
+            .map(|b| b.resultant(&self.x, f, own))
+            .collect();
+        let split: Vec<usize> = (0..self.bodies.len())
+            .filter(|&k| own.is_some() && self.bodies[k].free_meshed())
+            .collect();
+        if split.is_empty() {
+            return Ok(out);
+        }
+        let Some(share) = share else {
+            return Err(Error::BadParameter {
+                name: "free rigid body",
+                value: "of mesh nodes, split over ranks".into(),
+                expected: "a rank share that sums its resultants over the ranks",
+            });
+        };
+        let rows = split
+            .iter()
+            .map(|&k| (k, self.bodies[k].resultant_rows(&self.x, f, own)))
+            .collect();
+        for (&k, rows) in split.iter().zip(share.share_body_rows(rows)?) {
+            out[k] = fold_rows(&rows);
+        }
+        Ok(out)
     }
 }

@@ -16,7 +16,7 @@ pub use prescribed::{Amplitude, LoadCurve, Motion, Prescribed};
 pub use corrector::KinematicCorrector;
 pub use elements::{Element, Material};
 pub use hexahedron::{Hex8, Integration};
-pub use rigid::{BodyMotion, SolverBody};
+pub use rigid::{BodyMotion, ResultantRow, SolverBody};
 
 use crate::contact::Contact;
 use crate::error::{Error, Result};
@@ -408,15 +408,12 @@ impl Solver {
         let mut body_ext = vec![([0.0; 3], [0.0; 3]); self.bodies.len()];
         // a rank's share of the model counts its own nodes' forces on a body (the ranks' shares
         // add up to the body's), and one rank its kinetic energy
-        let own = self.counted.as_ref().map(|(nodes, _)| nodes.as_slice());
-        let body_pen: Vec<([f64; 3], [f64; 3])> = self
-            .bodies
-            .iter()
-            .map(|b| b.resultant(&self.x, &penalty, own))
-            .collect();
+        let mut corrector = corrector;
+        let body_pen = self.body_resultants(&penalty, corrector.as_deref_mut())?;
+        let body_loads = self.body_resultants(&self.loads, corrector.as_deref_mut())?;
         for (k, b) in self.bodies.iter_mut().enumerate() {
             let (fp, mp) = body_pen[k];
-            let (fl, ml) = b.resultant(&self.x, &self.loads, own);
+            let (fl, ml) = body_loads[k];
             let ml = [0, 1, 2].map(|a| factor * (ml[a] + b.moment[a]));
             let g = self.gravity.map(|g| g * b.mass);
             let f_ext = [0, 1, 2].map(|a| factor * (fl[a] + b.load[a]) + g[a]);
@@ -468,6 +465,8 @@ impl Solver {
                         kinematic[i][a] = self.mass[i] * (self.v[i][a] - v_pred[i][a]) / dv_scale;
                     }
                 }
+                // the corrections of the carried nodes, as impulses on their bodies
+                let impulses = self.body_resultants(&kinematic, Some(&mut *c))?;
                 for (k, b) in self.bodies.iter_mut().enumerate() {
                     // corrections of the analytical surface, and of the carried nodes taken
                     // as an impulse on the body
@@ -477,8 +476,7 @@ impl Solver {
                         dv[a] = states[k].velocity[a] - pred[k].velocity[a];
                         dw[a] = states[k].angular_velocity[a] - pred[k].angular_velocity[a];
                     }
-                    let own = self.counted.as_ref().map(|(nodes, _)| nodes.as_slice());
-                    let (j, h) = b.resultant(&self.x, &kinematic, own);
+                    let (j, h) = impulses[k];
                     let iw = rigid::world_inertia(&b.state.rotation, &b.inertia);
                     let from_nodes = rigid::solve3(&iw, h);
                     let mut force = [0.0; 3];
@@ -536,6 +534,11 @@ impl Solver {
             }
         }
         for (k, b) in self.bodies.iter().enumerate() {
+            // a free body of mesh nodes split over ranks: every rank has its whole resultants,
+            // one counts their work
+            if self.counted.is_some() && b.free_meshed() && !self.bodies_counted {
+                continue;
+            }
             let v_now = [0, 1, 2].map(|a| now(bodies_old[k].velocity[a], b.state.velocity[a]));
             let w_now = [0, 1, 2].map(|a| {
                 now(

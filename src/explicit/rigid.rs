@@ -237,16 +237,49 @@ impl SolverBody {
         f: &[[f64; 3]],
         counted: Option<&[bool]>,
     ) -> ([f64; 3], [f64; 3]) {
-        let mut force = V3::new(0.0, 0.0, 0.0);
-        let mut moment = V3::new(0.0, 0.0, 0.0);
-        for &n in &self.nodes {
-            if counted.is_some_and(|c| !c[n as usize]) {
+        fold_rows(&self.resultant_rows(x, f, counted))
+    }
+
+    /// The rows [`Self::resultant`] adds, in the order of the body's nodes: each counted node
+    /// with a force (a zero force changes no sum: left out).
+    pub(crate) fn resultant_rows(
+        &self,
+        x: &[[f64; 3]],
+        f: &[[f64; 3]],
+        counted: Option<&[bool]>,
+    ) -> Vec<ResultantRow> {
+        let mut rows = Vec::new();
+        for (k, &n) in self.nodes.iter().enumerate() {
+            if counted.is_some_and(|c| !c[n as usize]) || f[n as usize] == [0.0; 3] {
                 continue;
             }
             let fi = v3(f[n as usize]);
-            force = force + fi;
-            moment = moment + (v3(x[n as usize]) - v3(self.state.position)).cross(fi);
+            let mi = (v3(x[n as usize]) - v3(self.state.position)).cross(fi);
+            rows.push((k as u32, fi.to_array(), mi.to_array()));
         }
-        (force.to_array(), moment.to_array())
+        rows
+    }
+}
+
+/// One node's share of a body's resultant: its place in the body's nodes, its force, and the
+/// force's moment about the body's reference point.
+pub type ResultantRow = (u32, [f64; 3], [f64; 3]);
+
+/// The resultant force and moment of `rows`, added in their order.
+pub(crate) fn fold_rows(rows: &[ResultantRow]) -> ([f64; 3], [f64; 3]) {
+    let mut force = V3::new(0.0, 0.0, 0.0);
+    let mut moment = V3::new(0.0, 0.0, 0.0);
+    for (_, f, m) in rows {
+        force = force + v3(*f);
+        moment = moment + v3(*m);
+    }
+    (force.to_array(), moment.to_array())
+}
+
+impl SolverBody {
+    /// Whether this body is free and carries mesh nodes (split over ranks, its resultants need
+    /// every rank's nodes).
+    pub(crate) fn free_meshed(&self) -> bool {
+        self.motion == BodyMotion::Free && !self.nodes.is_empty()
     }
 }

@@ -29,8 +29,12 @@
 //! `run.adjust_overclosure`: every rank adjusts the whole model's start as one process does,
 //! then keeps its nodes' positions (once, O(model) on every rank).
 //!
-//! Not distributed (refused by name): free rigid bodies of mesh nodes. VTK frames are not
-//! written (a warning says so). A node that moves past its pair's search radius
+//! A free rigid body of mesh nodes has its resultants (contact, loads, kinematic impulses)
+//! gathered as per-node rows from every rank and summed in its nodes' order, as one process
+//! sums them.
+//!
+//! Not distributed (refused by name): a free rigid body of mesh nodes in a scene with penalty
+//! contact. VTK frames are not written (a warning says so). A node that moves past its pair's search radius
 //! within one increment stops the run on every rank with the single process's tunnelling
 //! error.
 
@@ -59,7 +63,7 @@ use crate::distributed::{
     DistributedContact, DistributedRigid, RankModel,
 };
 use crate::error::{Error, Result};
-use crate::explicit::{BodyMotion, Element, LoadCurve, Prescribed, Solver};
+use crate::explicit::{Element, LoadCurve, Prescribed, Solver};
 
 fn refuse(what: &str, expected: &'static str) -> Error {
     Error::BadParameter {
@@ -130,16 +134,19 @@ fn run_into(
     // every rank builds the same scene, so every rank refuses the same things
     let built = scene.build()?;
     let (g, model) = (&built.solver, &built.model);
-    // a free body of mesh nodes would need its resultant summed over the ranks that hold
-    // them; an analytical one carries no node, and every rank moves it alike
-    let free_meshed =
-        |b: &&crate::explicit::SolverBody| b.motion == BodyMotion::Free && !b.nodes.is_empty();
-    if let Some(k) = g.bodies.iter().position(|b| free_meshed(&b)) {
+    // a free body of mesh nodes has its resultants summed over the ranks that hold its nodes;
+    // under penalty contact its springs would need the whole body's effective mass and
+    // stable increment on every rank
+    let penalty = model
+        .pairs()
+        .iter()
+        .any(|p| matches!(p.enforce, crate::model::Enforce::Penalty(_)));
+    if let Some(k) = g.bodies.iter().position(|b| penalty && b.free_meshed()) {
         let name = built.bodies.iter().find(|b| b.1 == k).map_or("", |b| &b.0);
         return Err(refuse(
-            &format!("free rigid body {name}"),
-            "rigid bodies held or moving at a set velocity, or free analytical ones (free \
-             rigid bodies of mesh nodes run in one process)",
+            &format!("free rigid body {name} with penalty contact"),
+            "free rigid bodies of mesh nodes with kinematic contact, or none (under penalty \
+             contact a free rigid body of mesh nodes runs in one process)",
         ));
     }
     let (size, me) = (comm.size() as usize, comm.rank() as u32);
@@ -209,6 +216,15 @@ fn run_into(
     // the rigid bodies, held or moving at a set velocity: every rank moves them alike and
     // carries its own nodes of theirs (a body's nodes belong to no element, so to no halo);
     // rank 0 counts their kinetic energy, each rank the contact forces on its own nodes
+    let body_keys: Vec<Vec<u32>> = g
+        .bodies
+        .iter()
+        .map(|b| {
+            (0..b.nodes.len() as u32)
+                .filter(|&j| is_local[b.nodes[j as usize] as usize])
+                .collect()
+        })
+        .collect();
     for b in &g.bodies {
         let mut local = b.clone();
         (local.nodes, local.offsets) = b
@@ -350,6 +366,7 @@ fn run_into(
         part_nodes: &part_nodes,
         x0: &x0,
         bodies: &built.bodies,
+        body_keys: &body_keys,
         bodies0: &bodies0,
         at_peak: bodies0.clone(),
         history,

@@ -8,10 +8,11 @@ use mpi::topology::SimpleCommunicator;
 
 use super::sum_over_ranks;
 use crate::distributed::{
-    agree, all_max, exchange_known, DistributedContact, DistributedRigid, FastGlobalNode,
+    agree, all_gather, all_max, exchange_known, DistributedContact, DistributedRigid,
+    FastGlobalNode,
 };
 use crate::error::{Error, Result};
-use crate::explicit::{KinematicCorrector, Solver};
+use crate::explicit::{KinematicCorrector, ResultantRow, Solver};
 use crate::kinematic::BodyState;
 use crate::scene::account::Account;
 use crate::scene::increments::{Limits, Ranks, Sums};
@@ -66,6 +67,8 @@ pub(super) struct Rank<'a> {
     pub(super) x0: &'a [[f64; 3]],
     /// The rigid bodies' names and indices, as the history lists them.
     pub(super) bodies: &'a [(String, usize)],
+    /// Per rigid body, each of this rank's nodes' place in the whole body's node list.
+    pub(super) body_keys: &'a [Vec<u32>],
     /// The bodies' reference points at the start.
     pub(super) bodies0: &'a [[f64; 3]],
     /// The bodies' reference points when the contact force peaked.
@@ -110,14 +113,18 @@ impl Ranks for Rank<'_> {
                 return Err(tunnelling(&f, r.fast_nodes, k, t_start));
             }
         }
+        // kinematic contact, or a free body of mesh nodes whose resultants every rank sums
         let kinematic = self.rigid.is_some()
             || self
                 .contact
                 .as_ref()
-                .is_some_and(|c| c.has_kinematic_pairs());
+                .is_some_and(|c| c.has_kinematic_pairs())
+            || solver.bodies.iter().any(|b| b.free_meshed());
         let mut fastest = None;
         let stepped = if kinematic {
             let mut corrector = RankCorrector {
+                comm: self.comm,
+                body_keys: self.body_keys,
                 contact: self.contact.as_mut(),
                 rigid: self.rigid.as_mut(),
                 own: self.own,
@@ -274,6 +281,9 @@ fn tunnelling(f: &FastGlobalNode, count: usize, k: usize, t_start: f64) -> Error
 /// distributed contact (its own nodes), then the pairs against analytical surfaces, in the
 /// order one process corrects them.
 struct RankCorrector<'a> {
+    comm: &'a SimpleCommunicator,
+    /// Per rigid body, each of this rank's nodes' place in the whole body's node list.
+    body_keys: &'a [Vec<u32>],
     contact: Option<&'a mut DistributedContact>,
     rigid: Option<&'a mut DistributedRigid>,
     /// Own nodes (local indices), in the distributed contact's order.
@@ -287,6 +297,35 @@ struct RankCorrector<'a> {
 }
 
 impl KinematicCorrector for RankCorrector<'_> {
+    /// Every rank's rows, each body's in its nodes' order (one collective pair: the counts and
+    /// the rows).
+    fn share_body_rows(
+        &mut self,
+        rows: Vec<(usize, Vec<ResultantRow>)>,
+    ) -> Result<Vec<Vec<ResultantRow>>> {
+        // each row keyed by its node's place in the whole body
+        let keys = self.body_keys;
+        let flat: Vec<f64> = rows
+            .iter()
+            .enumerate()
+            .flat_map(|(i, (body, list))| {
+                list.iter().flat_map(move |(j, f, m)| {
+                    let key = keys[*body][*j as usize];
+                    [i as f64, key as f64, f[0], f[1], f[2], m[0], m[1], m[2]]
+                })
+            })
+            .collect();
+        let (all, _) = all_gather(self.comm, &flat);
+        let mut out = vec![Vec::new(); rows.len()];
+        for r in all.chunks_exact(8) {
+            out[r[0] as usize].push((r[1] as u32, [r[2], r[3], r[4]], [r[5], r[6], r[7]]));
+        }
+        for list in &mut out {
+            list.sort_by_key(|row| row.0);
+        }
+        Ok(out)
+    }
+
     fn has_kinematic_pairs(&self) -> bool {
         self.rigid.is_some()
             || self
