@@ -173,8 +173,9 @@ impl DistributedContact {
             } else {
                 let o = owner_of[l - n_own];
                 debug_assert_ne!(o, me);
-                out[o].push(self.ghost_ids[l - n_own] as f64);
-                out[o].push(key as f64);
+                // ids and keys travel as their bits (any u64, exactly)
+                out[o].push(f64::from_bits(self.ghost_ids[l - n_own]));
+                out[o].push(f64::from_bits(key));
                 out[o].extend(values);
             }
         }
@@ -184,12 +185,12 @@ impl DistributedContact {
         for list in exchange(&self.comm, &out) {
             for r in list.chunks_exact(K + 2) {
                 // a ghost's owner: the node is this rank's
-                let Some(&l) = self.index.get(&(r[0] as u64)) else {
+                let Some(&l) = self.index.get(&r[0].to_bits()) else {
                     continue;
                 };
                 let mut values = [0.0; K];
                 values.copy_from_slice(&r[2..]);
-                rows.push((l, r[1] as u64, values));
+                rows.push((l, r[1].to_bits(), values));
             }
         }
         rows.sort_by_key(|r| (r.0, r.1));

@@ -154,7 +154,8 @@ impl FastGlobalNode {
     fn record(&self) -> [f64; 5] {
         [
             self.distance / self.radius,
-            self.node as f64,
+            // the id travels as its bits (any u64, exactly)
+            f64::from_bits(self.node),
             self.pair as f64,
             self.distance,
             self.radius,
@@ -172,7 +173,7 @@ impl FastGlobalNode {
                 _ => Some(f),
             })
             .map(|f| Self {
-                node: f[1] as u64,
+                node: f[1].to_bits(),
                 pair: f[2] as usize,
                 distance: f[3],
                 radius: f[4],

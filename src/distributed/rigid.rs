@@ -135,7 +135,8 @@ fn gather_pushed(comm: &SimpleCommunicator, mine: Vec<Pushed>) -> Vec<Pushed> {
         .flat_map(|p| {
             let (n, r) = (p.normal, p.arm);
             [
-                p.key as f64,
+                // the key travels as its bits (any u64, exactly)
+                f64::from_bits(p.key),
                 p.mass,
                 p.area,
                 n.x,
@@ -154,7 +155,7 @@ fn gather_pushed(comm: &SimpleCommunicator, mine: Vec<Pushed>) -> Vec<Pushed> {
         .chunks_exact(ROW)
         .enumerate()
         .map(|(i, r)| Pushed {
-            key: r[0] as u64,
+            key: r[0].to_bits(),
             index: i
                 .checked_sub(before)
                 .and_then(|j| mine.get(j))
