@@ -113,6 +113,7 @@ fn main() {
         positions: own.iter().map(|&i| x0[i]).collect(),
         masses: own.iter().map(|&i| masses[i]).collect(),
         pairs,
+        rigid_parts: Vec::new(),
     };
     let device = Device::cpu();
     if case == "bad-slave" || case == "bad-facet" {

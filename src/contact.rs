@@ -24,10 +24,15 @@ mod kinematic_share;
 pub(crate) use kinematic_share::AnchorPlane;
 mod kinematic_step;
 mod overclosure;
+mod rank_rows;
 mod report;
 mod resident;
 mod restart;
 mod rigid_parts;
+#[cfg(feature = "mpi")]
+pub(crate) use rank_rows::row_increment;
+#[cfg(feature = "mpi")]
+pub(crate) use rigid_parts::RigidPartRun;
 mod slave_order;
 mod warnings;
 pub use report::{
@@ -109,6 +114,11 @@ pub struct Contact {
     dim: u32,
     /// The model's rigid parts, followed from the positions of host-array increments.
     parts: Vec<rigid_parts::RigidPartRun>,
+    /// The rigid parts' states given for the next host-array increments instead (a rank's
+    /// local model holds part of a body: its state comes from the whole body).
+    given_parts: Option<Vec<crate::penalty::RigidState>>,
+    /// What a rank's local model reads back beside the forces ([`rank_rows::NodeRows`]).
+    rows: rank_rows::NodeRows,
 }
 
 impl Contact {
@@ -290,6 +300,8 @@ impl Contact {
             host_increments: 0,
             dim: model.dim(),
             parts: rigid_parts::RigidPartRun::all(model),
+            given_parts: None,
+            rows: rank_rows::NodeRows::default(),
         })
     }
 

@@ -8,7 +8,7 @@ use crate::penalty::RigidState;
 
 /// One rigid part: its nodes, the reference frame its rotation is read from, and its state.
 #[derive(Clone, Debug)]
-pub(super) struct RigidPartRun {
+pub(crate) struct RigidPartRun {
     nodes: Vec<u32>,
     /// Three nodes spanning the part (a, the farthest from a, the farthest from the line a–b).
     triple: [u32; 3],
@@ -89,47 +89,74 @@ fn centroid(x: &[[f64; 3]], nodes: &[u32]) -> [f64; 3] {
 impl RigidPartRun {
     /// The model's rigid parts at the model's positions.
     pub(super) fn all(model: &Model) -> Vec<Self> {
-        let x = model.positions();
         let planar = model.dim() == 2;
         model
             .rigid_parts()
             .iter()
-            .map(|p| {
-                let a = p.nodes[0];
-                let far = |from: &dyn Fn(u32) -> f64| {
-                    // the first of the largest, for the same choice every run
-                    let mut best = (a, -1.0);
-                    for &n in &p.nodes {
-                        let d = from(n);
-                        if d > best.1 {
-                            best = (n, d);
-                        }
-                    }
-                    best.0
-                };
-                let b = far(&|n| (v(x, n) - v(x, a)).length2());
-                let c = far(&|n| (v(x, n) - v(x, a)).cross(v(x, b) - v(x, a)).length2());
-                let triple = [a, b, c];
-                let inv_inertia0 = inverse(&p.inertia);
-                Self {
-                    nodes: p.nodes.clone(),
-                    triple,
-                    frame0: frame(x, triple, planar),
-                    inv_inertia0,
-                    planar,
-                    state: RigidState {
-                        centre: centroid(x, &p.nodes),
-                        inv_mass: 1.0 / p.mass,
-                        inv_inertia: inv_inertia0,
-                    },
-                }
-            })
+            .map(|p| Self::of(p, model.positions(), planar))
             .collect()
+    }
+
+    /// One whole part by itself: its nodes at `positions` (in the part's order, the same on
+    /// every rank), its `mass` and `inertia` (about the nodes' centroid, model frame at those
+    /// positions) — the same state, to the bit, as the part in a whole model gets from the same
+    /// positions of its nodes (a distributed run's local models hold only some of them).
+    #[cfg(feature = "mpi")]
+    pub(crate) fn whole(
+        positions: &[[f64; 3]],
+        mass: f64,
+        inertia: [[f64; 3]; 3],
+        planar: bool,
+    ) -> Self {
+        let part = crate::model::RigidPart {
+            nodes: (0..positions.len() as u32).collect(),
+            mass,
+            inertia,
+        };
+        Self::of(&part, positions, planar)
+    }
+
+    /// The state of the last positions given.
+    #[cfg(feature = "mpi")]
+    pub(crate) fn state(&self) -> RigidState {
+        self.state
+    }
+
+    /// Part `p` at the positions `x` (indexed by its nodes' ids).
+    fn of(p: &crate::model::RigidPart, x: &[[f64; 3]], planar: bool) -> Self {
+        let a = p.nodes[0];
+        let far = |from: &dyn Fn(u32) -> f64| {
+            // the first of the largest, for the same choice every run
+            let mut best = (a, -1.0);
+            for &n in &p.nodes {
+                let d = from(n);
+                if d > best.1 {
+                    best = (n, d);
+                }
+            }
+            best.0
+        };
+        let b = far(&|n| (v(x, n) - v(x, a)).length2());
+        let c = far(&|n| (v(x, n) - v(x, a)).cross(v(x, b) - v(x, a)).length2());
+        let triple = [a, b, c];
+        let inv_inertia0 = inverse(&p.inertia);
+        Self {
+            nodes: p.nodes.clone(),
+            triple,
+            frame0: frame(x, triple, planar),
+            inv_inertia0,
+            planar,
+            state: RigidState {
+                centre: centroid(x, &p.nodes),
+                inv_mass: 1.0 / p.mass,
+                inv_inertia: inv_inertia0,
+            },
+        }
     }
 
     /// Follows the part to positions `x`: its centroid, and its inverse inertia turned by the
     /// rotation R = F·F₀ᵀ of its frame (J = R·J₀·Rᵀ).
-    pub(super) fn update(&mut self, x: &[[f64; 3]]) {
+    pub(crate) fn update(&mut self, x: &[[f64; 3]]) {
         let f = frame(x, self.triple, self.planar);
         let r = mul(&f, &transpose(&self.frame0));
         self.state.centre = centroid(x, &self.nodes);

@@ -170,6 +170,8 @@ impl DistributedContact {
         };
         let positions: Vec<[f64; 3]> = x.iter().chain(gx).copied().collect();
         model.add_nodes(&positions, &self.local_masses())?;
+        // the rigid parts it holds nodes of (their states come from the whole parts)
+        self.parts.add_to(&mut model, &local_of)?;
         // the friction each slave carries, from the contact being replaced (same slaves, same
         // order: a slave never changes rank)
         let mut carried = Vec::with_capacity(self.pairs.len());
@@ -246,6 +248,15 @@ impl DistributedContact {
         self.contact = if any {
             let mut c = Contact::new(&self.device, &model)?;
             c.request_outputs(self.outputs);
+            // the rows of the bound: a node's and a body's are summed over the ranks
+            c.request_rows(true);
+            if self.parts.len() > 0 {
+                for (k, p) in self.pairs.iter().enumerate() {
+                    if let (Some(id), None) = (p.local, &p.kinematic) {
+                        c.set_rigid_slave_share(id, self.parts.pass_slaves(k))?;
+                    }
+                }
+            }
             if let Some(dt) = self.dt_ref {
                 c.set_reference_increment(dt)?;
             }

@@ -37,6 +37,13 @@
 //! the master nodes' shares of the corrections are summed on their owners in the pair's slave
 //! order — the single process's bits — and sent back to the ranks holding them as ghosts.
 //!
+//! Rigid parts of mesh nodes ([`RankModel::rigid_parts`], free bodies' meshed surfaces under
+//! penalty contact): every rank follows each whole part from its nodes' positions, given before
+//! each increment ([`DistributedContact::move_rigid_parts`]), so the springs on it see the whole
+//! body. The stable increment's node-wise bound is taken on rows summed over the ranks: each
+//! ghost's row goes back to its owner with its force, and each body's share travels in the
+//! increment's agreement.
+//!
 //! Slave areas (the penalty's area per slave) are fixed at construction from the whole surface
 //! at the start positions, as a single process fixes them when it builds its contact: the
 //! given [`RankPair::slave_areas`], else the mean area of the whole master surface's facets.
@@ -65,6 +72,8 @@ mod rigid;
 pub use rigid::{DistributedRigid, RankRigidPair};
 mod ghosts;
 mod outputs;
+mod parts;
+pub use parts::RankRigidPart;
 mod share;
 pub use outputs::SlaveOutput;
 pub use share::{RankBalance, RankModel, RankPair};
@@ -229,6 +238,8 @@ pub struct DistributedContact {
     rebuilds: u64,
     /// Bytes the kinematic correction of this increment sent so far.
     kinematic_bytes: std::cell::Cell<usize>,
+    /// The rigid parts of mesh nodes ([`RankModel::rigid_parts`]).
+    parts: parts::RankParts,
 }
 
 /// One pass of a pair on this rank: its own slaves (or, for a balanced pair's second pass, its
@@ -495,6 +506,8 @@ impl DistributedContact {
                 Some(l)
             })
             .collect();
+        let pass_slaves: Vec<usize> = pairs.iter().map(|p| p.slaves.len()).collect();
+        let parts = parts::RankParts::new(&comm, &model.rigid_parts, model.two_d, &pass_slaves)?;
         let size = comm.size() as usize;
         Ok(Self {
             comm,
@@ -523,6 +536,7 @@ impl DistributedContact {
             ghost_ids: Vec::new(),
             rebuilds: 0,
             kinematic_bytes: std::cell::Cell::new(0),
+            parts,
         })
     }
 

@@ -17,6 +17,10 @@ pub struct RankModel {
     /// The model is 2D (the x–y plane; [`crate::Model::new_2d`]): its facets are segments,
     /// `[a, b, NO_GLOBAL_NODE, NO_GLOBAL_NODE]`. The same on every rank.
     pub two_d: bool,
+    /// The rigid parts of mesh nodes (free bodies' meshed surfaces), the same on every rank;
+    /// give their nodes' positions before every increment
+    /// ([`super::DistributedContact::move_rigid_parts`]).
+    pub rigid_parts: Vec<super::RankRigidPart>,
 }
 
 /// One penalty pair's share on a rank.

@@ -102,15 +102,33 @@ impl DistributedContact {
         let mut ghost_forces = vec![[0.0; 3]; gx.len()];
         // the fastest pair node here: (distance / radius, global id, pair, distance, radius)
         let mut fast = (0usize, [-1.0, 0.0, 0.0, 0.0, 0.0]);
+        // the rows of the bound: the local model's largest, each own node's (its ghosts'
+        // shares added below) and each rigid part's share here
+        let n_local = n_own + gx.len();
+        let (mut local_max, mut damping) = (0.0f32, 0.0f32);
+        let mut rows = vec![0.0f32; n_local];
+        let mut body_rows = vec![0.0f32; self.parts.len()];
+        if !self.parts.take_moved() && fault.is_none() {
+            fault = Some(bad(
+                "rigid part positions",
+                "not given for this increment".into(),
+                "DistributedContact::move_rigid_parts before every step",
+            ));
+        }
         if let Some(c) = self.contact.as_mut() {
+            // a fault here is agreed below, never returned alone
+            let mut given = Ok(());
             for p in &self.pairs {
                 if let (Some(id), Some((origin, span))) = (p.local, p.frame) {
-                    c.give_search_frame(id, origin, span)?;
+                    given = given.and_then(|_| c.give_search_frame(id, origin, span));
                 }
+            }
+            if !self.parts.local.is_empty() {
+                given = given.and_then(|_| c.give_rigid_states(self.parts.local_states()));
             }
             let lx: Vec<[f64; 3]> = x.iter().chain(&gx).copied().collect();
             let lv: Vec<[f64; 3]> = v.iter().chain(&gv).copied().collect();
-            match c.penalty_step(&lx, &lv, dt) {
+            match given.and_then(|_| c.penalty_step(&lx, &lv, dt)) {
                 Err(e) => fault = Some(e),
                 Ok(r) => {
                     forces.copy_from_slice(&r.forces[..n_own]);
@@ -118,6 +136,16 @@ impl DistributedContact {
                     stable = r.stable_dt;
                     over = r.max_overclosure;
                     active = r.active;
+                    let (r, z) = c.node_rows();
+                    if r.len() == n_local {
+                        rows.copy_from_slice(r);
+                        damping = z;
+                        local_max = r.iter().fold(0.0, |m, &v| m.max(v));
+                        // a body's row is on its lowest local node, which has none of its own
+                        for &(k, rep) in &self.parts.local {
+                            body_rows[k] = std::mem::take(&mut rows[rep as usize]);
+                        }
+                    }
                     let rep = c.report();
                     if let Some(f) = rep.fastest {
                         fast = (rep.fast_nodes, self.fast_global(&f).record());
@@ -129,32 +157,37 @@ impl DistributedContact {
                 fault = self.take_anchors().err();
             }
         }
-        // ghosts' forces back to their owners, added there in rank order
+        // ghosts' forces and rows back to their owners, added there in rank order
         let mut back: Vec<Vec<f64>> = Vec::with_capacity(self.recv.len());
-        let mut at = 0;
+        let mut at = n_own;
         for &count in &self.recv {
             back.push(
-                ghost_forces[at..at + count]
-                    .iter()
-                    .flat_map(|f| f.iter().copied())
+                (at..at + count)
+                    .flat_map(|l| {
+                        let f = ghost_forces[l - n_own];
+                        [f[0], f[1], f[2], rows[l] as f64]
+                    })
                     .collect(),
             );
             at += count;
         }
         bytes += 8 * back.iter().map(Vec::len).sum::<usize>();
-        let counts: Vec<usize> = self.send.iter().map(|l| 3 * l.len()).collect();
+        let counts: Vec<usize> = self.send.iter().map(|l| 4 * l.len()).collect();
         let came = exchange_known(&self.comm, &back, &counts);
         for (q, list) in self.send.iter().enumerate() {
             for (k, &i) in list.iter().enumerate() {
                 for a in 0..3 {
-                    forces[i][a] += came[q][3 * k + a];
+                    forces[i][a] += came[q][4 * k + a];
                 }
+                rows[i] += came[q][4 * k + 3] as f32;
             }
         }
-        // one collective: the faults and each rank's stable increment, overclosure, counts
-        // and fastest node, folded in rank order (the same bits on every rank)
+        let own_max = rows[..n_own].iter().fold(0.0f32, |m, &v| m.max(v));
+        // one collective: the faults and each rank's stable increment, overclosure, counts,
+        // fastest node and rows of the bound, folded in rank order (the same bits on every
+        // rank)
         let [f0, f1, f2, f3, f4] = fast.1;
-        let record = [
+        let mut record = vec![
             stable,
             over,
             active as f64,
@@ -164,12 +197,19 @@ impl DistributedContact {
             f2,
             f3,
             f4,
+            local_max as f64,
+            own_max as f64,
+            damping as f64,
         ];
+        record.extend(body_rows.iter().map(|&r| r as f64));
         let rows = agree_and_gather(&self.comm, fault, &record)?;
         let fastest = FastGlobalNode::fastest_of(&rows, 4);
         self.last = DistributedStep {
             forces,
-            stable_dt: rows.iter().map(|r| r[0]).fold(f64::INFINITY, f64::min),
+            stable_dt: rows
+                .iter()
+                .map(|r| r[0])
+                .fold(summed_rows_bound(&rows), f64::min),
             max_overclosure: rows.iter().map(|r| r[1]).fold(0.0, f64::max),
             active: rows.iter().map(|r| r[2] as usize).sum(),
             global_search: global,
@@ -278,5 +318,29 @@ impl DistributedContact {
             };
             p.frame = Some((origin, span));
         }
+    }
+}
+
+/// The stable increment of the node-wise bound on the rows summed over the ranks, from the
+/// agreed records (from column 9: each rank's local model's largest row, its own nodes' largest
+/// summed row, the damping ratio, then each rigid part's row there): infinite unless a sum
+/// exceeds every row a local model saw — then a node held by several ranks, or a body, carries
+/// a larger row than any one rank's bound counted, as one process's bound would.
+fn summed_rows_bound(records: &[Vec<f64>]) -> f64 {
+    let local = records.iter().map(|r| r[9] as f32).fold(0.0f32, f32::max);
+    let mut summed = records.iter().map(|r| r[10] as f32).fold(0.0f32, f32::max);
+    let damping = records.iter().map(|r| r[11] as f32).fold(0.0f32, f32::max);
+    let parts = records.first().map_or(0, |r| r.len() - 12);
+    for k in 0..parts {
+        let body = records
+            .iter()
+            .map(|r| r[12 + k] as f32)
+            .fold(0.0f32, |s, v| s + v);
+        summed = summed.max(body);
+    }
+    if summed > local {
+        crate::contact::row_increment(summed, damping)
+    } else {
+        f64::INFINITY
     }
 }

@@ -42,6 +42,9 @@ pub struct SolverBody {
     pub load: [f64; 3],
     /// A moment on the body, model force × length units; free bodies only.
     pub moment: [f64; 3],
+    /// How many mesh nodes the whole body carries (a rank's share of it carries only some of
+    /// them, or none, in `nodes`).
+    pub(crate) whole_nodes: usize,
 }
 
 pub(crate) fn v3(a: [f64; 3]) -> V3<f64> {
@@ -157,6 +160,7 @@ impl SolverBody {
             inertia,
             state,
             motion,
+            whole_nodes: nodes.len(),
             nodes,
             offsets,
             locked: [false; 3],
@@ -277,9 +281,22 @@ pub(crate) fn fold_rows(rows: &[ResultantRow]) -> ([f64; 3], [f64; 3]) {
 }
 
 impl SolverBody {
+    /// Where the body puts nodes at body-frame `offsets` now (as [`Self::place_nodes`] puts
+    /// its own): a whole body's nodes on a rank that carries only some of them.
+    pub(crate) fn positions_of(&self, offsets: &[[f64; 3]]) -> Vec<[f64; 3]> {
+        let s = &self.state;
+        offsets
+            .iter()
+            .map(|off| {
+                let r = rotate(&s.rotation, *off);
+                [0, 1, 2].map(|a| s.position[a] + r[a])
+            })
+            .collect()
+    }
+
     /// Whether this body is free and carries mesh nodes (split over ranks, its resultants need
     /// every rank's nodes).
     pub(crate) fn free_meshed(&self) -> bool {
-        self.motion == BodyMotion::Free && !self.nodes.is_empty()
+        self.motion == BodyMotion::Free && self.whole_nodes > 0
     }
 }

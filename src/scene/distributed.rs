@@ -31,10 +31,11 @@
 //!
 //! A free rigid body of mesh nodes has its resultants (contact, loads, kinematic impulses)
 //! gathered as per-node rows from every rank and summed in its nodes' order, as one process
-//! sums them.
+//! sums them. Under penalty contact every rank also places all of its nodes from the body's
+//! state and follows the whole body from them ([`DistributedContact::move_rigid_parts`]), so
+//! its springs see the whole body's mass and inertia as one process's do.
 //!
-//! Not distributed (refused by name): a free rigid body of mesh nodes in a scene with penalty
-//! contact. VTK frames are not written (a warning says so). A node that moves past its pair's search radius
+//! VTK frames are not written (a warning says so). A node that moves past its pair's search radius
 //! within one increment stops the run on every rank with the single process's tunnelling
 //! error.
 
@@ -60,7 +61,7 @@ use crate::contact::Contact;
 use crate::device::Device;
 use crate::distributed::{
     agree, all_gather, all_gather_fixed, all_max, all_min, collectives_issued, exchange,
-    DistributedContact, DistributedRigid, RankModel,
+    DistributedContact, DistributedRigid, RankModel, RankRigidPart,
 };
 use crate::error::{Error, Result};
 use crate::explicit::{Element, LoadCurve, Prescribed, Solver};
@@ -134,21 +135,6 @@ fn run_into(
     // every rank builds the same scene, so every rank refuses the same things
     let built = scene.build()?;
     let (g, model) = (&built.solver, &built.model);
-    // a free body of mesh nodes has its resultants summed over the ranks that hold its nodes;
-    // under penalty contact its springs would need the whole body's effective mass and
-    // stable increment on every rank
-    let penalty = model
-        .pairs()
-        .iter()
-        .any(|p| matches!(p.enforce, crate::model::Enforce::Penalty(_)));
-    if let Some(k) = g.bodies.iter().position(|b| penalty && b.free_meshed()) {
-        let name = built.bodies.iter().find(|b| b.1 == k).map_or("", |b| &b.0);
-        return Err(refuse(
-            &format!("free rigid body {name} with penalty contact"),
-            "free rigid bodies of mesh nodes with kinematic contact, or none (under penalty \
-             contact a free rigid body of mesh nodes runs in one process)",
-        ));
-    }
     let (size, me) = (comm.size() as usize, comm.rank() as u32);
     let n = g.x.len();
     let part = crate::partition::recursive_bisection(&g.x, size)?;
@@ -269,6 +255,20 @@ fn run_into(
                 masses: own.iter().map(|&l| solver.mass[l]).collect(),
                 pairs,
                 two_d: model.dim() == 2,
+                rigid_parts: model
+                    .rigid_parts()
+                    .iter()
+                    .map(|p| RankRigidPart {
+                        ids: p.nodes.iter().map(|&n| n as u64).collect(),
+                        positions: p
+                            .nodes
+                            .iter()
+                            .map(|&n| model.positions()[n as usize])
+                            .collect(),
+                        mass: p.mass,
+                        inertia: p.inertia,
+                    })
+                    .collect(),
             },
         )?)
     } else {
@@ -309,6 +309,24 @@ fn run_into(
             (mine, total, p.count)
         })
         .collect();
+    // each rigid part of the contact model is a free body of mesh nodes with the same nodes
+    let rigid_parts: Vec<(usize, Vec<[f64; 3]>)> = model
+        .rigid_parts()
+        .iter()
+        .map(|p| {
+            let b = g
+                .bodies
+                .iter()
+                .position(|b| b.nodes == p.nodes)
+                .ok_or_else(|| {
+                    refuse(
+                        "a rigid part that is no free body's nodes",
+                        "rigid parts from the scene's free bodies",
+                    )
+                })?;
+            Ok((b, g.bodies[b].offsets.clone()))
+        })
+        .collect::<Result<_>>()?;
     let x0 = solver.x.clone();
     let mut built_list = built_list(scene, g, &built.slaves);
     built_list.push(format!(
@@ -368,6 +386,7 @@ fn run_into(
         bodies: &built.bodies,
         body_keys: &body_keys,
         bodies0: &bodies0,
+        rigid_parts: &rigid_parts,
         at_peak: bodies0.clone(),
         history,
         halo_bytes: 0,

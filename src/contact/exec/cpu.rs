@@ -254,6 +254,7 @@ impl IncrementExec for CpuExec {
         x: &[Vec<[f32; 4]>],
         v: &[[f32; 4]],
         outputs: bool,
+        rows: bool,
     ) -> Result<HostResults> {
         // the host's arrays are the CPU path's own: the increment runs on them, summing into
         // fresh forces that are handed back
@@ -279,7 +280,8 @@ impl IncrementExec for CpuExec {
                 });
             }
         }
-        Ok((forces, st, raws, plans))
+        let rows = if rows { r.rows.clone() } else { Vec::new() };
+        Ok((forces, st, raws, plans, rows))
     }
 
     fn run_split(

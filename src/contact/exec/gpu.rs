@@ -217,7 +217,7 @@ impl GpuExec {
             f: buffer("forces", n * 16, state),
             staging: buffer(
                 "increment readback",
-                n * 16 + STATS_BYTES + 64 * inc.pairs.len() as u64 + outputs,
+                n * 16 + STATS_BYTES + n * 4 + 64 * inc.pairs.len() as u64 + outputs,
                 wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
             ),
         }
@@ -231,6 +231,7 @@ impl GpuExec {
         x: &[Vec<[f32; 4]>],
         v: &[[f32; 4]],
         outputs: bool,
+        rows: bool,
     ) -> Result<HostResults> {
         let ctx = self.ctx.clone();
         for (b, xk) in host.x.iter().zip(x) {
@@ -256,6 +257,12 @@ impl GpuExec {
         enc.copy_buffer_to_buffer(&host.f, 0, staging, 0, forces_bytes);
         enc.copy_buffer_to_buffer(self.inc()?.stats(), 0, staging, forces_bytes, STATS_BYTES);
         let mut offset = forces_bytes + STATS_BYTES;
+        let rows_bytes = if rows { self.n_nodes as u64 * 4 } else { 0 };
+        if rows {
+            enc.copy_buffer_to_buffer(self.inc()?.rows(), 0, staging, offset, rows_bytes);
+        }
+        let rows_at = offset as usize;
+        offset += rows_bytes;
         // every pair's schedule words
         let heads = offset;
         for pair in &self.pairs {
@@ -317,7 +324,8 @@ impl GpuExec {
                 }
             })
             .collect();
-        Ok((forces, st, raws, plans))
+        let rows = bytemuck::pod_collect_to_vec(&bytes[rows_at..rows_at + rows_bytes as usize]);
+        Ok((forces, st, raws, plans, rows))
     }
 }
 
@@ -386,12 +394,13 @@ impl IncrementExec for GpuExec {
         x: &[Vec<[f32; 4]>],
         v: &[[f32; 4]],
         outputs: bool,
+        rows: bool,
     ) -> Result<HostResults> {
         let host = match self.host.take() {
             Some(h) => h,
             None => self.host_buffers(inc),
         };
-        let done = self.host_increment_on(&host, inc, x, v, outputs);
+        let done = self.host_increment_on(&host, inc, x, v, outputs, rows);
         self.host = Some(host);
         done
     }

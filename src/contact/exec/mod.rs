@@ -35,7 +35,16 @@ pub(crate) struct PairRaw {
 
 /// What a host-array increment reads back: the forces (one `[f32; 4]` per model node), the
 /// statistics, each pair's raw results (with outputs only) and each pair's schedule words.
-pub(crate) type HostResults = (Vec<[f32; 4]>, IncrementStats, Vec<PairRaw>, Vec<Vec<u32>>);
+/// What a host-array increment reads back: the forces, the statistics, each pair's raw results
+/// (when outputs were asked for), each pair's schedule words, and the node-wise bound's rows
+/// per model node (when asked for; else empty).
+pub(crate) type HostResults = (
+    Vec<[f32; 4]>,
+    IncrementStats,
+    Vec<PairRaw>,
+    Vec<Vec<u32>>,
+    Vec<f32>,
+);
 
 /// One increment's inputs beside the caller's arrays: the pairs (their stages and setups, in
 /// the executor's pair order), their penalty parameters this increment, and which pairs the
@@ -114,13 +123,15 @@ pub(crate) trait IncrementExec: wgpu::WasmNotSend {
     fn record(&mut self, io: ResidentIo<'_>, inc: &Increment<'_>) -> Result<()>;
     /// One host-array increment on abut's own arrays: positions `x` (per pair, relative to its
     /// search's frame), velocities `v`; the forces, statistics, schedule words and (with
-    /// `outputs`) each pair's raw results come back in one readback.
+    /// `outputs`) each pair's raw results and (with `rows`) the node-wise bound's rows come back
+    /// in one readback.
     fn host_increment(
         &mut self,
         inc: &Increment<'_>,
         x: &[Vec<[f32; 4]>],
         v: &[[f32; 4]],
         outputs: bool,
+        rows: bool,
     ) -> Result<HostResults>;
     /// One device-resident increment on the caller's GPU buffers, its entries `..first_gpu`
     /// run by `twin` (a CPU executor whose pairs were made resident as these) and the rest

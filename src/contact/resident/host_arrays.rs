@@ -122,9 +122,18 @@ impl Contact {
             .iter()
             .map(|pr| !pr.search.is_anchored() && pr.schedule.surely_local(&pr.search, positions))
             .collect();
-        // the rigid parts where the positions have them
-        for p in &mut self.parts {
-            p.update(positions);
+        // the rigid parts where the positions have them, or as given from the whole bodies
+        match &self.given_parts {
+            Some(states) => {
+                for (p, s) in self.parts.iter_mut().zip(states) {
+                    p.state = *s;
+                }
+            }
+            None => {
+                for p in &mut self.parts {
+                    p.update(positions);
+                }
+            }
         }
         let params = self.pair_params(dt);
         let inc = Increment {
@@ -132,7 +141,10 @@ impl Contact {
             params: &params,
             local_only: &local_only,
         };
-        let (forces, st, raws, plans) = self.exec.host_increment(&inc, &xs, &v, outputs)?;
+        let (forces, st, raws, plans, rows) =
+            self.exec
+                .host_increment(&inc, &xs, &v, outputs, self.rows.wanted)?;
+        self.rows.take(rows, st.damping);
         for (pr, plan) in self.pairs.iter_mut().zip(&plans) {
             pr.schedule.update(plan, &pr.search, positions);
         }

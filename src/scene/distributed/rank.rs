@@ -71,6 +71,9 @@ pub(super) struct Rank<'a> {
     pub(super) body_keys: &'a [Vec<u32>],
     /// The bodies' reference points at the start.
     pub(super) bodies0: &'a [[f64; 3]],
+    /// Per rigid part of the contact model (a free body of mesh nodes): its body's index and
+    /// the whole body's node offsets (every rank places all of its nodes).
+    pub(super) rigid_parts: &'a [(usize, Vec<[f64; 3]>)],
     /// The bodies' reference points when the contact force peaked.
     pub(super) at_peak: Vec<[f64; 3]>,
     /// Rank 0's history file.
@@ -100,6 +103,14 @@ impl Ranks for Rank<'_> {
         let mut limits = Limits::default();
         if let Some(c) = self.contact.as_mut() {
             c.request_outputs(last);
+            if !self.rigid_parts.is_empty() {
+                let at: Vec<Vec<[f64; 3]>> = self
+                    .rigid_parts
+                    .iter()
+                    .map(|(b, offsets)| solver.bodies[*b].positions_of(offsets))
+                    .collect();
+                c.move_rigid_parts(&at)?;
+            }
             let ox: Vec<[f64; 3]> = self.own.iter().map(|&l| solver.x[l]).collect();
             let ov: Vec<[f64; 3]> = self.own.iter().map(|&l| solver.v[l]).collect();
             let r = c.step(&ox, &ov, step)?;
