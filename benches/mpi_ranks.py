@@ -10,11 +10,12 @@ so that ranks share the cores alike.
 
     cargo build --release --features mpi
     python3 benches/mpi_ranks.py [--sizes 16,32] [--ranks 1,2,4,8] [--abut target/release/abut]
-        [--enforce penalty|kinematic] [--sliding finite|small]
+        [--enforce penalty|kinematic] [--sliding finite|small] [--plate fixed|free]
 
 `--enforce kinematic` runs the contact pair kinematically (the master nodes' corrections summed
 on their owners), `--sliding small` with small sliding (each slave anchored once); the bytes
-then count the correction's exchanges too.
+then count the correction's exchanges too. `--plate free` makes the plate a free rigid body of
+1,000 kg (its resultants summed over the ranks; under penalty every rank follows the whole body).
 """
 
 import argparse
@@ -29,9 +30,10 @@ import tempfile
 ROOT = pathlib.Path(__file__).resolve().parent.parent
 
 
-def scene(size: int, work: pathlib.Path, enforce: str, sliding: str) -> pathlib.Path:
+def scene(size: int, work: pathlib.Path, enforce: str, sliding: str, plate: str) -> pathlib.Path:
     """The committed scene with the block cut into size x size x size/2 hexahedra, its pair
-    enforced and sliding as asked (kinematic small sliding is frictionless)."""
+    enforced and sliding as asked (kinematic small sliding is frictionless), its plate fixed or
+    a free body."""
     text = (ROOT / "scenes" / "block_drop.toml").read_text()
     text, n = re.subn(
         r"divisions = \[16, 16, 8\]", f"divisions = [{size}, {size}, {size // 2}]", text
@@ -46,7 +48,15 @@ def scene(size: int, work: pathlib.Path, enforce: str, sliding: str) -> pathlib.
     elif sliding == "small":
         pair += '\nsliding = "small"'
     text = text.replace("friction = 0.3", pair)
-    path = work / f"block_drop_{size}_{enforce}_{sliding}.toml"
+    if plate == "free":
+        text, n = re.subn(
+            r"divisions = \[30, 30, 0\]",
+            'divisions = [30, 30, 0]\nmotion = "free"\nmass = 1.0e3',
+            text,
+        )
+        if n != 1:
+            sys.exit("scenes/block_drop.toml: the plate's divisions are not [30, 30, 0]")
+    path = work / f"block_drop_{size}_{enforce}_{sliding}_{plate}.toml"
     path.write_text(text)
     return path
 
@@ -78,6 +88,7 @@ def main() -> None:
     ap.add_argument("--abut", default=str(ROOT / "target" / "release" / "abut"))
     ap.add_argument("--enforce", choices=["penalty", "kinematic"], default="penalty")
     ap.add_argument("--sliding", choices=["finite", "small"], default="finite")
+    ap.add_argument("--plate", choices=["fixed", "free"], default="fixed")
     args = ap.parse_args()
     sizes = [int(s) for s in args.sizes.split(",")]
     rank_counts = [int(r) for r in args.ranks.split(",")]
@@ -91,7 +102,7 @@ def main() -> None:
     with tempfile.TemporaryDirectory() as tmp:
         work = pathlib.Path(tmp)
         for size in sizes:
-            toml = scene(size, work, args.enforce, args.sliding)
+            toml = scene(size, work, args.enforce, args.sliding, args.plate)
             tets = 6 * size * size * (size // 2)
             for ranks in [0] + rank_counts:
                 s = run(args.abut, toml, ranks, work / f"out-{size}-{ranks}")

@@ -137,3 +137,109 @@ impl Solver {
         Ok(out)
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::explicit::{BodyMotion, SolverBody};
+
+    /// A rank's corrector that records what the solver asked of it.
+    #[derive(Default)]
+    struct Recorder {
+        /// Whether it has kinematic pairs (else it only gathers the bodies' rows: a free meshed
+        /// body under penalty contact).
+        kinematic: bool,
+        /// Body-row gathers (collectives across ranks).
+        gathers: usize,
+        /// The fault agreed on, as text.
+        agreed: Option<String>,
+    }
+
+    impl KinematicCorrector for Recorder {
+        fn has_kinematic_pairs(&self) -> bool {
+            self.kinematic
+        }
+
+        fn agree(&mut self, fault: Option<Error>) -> Result<()> {
+            self.agreed = fault.as_ref().map(|e| e.to_string());
+            fault.map_or(Ok(()), Err)
+        }
+
+        fn share_body_rows(
+            &mut self,
+            rows: Vec<(usize, Vec<ResultantRow>)>,
+        ) -> Result<Vec<Vec<ResultantRow>>> {
+            self.gathers += 1;
+            Ok(rows.into_iter().map(|(_, r)| r).collect())
+        }
+
+        fn correct(
+            &mut self,
+            _: &mut [[f64; 3]],
+            _: &mut [[f64; 3]],
+            _: &mut [BodyState],
+            _: f64,
+        ) -> Result<f64> {
+            Ok(0.0)
+        }
+    }
+
+    /// Spoils a solver's input; returns the increment to take.
+    type Spoil = fn(&mut Solver) -> f64;
+
+    /// A rank's share: two nodes on a free body, one free node; counted as a rank's.
+    fn rank_share() -> Solver {
+        let x = vec![[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 0.0, 1.0]];
+        let mut s = Solver::new(x.clone(), Vec::new(), &[1.0; 3]).unwrap();
+        let i = [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]];
+        let body = SolverBody::new(2.0, i, [0.5, 0.0, 0.0], vec![0, 1], &x, BodyMotion::Free);
+        s.add_body(body.unwrap()).unwrap();
+        s.counted = Some((vec![true; 3], Vec::new()));
+        s
+    }
+
+    /// A fault found before the increment (a bad load, gravity or damping set on one rank, a
+    /// bad increment) does not return before the increment's exchanges: the rank goes through
+    /// the body-row gathers every other rank makes and returns the fault where the ranks agree
+    /// (the corrector's agreement; with no kinematic pair, the caller's after the step) — else
+    /// the others would wait in a gather this rank skipped, for ever. Without a corrector it
+    /// returns at once, as before.
+    #[test]
+    fn a_fault_before_the_increment_is_agreed_after_every_exchange() {
+        let cases: [(&str, Spoil); 4] = [
+            ("loads", |s| {
+                s.loads[2] = [f64::NAN, 0.0, 0.0];
+                1e-3
+            }),
+            ("gravity", |s| {
+                s.gravity = [0.0, 0.0, f64::INFINITY];
+                1e-3
+            }),
+            ("damping", |s| {
+                s.damping = -1.0;
+                1e-3
+            }),
+            ("dt", |_| f64::NAN),
+        ];
+        for ((name, spoil), kinematic) in cases.into_iter().flat_map(|c| [(c, true), (c, false)]) {
+            let mut s = rank_share();
+            let dt = spoil(&mut s);
+            let mut rank = Recorder {
+                kinematic,
+                ..Recorder::default()
+            };
+            let err = s
+                .step_with_forces_and(dt, &[[0.0; 3]; 3], &mut rank)
+                .expect_err(name);
+            assert!(err.to_string().contains(name), "{name}: {err}");
+            assert_eq!(rank.gathers, 2, "{name}: both resultant gathers made");
+            if kinematic {
+                let agreed = rank.agreed.as_deref().unwrap_or_default();
+                assert!(agreed.contains(name), "{name}: agreed on {agreed:?}");
+            }
+            let mut one = rank_share();
+            spoil(&mut one);
+            assert!(one.step(dt, None).is_err(), "{name}");
+        }
+    }
+}

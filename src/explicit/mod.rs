@@ -304,14 +304,25 @@ impl Solver {
         given: Option<&[[f64; 3]]>,
         corrector: Option<&mut dyn KinematicCorrector>,
     ) -> Result<()> {
-        if !(dt.is_finite() && dt > 0.0) {
-            return Err(Error::BadParameter {
+        let early = if !(dt.is_finite() && dt > 0.0) {
+            Err(Error::BadParameter {
                 name: "dt",
                 value: dt.to_string(),
                 expected: "must be finite and positive",
-            });
+            })
+        } else {
+            self.check_inputs()
+        };
+        // a rank of a distributed run goes on through the increment's exchanges with its fault
+        // (the arithmetic on bad input harms nothing) and returns it where the ranks agree, so
+        // that none is left waiting in an exchange it would have skipped
+        let mut deferred = None;
+        if let Err(e) = early {
+            if corrector.is_none() {
+                return Err(e);
+            }
+            deferred = Some(e);
         }
-        self.check_inputs()?;
         let (mut f_int, internal) = self.internal_forces();
         let n = self.x.len();
         // bulk viscosity acts with the half-step velocities (the last ones known); its power is
@@ -441,7 +452,7 @@ impl Solver {
         let corrector = corrector
             .or(contact.map(|c| c as &mut dyn KinematicCorrector))
             .filter(|c| c.has_kinematic_pairs());
-        let diverged = self.check_diverged().err();
+        let diverged = deferred.or_else(|| self.check_diverged().err());
         let diverged = match (&corrector, diverged) {
             (None, Some(e)) => return Err(e),
             (_, d) => d,

@@ -283,6 +283,7 @@ pub(crate) fn fold_rows(rows: &[ResultantRow]) -> ([f64; 3], [f64; 3]) {
 impl SolverBody {
     /// Where the body puts nodes at body-frame `offsets` now (as [`Self::place_nodes`] puts
     /// its own): a whole body's nodes on a rank that carries only some of them.
+    #[cfg(feature = "mpi")]
     pub(crate) fn positions_of(&self, offsets: &[[f64; 3]]) -> Vec<[f64; 3]> {
         let s = &self.state;
         offsets
