@@ -8,6 +8,9 @@ use crate::contact::Contact;
 use crate::error::{Error, Result};
 use crate::kinematic::BodyState;
 
+/// A body's resultant force and moment (about its reference point).
+type Resultant = ([f64; 3], [f64; 3]);
+
 /// A kinematic corrector of the increment the solver predicted.
 pub trait KinematicCorrector {
     /// Whether it corrects anything (the same answer on every rank of a distributed run).
@@ -107,12 +110,26 @@ impl Solver {
         &self,
         f: &[[f64; 3]],
         share: Option<&mut (dyn KinematicCorrector + 'c)>,
-    ) -> Result<Vec<([f64; 3], [f64; 3])>> {
+    ) -> Result<Vec<Resultant>> {
+        Ok(self.body_resultants_of(&[f], share)?.remove(0))
+    }
+
+    /// [`Self::body_resultants`] of each of `forces`, every split body's rows of them all
+    /// shared in one exchange (one gather across ranks, not one per force array).
+    pub(super) fn body_resultants_of<'c>(
+        &self,
+        forces: &[&[[f64; 3]]],
+        share: Option<&mut (dyn KinematicCorrector + 'c)>,
+    ) -> Result<Vec<Vec<Resultant>>> {
         let own = self.counted.as_ref().map(|(nodes, _)| nodes.as_slice());
-        let mut out: Vec<_> = self
-            .bodies
+        let mut out: Vec<Vec<_>> = forces
             .iter()
-            .map(|b| b.resultant(&self.x, f, own))
+            .map(|f| {
+                self.bodies
+                    .iter()
+                    .map(|b| b.resultant(&self.x, f, own))
+                    .collect()
+            })
             .collect();
         let split: Vec<usize> = (0..self.bodies.len())
             .filter(|&k| own.is_some() && self.bodies[k].free_meshed())
@@ -127,12 +144,16 @@ impl Solver {
                 expected: "a rank share that sums its resultants over the ranks",
             });
         };
-        let rows = split
-            .iter()
-            .map(|&k| (k, self.bodies[k].resultant_rows(&self.x, f, own)))
+        // (force array, body) of each list, in the order shared
+        let lists: Vec<(usize, usize)> = (0..forces.len())
+            .flat_map(|a| split.iter().map(move |&k| (a, k)))
             .collect();
-        for (&k, rows) in split.iter().zip(share.share_body_rows(rows)?) {
-            out[k] = fold_rows(&rows);
+        let rows = lists
+            .iter()
+            .map(|&(a, k)| (k, self.bodies[k].resultant_rows(&self.x, forces[a], own)))
+            .collect();
+        for (&(a, k), rows) in lists.iter().zip(share.share_body_rows(rows)?) {
+            out[a][k] = fold_rows(&rows);
         }
         Ok(out)
     }
@@ -149,7 +170,7 @@ mod tests {
         /// Whether it has kinematic pairs (else it only gathers the bodies' rows: a free meshed
         /// body under penalty contact).
         kinematic: bool,
-        /// Body-row gathers (collectives across ranks).
+        /// Body-row exchanges (each a gather across ranks).
         gathers: usize,
         /// The fault agreed on, as text.
         agreed: Option<String>,
@@ -200,7 +221,7 @@ mod tests {
 
     /// A fault found before the increment (a bad load, gravity or damping set on one rank, a
     /// bad increment) does not return before the increment's exchanges: the rank goes through
-    /// the body-row gathers every other rank makes and returns the fault where the ranks agree
+    /// the body-row gather every other rank makes and returns the fault where the ranks agree
     /// (the corrector's agreement; with no kinematic pair, the caller's after the step) — else
     /// the others would wait in a gather this rank skipped, for ever. Without a corrector it
     /// returns at once, as before.
@@ -232,7 +253,7 @@ mod tests {
                 .step_with_forces_and(dt, &[[0.0; 3]; 3], &mut rank)
                 .expect_err(name);
             assert!(err.to_string().contains(name), "{name}: {err}");
-            assert_eq!(rank.gathers, 2, "{name}: both resultant gathers made");
+            assert_eq!(rank.gathers, 1, "{name}: the resultants' gather made");
             if kinematic {
                 let agreed = rank.agreed.as_deref().unwrap_or_default();
                 assert!(agreed.contains(name), "{name}: agreed on {agreed:?}");

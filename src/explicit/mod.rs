@@ -420,8 +420,12 @@ impl Solver {
         // a rank's share of the model counts its own nodes' forces on a body (the ranks' shares
         // add up to the body's), and one rank its kinetic energy
         let mut corrector = corrector;
-        let body_pen = self.body_resultants(&penalty, corrector.as_deref_mut())?;
-        let body_loads = self.body_resultants(&self.loads, corrector.as_deref_mut())?;
+        let mut both =
+            self.body_resultants_of(&[&penalty, &self.loads], corrector.as_deref_mut())?;
+        let (body_loads, body_pen) = (
+            both.pop().unwrap_or_default(),
+            both.pop().unwrap_or_default(),
+        );
         for (k, b) in self.bodies.iter_mut().enumerate() {
             let (fp, mp) = body_pen[k];
             let (fl, ml) = body_loads[k];
