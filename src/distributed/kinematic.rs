@@ -16,7 +16,7 @@ use super::collectives::{agree_and_gather, exchange, exchange_known};
 use super::*;
 use crate::geometry::{closest_on_facet, V3};
 use crate::kinematic::{
-    change_velocity, law_energy, push_target, pushed, slave_friction, SlaveCorrection, PASSES,
+    change_velocity, correct_touches, slave_friction, NodeSums, SlaveCorrection, Touch, PASSES,
 };
 use crate::model::Kinematic;
 use crate::model::PressureOverclosure;
@@ -35,19 +35,6 @@ pub struct KinematicStep {
     /// Bytes this rank sent to other ranks in the correction (the ghosts' state, the master
     /// nodes' shares and their sums back).
     pub bytes_sent: usize,
-}
-
-/// One pushed slave's contact on a rank: its place in the pair's slave list, its own index
-/// and local node, its facet's local nodes and count, and the geometry.
-struct Touch {
-    key: u64,
-    slave: usize,
-    node: usize,
-    nodes: [u32; 4],
-    count: usize,
-    normal: V3<f64>,
-    weights: [f64; 4],
-    overclosure: f64,
 }
 
 /// A slave's contact in a kinematic pass: its local node, its key and its facet's local nodes
@@ -284,6 +271,10 @@ impl DistributedContact {
     /// [`crate::kinematic::meshed_pass`] gives them — the master nodes' sums on their owners
     /// (three collectives; six with a softened law).
     #[allow(clippy::too_many_arguments)]
+    /// The correction of one pass's `contacts` (the slaves' areas `areas`) at the local
+    /// positions `lx` (or small sliding's anchor planes): `kinematic::correct_touches` with the
+    /// master nodes' shares summed on their owners — one process's arithmetic. Returns the own
+    /// nodes' corrections and each slave's.
     fn correction(
         &self,
         contacts: &[Contact1],
@@ -293,98 +284,18 @@ impl DistributedContact {
         masses: &[f64],
         dt: f64,
     ) -> (Vec<[f64; 3]>, Vec<SlaveCorrection>) {
-        let n_own = self.ids.len();
         let touch = touches(lx, contacts, planes);
-        // a softened law: the masses the pushed slaves add to each master node
-        let shares: Vec<f64> = if law.is_some() {
-            let added = self.node_sums(
-                touch
-                    .iter()
-                    .filter(|t| pushed(law, t.overclosure))
-                    .flat_map(|t| {
-                        let ms = masses[t.node];
-                        (0..t.count).map(move |j| (t.nodes[j] as usize, t.key, [t.weights[j] * ms]))
-                    })
-                    .collect(),
-            );
-            touch
-                .iter()
-                .map(|t| {
-                    if !pushed(law, t.overclosure) {
-                        return 1.0;
-                    }
-                    let taken: f64 = (0..t.count)
-                        .map(|j| {
-                            let n = t.nodes[j] as usize;
-                            let s_j = added[n].map_or(0.0, |a| a[0]);
-                            t.weights[j] * s_j / (masses[n] + s_j)
-                        })
-                        .sum();
-                    (1.0 - taken).max(f64::MIN_POSITIVE)
-                })
-                .collect()
-        } else {
-            vec![1.0; touch.len()]
-        };
-        // each pushed slave's resisting force, its facet nodes' shares of it
-        let mut out = vec![SlaveCorrection::default(); contacts.len()];
-        let mut push_of = vec![0.0; contacts.len()];
-        let mut parts = Vec::new();
-        for (t, share) in touch.iter().zip(&shares) {
-            let ms = masses[t.node];
-            let Some(target) = push_target(law, t.overclosure, ms * share, areas[t.slave], dt)
-            else {
-                continue;
-            };
-            let fs = ms * (t.overclosure - target) / (dt * dt);
-            for j in 0..t.count {
-                // the single process subtracts each share from its node's sum
-                let f = (t.normal * (t.weights[j] * fs)) * -1.0;
-                parts.push((
-                    t.nodes[j] as usize,
-                    t.key,
-                    [f.x, f.y, f.z, t.weights[j] * ms],
-                ));
-            }
-            out[t.slave] = SlaveCorrection {
-                overclosure: t.overclosure,
-                target,
-                force: fs,
-                normal: t.normal.to_array(),
-                energy: law.map_or(0.0, |l| law_energy(l, target) * areas[t.slave]),
-                applied: [0.0; 3],
-            };
-            push_of[t.slave] = t.overclosure - target;
-        }
-        let sums = self.node_sums(parts);
-        let da: Vec<Option<V3<f64>>> = sums
-            .iter()
-            .zip(masses)
-            .map(|(s, &m)| s.map(|s| V3::new(s[0], s[1], s[2]) * (1.0 / (m + s[3]))))
-            .collect();
-        let mut dx = vec![[0.0; 3]; n_own];
-        for (d, a) in dx.iter_mut().zip(&da) {
-            if let Some(a) = a {
-                let d3 = *a * (dt * dt);
-                for (c, value) in d.iter_mut().zip(d3.to_array()) {
-                    *c += value;
-                }
-            }
-        }
-        for t in &touch {
-            if out[t.slave].force <= 0.0 {
-                continue;
-            }
-            let mut d = t.normal * push_of[t.slave];
-            for j in 0..t.count {
-                let a = da[t.nodes[j] as usize].unwrap_or(V3::zero());
-                d = d + a * (t.weights[j] * dt * dt);
-            }
-            for (c, value) in dx[t.node].iter_mut().zip(d.to_array()) {
-                *c += value;
-            }
-            out[t.slave].applied = (d * (masses[t.node] / (dt * dt))).to_array();
-        }
+        let mut dx = vec![[0.0; 3]; self.ids.len()];
+        let out = correct_touches(
+            &touch,
+            contacts.len(),
+            masses,
+            areas,
+            law,
+            dt,
+            self,
+            &mut dx,
+        );
         (dx, out)
     }
 
@@ -528,5 +439,15 @@ impl DistributedContact {
             }
         }
         dissipated
+    }
+}
+
+/// A rank's sums for the shared correction: on the nodes' owners, in key order.
+impl NodeSums for DistributedContact {
+    fn node_sums<const K: usize>(
+        &self,
+        rows: Vec<(usize, u64, [f64; K])>,
+    ) -> Vec<Option<[f64; K]>> {
+        DistributedContact::node_sums(self, rows)
     }
 }

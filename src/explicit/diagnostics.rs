@@ -69,11 +69,24 @@ impl Solver {
         format!("check the increment in force, {dt:e}: {elements}{contact}")
     }
 
-    /// An error naming the first input of the increment about to run that is not finite (or
-    /// a damping that is negative): gravity, damping, bulk viscosity, a node's load, a load
-    /// curve's value, a body's load or moment — set through the library, say, mid-run. Caught
-    /// before the increment uses it, so the message names it and not what it would blow up.
-    pub(super) fn check_inputs(&self) -> Result<()> {
+    /// An error naming the first input of the increment `dt` about to run that is not finite
+    /// (or a damping that is negative, an increment not positive): the increment, gravity,
+    /// damping, bulk viscosity, a node's load, a load curve's value, a body's load or moment —
+    /// set through the library, say, mid-run. Caught before the increment uses it, so the
+    /// message names it and not what it would blow up.
+    pub(super) fn check_increment(&self, dt: f64) -> Result<()> {
+        if !(dt.is_finite() && dt > 0.0) {
+            return Err(Error::BadParameter {
+                name: "dt",
+                value: dt.to_string(),
+                expected: "must be finite and positive",
+            });
+        }
+        self.check_inputs()
+    }
+
+    /// The inputs an increment takes from the solver's fields (see [`Self::check_increment`]).
+    fn check_inputs(&self) -> Result<()> {
         // the message is only made when there is one: nothing allocated per increment
         let bad = |name: &'static str, value: String| {
             Err(Error::BadParameter {

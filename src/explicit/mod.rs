@@ -304,25 +304,13 @@ impl Solver {
         given: Option<&[[f64; 3]]>,
         corrector: Option<&mut dyn KinematicCorrector>,
     ) -> Result<()> {
-        let early = if !(dt.is_finite() && dt > 0.0) {
-            Err(Error::BadParameter {
-                name: "dt",
-                value: dt.to_string(),
-                expected: "must be finite and positive",
-            })
-        } else {
-            self.check_inputs()
-        };
         // a rank of a distributed run goes on through the increment's exchanges with its fault
         // (the arithmetic on bad input harms nothing) and returns it where the ranks agree, so
         // that none is left waiting in an exchange it would have skipped
-        let mut deferred = None;
-        if let Err(e) = early {
-            if corrector.is_none() {
-                return Err(e);
-            }
-            deferred = Some(e);
-        }
+        let deferred = match self.check_increment(dt) {
+            Err(e) if corrector.is_none() => return Err(e),
+            early => early.err(),
+        };
         let (mut f_int, internal) = self.internal_forces();
         let n = self.x.len();
         // bulk viscosity acts with the half-step velocities (the last ones known); its power is

@@ -21,6 +21,9 @@ use crate::geometry::{closest_on_facet, V3};
 use crate::model::{MasterSurface, PressureOverclosure};
 use crate::search::SearchResult;
 
+mod correct;
+use correct::InProcess;
+pub(crate) use correct::{correct_touches, NodeSums, Touch};
 mod rigid;
 pub use rigid::{rigid_pass, rigid_pass_shared, to_body, to_model, Pushed, ShareRows};
 
@@ -211,49 +214,7 @@ pub fn anchored_pass(
     correct(masses, &search.slaves, &geometry, areas, law, dt, dx)
 }
 
-/// The share of a slave's push that the contact transmits when the slaves around it push
-/// alike: the correction adds each pushed slave's mass to its master nodes (`S_j = Σ w_j·m_s`)
-/// and moves the slave onto the master's corrected position, so a push of `h − h'` leaves the
-/// slave `(h − h')·(1 − Σ_j w_j·S_j/(m_j + S_j))` and the contact transmits that times
-/// `m_s/Δt²`. 1 against a fixed master, `m_master/(m_master + m_s)` for one slave on one node.
-fn transmitted_shares(
-    masses: &[f64],
-    slaves: &[u32],
-    geometry: &[Option<SlaveGeometry>],
-    law: Option<&PressureOverclosure>,
-) -> Vec<f64> {
-    let mut added = std::collections::BTreeMap::<u32, f64>::new();
-    for (&s, g) in slaves.iter().zip(geometry) {
-        let Some(g) = g.as_ref().filter(|g| pushed(law, g.overclosure)) else {
-            continue;
-        };
-        for (j, &n) in g.nodes.iter().enumerate() {
-            *added.entry(n).or_insert(0.0) += g.weights[j] * masses[s as usize];
-        }
-    }
-    geometry
-        .iter()
-        .map(|g| {
-            let Some(g) = g.as_ref().filter(|g| pushed(law, g.overclosure)) else {
-                return 1.0;
-            };
-            let taken: f64 = g
-                .nodes
-                .iter()
-                .enumerate()
-                .map(|(j, &n)| {
-                    let s_j = added.get(&n).copied().unwrap_or(0.0);
-                    g.weights[j] * s_j / (masses[n as usize] + s_j)
-                })
-                .sum();
-            (1.0 - taken).max(f64::MIN_POSITIVE)
-        })
-        .collect()
-}
-
-/// The correction of the module docs for the slaves' geometry. A softened law is balanced
-/// with the force the contact transmits ([`transmitted_shares`]), so that at rest the law
-/// holds whatever the masses of slave and master.
+/// The correction of the module docs for the slaves' geometry, in one process.
 fn correct(
     masses: &[f64],
     slaves: &[u32],
@@ -263,62 +224,28 @@ fn correct(
     dt: f64,
     dx: &mut [[f64; 3]],
 ) -> Vec<SlaveCorrection> {
-    let mut force = std::collections::BTreeMap::<u32, (V3<f64>, f64)>::new();
-    let mut out = vec![SlaveCorrection::default(); slaves.len()];
-    let mut push_of = vec![0.0; slaves.len()];
-    let shares = match law {
-        Some(_) => transmitted_shares(masses, slaves, geometry, law),
-        None => vec![1.0; slaves.len()],
-    };
-    for (k, (&s, g)) in slaves.iter().zip(geometry).enumerate() {
-        let Some(g) = g else { continue };
-        let h = g.overclosure;
-        let ms = masses[s as usize];
-        let Some(target) = push_target(law, h, ms * shares[k], areas[k], dt) else {
-            continue;
-        };
-        let fs = ms * (h - target) / (dt * dt);
-        for (j, &n) in g.nodes.iter().enumerate() {
-            let e = force.entry(n).or_insert((V3::zero(), 0.0));
-            e.0 = e.0 - g.normal * (g.weights[j] * fs);
-            e.1 += g.weights[j] * ms;
-        }
-        out[k] = SlaveCorrection {
-            overclosure: h,
-            target,
-            force: fs,
-            normal: g.normal.to_array(),
-            energy: law.map_or(0.0, |l| law_energy(l, target) * areas[k]),
-            applied: [0.0; 3],
-        };
-        push_of[k] = h - target;
-    }
-    // master corrections
-    let mut da = std::collections::BTreeMap::new();
-    for (n, (f, madd)) in &force {
-        let a = *f * (1.0 / (masses[*n as usize] + madd));
-        da.insert(*n, a);
-        let d = a * (dt * dt);
-        for c in 0..3 {
-            dx[*n as usize][c] += d.to_array()[c];
-        }
-    }
-    // slave corrections: onto the corrected master
-    for (k, &s) in slaves.iter().enumerate() {
-        let Some(g) = &geometry[k] else { continue };
-        if out[k].force <= 0.0 {
-            continue;
-        }
-        let mut d = g.normal * push_of[k];
-        for (j, node) in g.nodes.iter().enumerate() {
-            d = d + da[node] * (g.weights[j] * dt * dt);
-        }
-        for c in 0..3 {
-            dx[s as usize][c] += d.to_array()[c];
-        }
-        out[k].applied = (d * (masses[s as usize] / (dt * dt))).to_array();
-    }
-    out
+    let touch: Vec<Touch> = slaves
+        .iter()
+        .zip(geometry)
+        .enumerate()
+        .filter_map(|(k, (&s, g))| {
+            let g = g.as_ref()?;
+            let mut nodes = [u32::MAX; 4];
+            nodes[..g.nodes.len()].copy_from_slice(g.nodes);
+            Some(Touch {
+                key: k as u64,
+                slave: k,
+                node: s as usize,
+                nodes,
+                count: g.nodes.len(),
+                normal: g.normal,
+                weights: g.weights,
+                overclosure: g.overclosure,
+            })
+        })
+        .collect();
+    let sums = InProcess(masses.len());
+    correct_touches(&touch, slaves.len(), masses, areas, law, dt, &sums, dx)
 }
 
 /// What the kinematic friction of one pair did in one increment ([`friction_pass`]).
