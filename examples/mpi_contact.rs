@@ -18,12 +18,14 @@
 //! `ABUT_MPI_CASE` picks another model: `self` (a self-contact sheet), `balanced` (a balanced
 //! pair of two plates), `stretch` (a plate stretched tenfold under slaves that lie in the middle
 //! of one of its facets), `bad-slave` (a rank names a slave it does not own: refused
-//! everywhere), `bad-facet` (a rank gives a 2D segment as a facet of this 3D model: likewise).
+//! everywhere), `bad-facet` (a rank gives a 2D segment as a facet of this 3D model: likewise),
+//! `bad-part` (every rank gives a rigid part of the first three nodes, the last with a negative
+//! mass: likewise).
 //! The line also gives the MPI collectives per increment, between distributed global searches
 //! and at them.
 
 use abut::distributed::{
-    all_gather, DistributedContact, RankBalance, RankModel, RankPair, NO_GLOBAL_NODE,
+    all_gather, DistributedContact, RankBalance, RankModel, RankPair, RankRigidPart, NO_GLOBAL_NODE,
 };
 use abut::mesh::{plate_quads, point_cloud};
 use abut::partition::recursive_bisection;
@@ -116,11 +118,19 @@ fn main() {
         rigid_parts: Vec::new(),
     };
     let device = Device::cpu();
-    if case == "bad-slave" || case == "bad-facet" {
-        // the last rank names a slave it does not own, or gives a 2D segment as a facet of
-        // this 3D model: every rank is refused, none hangs
+    if case.starts_with("bad-") {
+        // the last rank names a slave it does not own, gives a 2D segment as a facet of this
+        // 3D model, or a rigid part of negative mass: every rank is refused, none hangs
         let mut bad = model.clone();
-        if rank == size - 1 && case == "bad-slave" {
+        if case == "bad-part" {
+            let unit = [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]];
+            bad.rigid_parts.push(RankRigidPart {
+                ids: vec![0, 1, 2],
+                positions: x0[..3].to_vec(),
+                mass: if rank == size - 1 { -1.0 } else { 1.0 },
+                inertia: unit,
+            });
+        } else if rank == size - 1 && case == "bad-slave" {
             bad.pairs[0].slaves.push(u64::MAX - 1);
         } else if rank == size - 1 {
             bad.pairs[0]

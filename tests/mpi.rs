@@ -114,14 +114,15 @@ fn forces_across_ranks_equal_the_single_process_and_reruns_are_bitwise() {
     }
 }
 
-/// A rank that names a slave it does not own, or gives a 2D segment as a facet of a 3D model,
-/// is refused, and so is every other rank, with an error naming the rank at fault — none of
-/// them is left waiting in a collective.
+/// A rank that names a slave it does not own, gives a 2D segment as a facet of a 3D model or
+/// a rigid part of negative mass, is refused, and so is every other rank, with an error naming
+/// the rank at fault — none of them is left waiting in a collective.
 #[test]
 fn a_bad_share_is_refused_on_every_rank() {
     for (case, says) in [
         ("bad-slave", "global id 18446744073709551614"),
         ("bad-facet", "a triangle or a quad in a 3D model"),
+        ("bad-part", "rigid part 0"),
     ] {
         let out = mpirun(3, Some(case));
         for r in 0..3 {

@@ -23,7 +23,9 @@ use crate::search::SearchResult;
 
 mod correct;
 use correct::InProcess;
-pub(crate) use correct::{correct_touches, NodeSums, Touch};
+#[cfg(feature = "mpi")]
+pub(crate) use correct::NodeSums;
+pub(crate) use correct::{correct_touches, Touch};
 mod rigid;
 pub use rigid::{rigid_pass, rigid_pass_shared, to_body, to_model, Pushed, ShareRows};
 
