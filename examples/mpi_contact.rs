@@ -20,7 +20,8 @@
 //! of one of its facets), `bad-slave` (a rank names a slave it does not own: refused
 //! everywhere), `bad-facet` (a rank gives a 2D segment as a facet of this 3D model: likewise),
 //! `bad-part` (every rank gives a rigid part of the first three nodes, the last with a negative
-//! mass: likewise).
+//! mass: likewise), `lost-part` (every rank gives a rigid part one of whose nodes no rank owns:
+//! refused on every rank alike).
 //! The line also gives the MPI collectives per increment, between distributed global searches
 //! and at them.
 
@@ -118,16 +119,25 @@ fn main() {
         rigid_parts: Vec::new(),
     };
     let device = Device::cpu();
-    if case.starts_with("bad-") {
+    if case.starts_with("bad-") || case == "lost-part" {
         // the last rank names a slave it does not own, gives a 2D segment as a facet of this
         // 3D model, or a rigid part of negative mass: every rank is refused, none hangs
         let mut bad = model.clone();
-        if case == "bad-part" {
+        if case == "bad-part" || case == "lost-part" {
+            // lost-part: every rank alike, one node no rank owns
             let unit = [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]];
+            let mut ids = vec![0, 1, 2];
+            if case == "lost-part" {
+                ids[2] = u64::MAX - 1;
+            }
             bad.rigid_parts.push(RankRigidPart {
-                ids: vec![0, 1, 2],
+                ids,
                 positions: x0[..3].to_vec(),
-                mass: if rank == size - 1 { -1.0 } else { 1.0 },
+                mass: if rank == size - 1 && case == "bad-part" {
+                    -1.0
+                } else {
+                    1.0
+                },
                 inertia: unit,
             });
         } else if rank == size - 1 && case == "bad-slave" {

@@ -116,7 +116,8 @@ fn forces_across_ranks_equal_the_single_process_and_reruns_are_bitwise() {
 
 /// A rank that names a slave it does not own, gives a 2D segment as a facet of a 3D model or
 /// a rigid part of negative mass, is refused, and so is every other rank, with an error naming
-/// the rank at fault — none of them is left waiting in a collective.
+/// the rank at fault — none of them is left waiting in a collective. A rigid part naming a node
+/// no rank owns is refused on every rank alike.
 #[test]
 fn a_bad_share_is_refused_on_every_rank() {
     for (case, says) in [
@@ -139,6 +140,18 @@ fn a_bad_share_is_refused_on_every_rank() {
                 );
             }
         }
+    }
+    // a rigid part one of whose nodes no rank owns: every rank finds it alike and says so
+    let out = mpirun(3, Some("lost-part"));
+    for r in 0..3 {
+        let line = out
+            .lines()
+            .find(|l| l.starts_with(&format!("rank {r} refused")))
+            .unwrap_or_else(|| panic!("lost-part: rank {r} was not refused: {out}"));
+        assert!(
+            line.contains("rigid part 0: 2 of its 3 nodes owned by a rank"),
+            "{line}"
+        );
     }
 }
 

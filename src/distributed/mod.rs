@@ -507,7 +507,9 @@ impl DistributedContact {
             })
             .collect();
         let pass_slaves: Vec<usize> = pairs.iter().map(|p| p.slaves.len()).collect();
-        let parts = parts::RankParts::new(&comm, &model.rigid_parts, model.two_d, &pass_slaves)?;
+        let owns = |g: u64| index.contains_key(&g);
+        let parts =
+            parts::RankParts::new(&comm, &model.rigid_parts, model.two_d, &pass_slaves, &owns)?;
         let size = comm.size() as usize;
         Ok(Self {
             comm,

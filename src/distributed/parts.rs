@@ -43,14 +43,15 @@ pub(super) struct RankParts {
 }
 
 impl RankParts {
-    /// The parts of `given` (checked; the same number on every rank, else an error on every
-    /// rank), with each of `passes`' slave counts summed over the ranks when there are any.
-    /// Collective.
+    /// The parts of `given` (checked; the same number on every rank, and every node of each
+    /// owned by some rank — `owns` tells this rank's — else an error on every rank), with each
+    /// of `passes`' slave counts summed over the ranks when there are any. Collective.
     pub(super) fn new(
         comm: &SimpleCommunicator,
         given: &[RankRigidPart],
         two_d: bool,
         passes: &[usize],
+        owns: &dyn Fn(u64) -> bool,
     ) -> Result<Self> {
         let fault = given
             .iter()
@@ -69,11 +70,31 @@ impl RankParts {
         if given.is_empty() {
             return Ok(Self::default());
         }
-        let counts: Vec<f64> = passes.iter().map(|&n| n as f64).collect();
-        let all = all_gather_fixed(comm, &counts);
-        let pass_slaves = (0..passes.len())
-            .map(|k| all.iter().skip(k).step_by(passes.len()).sum::<f64>() as usize)
+        // one gather: each pass's slaves here, and how many of each part's nodes are owned here
+        let mine: Vec<f64> = passes
+            .iter()
+            .map(|&n| n as f64)
+            .chain(
+                given
+                    .iter()
+                    .map(|p| p.ids.iter().filter(|&&g| owns(g)).count() as f64),
+            )
             .collect();
+        let all = all_gather_fixed(comm, &mine);
+        let total = |k: usize| all.iter().skip(k).step_by(mine.len()).sum::<f64>() as usize;
+        for (k, p) in given.iter().enumerate() {
+            let owned = total(passes.len() + k);
+            if owned != p.ids.len() {
+                return Err(bad(
+                    "rigid part",
+                    format!(
+                        "rigid part {k}: {owned} of its {} nodes owned by a rank",
+                        p.ids.len()
+                    ),
+                    "every node of a rigid part owned by one rank",
+                ));
+            }
+        }
         Ok(Self {
             ids: given.iter().map(|p| p.ids.clone()).collect(),
             runs: given
@@ -82,7 +103,7 @@ impl RankParts {
                 .collect(),
             bodies: given.iter().map(|p| (p.mass, p.inertia)).collect(),
             moved: false,
-            pass_slaves,
+            pass_slaves: (0..passes.len()).map(total).collect(),
             local: Vec::new(),
         })
     }
