@@ -219,11 +219,9 @@ impl SolverBody {
     pub(crate) fn place_nodes(&self, x: &mut [[f64; 3]], v: &mut [[f64; 3]]) {
         let s = &self.state;
         for (&n, off) in self.nodes.iter().zip(&self.offsets) {
-            let r = rotate(&s.rotation, *off);
+            let (xn, r) = self.node_at(*off);
             let n = n as usize;
-            for a in 0..3 {
-                x[n][a] = s.position[a] + r[a];
-            }
+            x[n] = xn;
             let wr = v3(s.angular_velocity).cross(v3(r)).to_array();
             for a in 0..3 {
                 v[n][a] = s.velocity[a] + wr[a];
@@ -285,14 +283,16 @@ impl SolverBody {
     /// its own): a whole body's nodes on a rank that carries only some of them.
     #[cfg(feature = "mpi")]
     pub(crate) fn positions_of(&self, offsets: &[[f64; 3]]) -> Vec<[f64; 3]> {
+        offsets.iter().map(|off| self.node_at(*off).0).collect()
+    }
+
+    /// A node at body-frame offset `off` now: its position, and the offset turned into the
+    /// model frame (the one arithmetic [`Self::place_nodes`] and `positions_of` share, so a
+    /// node has the same bits whichever placed it).
+    fn node_at(&self, off: [f64; 3]) -> ([f64; 3], [f64; 3]) {
         let s = &self.state;
-        offsets
-            .iter()
-            .map(|off| {
-                let r = rotate(&s.rotation, *off);
-                [0, 1, 2].map(|a| s.position[a] + r[a])
-            })
-            .collect()
+        let r = rotate(&s.rotation, off);
+        ([0, 1, 2].map(|a| s.position[a] + r[a]), r)
     }
 
     /// Whether this body is free and carries mesh nodes (split over ranks, its resultants need

@@ -34,10 +34,8 @@ pub(crate) struct PairRaw {
 }
 
 /// What a host-array increment reads back: the forces (one `[f32; 4]` per model node), the
-/// statistics, each pair's raw results (with outputs only) and each pair's schedule words.
-/// What a host-array increment reads back: the forces, the statistics, each pair's raw results
-/// (when outputs were asked for), each pair's schedule words, and the node-wise bound's rows
-/// per model node (when asked for; else empty).
+/// statistics, each pair's raw results (when outputs were asked for), each pair's schedule
+/// words, and the node-wise bound's rows per model node (when asked for; else empty).
 pub(crate) type HostResults = (
     Vec<[f32; 4]>,
     IncrementStats,
