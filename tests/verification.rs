@@ -4,8 +4,8 @@
 
 mod common;
 
-use common::devices;
 use common::scene_toml::{boundary, fixed, part, SceneToml};
+use common::{devices, gpus};
 
 use std::f64::consts::PI;
 
@@ -357,15 +357,13 @@ fn s5_penalty_stability_bound() {
     }
 }
 
-/// §3, Hertz sphere, force against indentation, axisymmetric (scenes/hertz_sphere.toml): the
-/// element first passes its patch test (a cylinder in uniaxial compression: uniform axial stress,
-/// no hoop or radial stress); then the force–indentation curve over δ ∈ [δmax/2, δmax]
-/// (δmax = 0.0025 R, a = 0.05 R) is measured against (4/3)·E*·√R·δ^(3/2) within VERIFICATION's
-/// 2 %: the least-squares stiffness, every sample, and the force at δmax, on every device. The
-/// least-squares stiffness must also be stiffer than Hertz (the mesh, the finite block and the
-/// surface's inward slide all stiffen it; a softer one would mean contact force lost).
+/// §3, Hertz sphere, force against indentation, axisymmetric (scenes/hertz_sphere.toml), on the
+/// CPU path: the element first passes its patch test (a cylinder in uniaxial compression: uniform
+/// axial stress, no hoop or radial stress), then the force–indentation curve (`hertz_sphere_on`).
+/// The adapters run the same curve in their own tests below, so that the test harness runs the
+/// three long runs side by side.
 #[test]
-fn s3_hertz_sphere_force_indentation_axisymmetric() {
+fn s3_hertz_sphere_force_indentation_axisymmetric_cpu() {
     let cylinder = SceneToml::new("axisymmetric cylinder in uniaxial compression", 40.0)
         .run("damping", 0.3)
         .run("nlgeom", false)
@@ -399,36 +397,59 @@ fn s3_hertz_sphere_force_indentation_axisymmetric() {
         (p.displacement[0] - 0.3 * 0.01 * 2.0 / 3.0).abs() < 1e-5,
         "{p:?}"
     );
+    hertz_sphere_on(&Device::cpu());
+}
+
+/// §3, Hertz sphere (as above) on every Vulkan adapter.
+#[test]
+fn s3_hertz_sphere_force_indentation_axisymmetric_vulkan() {
+    for d in gpus().iter().filter(|d| d.backend_name() == "vulkan") {
+        hertz_sphere_on(d);
+    }
+}
+
+/// §3, Hertz sphere (as above) on every other adapter (GL, Metal, DX12).
+#[test]
+fn s3_hertz_sphere_force_indentation_axisymmetric_other_adapters() {
+    for d in gpus().iter().filter(|d| d.backend_name() != "vulkan") {
+        hertz_sphere_on(d);
+    }
+}
+
+/// The Hertz sphere's force–indentation curve on `d`, over δ ∈ [δmax/2, δmax] (δmax = 0.0025 R,
+/// a = 0.05 R), against (4/3)·E*·√R·δ^(3/2) within VERIFICATION's 2 %: the least-squares
+/// stiffness, every sample, and the force at δmax. The least-squares stiffness must also be
+/// stiffer than Hertz (the mesh, the finite block and the surface's inward slide all stiffen it;
+/// a softer one would mean contact force lost).
+fn hertz_sphere_on(d: &Device) {
     let text = scene("hertz_sphere.toml");
     let (e, nu, r, d_max): (f64, f64, f64, f64) = (1.0, 0.3, 1.0, 0.0025);
     let k = 4.0 / 3.0 * e / (1.0 - nu * nu) * r.sqrt();
-    for d in devices() {
-        let s = run_text(&text, &d);
-        // per radian → whole circumference; indentation = the sphere's descent
-        let samples: Vec<(f64, f64)> = s
-            .curve
-            .iter()
-            .map(|c| (-c.body_displacement[0][1], 2.0 * PI * c.force[1].abs()))
-            .filter(|(x, _)| *x >= 0.5 * d_max)
-            .collect();
-        assert!(samples.len() >= 100, "{d}: {} samples", samples.len());
-        let (num, den) = samples.iter().fold((0.0, 0.0), |(n, q), (x, f)| {
-            (n + f * x.powf(1.5), q + x.powf(3.0))
-        });
-        let fit = num / den / k - 1.0;
-        let worst = samples
-            .iter()
-            .map(|(x, f)| f / (k * x.powf(1.5)) - 1.0)
-            .fold(0.0f64, |w, e| if e.abs() > w.abs() { e } else { w });
-        let last = 2.0 * PI * s.final_contact_force[1].abs() / (k * d_max.powf(1.5)) - 1.0;
-        eprintln!(
-            "{d}: Hertz sphere F/δ^1.5 least squares {:+.2} %, worst sample {:+.2} %, at δmax {:+.2} %",
-            100.0 * fit,
-            100.0 * worst,
-            100.0 * last
-        );
-        assert!(fit > 0.0 && fit < 0.02, "{d}: least squares {fit}");
-        assert!(worst.abs() < 0.02, "{d}: worst sample {worst}");
-        assert!(last.abs() < 0.02, "{d}: at δmax {last}");
-    }
+    let s = run_text(&text, d);
+    // per radian → whole circumference; indentation = the sphere's descent
+    let samples: Vec<(f64, f64)> = s
+        .curve
+        .iter()
+        .map(|c| (-c.body_displacement[0][1], 2.0 * PI * c.force[1].abs()))
+        .filter(|(x, _)| *x >= 0.5 * d_max)
+        .collect();
+    assert!(samples.len() >= 100, "{d}: {} samples", samples.len());
+    let (num, den) = samples.iter().fold((0.0, 0.0), |(n, q), (x, f)| {
+        (n + f * x.powf(1.5), q + x.powf(3.0))
+    });
+    let fit = num / den / k - 1.0;
+    let worst = samples
+        .iter()
+        .map(|(x, f)| f / (k * x.powf(1.5)) - 1.0)
+        .fold(0.0f64, |w, e| if e.abs() > w.abs() { e } else { w });
+    let last = 2.0 * PI * s.final_contact_force[1].abs() / (k * d_max.powf(1.5)) - 1.0;
+    eprintln!(
+        "{d}: Hertz sphere F/δ^1.5 least squares {:+.2} %, worst sample {:+.2} %, at δmax {:+.2} %",
+        100.0 * fit,
+        100.0 * worst,
+        100.0 * last
+    );
+    assert!(fit > 0.0 && fit < 0.02, "{d}: least squares {fit}");
+    assert!(worst.abs() < 0.02, "{d}: worst sample {worst}");
+    assert!(last.abs() < 0.02, "{d}: at δmax {last}");
 }
