@@ -15,12 +15,15 @@
 //           2 work (the nearest facet's work items, free after its chunks: n_slaves + 1
 //           words at offset 0, scanned in place by scan.wgsl between the two passes),
 //           3 status (from word ACTIVE_LIST: the count, then the slave indices; the status
-//           words before it are not touched).
+//           words before it are not touched), 4 slaves (model node ids), 5 reference (the
+//           motion budget's, set_reference's just before: active_mark writes the w of each
+//           slave's, its tracking state, which motion.wgsl reads in node order).
 // Dispatch: active_mark and active_compact one invocation per slave, ITEM_WORKGROUP per
 //           workgroup, folded into 2D, from the global slots (global increments only, after
 //           nearest_facet); the work levels' scan between them.
 // Invariants: active_mark writes work[i] = 1 for a slave to visit (tracked, or every slave with
-//             FLAG_EVERY_SLAVE) and 0 otherwise, work[n_slaves] = 0; after the exclusive scan,
+//             FLAG_EVERY_SLAVE) and 0 otherwise, work[n_slaves] = 0, and the slave's state
+//             (slave_state: a slave's node is in no other slave's reference); after the exclusive scan,
 //             active_compact writes slave i at status[ACTIVE_LIST + 1 + work[i]] (slave order:
 //             the same bits every run) and the count at status[ACTIVE_LIST], from which the
 //             schedule sizes ACTIVE_SLOT in the local increments that follow. No loop.
@@ -29,6 +32,8 @@
 @group(0) @binding(1) var<storage, read> hits: array<Hit>;
 @group(0) @binding(2) var<storage, read_write> work: array<u32>;
 @group(0) @binding(3) var<storage, read_write> status: array<u32>;
+@group(0) @binding(4) var<storage, read> slaves: array<u32>;
+@group(0) @binding(5) var<storage, read_write> reference: array<vec4<f32>>;
 
 fn visited(i: u32) -> bool {
     return (params.flags & FLAG_EVERY_SLAVE) != 0u || hits[i].node != NO_NODE;
@@ -41,6 +46,7 @@ fn active_mark(@builtin(workgroup_id) wg: vec3<u32>,
     let i = folded_id(wg, nwg, li, ITEM_WORKGROUP);
     if (i >= params.n_slaves) { return; }
     work[i] = select(0u, 1u, visited(i));
+    reference[slaves[i]].w = slave_state(hits[i]);
     if (i == 0u) { work[params.n_slaves] = 0u; }
 }
 

@@ -45,6 +45,12 @@ const FLAG_SELF_CONTACT: u32 = 2u;
 const FLAG_EVERY_SLAVE: u32 = 4u;   // local increments visit every slave (no compaction)
 const FLAG_SLAVES_APART: u32 = 8u;  // no slave node is on an active master facet
 const FLAG_BUCKETS: u32 = 16u;      // the global search bins facets in a hashed grid (buckets.wgsl)
+// A slave's tracking state, kept in the w of its reference position (motion.wgsl), which the
+// motion pass reads in node order instead of the hit (Rust twins: SLAVE_TRACKED, SLAVE_WITHIN):
+// below SLAVE_TRACKED untracked, SLAVE_TRACKED tracked with no facet within the radius,
+// SLAVE_WITHIN tracked with one. Small whole floats: any backend stores and compares them exactly.
+const SLAVE_TRACKED: f32 = 1.0;
+const SLAVE_WITHIN: f32 = 2.0;
 // The statistics' word of the node-wise bound on the springs' ω² (f32 bits; raised by add_forces,
 // read by finish_stats; the other STAT_* words: stats.wgsl; Rust twin: STAT_OMEGA2).
 const STAT_OMEGA2: u32 = 3u;
@@ -58,6 +64,12 @@ struct Hit {
     point_gap: vec4<f32>,   // xyz closest point (in the frame), w signed gap along the normal
     normal_dist: vec4<f32>, // xyz unit facet normal at the point, w distance
     weights: vec4<f32>,     // load-transfer weights of the facet's nodes
+}
+
+// The tracking state hit h leaves its slave in (Rust twin: abi::search::slave_state).
+fn slave_state(h: Hit) -> f32 {
+    if (h.node == NO_NODE) { return 0.0; }
+    return select(SLAVE_TRACKED, SLAVE_WITHIN, h.facet != NO_FACET);
 }
 
 // Status words (Rust twin: STATUS_* in src/abi/status.rs).

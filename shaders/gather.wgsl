@@ -138,15 +138,17 @@ fn scatter(i: u32) {
     // the penalty pass did not run (the increment will run again): its outputs are stale
     if (status[STATUS_BUDGET_EXCEEDED] != 0u) { return; }
     let o = out[i];
-    let hit = hits[i];
-    if ((o.status & CSTATUS_MASK) == CSTATUS_OPEN || hit.facet >= pp.n_facets) { return; }
-    let fac = facet_nodes[hit.facet];
+    // of the hit, its facet, and for a spring its weights (20 of its 64 bytes)
+    let facet = hits[i].facet;
+    if ((o.status & CSTATUS_MASK) == CSTATUS_OPEN || facet >= pp.n_facets) { return; }
+    let weights = hits[i].weights;
+    let fac = facet_nodes[facet];
     let n = facet_node_count(fac);
     let sf = pow2(fixed_exponent(status[STATUS_FORCE_SCALE], pp.n_slaves));
     let sr = pow2(fixed_exponent(status[STATUS_ROW_SCALE], pp.n_slaves));
     let rigid_master = pp.body_slots.x != NO_SLAVE;
     for (var j = 0u; j < n; j++) {
-        let w = hit.weights[j];
+        let w = weights[j];
         let base = 4u * fac[j];
         atomicOr(&need[fac[j]], NEED_FORCE);
         add_fixed(base, to_fixed(-w * o.force.x, sf));

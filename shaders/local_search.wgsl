@@ -6,7 +6,8 @@
 //           global search), 2 facets, 3 slaves, 4 adjacency (words 0..=n_nodes: start of each
 //           model node's active facets within this same buffer; then the lists, increasing),
 //           5 status (atomic words; from ACTIVE_LIST the active slaves: active.wgsl),
-//           6 hits (read: the tracked node; written: the result).
+//           6 hits (read: the tracked node; written: the result), 7 reference (the motion
+//           budget's; written: the w of the slave's, its tracking state for motion.wgsl).
 // Dispatch: one invocation per active slave (the slaves the last global search left tracked),
 //           ITEM_WORKGROUP per workgroup, folded into 2D, indirect from the plan's ACTIVE_SLOT.
 // Invariants: a slave looks only at the facets attached to its tracked master node (with
@@ -37,6 +38,7 @@
 @group(0) @binding(4) var<storage, read> adjacency: array<u32>;
 @group(0) @binding(5) var<storage, read_write> status: array<atomic<u32>>;
 @group(0) @binding(6) var<storage, read_write> hits: array<Hit>;
+@group(0) @binding(7) var<storage, read_write> reference: array<vec4<f32>>;
 
 struct Best {
     facet: u32,
@@ -86,12 +88,13 @@ fn local_search(@builtin(workgroup_id) wg: vec3<u32>,
     if (k >= atomicLoad(&status[ACTIVE_LIST])) { return; }
     if (atomicLoad(&status[STATUS_BUDGET_EXCEEDED]) != 0u) { return; }
     let i = atomicLoad(&status[ACTIVE_LIST + 1u + k]);
-    var hit = hits[i];
-    var tracked = hit.node;
+    // of the last hit, the walk reads its tracked node and facet alone (8 of its 64 bytes)
+    var tracked = hits[i].node;
     if (tracked == NO_NODE) { return; }
-    let last = hit.facet;
+    let last = hits[i].facet;
     let s = slaves[i];
     let p = nodes[s].xyz;
+    var hit: Hit;
     hit.facet = NO_FACET;
     hit.candidates = 0u;
     hit.slave = s;
@@ -164,4 +167,5 @@ fn local_search(@builtin(workgroup_id) wg: vec3<u32>,
         }
     }
     hits[i] = hit;
+    reference[s].w = slave_state(hit);
 }

@@ -3,13 +3,14 @@
 // CPU mirrors: src/cpu/to_local.rs (to_local), src/cpu/motion.rs (the others).
 //
 // Bindings: 0 params (uniform SearchParams), 1 nodes (in the search's frame; w, the mass, is
-//           kept), 2 reference (positions at the last global search, same frame), 3 motion_nodes
-//           (the slave nodes, in slave order, then the master surface's other nodes), 4 status
-//           (the master box, the first non-finite node and the budget are raised here), 5 hits
-//           (each slave's facet and tracked node at the last increment), 6 adjacency (as in
-//           local_search.wgsl: a node with active facets is a master node), 7 frame (uniform
-//           FrameParams: the frame origin), 8 positions (the caller's buffer: one vec4<f32> per
-//           model node, model frame, w ignored).
+//           kept), 2 reference (xyz: positions at the last global search, same frame; w of a
+//           slave: its tracking state at the last increment, SLAVE_TRACKED and SLAVE_WITHIN in
+//           common.wgsl, written by active_mark and local_search), 3 motion_nodes (the slave
+//           nodes in node order, then the master surface's other nodes in node order), 4 status
+//           (the master box, the first non-finite node and the budget are raised here),
+//           6 adjacency (as in local_search.wgsl: a node with active facets is a master node),
+//           7 frame (uniform FrameParams: the frame origin), 8 positions (the caller's buffer:
+//           one vec4<f32> per model node, model frame, w ignored).
 // Dispatch: one invocation per node, ITEM_WORKGROUP per workgroup, folded into 2D — to_local per
 //           model node (small sliding: every increment; otherwise global increments, indirect
 //           from the plan, before the search); motion per motion node, every increment;
@@ -38,9 +39,14 @@
 // What motion writes: the node of every master node and of every slave the local increments visit
 // (tracked, or every slave with FLAG_EVERY_SLAVE) — the nodes the local search and the penalty
 // read. An untracked slave of a pair whose slaves are on no master facet (FLAG_SLAVES_APART) is
-// read for the budget (its position and reference: 40 bytes with its id and hit word) and not
-// written: nothing reads its node before the next global search, whose to_local writes every
-// node first. A non-finite coordinate of a node that is no motion node is named by that to_local:
+// read for the budget (its position and reference, whose w is its state: 36 bytes with its id)
+// and not written: nothing reads its node before the next global search, whose to_local writes
+// every node first.
+//
+// Node order: the motion nodes are visited in node order, and a slave's state is read beside its
+// reference, by node, not from its hit (by slave: in Morton order, a scattered read per slave).
+// The caller's positions, the references and the frame's nodes are then read in node order
+// whatever order the pair keeps its slaves in. A non-finite coordinate of a node that is no motion node is named by that to_local:
 // at the next global search.
 
 @group(0) @binding(0) var<uniform> params: SearchParams;
@@ -48,7 +54,6 @@
 @group(0) @binding(2) var<storage, read_write> reference: array<vec4<f32>>;
 @group(0) @binding(3) var<storage, read> motion_nodes: array<u32>;
 @group(0) @binding(4) var<storage, read_write> status: array<atomic<u32>>;
-@group(0) @binding(5) var<storage, read> hits: array<Hit>;
 @group(0) @binding(6) var<storage, read> adjacency: array<u32>;
 @group(0) @binding(7) var<uniform> frame: FrameParams;
 @group(0) @binding(8) var<storage, read> positions: array<vec4<f32>>;
@@ -142,10 +147,10 @@ fn motion(@builtin(workgroup_id) wg: vec3<u32>,
         if (k < params.n_slaves) {
             let apart = (params.flags & FLAG_SLAVES_APART) != 0u;
             master = !apart && adjacency[id] != adjacency[id + 1u];
-            let tracked = hits[k].node != NO_NODE;
-            write = master || tracked || (params.flags & FLAG_EVERY_SLAVE) != 0u;
-            // an untracked slave has no facet
-            counts = master || !tracked || hits[k].facet == NO_FACET;
+            let state = reference[id].w;
+            write = master || state >= SLAVE_TRACKED || (params.flags & FLAG_EVERY_SLAVE) != 0u;
+            // untracked, or tracked with no facet within the radius
+            counts = master || state < SLAVE_WITHIN;
         } else {
             master = adjacency[id] != adjacency[id + 1u];
         }
@@ -165,6 +170,8 @@ fn motion(@builtin(workgroup_id) wg: vec3<u32>,
     box_finish(li);
 }
 
+// Global increments: each motion node's position becomes the budget's reference, a slave's state
+// untracked until active_mark, which runs next, writes it from the new hit.
 @compute @workgroup_size(64)
 fn set_reference(@builtin(workgroup_id) wg: vec3<u32>,
                  @builtin(num_workgroups) nwg: vec3<u32>,
@@ -172,5 +179,5 @@ fn set_reference(@builtin(workgroup_id) wg: vec3<u32>,
     let k = folded_id(wg, nwg, li, ITEM_WORKGROUP);
     if (k >= params.n_motion_nodes) { return; }
     let id = motion_nodes[k];
-    reference[id] = nodes[id];
+    reference[id] = vec4<f32>(nodes[id].xyz, 0.0);
 }

@@ -316,6 +316,8 @@ fn resident_twins_match_rust() {
     ] {
         assert_eq!(constant_u32(&m, name), v, "{name}");
     }
+    assert_eq!(constant_f32(&m, "SLAVE_TRACKED"), l::SLAVE_TRACKED);
+    assert_eq!(constant_f32(&m, "SLAVE_WITHIN"), l::SLAVE_WITHIN);
     // the params words are bound as a uniform: their offset must be a multiple of 256 bytes
     assert_eq!((4 * l::PLAN_PARAMS) % 256, 0);
     assert!(l::PLAN_PARAMS + std::mem::size_of::<SearchParams>() / 4 <= l::PLAN_SLOTS);

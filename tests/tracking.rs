@@ -10,7 +10,7 @@ use abut::mesh::{plate_quads, plate_triangles, sphere_triangles};
 use abut::model::Schedule;
 use abut::search::Trigger;
 use abut::*;
-use common::{devices, facet_distance, gpus};
+use common::{devices, facet_distance, flat_master, gpus};
 
 #[derive(Debug, Default)]
 struct Tally {
@@ -368,6 +368,79 @@ fn large_motion_triggers_the_budget() {
         eprintln!("{d}: {t:?}");
         assert!(t.compared > 10_000 && t.discrepancies == 0, "{d}: {t:?}");
         assert!(t.budget >= 3, "{d}: {t:?}");
+    }
+}
+
+/// A tracked slave's state follows it between global searches. A slave within the radius is
+/// not counted by the motion budget (the local search follows it); one that leaves the radius in
+/// a local increment is counted from the next one on (tracked from beyond the radius, its walk
+/// may have far to go), so moving more than half the budget away asks for a global search then.
+/// The motion pass visits the slaves in node order and reads each one's state by node: the node
+/// set lists them against node order here, so a state read for the wrong slave shows. 2D and
+/// 3D, with and without slaves leaving, every device.
+#[test]
+fn a_slave_leaving_the_radius_is_counted_by_the_budget_from_the_next_increment() {
+    for dim in [2, 3] {
+        let (mut m, master, h) = flat_master(dim);
+        let radius = 1.5 * h;
+        let up = if dim == 3 { 2 } else { 1 };
+        let count = if dim == 3 { 49 } else { 30 };
+        let start: Vec<[f64; 3]> = (0..count)
+            .map(|i| {
+                let mut q = if dim == 3 {
+                    [0.2 + 0.1 * (i % 7) as f64, 0.2 + 0.1 * (i / 7) as f64, 0.0]
+                } else {
+                    [0.2 + 0.02 * i as f64, 0.0, 0.0]
+                };
+                q[up] = 0.5 * radius;
+                q
+            })
+            .collect();
+        let first = m.positions().len();
+        let r = m.add_nodes(&start, &vec![1.0; count]).unwrap();
+        let listed: Vec<u32> = r.to_vec().into_iter().rev().collect();
+        let set = m.add_node_set(&listed).unwrap();
+        let p = m
+            .add_pair(Pair::new(set, master).search_radius(radius))
+            .unwrap();
+        let base = m.positions().to_vec();
+        for leaving in [false, true] {
+            // increment 1: every slave slides 0.4 radius (within the radius: not counted, though
+            // more than half the budget), and every fifth rises 0.8 radius, out of it;
+            // increment 2: nobody moves
+            let at = |k: usize| {
+                let mut x = base.clone();
+                if k >= 1 {
+                    for (i, q) in x[first..].iter_mut().enumerate() {
+                        q[0] += 0.4 * radius;
+                        if leaving && i % 5 == 2 {
+                            q[up] += 0.8 * radius;
+                        }
+                    }
+                }
+                x
+            };
+            for d in devices() {
+                let mut s = GlobalSearch::new(&d, &m, p).unwrap();
+                s.set_schedule(schedule(100)).unwrap();
+                let triggers: Vec<(Trigger, f64)> = (0..3)
+                    .map(|k| {
+                        let r = s.step(&at(k)).unwrap();
+                        (r.stats.trigger, r.stats.motion / radius)
+                    })
+                    .collect();
+                let what = format!("{d}, {dim}D, slaves leaving: {leaving}: {triggers:?}");
+                assert_eq!(triggers[0].0, Trigger::First, "{what}");
+                assert_eq!(triggers[1], (Trigger::Local, 0.0), "{what}");
+                if leaving {
+                    assert_eq!(triggers[2].0, Trigger::Budget, "{what}");
+                    // the leavers' slide and rise
+                    assert!((triggers[2].1 - 0.4f64.hypot(0.8)).abs() < 1e-3, "{what}");
+                } else {
+                    assert_eq!(triggers[2], (Trigger::Local, 0.0), "{what}");
+                }
+            }
+        }
     }
 }
 

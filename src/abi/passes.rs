@@ -42,7 +42,8 @@ pub enum Buf {
     Status,
     /// One `Hit` per slave.
     Hits,
-    /// Grid-local positions at the last global search (the motion budget's reference).
+    /// Grid-local positions at the last global search (the motion budget's reference, xyz) and,
+    /// in w, each slave's tracking state (`SLAVE_TRACKED`, `SLAVE_WITHIN`), by model node.
     Reference,
     /// The nodes whose motion the budget watches.
     MotionNodes,
@@ -400,9 +401,9 @@ pub const NEAREST_FACET: Pass = Pass {
     per_workgroup: ITEM_WORKGROUP,
 };
 
-/// `motion.wgsl`: every increment, the motion nodes into the frame where the local passes read
-/// them (the master's box raised, non-finite nodes named), and the largest motion since the
-/// last global search against the budget.
+/// `motion.wgsl`: every increment, the motion nodes (in node order) into the frame where the
+/// local passes read them (the master's box raised, non-finite nodes named), and the largest
+/// motion since the last global search against the budget.
 pub const MOTION: Pass = Pass {
     stem: "motion",
     entry: "motion",
@@ -412,7 +413,6 @@ pub const MOTION: Pass = Pass {
         b(2, Reference, RW),
         b(3, MotionNodes, R),
         b(4, Status, RW),
-        b(5, Hits, R),
         b(6, Adjacency, R),
         b(7, FrameParams, U),
         b(8, Positions, R),
@@ -445,7 +445,8 @@ pub const SCHEDULE: Pass = Pass {
     per_workgroup: 1,
 };
 
-/// `local_search.wgsl`: each active slave's walk from its tracked node.
+/// `local_search.wgsl`: each active slave's walk from its tracked node (its hit, and its tracking
+/// state in its reference's w).
 pub const LOCAL_SEARCH: Pass = Pass {
     stem: "local_search",
     entry: "local_search",
@@ -457,17 +458,25 @@ pub const LOCAL_SEARCH: Pass = Pass {
         b(4, Adjacency, R),
         b(5, Status, RW),
         b(6, Hits, RW),
+        b(7, Reference, RW),
     ],
     items: Items::ActiveSlaves,
     per_workgroup: ITEM_WORKGROUP,
 };
 
 /// `active.wgsl`: each slave marked for the local increments (tracked, or every slave with
-/// `FLAG_EVERY_SLAVE`) into the work items' first level, to be scanned.
+/// `FLAG_EVERY_SLAVE`) into the work items' first level, to be scanned; its tracking state
+/// into its reference's w.
 pub const ACTIVE_MARK: Pass = Pass {
     stem: "active",
     entry: "active_mark",
-    bindings: &[b(0, SearchParams, U), b(1, Hits, R), b(2, Work, RW)],
+    bindings: &[
+        b(0, SearchParams, U),
+        b(1, Hits, R),
+        b(2, Work, RW),
+        b(4, Slaves, R),
+        b(5, Reference, RW),
+    ],
     items: Items::Slaves,
     per_workgroup: ITEM_WORKGROUP,
 };

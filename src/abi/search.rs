@@ -100,6 +100,24 @@ pub const FLAG_SLAVES_APART: u32 = 8;
 /// Flag: the global search bins the facets into a hashed grid of cells and visits a slave's
 /// cells in rings outward (`buckets.wgsl`) in place of the tree's walk (WGSL: `FLAG_BUCKETS`).
 pub const FLAG_BUCKETS: u32 = 16;
+/// A slave's tracking state, in the w of its motion reference (by node, which the motion pass
+/// reads in node order): tracked, with no facet within the radius; below it, untracked
+/// (WGSL: `SLAVE_TRACKED`).
+pub const SLAVE_TRACKED: f32 = 1.0;
+/// A slave's tracking state: tracked, with a facet within the radius (WGSL: `SLAVE_WITHIN`).
+pub const SLAVE_WITHIN: f32 = 2.0;
+
+/// The tracking state `hit` leaves its slave in: 0 untracked, [`SLAVE_TRACKED`] or
+/// [`SLAVE_WITHIN`] (WGSL: `slave_state`).
+pub fn slave_state(hit: &GpuHit) -> f32 {
+    if hit.node == u32::MAX {
+        0.0
+    } else if hit.facet == NO_FACET {
+        SLAVE_TRACKED
+    } else {
+        SLAVE_WITHIN
+    }
+}
 /// Walk iterations of the local search before it gives up (WGSL default).
 pub const MAX_LOCAL_ITERATIONS: u32 = 16;
 

@@ -113,18 +113,17 @@ use Per::*;
 /// (the global search's).
 pub fn touches(pass: &Pass) -> Option<&'static [Touch]> {
     let list: &'static [Touch] = match pass.entry {
-        // the node's id and the caller's position; a slave's hit (its tracked node, and for one
-        // tracked its facet); the node in the frame read (its mass) and written where the local
-        // passes read it (not for an untracked slave: FLAG_SLAVES_APART); a master node's
-        // adjacency range (the box); the reference of every node the budget counts (not a
-        // slave within the radius)
+        // the node's id and the caller's position (in node order); the node in the frame read
+        // (its mass) and written where the local passes read it (not for an untracked slave:
+        // FLAG_SLAVES_APART); a master node's adjacency range (the box); the reference of every
+        // node the budget counts, whose w is a slave's tracking state, and of a slave within
+        // the radius, which the budget does not count, that state word alone
         "motion" => {
             const {
                 &[
                     t(MotionNodes, R, WORD, One, Each),
                     t(Positions, R, VEC4, One, Each),
-                    t(Hits, R, WORD, One, Slave),
-                    t(Hits, R, WORD, One, NearSlave),
+                    t(Reference, R, WORD, One, NearSlave),
                     t(Nodes, R, VEC4, One, NearOrMaster),
                     t(Nodes, W, VEC4, One, NearOrMaster),
                     t(Adjacency, R, 2 * WORD, One, Master),
@@ -134,14 +133,15 @@ pub fn touches(pass: &Pass) -> Option<&'static [Touch]> {
             }
         }
         "schedule" | "pair_stats" | "finish_stats" => &[],
-        // the active slave's index; its hit; the slave's node and id, the tracked node's facet
-        // range and facets with their nodes; the hit written back (its items are the active
-        // slaves: within the radius, or tracked from within the tracking radius)
+        // the active slave's index; its hit's tracked node and facet; the slave's node and id, the tracked node's facet
+        // range and facets with their nodes; the hit written back, and the slave's tracking
+        // state in its reference's w (its items are the active slaves: within the radius, or
+        // tracked from within the tracking radius)
         "local_search" => {
             const {
                 &[
                     t(Status, R, WORD, One, Each),
-                    t(Hits, R, HIT, One, Slave),
+                    t(Hits, R, 2 * WORD, One, Slave),
                     t(Slaves, R, WORD, One, NearSlave),
                     t(Nodes, R, VEC4, One, NearSlave),
                     t(Adjacency, R, 2 * WORD, One, NearSlave),
@@ -149,6 +149,7 @@ pub fn touches(pass: &Pass) -> Option<&'static [Touch]> {
                     t(Facets, R, VEC4, NodeFacet, NearSlave),
                     t(Nodes, R, VEC4, NodeFacetNode, NearSlave),
                     t(Hits, W, HIT, One, NearSlave),
+                    t(Reference, W, WORD, One, NearSlave),
                 ]
             }
         }
@@ -215,14 +216,16 @@ pub fn touches(pass: &Pass) -> Option<&'static [Touch]> {
             }
         }
         // the active slave's index (scatter_forces_active; counted for both), the output and
-        // the hit; in contact, the facet's pair nodes, and each master node's sums read and
-        // written (once per node: the slaves sharing it meet in cache)
+        // the hit's facet; in contact, the hit's weights, the facet's pair nodes, and each
+        // master node's sums read and written (once per node: the slaves sharing it meet in
+        // cache)
         "scatter_forces" | "scatter_forces_active" => {
             const {
                 &[
                     t(Status, R, WORD, One, Each),
                     t(Out, R, OUT, One, Slave),
-                    t(Hits, R, HIT, One, Slave),
+                    t(Hits, R, WORD, One, Slave),
+                    t(Hits, R, VEC4, One, NearSlave),
                     t(FacetNodes, R, VEC4, One, NearSlave),
                     t(Acc, R, SUMS, One, EachMasterNode),
                     t(Acc, W, SUMS, One, EachMasterNode),
@@ -489,7 +492,7 @@ mod tests {
     }
 
     /// A slave beyond the radius, in a pair whose slaves are no master nodes, costs the motion
-    /// pass its id, hit word, position and reference (40 bytes) and nothing else in a local
+    /// pass its id, position and reference (whose w is its state: 36 bytes) and nothing else in a local
     /// increment: the normals and the active gather and add_forces do not visit it (the gather
     /// and add_forces over every pair node, which global increments run, read its hit word); a
     /// master node under no contact costs the normals, gather and add_forces its need word
@@ -502,7 +505,7 @@ mod tests {
             nodes_per_facet: 4.0,
         };
         let far = |pass| bytes_per_slave(pass, &no_master, 0.0).unwrap();
-        assert_eq!(far(&passes::MOTION), (2 * WORD + 2 * VEC4) as f64);
+        assert_eq!(far(&passes::MOTION), (WORD + 2 * VEC4) as f64);
         assert_eq!(far(&passes::NODAL_NORMALS_NEEDED), 0.0);
         assert_eq!(far(&passes::GATHER), WORD as f64);
         assert_eq!(far(&passes::ADD_FORCES), WORD as f64);
@@ -513,7 +516,7 @@ mod tests {
             .filter(|p| p.entry != "integrate")
             .map(|p| far(p))
             .sum();
-        assert_eq!(total, 40.0);
+        assert_eq!(total, 36.0);
         // a master node under no contact: its need word in the normals, gather and add_forces
         let plate = Topology {
             masters_per_slave: 0.25,

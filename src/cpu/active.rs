@@ -1,7 +1,7 @@
 //! CPU mirror of `shaders/active.wgsl`: the active slaves a global search leaves, compacted in
 //! slave order for the local increments' slave passes.
 
-use crate::abi::search::{GpuHit, SearchParams, FLAG_EVERY_SLAVE};
+use crate::abi::search::{slave_state, GpuHit, SearchParams, FLAG_EVERY_SLAVE};
 use crate::model::NO_NODE;
 
 /// Whether local increments visit slave `i` (WGSL: `visited`).
@@ -10,11 +10,19 @@ fn visited(params: &SearchParams, hits: &[GpuHit], i: usize) -> bool {
 }
 
 /// 1 for each slave to visit, 0 for the others, and a last 0 (WGSL: `active_mark`); `work`
-/// holds at least `n_slaves + 1` words.
-pub fn active_mark(params: &SearchParams, hits: &[GpuHit], work: &mut [u32]) {
+/// holds at least `n_slaves + 1` words. Each slave's tracking state into the w of its
+/// reference (`slaves`: their model node ids).
+pub fn active_mark(
+    params: &SearchParams,
+    hits: &[GpuHit],
+    work: &mut [u32],
+    slaves: &[u32],
+    reference: &mut [[f32; 4]],
+) {
     let n = params.n_slaves as usize;
     for (i, w) in work[..n].iter_mut().enumerate() {
         *w = u32::from(visited(params, hits, i));
+        reference[slaves[i] as usize][3] = slave_state(&hits[i]);
     }
     work[n] = 0;
 }
@@ -67,7 +75,12 @@ mod tests {
             };
             let levels = crate::abi::search::ScanLevels::new(n + 1);
             let mut work = vec![7; levels.words as usize];
-            active_mark(&params, &hits, &mut work);
+            let slaves: Vec<u32> = (0..n).collect();
+            let mut reference = vec![[0.0; 4]; n as usize];
+            active_mark(&params, &hits, &mut work, &slaves, &mut reference);
+            for (h, r) in hits.iter().zip(&reference) {
+                assert_eq!(r[3], slave_state(h));
+            }
             crate::cpu::scan::scan(&levels, &mut work);
             let mut active = vec![0; n as usize + 1];
             active_compact(&params, &hits, &work, &mut active);

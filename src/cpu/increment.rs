@@ -119,7 +119,6 @@ pub(crate) fn run_entry(
             &ws.reference,
             &prep.motion_nodes,
             status,
-            &ws.hits,
             &prep.adjacency,
         ),
         Kernel::Schedule => {
@@ -135,6 +134,7 @@ pub(crate) fn run_entry(
             status,
             hits_mut(&mut ws.hits),
             &ws.active,
+            &mut ws.reference,
         ),
         Kernel::TreeRefit => {
             if let Some(tp) = tree_passes(params.tree_levels).get(e.level) {
@@ -224,7 +224,13 @@ pub(crate) fn run_entry(
         Kernel::SetReference => {
             motion::set_reference(&params, &prep.nodes, &mut ws.reference, &prep.motion_nodes)
         }
-        Kernel::ActiveMark => active::active_mark(&params, &ws.hits, &mut ws.work),
+        Kernel::ActiveMark => active::active_mark(
+            &params,
+            &ws.hits,
+            &mut ws.work,
+            &prep.slaves,
+            &mut ws.reference,
+        ),
         Kernel::ActiveCompact => {
             ws.active.resize(params.n_slaves as usize + 1, 0);
             active::active_compact(&params, &ws.hits, &ws.work, &mut ws.active)

@@ -55,7 +55,8 @@ fn has_node(facets: &[[u32; 4]], f: u32, node: u32) -> bool {
 }
 
 /// One "invocation" per active slave (WGSL: `local_search`): `active` holds the count, then
-/// the slave indices (`cpu::active`); an untracked slave keeps its hit.
+/// the slave indices (`cpu::active`); an untracked slave keeps its hit. A walked slave's
+/// tracking state goes into the w of its `reference` (by model node).
 #[allow(clippy::too_many_arguments)]
 pub fn local_search(
     params: &SearchParams,
@@ -66,6 +67,7 @@ pub fn local_search(
     status: &mut [u32],
     hits: &mut [GpuHit],
     active: &[u32],
+    reference: &mut [[f32; 4]],
 ) {
     if status[STATUS_BUDGET_EXCEEDED] != 0 {
         return;
@@ -93,6 +95,7 @@ pub fn local_search(
         .collect();
     let (mut most, mut capped) = (0, 0);
     for (i, hit, (it, cap)) in walked {
+        reference[slaves[i as usize] as usize][3] = slave_state(&hit);
         hits[i as usize] = hit;
         most = most.max(it);
         capped += cap;

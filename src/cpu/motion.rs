@@ -4,11 +4,10 @@
 use super::common::node;
 use super::to_local::check_node;
 use crate::abi::search::{
-    FrameParams, GpuHit, SearchParams, FLAG_EVERY_SLAVE, FLAG_SLAVES_APART, NO_FACET,
+    FrameParams, SearchParams, FLAG_EVERY_SLAVE, FLAG_SLAVES_APART, SLAVE_TRACKED, SLAVE_WITHIN,
 };
 use crate::abi::status::{STATUS_BUDGET_EXCEEDED, STATUS_MOTION};
 use crate::geometry::V3;
-use crate::model::NO_NODE;
 
 /// Model node `id`'s position in the frame (WGSL: `in_frame`).
 fn in_frame(frame: &FrameParams, positions: &[[f32; 4]], id: u32) -> V3<f32> {
@@ -24,8 +23,8 @@ fn in_frame(frame: &FrameParams, positions: &[[f32; 4]], id: u32) -> V3<f32> {
 /// passes read it (every master node, and every slave they visit: tracked, or all with
 /// `FLAG_EVERY_SLAVE`), named if not finite, boxed if a master node; then its motion against
 /// the budget, except for a slave with a facet within the radius at the last increment that is
-/// not a master node. Each displacement since the reference is taken relative to the pair's
-/// reference master node's (`params.ref_node`).
+/// not a master node. A slave's state is the w of its reference. Each displacement since the
+/// reference is taken relative to the pair's reference master node's (`params.ref_node`).
 #[allow(clippy::too_many_arguments)]
 pub fn motion(
     params: &SearchParams,
@@ -35,7 +34,6 @@ pub fn motion(
     reference: &[[f32; 4]],
     motion_nodes: &[u32],
     status: &mut [u32],
-    hits: &[GpuHit],
     adjacency: &[u32],
 ) {
     let on_master = |id: u32| adjacency[id as usize + 1] > adjacency[id as usize];
@@ -48,11 +46,11 @@ pub fn motion(
         let x = in_frame(frame, positions, id);
         let (master, write, counts) = if k < params.n_slaves as usize {
             let master = !apart && on_master(id);
-            let tracked = hits[k].node != NO_NODE;
+            let state = reference[id as usize][3];
             (
                 master,
-                master || tracked || every,
-                master || !tracked || hits[k].facet == NO_FACET,
+                master || state >= SLAVE_TRACKED || every,
+                master || state < SLAVE_WITHIN,
             )
         } else {
             (on_master(id), true, true)
@@ -74,8 +72,8 @@ pub fn motion(
     }
 }
 
-/// One "invocation" per motion node: its position becomes the budget's reference
-/// (WGSL: `set_reference`).
+/// One "invocation" per motion node: its position becomes the budget's reference, a slave's
+/// state untracked until `active_mark` writes it (WGSL: `set_reference`).
 pub fn set_reference(
     params: &SearchParams,
     nodes: &[[f32; 4]],
@@ -83,6 +81,7 @@ pub fn set_reference(
     motion_nodes: &[u32],
 ) {
     for &id in &motion_nodes[..params.n_motion_nodes as usize] {
-        reference[id as usize] = nodes[id as usize];
+        let n = nodes[id as usize];
+        reference[id as usize] = [n[0], n[1], n[2], 0.0];
     }
 }

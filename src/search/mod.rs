@@ -415,9 +415,10 @@ impl SearchStage {
         let master_nodes = master.nodes();
         let ref_node = reference_node(&master_nodes, model.positions());
         let self_contact = slaves.iter().any(|s| master_nodes.binary_search(s).is_ok());
-        let mut motion_nodes = slaves.clone();
+        // the slaves in node order, then the master's other nodes: motion reads by node
         let mut sorted = slaves.clone();
         sorted.sort_unstable();
+        let mut motion_nodes = sorted.clone();
         motion_nodes.extend(
             master_nodes
                 .iter()

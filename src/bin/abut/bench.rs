@@ -57,6 +57,13 @@ pub struct BenchArgs {
     /// share.md to --out.
     #[arg(long)]
     pub share: bool,
+    /// --share at these slave counts only (comma-separated; default 10^5 and 10^6).
+    #[arg(long, value_delimiter = ',')]
+    pub sizes: Vec<usize>,
+    /// --share at these shares within the radius only, percent (comma-separated; default 100,
+    /// 20, 5, 1): 100 % runs first whatever is given, the reference of the ratio against 100 %.
+    #[arg(long, value_delimiter = ',')]
+    pub shares: Vec<f64>,
     /// Only the slave order's effect: a local increment with every slave within the radius,
     /// its slaves kept in the caller's order (the bench places them at random) and in Morton
     /// order, on the CPU path and every adapter at 10^5 and 10^6 slaves (--quick: 10^4), the GPU

@@ -411,7 +411,12 @@ pub fn run(a: &BenchArgs) -> abut::Result<()> {
         md.push_str(&detail);
         md.push('\n');
     }
-    md.push_str(&crate::resident_share::section(&devices, share_sizes)?);
+    md.push_str(&crate::resident_share::section(
+        &devices,
+        share_sizes,
+        &crate::resident_share::SHARES,
+        true,
+    )?);
     let _ = writeln!(
         md,
         "The H100 estimate is the compulsory bytes of a local increment (the table's passes, {:.0} B \

@@ -14,8 +14,8 @@ use abut::{Contact, Device, GlobalSearch, PairId, ResidentIo};
 use crate::bench::{scene, BenchScene, Config};
 use crate::resident_bench::{median, resident_bytes};
 
-/// Shares of the slaves within the search radius.
-const SHARES: [f64; 4] = [1.0, 0.2, 0.05, 0.01];
+/// Shares of the slaves within the search radius (the first, 100 %, is the ratios' reference).
+pub(crate) const SHARES: [f64; 4] = [1.0, 0.2, 0.05, 0.01];
 /// Local increments timed per run (after the first, global, one).
 const INCREMENTS: usize = 8;
 /// Global searches timed per run (increments with a global search asked for, after the local
@@ -227,16 +227,34 @@ pub(crate) fn run(a: &crate::bench::BenchArgs) -> abut::Result<()> {
         .into_iter()
         .filter_map(|d| d.ok())
         .collect();
-    let sizes: &[usize] = if a.quick {
+    let sizes: &[usize] = if !a.sizes.is_empty() {
+        &a.sizes
+    } else if a.quick {
         &[10_000]
     } else {
         &[100_000, 1_000_000]
     };
+    let mut shares = vec![1.0];
+    if a.shares.is_empty() {
+        shares = SHARES.to_vec();
+    }
+    for &s in &a.shares {
+        if !(s > 0.0 && s <= 100.0) {
+            return Err(abut::Error::BadParameter {
+                name: "--shares",
+                value: format!("{s}"),
+                expected: "percentages above 0 and at most 100",
+            });
+        }
+        if s < 100.0 {
+            shares.push(s / 100.0);
+        }
+    }
     let md = format!(
         "# abut bench --share{} on {}\n\n{}",
         if a.quick { " --quick" } else { "" },
         crate::bench::machine(),
-        section(&devices, sizes)?
+        section(&devices, sizes, &shares, !a.gpu_only)?
     );
     let io_err = crate::bench::io_err;
     std::fs::create_dir_all(&a.out).map_err(|e| io_err(&a.out, e))?;
@@ -264,9 +282,15 @@ pub(crate) fn time_of(device: &Device, sc: &BenchScene) -> abut::Result<GpuTimes
     }
 }
 
-/// The section of resident.md: per device and size, a local increment at each share, with the
-/// active-slave compaction and visiting every slave.
-pub(crate) fn section(devices: &[Device], sizes: &[usize]) -> abut::Result<String> {
+/// The section of resident.md: per device (the CPU path first, with `cpu`) and size, a local
+/// increment at each of `shares` (the first is the ratios' reference), with the active-slave
+/// compaction and visiting every slave.
+pub(crate) fn section(
+    devices: &[Device],
+    sizes: &[usize],
+    shares: &[f64],
+    cpu: bool,
+) -> abut::Result<String> {
     let mut md = String::new();
     let (near, far) = (contact_bytes(1.0)?, contact_bytes(0.0)?);
     let _ = writeln!(
@@ -292,14 +316,14 @@ pub(crate) fn section(devices: &[Device], sizes: &[usize]) -> abut::Result<Strin
         md,
         "| device | slaves | within radius | compulsory bytes / slave | MB / incr. | time / incr. | GPU time of abut's passes | every slave | against every slave | against 100 % | global search | against the global search |\n|---|---|---|---|---|---|---|---|---|---|---|---|"
     );
-    let mut all = vec![Device::cpu()];
+    let mut all = if cpu { vec![Device::cpu()] } else { Vec::new() };
     all.extend(devices.iter().cloned());
     for device in &all {
         for &n in sizes {
             // runs[share][round]: (with the compaction, visiting every slave)
-            let mut runs: Vec<Vec<(GpuTimes, GpuTimes)>> = vec![Vec::new(); SHARES.len()];
+            let mut runs: Vec<Vec<(GpuTimes, GpuTimes)>> = vec![Vec::new(); shares.len()];
             for round in 0..ROUNDS {
-                for (k, share) in SHARES.iter().enumerate() {
+                for (k, share) in shares.iter().enumerate() {
                     eprintln!(
                         "{device}: {n} slaves, {:.0} % within the radius, round {}",
                         share * 100.0,
@@ -314,7 +338,7 @@ pub(crate) fn section(devices: &[Device], sizes: &[usize]) -> abut::Result<Strin
                 }
             }
             let key = |t: &GpuTimes| t.gpu.unwrap_or(t.wall);
-            for (k, share) in SHARES.iter().enumerate() {
+            for (k, share) in shares.iter().enumerate() {
                 let of = |f: &dyn Fn(usize) -> Option<f64>| -> Option<f64> {
                     let v: Option<Vec<f64>> = (0..ROUNDS).map(f).collect();
                     v.map(median)
