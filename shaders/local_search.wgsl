@@ -7,7 +7,8 @@
 //           model node's active facets within this same buffer; then the lists, increasing),
 //           5 status (atomic words; from ACTIVE_LIST the active slaves: active.wgsl),
 //           6 hits (read: the tracked node; written: the result), 7 reference (the motion
-//           budget's; written: the w of the slave's, its tracking state for motion.wgsl).
+//           budget's; written, where the slave crossed the radius: the w of the slave's, its
+//           tracking state for motion.wgsl).
 // Dispatch: one invocation per active slave (the slaves the last global search left tracked),
 //           ITEM_WORKGROUP per workgroup, folded into 2D, indirect from the plan's ACTIVE_SLOT.
 // Invariants: a slave looks only at the facets attached to its tracked master node (with
@@ -167,5 +168,9 @@ fn local_search(@builtin(workgroup_id) wg: vec3<u32>,
         }
     }
     hits[i] = hit;
-    reference[s].w = slave_state(hit);
+    // the state (tracked; with a facet within the radius or not) changes only where the slave
+    // crossed the radius: written there alone, not a scattered write by node for every slave
+    if ((hit.facet != NO_FACET) != (last != NO_FACET)) {
+        reference[s].w = slave_state(hit);
+    }
 }

@@ -41,13 +41,13 @@
 // read. An untracked slave of a pair whose slaves are on no master facet (FLAG_SLAVES_APART) is
 // read for the budget (its position and reference, whose w is its state: 36 bytes with its id)
 // and not written: nothing reads its node before the next global search, whose to_local writes
-// every node first.
+// every node first. A non-finite coordinate of a node that is no motion node is named by that
+// to_local: at the next global search.
 //
 // Node order: the motion nodes are visited in node order, and a slave's state is read beside its
 // reference, by node, not from its hit (by slave: in Morton order, a scattered read per slave).
 // The caller's positions, the references and the frame's nodes are then read in node order
-// whatever order the pair keeps its slaves in. A non-finite coordinate of a node that is no motion node is named by that to_local:
-// at the next global search.
+// whatever order the pair keeps its slaves in.
 
 @group(0) @binding(0) var<uniform> params: SearchParams;
 @group(0) @binding(1) var<storage, read_write> nodes: array<vec4<f32>>;

@@ -55,6 +55,9 @@ pub enum Of {
     /// Once per master node of the pair whatever the items (records shared by the items that
     /// touch them, updated in cache).
     EachMasterNode,
+    /// Slave nodes that crossed the search radius this increment (none in a steady increment:
+    /// counted as none).
+    Crossing,
 }
 
 /// How many records an item touches.
@@ -133,10 +136,11 @@ pub fn touches(pass: &Pass) -> Option<&'static [Touch]> {
             }
         }
         "schedule" | "pair_stats" | "finish_stats" => &[],
-        // the active slave's index; its hit's tracked node and facet; the slave's node and id, the tracked node's facet
-        // range and facets with their nodes; the hit written back, and the slave's tracking
-        // state in its reference's w (its items are the active slaves: within the radius, or
-        // tracked from within the tracking radius)
+        // the active slave's index; its hit's tracked node and facet; the slave's node and id,
+        // the tracked node's facet range and facets with their nodes; the hit written back (its
+        // items are the active slaves: within the radius, or tracked from within the tracking
+        // radius); the tracking state in the slave's reference, written only where it crossed
+        // the radius
         "local_search" => {
             const {
                 &[
@@ -149,7 +153,7 @@ pub fn touches(pass: &Pass) -> Option<&'static [Touch]> {
                     t(Facets, R, VEC4, NodeFacet, NearSlave),
                     t(Nodes, R, VEC4, NodeFacetNode, NearSlave),
                     t(Hits, W, HIT, One, NearSlave),
-                    t(Reference, W, WORD, One, NearSlave),
+                    t(Reference, W, WORD, One, Crossing),
                 ]
             }
         }
@@ -334,6 +338,7 @@ impl Topology {
                 Master | EachMasterNode => m,
                 NearMaster => m * near,
                 Near => near + m * near,
+                Crossing => 0.0,
             };
         }
         if items == Items::ActiveSlaves {
@@ -341,7 +346,7 @@ impl Topology {
             // and the master nodes they touch are the share of the master under them
             return match of {
                 Each | Slave | NearSlave => near,
-                FarSlave | Master | NearMaster => 0.0,
+                FarSlave | Master | NearMaster | Crossing => 0.0,
                 NearOrMaster | Near => near,
                 EachMasterNode => self.masters_per_slave * near,
             };
@@ -362,6 +367,7 @@ impl Topology {
             NearMaster => (per_slave - 1.0).max(0.0) * near,
             Near => per_slave.min(1.0) * near + (per_slave - 1.0).max(0.0) * near,
             EachMasterNode => self.masters_per_slave,
+            Crossing => 0.0,
         }
     }
 }
@@ -436,7 +442,12 @@ mod tests {
                 );
                 let slave_only = matches!(
                     t.of,
-                    Of::Slave | Of::NearSlave | Of::FarSlave | Of::NearOrMaster | Of::Near
+                    Of::Slave
+                        | Of::NearSlave
+                        | Of::FarSlave
+                        | Of::NearOrMaster
+                        | Of::Near
+                        | Of::Crossing
                 );
                 assert!(
                     !slave_only || pass.items != Items::One,

@@ -55,8 +55,9 @@ fn has_node(facets: &[[u32; 4]], f: u32, node: u32) -> bool {
 }
 
 /// One "invocation" per active slave (WGSL: `local_search`): `active` holds the count, then
-/// the slave indices (`cpu::active`); an untracked slave keeps its hit. A walked slave's
-/// tracking state goes into the w of its `reference` (by model node).
+/// the slave indices (`cpu::active`); an untracked slave keeps its hit. A walked slave that
+/// crossed the radius has its tracking state written into the w of its `reference` (by model
+/// node).
 #[allow(clippy::too_many_arguments)]
 pub fn local_search(
     params: &SearchParams,
@@ -95,7 +96,10 @@ pub fn local_search(
         .collect();
     let (mut most, mut capped) = (0, 0);
     for (i, hit, (it, cap)) in walked {
-        reference[slaves[i as usize] as usize][3] = slave_state(&hit);
+        // written where the slave crossed the radius alone (WGSL: the same)
+        if (hit.facet != NO_FACET) != (hits[i as usize].facet != NO_FACET) {
+            reference[slaves[i as usize] as usize][3] = slave_state(&hit);
+        }
         hits[i as usize] = hit;
         most = most.max(it);
         capped += cap;
