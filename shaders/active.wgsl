@@ -23,7 +23,8 @@
 //           nearest_facet); the work levels' scan between them.
 // Invariants: active_mark writes work[i] = 1 for a slave to visit (tracked, or every slave with
 //             FLAG_EVERY_SLAVE) and 0 otherwise, work[n_slaves] = 0, and the slave's state
-//             (slave_state: a slave's node is in no other slave's reference); after the exclusive scan,
+//             (slave_state) into its own node's reference (a node set lists a node once, so
+//             no two invocations write one word); after the exclusive scan,
 //             active_compact writes slave i at status[ACTIVE_LIST + 1 + work[i]] (slave order:
 //             the same bits every run) and the count at status[ACTIVE_LIST], from which the
 //             schedule sizes ACTIVE_SLOT in the local increments that follow. No loop.

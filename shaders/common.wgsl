@@ -49,6 +49,10 @@ const FLAG_BUCKETS: u32 = 16u;      // the global search bins facets in a hashed
 // motion pass reads in node order instead of the hit (Rust twins: SLAVE_TRACKED, SLAVE_WITHIN):
 // below SLAVE_TRACKED untracked, SLAVE_TRACKED tracked with no facet within the radius,
 // SLAVE_WITHIN tracked with one. Small whole floats: any backend stores and compares them exactly.
+// Invariant: after every pass that writes a slave's hit, its state is slave_state(hit) —
+// nearest_facet's hits by active_mark, which follows it in every global increment; local_search
+// where the facet word went from none to some or back (the only change a tracked slave's state
+// can take between global searches). anchor.wgsl keeps none: an anchored pair runs no motion.
 const SLAVE_TRACKED: f32 = 1.0;
 const SLAVE_WITHIN: f32 = 2.0;
 // The statistics' word of the node-wise bound on the springs' ω² (f32 bits; raised by add_forces,
