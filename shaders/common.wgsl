@@ -7,6 +7,10 @@ const NO_FACET: u32 = 0xffffffffu;
 // Flag in Hit.candidates: the closest point lies on a free edge or corner of the master and the
 // slave is beside it, off the facets: no contact (Rust twin: HIT_BESIDE_FREE_EDGE).
 const HIT_BESIDE_FREE_EDGE: u32 = 0x80000000u;
+// Flag in Hit.candidates: written by a settled walk that left the slave's skin valid
+// (local_search.wgsl; Rust twin: HIT_WALKED); the bits below it count facets (HIT_COUNT).
+const HIT_WALKED: u32 = 0x40000000u;
+const HIT_COUNT: u32 = 0x3fffffffu;
 const QUAD_ITERATIONS: u32 = 8u;
 const QUAD_HALVINGS: u32 = 6u;     // Rust: geometry::QUAD_HALVINGS
 const QUAD_TRUST: f32 = 0.25;      // Rust: geometry::QUAD_TRUST
@@ -82,6 +86,7 @@ const STATUS_LOCAL_ITERATIONS: u32 = 3u; // most local-search iterations
 const STATUS_MOTION: u32 = 8u;         // bits of the largest motion since the last global search
 const STATUS_LOCAL_CAPPED: u32 = 9u;   // slaves whose local walk hit the cap
 const STATUS_CROWDED: u32 = 10u;       // self-contact slaves with unconnected facets near
+const STATUS_LOCAL_WALKS: u32 = 11u;   // slaves the local search walked (past their skin)
 const STATUS_SLID_TOO_FAR: u32 = 12u;  // small sliding: slid more than an element length
 const STATUS_PLANE_OFF: u32 = 13u;     // small sliding: tangent plane > 10° off the facet
 const STATUS_DT_STABLE: u32 = 4u;      // bits of the smallest stable increment (positive f32)

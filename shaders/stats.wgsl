@@ -15,7 +15,7 @@
 @group(0) @binding(1) var<storage, read_write> plan: array<u32>;
 @group(0) @binding(2) var<storage, read_write> stats: array<atomic<u32>>;
 
-// Words of the statistics (Rust twin: IncrementStats, 72 bytes).
+// Words of the statistics (Rust twin: IncrementStats, 76 bytes).
 const STAT_STABLE_DT: u32 = 0u;      // f32: the largest stable increment the penalty springs allow
 const STAT_APPROACH_DT: u32 = 1u;    // f32: the approach limit
 const STAT_MAX_OVERCLOSURE: u32 = 2u; // f32: the largest overclosure of a spring in contact
@@ -29,12 +29,13 @@ const STAT_FALLBACKS: u32 = 8u;      // slaves whose tree walk hit its cap (all 
 const STAT_COLLAPSED: u32 = 9u;      // master facets collapsed at a global search (all pairs)
 const STAT_NONFINITE: u32 = 10u;     // the lowest node with a non-finite coordinate, NO_NODE if none
 const STAT_LOCAL_CAPPED: u32 = 11u;  // local walks stopped at the iteration cap
-const STAT_MOTION: u32 = 12u;        // f32: the largest motion since a global search
-const STAT_FIT_FAILED: u32 = 13u;    // master boxes that could not be taken (since the start)
-const STAT_FAST: u32 = 14u;          // slaves moving farther than the radius relative to the master
-const STAT_FAST_RATIO: u32 = 15u;    // f32: the largest such relative motion over the radius
-const STAT_DAMPING: u32 = 16u;       // f32: the largest contact damping ratio (constant)
-const STAT_INCREMENT: u32 = 17u;     // increments completed (since the start)
+const STAT_LOCAL_WALKS: u32 = 12u;   // slaves the local search walked (past their skin)
+const STAT_MOTION: u32 = 13u;        // f32: the largest motion since a global search
+const STAT_FIT_FAILED: u32 = 14u;    // master boxes that could not be taken (since the start)
+const STAT_FAST: u32 = 15u;          // slaves moving farther than the radius relative to the master
+const STAT_FAST_RATIO: u32 = 16u;    // f32: the largest such relative motion over the radius
+const STAT_DAMPING: u32 = 17u;       // f32: the largest contact damping ratio (constant)
+const STAT_INCREMENT: u32 = 18u;     // increments completed (since the start)
 
 @compute @workgroup_size(1)
 fn pair_stats() {
@@ -46,6 +47,7 @@ fn pair_stats() {
     atomicAdd(&stats[STAT_FALLBACKS], status[STATUS_FALLBACK]);
     atomicAdd(&stats[STAT_COLLAPSED], status[STATUS_COLLAPSED]);
     atomicAdd(&stats[STAT_LOCAL_CAPPED], status[STATUS_LOCAL_CAPPED]);
+    atomicAdd(&stats[STAT_LOCAL_WALKS], status[STATUS_LOCAL_WALKS]);
     atomicMax(&stats[STAT_MOTION], status[STATUS_MOTION]);
     atomicAdd(&stats[STAT_FAST], status[STATUS_FAST]);
     atomicMax(&stats[STAT_FAST_RATIO], status[STATUS_FAST_RATIO]);

@@ -211,7 +211,7 @@ fn hundred_thousand_facets_within_the_radius() {
         let per_slave = |r: &SearchResult| -> Vec<u32> {
             r.raw
                 .iter()
-                .map(|h| h.candidates & !abut::testing::abi::search::HIT_BESIDE_FREE_EDGE)
+                .map(|h| h.candidates & abut::testing::abi::search::HIT_COUNT)
                 .collect()
         };
         let mut counts = per_slave(&wide);

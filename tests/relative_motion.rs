@@ -623,3 +623,58 @@ fn a_budget_search_from_relative_motion_is_not_left_out() {
         );
     }
 }
+
+/// The skin of the local search (issue 35): a slave sliding slowly over a quad while the whole
+/// model travels fast walks in the first local increment after the global search (whose hit
+/// leaves no skin), is then projected on its facet alone — no walk — until its own motion
+/// (relative to the master: the travel uses none of the skin) reaches the margin its walk left,
+/// and walks again there; the walks counted (`IncrementStats::local_walks`) are the same on
+/// every device, and so are the forces.
+#[test]
+fn a_slave_within_its_skin_is_not_walked_and_the_walks_are_counted() {
+    let mut m = Model::new_3d();
+    let p = plate_quads(4, 4, 4.0, 4.0, 0.0, 0, &|_, _| 0.0);
+    let np = p.positions.len();
+    m.add_nodes(&p.positions, &vec![M_NODE; np]).unwrap();
+    let s = m.add_surface(Surface::quads(&p.facets)).unwrap();
+    // over the facet [1, 2] × [1, 2], nearest its node (1, 1), slightly overclosed
+    let r = m.add_nodes(&[[1.2, 1.35, -1e-4]], &[M_SLAVE]).unwrap();
+    let set = m.add_node_set(&r.to_vec()).unwrap();
+    m.add_pair(Pair::new(set, s).search_radius(RADIUS).enforce(penalty()))
+        .unwrap();
+    let dt = 1e-3;
+    // the model travels 0.1 per increment, the slave besides slides 0.01 (30 increments: from
+    // x = 1.2 to 1.5, over the same facet and nearest the same node)
+    let script = |k| scripted(&m, np, [100.0, -50.0, 20.0], [10.0, 0.0, 0.0], dt, k);
+    let mut runs = Vec::new();
+    for d in devices() {
+        let stats = resident(&d, &m, script, dt, 30);
+        let walks: Vec<u32> = stats.iter().map(|s| s.local_walks).collect();
+        assert_eq!(stats[0].global_searches, 1, "{d}");
+        assert!(
+            stats[1..].iter().all(|s| s.global_searches == 0),
+            "{d}: no search after the first: the travel uses no budget"
+        );
+        assert_eq!(
+            walks[1], 1,
+            "{d}: the first local increment walks: {walks:?}"
+        );
+        let within = walks[2..].iter().filter(|&&w| w == 0).count();
+        assert!(
+            within >= 10,
+            "{d}: within the skin most increments: {walks:?}"
+        );
+        assert!(
+            walks[2..].contains(&1),
+            "{d}: past the margin the slave walks again: {walks:?}"
+        );
+        assert!(
+            stats.iter().all(|s| s.active == 1),
+            "{d}: in contact throughout"
+        );
+        runs.push((d.to_string(), walks));
+    }
+    for (d, walks) in &runs[1..] {
+        assert_eq!(walks, &runs[0].1, "{d} against {}", runs[0].0);
+    }
+}

@@ -259,7 +259,7 @@ fn facet_sizes_varying_a_hundredfold() {
             let mut counts: Vec<u32> = r
                 .raw
                 .iter()
-                .map(|h| h.candidates & !abut::testing::abi::search::HIT_BESIDE_FREE_EDGE)
+                .map(|h| h.candidates & abut::testing::abi::search::HIT_COUNT)
                 .collect();
             counts.sort_unstable();
             medians.push(counts[counts.len() / 2]);
@@ -301,7 +301,9 @@ fn box_bounds_beyond_the_box_grid_act_as_infinite() {
     let found = reference.iter().filter(|h| h.facet != u32::MAX).count();
     assert!(found > 100, "too few contacts to be a test: {found}");
     let candidates = |h: &[abut::testing::abi::search::GpuHit]| -> u64 {
-        h.iter().map(|h| (h.candidates & 0x7fff_ffff) as u64).sum()
+        h.iter()
+            .map(|h| (h.candidates & abut::testing::abi::search::HIT_COUNT) as u64)
+            .sum()
     };
     assert!(
         candidates(&cpu) > 10 * candidates(&reference),

@@ -133,6 +133,18 @@ fn wgsl_twins_match_rust() {
         constant_u32(&m, "HIT_BESIDE_FREE_EDGE"),
         abut::testing::abi::search::HIT_BESIDE_FREE_EDGE
     );
+    assert_eq!(
+        constant_u32(&m, "HIT_WALKED"),
+        abut::testing::abi::search::HIT_WALKED
+    );
+    assert_eq!(
+        constant_u32(&m, "HIT_COUNT"),
+        abut::testing::abi::search::HIT_COUNT
+    );
+    assert_eq!(
+        constant_f32(&parse("local_search"), "SKIN_ROUNDOFF"),
+        abut::testing::abi::search::SKIN_ROUNDOFF
+    );
     assert_eq!(constant_u32(&m, "NO_NODE"), abut::model::NO_NODE);
     // the free-edge extension zone and the penalty's heavy-share cut, f32 twins
     assert_eq!(
@@ -330,8 +342,9 @@ fn resident_twins_match_rust() {
         std::mem::size_of::<abut::IncrementStats>(),
         abut::testing::abi::stats::STATS_WORDS * 4
     );
-    assert_eq!(constant_u32(&st, "STAT_FAST") as usize, 14);
-    assert_eq!(constant_u32(&st, "STAT_FAST_RATIO") as usize, 15);
+    assert_eq!(constant_u32(&st, "STAT_LOCAL_WALKS") as usize, 12);
+    assert_eq!(constant_u32(&st, "STAT_FAST") as usize, 15);
+    assert_eq!(constant_u32(&st, "STAT_FAST_RATIO") as usize, 16);
     assert_eq!(
         constant_u32(&st, "STAT_DAMPING") as usize,
         abut::testing::abi::stats::STATS_RESET_WORDS

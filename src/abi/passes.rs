@@ -45,6 +45,10 @@ pub enum Buf {
     /// Grid-local positions at the last global search (the motion budget's reference, xyz) and,
     /// in w, each slave's tracking state (`SLAVE_TRACKED`, `SLAVE_WITHIN`), by model node.
     Reference,
+    /// Per slave, its skin (`local_search.wgsl`): its position relative to the pair's reference
+    /// node at its last settled walk (xyz) and the margin that walk left (w), valid while its hit
+    /// carries `HIT_WALKED`.
+    Skins,
     /// The nodes whose motion the budget watches.
     MotionNodes,
     /// Small sliding: one `Anchor` per slave.
@@ -459,6 +463,7 @@ pub const LOCAL_SEARCH: Pass = Pass {
         b(5, Status, RW),
         b(6, Hits, RW),
         b(7, Reference, RW),
+        b(8, Skins, RW),
     ],
     items: Items::ActiveSlaves,
     per_workgroup: ITEM_WORKGROUP,

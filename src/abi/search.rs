@@ -20,6 +20,17 @@ pub const NO_FACET: u32 = u32::MAX;
 /// surface (an edge no other facet shares) and the slave is beside it, off the facets — the
 /// master ends there, so this is no contact whatever the gap (WGSL: `HIT_BESIDE_FREE_EDGE`).
 pub const HIT_BESIDE_FREE_EDGE: u32 = 1 << 31;
+/// Flag in [`GpuHit::candidates`]: the hit was written by a settled walk of the local search that
+/// left the slave's skin (`Buf::Skins`) valid for it; the global search's hits leave it clear
+/// (WGSL: `HIT_WALKED`).
+pub const HIT_WALKED: u32 = 1 << 30;
+/// The bits of [`GpuHit::candidates`] that count facets (the others are flags) (WGSL:
+/// `HIT_COUNT`).
+pub const HIT_COUNT: u32 = HIT_WALKED - 1;
+/// A skin's margin is shrunk by this fraction of the frame's coordinate scale (the largest
+/// coordinate of the slave and the reference node, plus the radius): more than the round-off of
+/// a projection or a distance computed in f32 (WGSL: `SKIN_ROUNDOFF`).
+pub const SKIN_ROUNDOFF: f32 = 1.0 / 16384.0;
 
 /// Uniform parameters of the search kernels. WGSL twin: `SearchParams` in common.wgsl.
 ///
@@ -215,8 +226,9 @@ pub struct GpuHit {
     /// then where the local search's walk took it.
     pub node: u32,
     /// Facets examined for this node by the search that wrote the hit (an untracked slave's,
-    /// which the local increments do not visit, by the last global search), with
-    /// [`HIT_BESIDE_FREE_EDGE`] in the top bit.
+    /// which the local increments do not visit, by the last global search; a walk's, in its
+    /// last step; a slave within its skin carries its last walk's), in the bits of
+    /// [`HIT_COUNT`], with [`HIT_BESIDE_FREE_EDGE`] and [`HIT_WALKED`] above them.
     pub candidates: u32,
     /// The slave node (model node id).
     pub slave: u32,

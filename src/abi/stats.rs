@@ -3,7 +3,7 @@
 
 use bytemuck::{Pod, Zeroable};
 
-/// What a device-resident increment leaves in its statistics buffer (72 bytes, WGSL twin: the
+/// What a device-resident increment leaves in its statistics buffer (76 bytes, WGSL twin: the
 /// `STAT_*` words of stats.wgsl). A host integrator running on the device can bind the buffer
 /// and read `stable_dt` there; the host reads it a few increments late without waiting.
 #[repr(C)]
@@ -35,6 +35,9 @@ pub struct IncrementStats {
     pub nonfinite_node: u32,
     /// Local walks stopped at the iteration cap.
     pub local_capped: u32,
+    /// Slaves the local search walked this increment; the other tracked slaves were within
+    /// their skin and projected on their facet alone.
+    pub local_walks: u32,
     /// The largest motion since a global search (model length units).
     pub motion: f32,
     /// Global searches whose master box could not be taken (no finite master node), since
@@ -53,7 +56,7 @@ pub struct IncrementStats {
     /// Increments completed since the start (this one included).
     pub increment: u32,
 }
-const _: () = assert!(std::mem::size_of::<IncrementStats>() == 72);
+const _: () = assert!(std::mem::size_of::<IncrementStats>() == 76);
 
 /// Bytes of [`IncrementStats`].
 pub const STATS_BYTES: u64 = std::mem::size_of::<IncrementStats>() as u64;
@@ -62,7 +65,7 @@ pub const STATS_BYTES: u64 = std::mem::size_of::<IncrementStats>() as u64;
 pub const STATS_WORDS: usize = std::mem::size_of::<IncrementStats>() / 4;
 
 /// Words of [`IncrementStats`] reset at the start of every increment (the last two persist).
-pub const STATS_RESET_WORDS: usize = 16;
+pub const STATS_RESET_WORDS: usize = 17;
 
 // Words of the statistics (WGSL: `STAT_*`), in [`IncrementStats`] order.
 /// The word of [`IncrementStats::stable_dt`] (WGSL: `STAT_STABLE_DT`).
@@ -89,18 +92,20 @@ pub const STAT_COLLAPSED: usize = 9;
 pub const STAT_NONFINITE: usize = 10;
 /// The word of [`IncrementStats::local_capped`] (WGSL: `STAT_LOCAL_CAPPED`).
 pub const STAT_LOCAL_CAPPED: usize = 11;
+/// The word of [`IncrementStats::local_walks`] (WGSL: `STAT_LOCAL_WALKS`).
+pub const STAT_LOCAL_WALKS: usize = 12;
 /// The word of [`IncrementStats::motion`] (WGSL: `STAT_MOTION`).
-pub const STAT_MOTION: usize = 12;
+pub const STAT_MOTION: usize = 13;
 /// The word of [`IncrementStats::fit_failed`] (WGSL: `STAT_FIT_FAILED`).
-pub const STAT_FIT_FAILED: usize = 13;
+pub const STAT_FIT_FAILED: usize = 14;
 /// The word of [`IncrementStats::fast_nodes`] (WGSL: `STAT_FAST`).
-pub const STAT_FAST: usize = 14;
+pub const STAT_FAST: usize = 15;
 /// The word of [`IncrementStats::fast_ratio`] (WGSL: `STAT_FAST_RATIO`).
-pub const STAT_FAST_RATIO: usize = 15;
+pub const STAT_FAST_RATIO: usize = 16;
 /// The word of [`IncrementStats::damping`] (WGSL: `STAT_DAMPING`).
-pub const STAT_DAMPING: usize = 16;
+pub const STAT_DAMPING: usize = 17;
 /// The word of [`IncrementStats::increment`] (WGSL: `STAT_INCREMENT`).
-pub const STAT_INCREMENT: usize = 17;
+pub const STAT_INCREMENT: usize = 18;
 
 /// The reset values of the statistics' first [`STATS_RESET_WORDS`] words.
 pub fn reset_image() -> [u32; STATS_RESET_WORDS] {

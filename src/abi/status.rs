@@ -25,9 +25,9 @@ pub const STATUS_LOCAL_CAPPED: usize = 9;
 /// Status word: self-contact slaves with unconnected facets within the radius
 /// (WGSL: `STATUS_CROWDED`).
 pub const STATUS_CROWDED: usize = 10;
-/// Status word no kernel writes (it told a grid fitted on the host was stale, before the
-/// device took the master's box at every global search), kept so the indices after it stay.
-pub const STATUS_UNUSED: usize = 11;
+/// Status word: slaves the local search walked (past their skin, or with none) this increment
+/// (WGSL: `STATUS_LOCAL_WALKS`).
+pub const STATUS_LOCAL_WALKS: usize = 11;
 /// Status word: small sliding, slave nodes that slid more than an element length from their
 /// anchor (WGSL: `STATUS_SLID_TOO_FAR`).
 pub const STATUS_SLID_TOO_FAR: usize = 12;
@@ -152,7 +152,12 @@ pub const STATUS_TABLE: [StatusWord; STATUS_WORDS] = [
         Owner::Search,
         0,
     ),
-    w(STATUS_UNUSED, "unused", Owner::Search, 0),
+    w(
+        STATUS_LOCAL_WALKS,
+        "slaves the local search walked",
+        Owner::Search,
+        0,
+    ),
     w(
         STATUS_SLID_TOO_FAR,
         "anchors slid beyond an element",
@@ -298,6 +303,10 @@ impl Status {
     /// Slaves whose local walk hit the iteration cap.
     pub fn local_capped(&self) -> u32 {
         self.0[STATUS_LOCAL_CAPPED]
+    }
+    /// Slaves the local search walked (the others were within their skin).
+    pub fn local_walks(&self) -> u32 {
+        self.0[STATUS_LOCAL_WALKS]
     }
     /// The largest motion since the last global search (grid units of length).
     pub fn motion(&self) -> f32 {

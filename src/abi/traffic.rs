@@ -58,6 +58,10 @@ pub enum Of {
     /// Slave nodes that crossed the search radius this increment (none in a steady increment:
     /// counted as none).
     Crossing,
+    /// Slave nodes within the search radius that moved past their skin and walk (none in a
+    /// steady increment: a walk is counted at its minimum, and `abut bench` reports how many
+    /// walked).
+    Walking,
 }
 
 /// How many records an item touches.
@@ -136,24 +140,29 @@ pub fn touches(pass: &Pass) -> Option<&'static [Touch]> {
             }
         }
         "schedule" | "pair_stats" | "finish_stats" => &[],
-        // the active slave's index; its hit's tracked node and facet; the slave's node and id,
-        // the tracked node's facet range and facets with their nodes; the hit written back (its
-        // items are the active slaves: within the radius, or tracked from within the tracking
-        // radius); the tracking state in the slave's reference, written only where it crossed
-        // the radius
+        // the active slave's index; its hit's tracked node, facet and count word; for a slave
+        // within its skin, its id, node and skin, the facet and its nodes; the hit written back
+        // (its items are the active slaves: within the radius, or tracked from within the
+        // tracking radius); the tracking state in the slave's reference, written only where it
+        // crossed the radius; a slave past its skin walks: the tracked node's facet range and
+        // facets with their nodes, and its new skin
         "local_search" => {
             const {
                 &[
                     t(Status, R, WORD, One, Each),
-                    t(Hits, R, 2 * WORD, One, Slave),
+                    t(Hits, R, 3 * WORD, One, Slave),
                     t(Slaves, R, WORD, One, NearSlave),
                     t(Nodes, R, VEC4, One, NearSlave),
-                    t(Adjacency, R, 2 * WORD, One, NearSlave),
-                    t(Adjacency, R, WORD, NodeFacet, NearSlave),
-                    t(Facets, R, VEC4, NodeFacet, NearSlave),
-                    t(Nodes, R, VEC4, NodeFacetNode, NearSlave),
+                    t(Facets, R, VEC4, One, NearSlave),
+                    t(Nodes, R, VEC4, FacetNode, NearSlave),
+                    t(Skins, R, VEC4, One, NearSlave),
                     t(Hits, W, HIT, One, NearSlave),
                     t(Reference, W, WORD, One, Crossing),
+                    t(Adjacency, R, 2 * WORD, One, Walking),
+                    t(Adjacency, R, WORD, NodeFacet, Walking),
+                    t(Facets, R, VEC4, NodeFacet, Walking),
+                    t(Nodes, R, VEC4, NodeFacetNode, Walking),
+                    t(Skins, W, VEC4, One, Walking),
                 ]
             }
         }
@@ -338,7 +347,7 @@ impl Topology {
                 Master | EachMasterNode => m,
                 NearMaster => m * near,
                 Near => near + m * near,
-                Crossing => 0.0,
+                Crossing | Walking => 0.0,
             };
         }
         if items == Items::ActiveSlaves {
@@ -346,7 +355,7 @@ impl Topology {
             // and the master nodes they touch are the share of the master under them
             return match of {
                 Each | Slave | NearSlave => near,
-                FarSlave | Master | NearMaster | Crossing => 0.0,
+                FarSlave | Master | NearMaster | Crossing | Walking => 0.0,
                 NearOrMaster | Near => near,
                 EachMasterNode => self.masters_per_slave * near,
             };
@@ -367,7 +376,7 @@ impl Topology {
             NearMaster => (per_slave - 1.0).max(0.0) * near,
             Near => per_slave.min(1.0) * near + (per_slave - 1.0).max(0.0) * near,
             EachMasterNode => self.masters_per_slave,
-            Crossing => 0.0,
+            Crossing | Walking => 0.0,
         }
     }
 }
@@ -448,6 +457,7 @@ mod tests {
                         | Of::NearOrMaster
                         | Of::Near
                         | Of::Crossing
+                        | Of::Walking
                 );
                 assert!(
                     !slave_only || pass.items != Items::One,

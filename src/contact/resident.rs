@@ -236,7 +236,7 @@ impl Contact {
     }
 
     /// The device buffer of the last device-resident increment's statistics
-    /// ([`IncrementStats`], 72 bytes, STORAGE | COPY_SRC): a host integrator running on the
+    /// ([`IncrementStats`], 76 bytes, STORAGE | COPY_SRC): a host integrator running on the
     /// device binds it to read `stable_dt` there. `None` on the CPU path and before the first
     /// increment.
     pub fn stats_buffer(&self) -> Option<&wgpu::Buffer> {

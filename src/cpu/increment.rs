@@ -125,17 +125,21 @@ pub(crate) fn run_entry(
             let count = ws.active.first().copied().unwrap_or(0);
             schedule::schedule(s.plan, status, s.args, count)
         }
-        Kernel::LocalSearch => local_search::local_search(
-            &params,
-            &prep.nodes,
-            &prep.facets,
-            &prep.slaves,
-            &prep.adjacency,
-            status,
-            hits_mut(&mut ws.hits),
-            &ws.active,
-            &mut ws.reference,
-        ),
+        Kernel::LocalSearch => {
+            ws.skins.resize(ws.hits.len(), [0.0; 4]);
+            local_search::local_search(
+                &params,
+                &prep.nodes,
+                &prep.facets,
+                &prep.slaves,
+                &prep.adjacency,
+                status,
+                hits_mut(&mut ws.hits),
+                &ws.active,
+                &mut ws.reference,
+                &mut ws.skins,
+            )
+        }
         Kernel::TreeRefit => {
             if let Some(tp) = tree_passes(params.tree_levels).get(e.level) {
                 tree::tree_refit(

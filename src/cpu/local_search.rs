@@ -1,12 +1,17 @@
-//! CPU mirror of `shaders/local_search.wgsl`: tracking between global searches.
+//! CPU mirror of `shaders/local_search.wgsl`: tracking between global searches, and the skin
+//! within which a slave is projected on its last facet alone (the shader's header says why that
+//! is the walk's result).
 
 use rayon::prelude::*;
 
 use super::common::{excluded, facet_box_d2, facet_collapsed, facet_node_count, node};
 use super::nearest_facet::{project, PRUNE_SLACK};
 use crate::abi::search::*;
-use crate::abi::status::{STATUS_BUDGET_EXCEEDED, STATUS_LOCAL_CAPPED, STATUS_LOCAL_ITERATIONS};
-use crate::geometry::{Projection, V3};
+use crate::abi::status::{
+    STATUS_BUDGET_EXCEEDED, STATUS_LOCAL_CAPPED, STATUS_LOCAL_ITERATIONS, STATUS_LOCAL_WALKS,
+    STATUS_MOTION,
+};
+use crate::geometry::{closest_on_triangle, Projection, V3};
 use crate::model::NO_NODE;
 
 struct Best {
@@ -14,12 +19,50 @@ struct Best {
     d2: f32,
     pr: Option<Projection<f32>>,
     candidates: u32,
+    /// The best's hull distance² (a lower bound of its distance).
+    lb2: f32,
+    /// The least lower bound² of the other facets this step examined.
+    second: f32,
+    /// This step passed over a collapsed facet.
+    collapsed: bool,
+}
+
+/// Whether `p` lies inside the tetrahedron `(a, b, c, d)`, false when it is flat (WGSL:
+/// `tet_contains`).
+fn tet_contains(p: V3<f32>, a: V3<f32>, b: V3<f32>, c: V3<f32>, d: V3<f32>) -> bool {
+    let v = (b - a).cross(c - a).dot(d - a);
+    if !(v.abs() > 0.0) {
+        return false;
+    }
+    let g = v.signum();
+    let s0 = (b - p).cross(c - p).dot(d - p) * g;
+    let s1 = (p - a).cross(c - a).dot(d - a) * g;
+    let s2 = (b - a).cross(p - a).dot(d - a) * g;
+    let s3 = (b - a).cross(c - a).dot(p - a) * g;
+    s0 >= 0.0 && s1 >= 0.0 && s2 >= 0.0 && s3 >= 0.0
+}
+
+/// Distance² from `p` to the hull of facet `fac`'s nodes, whose projection is `pr`: no point of
+/// the facet is nearer (WGSL: `hull_d2`).
+fn hull_d2(nodes: &[[f32; 4]], p: V3<f32>, fac: [u32; 4], pr: &Projection<f32>) -> f32 {
+    if facet_node_count(fac) < 4 {
+        return pr.dist2;
+    }
+    let x: [V3<f32>; 4] = std::array::from_fn(|j| node(nodes, fac[j]));
+    if tet_contains(p, x[0], x[1], x[2], x[3]) {
+        return 0.0;
+    }
+    let a = closest_on_triangle(p, x[0], x[1], x[2]).dist2;
+    let b = closest_on_triangle(p, x[0], x[2], x[3]).dist2;
+    let c = closest_on_triangle(p, x[0], x[1], x[3]).dist2;
+    let d = closest_on_triangle(p, x[1], x[2], x[3]).dist2;
+    a.min(b).min(c.min(d))
 }
 
 /// Facet `f` around the slave at `p` (WGSL: `consider`): counted unless excluded or collapsed,
 /// projected unless its nodes' box is farther than the best by more than round-off
 /// ([`PRUNE_SLACK`]), kept when nearer (ties: lowest id); the best itself is counted, not
-/// projected again.
+/// projected again; every other facet's lower bound lowers the step's second.
 #[allow(clippy::too_many_arguments)]
 fn consider(
     b: &mut Best,
@@ -32,18 +75,36 @@ fn consider(
     f: u32,
 ) {
     let fac = facets[f as usize];
-    if excluded(params, facets, adjacency, s, fac) || facet_collapsed(nodes, fac) {
+    if excluded(params, facets, adjacency, s, fac) {
+        return;
+    }
+    if facet_collapsed(nodes, fac) {
+        b.collapsed = true;
         return;
     }
     b.candidates += 1;
-    if b.facet != NO_FACET && (f == b.facet || facet_box_d2(nodes, fac, p) > b.d2 * PRUNE_SLACK) {
-        return;
+    if b.facet != NO_FACET {
+        if f == b.facet {
+            return;
+        }
+        let box_d2 = facet_box_d2(nodes, fac, p);
+        if box_d2 > b.d2 * PRUNE_SLACK {
+            b.second = b.second.min(box_d2);
+            return;
+        }
     }
     let pr = project(nodes, p, fac);
+    let lb2 = hull_d2(nodes, p, fac, &pr);
     if b.facet == NO_FACET || pr.dist2 < b.d2 || (pr.dist2 == b.d2 && f < b.facet) {
+        if b.facet != NO_FACET {
+            b.second = b.second.min(b.lb2);
+        }
         b.facet = f;
         b.d2 = pr.dist2;
         b.pr = Some(pr);
+        b.lb2 = lb2;
+    } else {
+        b.second = b.second.min(lb2);
     }
 }
 
@@ -54,10 +115,29 @@ fn has_node(facets: &[[u32; 4]], f: u32, node: u32) -> bool {
         .is_some_and(|fac| fac[..facet_node_count(*fac)].contains(&node))
 }
 
+/// The node of facet `fac` nearest `p`, ties to the lowest id (WGSL: `nearest_node`).
+fn nearest_node(nodes: &[[f32; 4]], fac: [u32; 4], p: V3<f32>) -> u32 {
+    let mut next = NO_NODE;
+    let mut nd2 = 0.0f32;
+    for &n in &fac[..facet_node_count(fac)] {
+        let d2 = (node(nodes, n) - p).length2();
+        if next == NO_NODE || d2 < nd2 || (d2 == nd2 && n < next) {
+            next = n;
+            nd2 = d2;
+        }
+    }
+    next
+}
+
+/// The largest absolute coordinate of `x` (WGSL: `max_abs`).
+fn max_abs(x: V3<f32>) -> f32 {
+    x.x.abs().max(x.y.abs()).max(x.z.abs())
+}
+
 /// One "invocation" per active slave (WGSL: `local_search`): `active` holds the count, then
 /// the slave indices (`cpu::active`); an untracked slave keeps its hit. A walked slave that
 /// crossed the radius has its tracking state written into the w of its `reference` (by model
-/// node).
+/// node); a settled walk writes the slave's skin into `skins` (by slave).
 #[allow(clippy::too_many_arguments)]
 pub fn local_search(
     params: &SearchParams,
@@ -69,47 +149,104 @@ pub fn local_search(
     hits: &mut [GpuHit],
     active: &[u32],
     reference: &mut [[f32; 4]],
+    skins: &mut [[f32; 4]],
 ) {
     if status[STATUS_BUDGET_EXCEEDED] != 0 {
         return;
     }
     let n = active.first().map_or(0, |&c| c as usize);
     let list = active.get(1..1 + n).unwrap_or(&[]);
-    let hits_in: &[GpuHit] = hits;
-    // per slave: its new hit and (iterations, 1 when its walk hit the cap), reduced as the
-    // GPU's atomics are
-    let walked: Vec<(u32, GpuHit, (u32, u32))> = list
+    let masters = f32::from_bits(status[STATUS_MOTION]);
+    let (hits_in, skins_in): (&[GpuHit], &[[f32; 4]]) = (hits, skins);
+    // per slave: its new hit, its new skin and (iterations, 1 when its walk hit the cap),
+    // reduced as the GPU's atomics are
+    type Walked = (u32, GpuHit, Option<[f32; 4]>, (u32, u32), bool);
+    let walked: Vec<Walked> = list
         .par_iter()
         .with_min_len(super::PAR_MIN)
         .filter(|&&i| hits_in[i as usize].node != NO_NODE)
         .map(|&i| {
-            let (hit, outcome) = track(
+            let (hit, skin, outcome, walked) = track(
                 params,
                 nodes,
                 facets,
                 adjacency,
                 slaves[i as usize],
                 hits_in[i as usize],
+                skins_in[i as usize],
+                masters,
             );
-            (i, hit, outcome)
+            (i, hit, skin, outcome, walked)
         })
         .collect();
-    let (mut most, mut capped) = (0, 0);
-    for (i, hit, (it, cap)) in walked {
+    let (mut most, mut capped, mut walks) = (0, 0, 0);
+    for (i, hit, skin, (it, cap), walked_slave) in walked {
         // written where the slave crossed the radius alone (WGSL: the same)
         if (hit.facet != NO_FACET) != (hits[i as usize].facet != NO_FACET) {
             reference[slaves[i as usize] as usize][3] = slave_state(&hit);
         }
         hits[i as usize] = hit;
+        if let Some(skin) = skin {
+            skins[i as usize] = skin;
+        }
+        walks += u32::from(walked_slave);
         most = most.max(it);
         capped += cap;
     }
     status[STATUS_LOCAL_ITERATIONS] = status[STATUS_LOCAL_ITERATIONS].max(most);
     status[STATUS_LOCAL_CAPPED] += capped;
+    status[STATUS_LOCAL_WALKS] += walks;
 }
 
-/// Slave `s`'s walk from the tracked node of its last hit `last`: its hit, and (iterations, 1
-/// when the walk hit the cap).
+/// Slave `s`'s hit (tracked node `tracked`, facets counted `candidates` with its flags): facet
+/// `f` with projection `pr` when it is one within the radius, else none (WGSL: `write_hit`,
+/// but the tracking state, which the caller writes).
+#[allow(clippy::too_many_arguments)]
+fn hit_of(
+    params: &SearchParams,
+    nodes: &[[f32; 4]],
+    facets: &[[u32; 4]],
+    adjacency: &[u32],
+    s: u32,
+    p: V3<f32>,
+    tracked: u32,
+    f: u32,
+    pr: Option<Projection<f32>>,
+    candidates: u32,
+) -> GpuHit {
+    let mut hit = GpuHit::miss(s, candidates);
+    hit.node = tracked;
+    match pr {
+        Some(pr) if f != NO_FACET && pr.dist2 <= params.radius * params.radius => {
+            let q = pr.point;
+            hit.facet = f;
+            hit.point_gap = [q.x, q.y, q.z, (p - q).dot(pr.normal)];
+            hit.normal_dist = [pr.normal.x, pr.normal.y, pr.normal.z, pr.dist2.sqrt()];
+            hit.weights = pr.weights;
+            if super::common::beside_free_edge(
+                nodes,
+                facets,
+                adjacency,
+                f,
+                facets[f as usize],
+                pr.weights,
+                p,
+                q,
+                pr.normal,
+            ) {
+                hit.candidates |= HIT_BESIDE_FREE_EDGE;
+            }
+        }
+        _ => hit.candidates &= !HIT_WALKED,
+    }
+    hit
+}
+
+/// Slave `s`'s walk from the tracked node of its last hit `last`, or its projection on that
+/// hit's facet alone while within its `skin` (`masters`: how far the master nodes moved since
+/// the global search, `STATUS_MOTION`): its hit, its new skin when the walk left one,
+/// (iterations, 1 when the walk hit the cap), and whether it walked.
+#[allow(clippy::too_many_arguments)]
 fn track(
     params: &SearchParams,
     nodes: &[[f32; 4]],
@@ -117,15 +254,48 @@ fn track(
     adjacency: &[u32],
     s: u32,
     last: GpuHit,
-) -> (GpuHit, (u32, u32)) {
+    skin: [f32; 4],
+    masters: f32,
+) -> (GpuHit, Option<[f32; 4]>, (u32, u32), bool) {
     let mut tracked = last.node;
     let p = node(nodes, s);
-    let mut hit = GpuHit::miss(s, 0);
+    let r = node(nodes, params.ref_node);
+    let roundoff = SKIN_ROUNDOFF * (max_abs(p).max(max_abs(r)) + params.radius);
+    let hit = |tracked: u32, f: u32, pr: Option<Projection<f32>>, candidates: u32| {
+        hit_of(
+            params, nodes, facets, adjacency, s, p, tracked, f, pr, candidates,
+        )
+    };
+    if last.candidates & HIT_WALKED != 0 && has_node(facets, last.facet, tracked) {
+        // within the skin: the walk would take the same facet and stay
+        let fac = facets[last.facet as usize];
+        if !facet_collapsed(nodes, fac) {
+            let pr = project(nodes, p, fac);
+            let moved = ((p - r) - V3::new(skin[0], skin[1], skin[2]))
+                .length2()
+                .sqrt()
+                + masters;
+            if pr.dist2.sqrt() + moved + roundoff < skin[3]
+                && nearest_node(nodes, fac, p) == tracked
+            {
+                let counted = last.candidates & (HIT_COUNT | HIT_WALKED);
+                return (
+                    hit(tracked, last.facet, Some(pr), counted),
+                    None,
+                    (1, 0),
+                    false,
+                );
+            }
+        }
+    }
     let mut b = Best {
         facet: NO_FACET,
         d2: 0.0,
         pr: None,
         candidates: 0,
+        lb2: 0.0,
+        second: EMPTY_LO,
+        collapsed: false,
     };
     // the first projection: the last search's facet when it is one around the tracked node
     if has_node(facets, last.facet, tracked) {
@@ -134,25 +304,24 @@ fn track(
             let pr = project(nodes, p, fac);
             b.facet = last.facet;
             b.d2 = pr.dist2;
+            b.lb2 = hull_d2(nodes, p, fac, &pr);
             b.pr = Some(pr);
         }
     }
     let mut it = 0;
     let mut settled = false;
+    let mut wide_from;
     loop {
+        // a step: the facets counted and the skin's bounds are the last step's
+        b.candidates = 0;
+        b.second = EMPTY_LO;
+        b.collapsed = false;
         // the best carries over: it has the new tracked node
         for k in adjacency[tracked as usize]..adjacency[tracked as usize + 1] {
-            consider(
-                &mut b,
-                params,
-                nodes,
-                facets,
-                adjacency,
-                s,
-                p,
-                adjacency[k as usize],
-            );
+            let f = adjacency[k as usize];
+            consider(&mut b, params, nodes, facets, adjacency, s, p, f);
         }
+        wide_from = b.facet;
         if params.flags & FLAG_WIDE_LOCAL != 0 && b.facet != NO_FACET {
             let near = facets[b.facet as usize];
             for &n in &near[..facet_node_count(near)] {
@@ -160,16 +329,8 @@ fn track(
                     continue;
                 }
                 for q in adjacency[n as usize]..adjacency[n as usize + 1] {
-                    consider(
-                        &mut b,
-                        params,
-                        nodes,
-                        facets,
-                        adjacency,
-                        s,
-                        p,
-                        adjacency[q as usize],
-                    );
+                    let f = adjacency[q as usize];
+                    consider(&mut b, params, nodes, facets, adjacency, s, p, f);
                 }
             }
         }
@@ -178,16 +339,7 @@ fn track(
             settled = true;
             break;
         }
-        let fac = facets[b.facet as usize];
-        let mut next = NO_NODE;
-        let mut nd2 = 0.0f32;
-        for &n in &fac[..facet_node_count(fac)] {
-            let d2 = (node(nodes, n) - p).length2();
-            if next == NO_NODE || d2 < nd2 || (d2 == nd2 && n < next) {
-                next = n;
-                nd2 = d2;
-            }
-        }
+        let next = nearest_node(nodes, facets[b.facet as usize], p);
         if next == tracked {
             settled = true;
             break;
@@ -198,239 +350,22 @@ fn track(
         }
     }
     let outcome = (it, u32::from(!settled));
-    hit.candidates = b.candidates;
-    hit.node = tracked;
-    if let (true, Some(pr)) = (
-        b.facet != NO_FACET && b.d2 <= params.radius * params.radius,
-        b.pr,
-    ) {
-        let q = pr.point;
-        hit.facet = b.facet;
-        hit.point_gap = [q.x, q.y, q.z, (p - q).dot(pr.normal)];
-        hit.normal_dist = [pr.normal.x, pr.normal.y, pr.normal.z, b.d2.sqrt()];
-        hit.weights = pr.weights;
-        if super::common::beside_free_edge(
-            nodes,
-            facets,
-            adjacency,
-            b.facet,
-            facets[b.facet as usize],
-            pr.weights,
-            p,
-            q,
-            pr.normal,
-        ) {
-            hit.candidates |= HIT_BESIDE_FREE_EDGE;
-        }
+    let mut candidates = b.candidates;
+    let mut new_skin = None;
+    let within = b.d2 <= params.radius * params.radius;
+    if settled && b.facet != NO_FACET && within && !b.collapsed && wide_from == b.facet {
+        let q = p - r;
+        new_skin = Some([q.x, q.y, q.z, b.second.sqrt() - masters]);
+        candidates |= HIT_WALKED;
     }
-    (hit, outcome)
+    (
+        hit(tracked, b.facet, b.pr, candidates),
+        new_skin,
+        outcome,
+        true,
+    )
 }
 
 #[cfg(test)]
-mod tests {
-    use super::*;
-    use proptest::prelude::*;
-
-    /// The walk as it was before the box test and the carried best: every facet around the
-    /// tracked node projected at every step. The reference the pruned walk must equal.
-    fn track_every_facet(
-        params: &SearchParams,
-        nodes: &[[f32; 4]],
-        facets: &[[u32; 4]],
-        adjacency: &[u32],
-        s: u32,
-        mut tracked: u32,
-    ) -> (u32, u32, f32, u32, (u32, u32)) {
-        let p = node(nodes, s);
-        let mut candidates = 0;
-        let mut consider = |f: u32, best: &mut u32, d2: &mut f32| {
-            let fac = facets[f as usize];
-            if excluded(params, facets, adjacency, s, fac) || facet_collapsed(nodes, fac) {
-                return;
-            }
-            candidates += 1;
-            let pr = project(nodes, p, fac);
-            if *best == NO_FACET || pr.dist2 < *d2 || (pr.dist2 == *d2 && f < *best) {
-                *best = f;
-                *d2 = pr.dist2;
-            }
-        };
-        let mut it = 0;
-        let mut found: (u32, f32);
-        let settled = loop {
-            let (mut best, mut d2) = (NO_FACET, 0.0f32);
-            for k in adjacency[tracked as usize]..adjacency[tracked as usize + 1] {
-                consider(adjacency[k as usize], &mut best, &mut d2);
-            }
-            if params.flags & FLAG_WIDE_LOCAL != 0 && best != NO_FACET {
-                let near = facets[best as usize];
-                for &n in &near[..facet_node_count(near)] {
-                    if n != tracked {
-                        for q in adjacency[n as usize]..adjacency[n as usize + 1] {
-                            consider(adjacency[q as usize], &mut best, &mut d2);
-                        }
-                    }
-                }
-            }
-            it += 1;
-            found = (best, d2);
-            if best == NO_FACET {
-                break true;
-            }
-            let fac = facets[best as usize];
-            let mut next = NO_NODE;
-            let mut nd2 = 0.0f32;
-            for &n in &fac[..facet_node_count(fac)] {
-                let e = (node(nodes, n) - p).length2();
-                if next == NO_NODE || e < nd2 || (e == nd2 && n < next) {
-                    next = n;
-                    nd2 = e;
-                }
-            }
-            if next == tracked {
-                break true;
-            }
-            tracked = next;
-            if it >= params.max_local_iterations {
-                break false;
-            }
-        };
-        (
-            found.0,
-            tracked,
-            found.1,
-            candidates,
-            (it, u32::from(!settled)),
-        )
-    }
-
-    /// A warped grid of `nx` × `ny` nodes (heights and in-plane jitter from `bumps`), meshed in
-    /// quads, in triangles or (`dim` 2) in segments along x, some facets collapsed onto a
-    /// line; the slaves are extra nodes after the grid. Returns nodes, facets and adjacency
-    /// (each node's facets, increasing, as local_search.wgsl reads them).
-    fn mesh(
-        nx: usize,
-        ny: usize,
-        kind: u8,
-        bumps: &[f32],
-        slaves: &[[f32; 3]],
-    ) -> (Vec<[f32; 4]>, Vec<[u32; 4]>, Vec<u32>) {
-        let mut nodes = Vec::new();
-        for j in 0..ny {
-            for i in 0..nx {
-                let b = |k: usize| bumps[(3 * (j * nx + i) + k) % bumps.len()];
-                nodes.push([i as f32 + 0.3 * b(0), j as f32 + 0.3 * b(1), b(2), 0.0]);
-            }
-        }
-        let id = |i: usize, j: usize| (j * nx + i) as u32;
-        let mut facets = Vec::new();
-        for j in 0..ny - 1 {
-            for i in 0..nx - 1 {
-                let q = [id(i, j), id(i + 1, j), id(i + 1, j + 1), id(i, j + 1)];
-                match kind {
-                    0 => facets.push(q),
-                    1 => {
-                        facets.push([q[0], q[1], q[2], NO_NODE]);
-                        facets.push([q[0], q[2], q[3], NO_NODE]);
-                    }
-                    _ => {}
-                }
-            }
-        }
-        if kind == 2 {
-            for j in 0..ny {
-                for i in 0..nx - 1 {
-                    facets.push([id(i, j), id(i + 1, j), NO_NODE, NO_NODE]);
-                }
-            }
-        }
-        // a few facets collapsed: a node moved onto its neighbour
-        let n_grid = nodes.len();
-        for k in (0..n_grid).step_by(17) {
-            if bumps[k % bumps.len()] > 0.8 && k + 1 < n_grid {
-                nodes[k] = nodes[k + 1];
-            }
-        }
-        nodes.extend(slaves.iter().map(|s| [s[0], s[1], s[2], 0.0]));
-        let n = nodes.len();
-        let mut around = vec![Vec::new(); n];
-        for (f, fac) in facets.iter().enumerate() {
-            for &k in &fac[..facet_node_count(*fac)] {
-                around[k as usize].push(f as u32);
-            }
-        }
-        let mut adjacency = Vec::with_capacity(n + 1);
-        let mut start = n as u32 + 1;
-        for list in &around {
-            adjacency.push(start);
-            start += list.len() as u32;
-        }
-        adjacency.push(start);
-        for list in around {
-            adjacency.extend(list);
-        }
-        (nodes, facets, adjacency)
-    }
-
-    proptest! {
-        #![proptest_config(ProptestConfig { cases: 512, ..ProptestConfig::default() })]
-        /// The box test, the carried best and the first projection from the last hit's facet
-        /// change nothing but the time: the facet, tracked node, distance, facets counted and
-        /// steps are those of the walk that projects every facet at every step — on warped
-        /// quads, triangles and segments, with and without the wide search, with self-contact
-        /// (the slave one of the grid's own nodes), from any tracked node and any last facet.
-        #[test]
-        fn pruning_changes_nothing_but_the_time(
-            kind in 0u8..3,
-            bumps in prop::collection::vec(-1.0f32..1.0, 16..64),
-            slaves in prop::collection::vec(
-                (-1.0f32..8.0, -1.0f32..8.0, -2.0f32..2.0).prop_map(|(x, y, z)| [x, y, z]),
-                1..8,
-            ),
-            start in 0u32..64,
-            last in 0u32..300,
-            wide in any::<bool>(),
-            self_contact in any::<bool>(),
-            iterations in 1u32..6,
-        ) {
-            let (nx, ny) = (8, if kind == 2 { 1 } else { 7 });
-            let (nodes, facets, adjacency) = mesh(nx, ny, kind, &bumps, &slaves);
-            let n_grid = (nx * ny) as u32;
-            let params = SearchParams {
-                radius: 1.5,
-                n_facets: facets.len() as u32,
-                max_local_iterations: iterations,
-                flags: (u32::from(wide) * FLAG_WIDE_LOCAL) | (u32::from(self_contact) * FLAG_SELF_CONTACT),
-                ..bytemuck::Zeroable::zeroed()
-            };
-            let mut s_list: Vec<u32> = (n_grid..nodes.len() as u32).collect();
-            if self_contact {
-                s_list.push(start % n_grid);
-            }
-            for s in s_list {
-                let tracked = (start * 7 + s) % n_grid;
-                // the last hit's facet: mostly one around the tracked node, else any or none
-                let around = &adjacency[adjacency[tracked as usize] as usize
-                    ..adjacency[tracked as usize + 1] as usize];
-                let facet = match (last, around.len() as u32) {
-                    (l, n) if l < 200 && n > 0 => around[(l % n) as usize],
-                    (l, _) if l < 250 && l < facets.len() as u32 => l,
-                    _ => NO_FACET,
-                };
-                let hit_in = GpuHit { node: tracked, facet, ..GpuHit::miss(s, 0) };
-                let (hit, outcome) = track(&params, &nodes, &facets, &adjacency, s, hit_in);
-                let (best, node, d2, candidates, steps) =
-                    track_every_facet(&params, &nodes, &facets, &adjacency, s, tracked);
-                prop_assert_eq!(outcome, steps);
-                prop_assert_eq!(hit.node, node);
-                prop_assert_eq!(hit.candidates & !HIT_BESIDE_FREE_EDGE, candidates);
-                if best != NO_FACET && d2 <= params.radius * params.radius {
-                    prop_assert_eq!(hit.facet, best);
-                    prop_assert_eq!(hit.normal_dist[3].to_bits(), d2.sqrt().to_bits());
-                } else {
-                    prop_assert_eq!(hit.facet, NO_FACET);
-                }
-            }
-        }
-    }
-}
+#[path = "local_search_tests.rs"]
+mod tests;

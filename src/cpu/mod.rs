@@ -151,6 +151,8 @@ pub struct CpuWorkspace {
     pub hits: Arc<Vec<GpuHit>>,
     /// Positions at the last global search (motion budget).
     pub reference: Vec<[f32; 4]>,
+    /// Per slave, its skin (`Buf::Skins`), sized with the hits by the local search.
+    pub skins: Vec<[f32; 4]>,
     /// Nearest-facet work items: each slave's chunk count, scanned to its first item.
     pub work: Vec<u32>,
     /// Nearest-facet record per walk position (`BEST_WORDS` words).

@@ -150,6 +150,10 @@ impl CpuSearch {
             Buf::Status => bytemuck::cast_slice_mut(&mut ws.status),
             Buf::Hits => bytemuck::cast_slice_mut(super::hits_mut(&mut ws.hits)),
             Buf::Reference => bytemuck::cast_slice_mut(&mut ws.reference),
+            Buf::Skins => {
+                ws.skins.resize(n, [0.0; 4]);
+                bytemuck::cast_slice_mut(&mut ws.skins)
+            }
             Buf::Plan => bytemuck::cast_slice_mut(&mut r.plan),
             Buf::Args => bytemuck::cast_slice_mut(&mut r.args),
             Buf::Boxes => bytemuck::cast_slice_mut(&mut ws.boxes),

@@ -14,6 +14,7 @@ pub fn pair_stats(status: &[u32], plan: &mut [u32], stats: &mut [u32; STATS_WORD
     stats[STAT_FALLBACKS] += status[STATUS_FALLBACK];
     stats[STAT_COLLAPSED] += status[STATUS_COLLAPSED];
     stats[STAT_LOCAL_CAPPED] += status[STATUS_LOCAL_CAPPED];
+    stats[STAT_LOCAL_WALKS] += status[STATUS_LOCAL_WALKS];
     stats[STAT_MOTION] = stats[STAT_MOTION].max(status[STATUS_MOTION]);
     stats[STAT_FAST] += status[STATUS_FAST];
     stats[STAT_FAST_RATIO] = stats[STAT_FAST_RATIO].max(status[STATUS_FAST_RATIO]);

@@ -73,6 +73,8 @@ struct Buffers {
     hits: GrowBuffer,
     readback: GrowBuffer,
     reference: GrowBuffer,
+    /// Per slave, its skin (`Buf::Skins`).
+    skins: GrowBuffer,
     adjacency: GrowBuffer,
     motion_nodes: GrowBuffer,
     anchors: GrowBuffer,
@@ -165,6 +167,7 @@ impl GpuSearch {
             hits: GrowBuffer::new(device, "hits", 0, storage | U::COPY_SRC),
             readback: GrowBuffer::new(device, "readback", 0, U::MAP_READ | U::COPY_DST),
             reference: GrowBuffer::new(device, "reference positions", 0, storage | U::COPY_SRC),
+            skins: GrowBuffer::new(device, "skins", 0, storage | U::COPY_SRC),
             adjacency: GrowBuffer::new(device, "node facets", 0, storage),
             motion_nodes: GrowBuffer::new(device, "motion nodes", 0, storage),
             anchors: GrowBuffer::new(device, "anchors", 0, storage),
@@ -255,6 +258,7 @@ impl GpuSearch {
             .status
             .ensure(d, l, STATUS_BYTES + 4 * (prep.slaves.len() as u64 + 1))?;
         replaced |= b.reference.ensure(d, l, (prep.n_nodes * 16) as u64)?;
+        replaced |= b.skins.ensure(d, l, (prep.slaves.len() * 16) as u64)?;
         replaced |= b.anchors.ensure(
             d,
             l,
@@ -293,6 +297,7 @@ impl GpuSearch {
             Buf::Status | Buf::Active => &b.status.buffer,
             Buf::Hits => &b.hits.buffer,
             Buf::Reference => &b.reference.buffer,
+            Buf::Skins => &b.skins.buffer,
             Buf::Plan => &b.plan,
             Buf::Args => &b.args,
             Buf::Boxes => &b.boxes.buffer,
@@ -328,6 +333,7 @@ impl GpuSearch {
             Buf::Status => b.status.buffer.as_entire_binding(),
             Buf::Hits => b.hits.buffer.as_entire_binding(),
             Buf::Reference => b.reference.buffer.as_entire_binding(),
+            Buf::Skins => b.skins.buffer.as_entire_binding(),
             Buf::MotionNodes => b.motion_nodes.buffer.as_entire_binding(),
             Buf::Anchors => b.anchors.buffer.as_entire_binding(),
             Buf::Work => b.work.buffer.as_entire_binding(),

@@ -150,7 +150,7 @@ impl GpuIncrement {
         &self.rows
     }
 
-    /// The statistics buffer (`IncrementStats`, 72 bytes, STORAGE | COPY_SRC).
+    /// The statistics buffer (`IncrementStats`, 76 bytes, STORAGE | COPY_SRC).
     pub(crate) fn stats(&self) -> &wgpu::Buffer {
         &self.stats
     }

@@ -78,7 +78,7 @@ pub struct SearchStats {
     /// device took it in the kernels' frame ([`SearchResult::frame`]).
     pub master_box: [[f64; 3]; 2],
     /// Facet–node distance evaluations in the nearest-facet step (the tree walks' projections
-    /// and the chunks' candidates), or in a local increment the tracked slaves' walks.
+    /// and the chunks' candidates), or in a local increment those of the walks' last steps.
     pub candidates: u64,
     /// Slaves whose walk (of the tree or the buckets) reached its visit cap and was finished in
     /// chunks (global searches).
@@ -564,7 +564,7 @@ impl SearchStage {
         let candidates = raw
             .iter()
             .filter(|h| trigger != Trigger::Local || h.node != crate::model::NO_NODE)
-            .map(|h| (h.candidates & !layout::HIT_BESIDE_FREE_EDGE) as u64)
+            .map(|h| (h.candidates & layout::HIT_COUNT) as u64)
             .sum();
         SearchResult {
             slaves: self.slave_ids.clone(),

@@ -78,9 +78,19 @@ pub(crate) fn velocities(sc: &BenchScene) -> Vec<[f32; 4]> {
     v
 }
 
+/// The mean of `local_walks` over the local increments among `stats` (none: `None`).
+fn mean_walks(stats: &[abut::IncrementStats]) -> Option<f64> {
+    let local: Vec<f64> = stats
+        .iter()
+        .filter(|s| s.global_searches == 0)
+        .map(|s| s.local_walks as f64)
+        .collect();
+    (!local.is_empty()).then(|| local.iter().sum::<f64>() / local.len() as f64)
+}
+
 /// Seconds per local increment of abut's passes on the CPU path (the host's integration left
-/// out), over `INCREMENTS` after the first.
-fn cpu_run(sc: &BenchScene) -> abut::Result<f64> {
+/// out), over `INCREMENTS` after the first, and the slaves walked per local increment.
+fn cpu_run(sc: &BenchScene) -> abut::Result<(f64, Option<f64>)> {
     let mut contact = Contact::new(&Device::cpu(), &sc.model)?;
     let masses = sc.model.masses();
     let mut x = positions(sc);
@@ -109,7 +119,10 @@ fn cpu_run(sc: &BenchScene) -> abut::Result<f64> {
             }
         }
     }
-    Ok(spent / INCREMENTS as f64)
+    Ok((
+        spent / INCREMENTS as f64,
+        mean_walks(&contact.collect_stats()?),
+    ))
 }
 
 /// Seconds of one global search of the bench pair on the CPU path (`GlobalSearch::run`, the
@@ -142,6 +155,9 @@ pub(crate) struct GpuTimes {
     /// GPU seconds per local increment of each group of abut's passes (its label), where the
     /// adapter has timestamps.
     pub(crate) groups: Vec<(String, f64)>,
+    /// Slaves the local search walked per local increment (`IncrementStats::local_walks`; the
+    /// other tracked slaves were within their skin).
+    pub(crate) walks: Option<f64>,
 }
 
 /// Times the local increments of `sc` on an adapter, then [`GLOBALS`] increments that search
@@ -150,6 +166,8 @@ fn gpu_run(device: &Device, sc: &BenchScene) -> abut::Result<GpuTimes> {
     let (d, q) = wgpu_of(device)?;
     let n_nodes = sc.model.positions().len();
     let (x0, v0) = (positions(sc), velocities(sc));
+    // the statistics of every increment, collected as the device finishes them
+    let stats = std::cell::RefCell::new(Vec::new());
     let run = |timed: bool| -> abut::Result<(f64, abut::Traffic, abut::Traffic)> {
         device.enable_timestamps(timed);
         let make = |data: &[[f32; 4]]| state_buffer(d, q, data);
@@ -172,7 +190,7 @@ fn gpu_run(device: &Device, sc: &BenchScene) -> abut::Result<GpuTimes> {
                 // through abut, which reads the timestamps back
                 device.submit(d.create_command_encoder(&Default::default()))?;
             }
-            contact.collect_stats()?;
+            stats.borrow_mut().extend(contact.collect_stats()?);
             Ok(())
         };
         step(&mut contact)?;
@@ -184,6 +202,7 @@ fn gpu_run(device: &Device, sc: &BenchScene) -> abut::Result<GpuTimes> {
         }
         let _ = d.poll(wgpu::PollType::wait_indefinitely());
         let wall = t.elapsed().as_secs_f64() / INCREMENTS as f64;
+        stats.borrow_mut().extend(contact.collect_stats()?);
         let local = device.traffic().unwrap_or_default().since(&before);
         let before = device.traffic().unwrap_or_default();
         for _ in 0..GLOBALS {
@@ -213,11 +232,13 @@ fn gpu_run(device: &Device, sc: &BenchScene) -> abut::Result<GpuTimes> {
         .filter(|(label, _)| label.as_str() != groups::INTEGRATOR.label)
         .map(|(label, ns)| (label.clone(), ns / INCREMENTS as f64 / 1e9))
         .collect();
+    let walks = mean_walks(&stats.borrow());
     Ok(GpuTimes {
         wall,
         gpu: (!timed.pass_ns.is_empty()).then_some(gpu),
         search,
         groups,
+        walks,
     })
 }
 
@@ -273,11 +294,13 @@ pub(crate) fn time_of(device: &Device, sc: &BenchScene) -> abut::Result<GpuTimes
     if device.wgpu().is_some() {
         gpu_run(device, sc)
     } else {
+        let (wall, walks) = cpu_run(sc)?;
         Ok(GpuTimes {
-            wall: cpu_run(sc)?,
+            wall,
             gpu: None,
             search: Some(cpu_search(sc)?),
             groups: Vec::new(),
+            walks,
         })
     }
 }
@@ -310,11 +333,13 @@ pub(crate) fn section(
          *Global search*: one global search of the same pair on the same device — on an adapter \
          the GPU time of the `global search` group in {GLOBALS} increments that search \
          globally after the local ones, on the CPU path `GlobalSearch::run` (median of \
-         {GLOBALS}).\n"
+         {GLOBALS}). *Walked*: the slaves the local search walked per local increment \
+         (`IncrementStats::local_walks`), against those within the radius: the others were \
+         within their skin and projected on their facet alone.\n"
     );
     let _ = writeln!(
         md,
-        "| device | slaves | within radius | compulsory bytes / slave | MB / incr. | time / incr. | GPU time of abut's passes | every slave | against every slave | against 100 % | global search | against the global search |\n|---|---|---|---|---|---|---|---|---|---|---|---|"
+        "| device | slaves | within radius | compulsory bytes / slave | MB / incr. | time / incr. | GPU time of abut's passes | every slave | against every slave | against 100 % | global search | against the global search | walked |\n|---|---|---|---|---|---|---|---|---|---|---|---|---|"
     );
     let mut all = if cpu { vec![Device::cpu()] } else { Vec::new() };
     all.extend(devices.iter().cloned());
@@ -351,12 +376,13 @@ pub(crate) fn section(
                 let against_every = of(&|i| Some(key(&r[i].0) / key(&r[i].1)));
                 let against_full = of(&|i| Some(key(&r[i].0) / key(&full[i].0)));
                 let against_search = of(&|i| r[i].0.search.map(|s| key(&r[i].0) / s));
+                let walked = of(&|i| r[i].0.walks.map(|w| w / (share * n as f64)));
                 let bytes = contact_bytes(*share)?;
                 let ms = |s: Option<f64>| s.map_or("–".into(), |s| format!("{:.2} ms", s * 1e3));
                 let ratio = |x: Option<f64>| x.map_or("–".into(), |x| format!("{x:.2}"));
                 let _ = writeln!(
                     md,
-                    "| {} | {n} | {:.0} % | {bytes:.0} | {:.1} | {:.2} ms | {} | {:.2} ms | {} | {} | {} | {} |",
+                    "| {} | {n} | {:.0} % | {bytes:.0} | {:.1} | {:.2} ms | {} | {:.2} ms | {} | {} | {} | {} | {} |",
                     device.backend_name(),
                     share * 100.0,
                     bytes * n as f64 / 1e6,
@@ -367,6 +393,7 @@ pub(crate) fn section(
                     ratio(against_full),
                     ms(search),
                     ratio(against_search),
+                    walked.map_or("–".into(), |w| format!("{:.1} %", w * 100.0)),
                 );
             }
         }

@@ -165,12 +165,13 @@ pub(crate) trait IncrementExec: wgpu::WasmNotSend {
 /// Every role a device-resident increment writes, per pair (`true`) or once (`false`): what a
 /// split increment hands from one executor to the other. `tests` check it against the passes'
 /// declared access.
-pub(crate) const HANDED_OVER: [(Buf, bool); 21] = [
+pub(crate) const HANDED_OVER: [(Buf, bool); 22] = [
     (Buf::Nodes, true),
     (Buf::Status, true),
     (Buf::Active, true),
     (Buf::Hits, true),
     (Buf::Reference, true),
+    (Buf::Skins, true),
     (Buf::Plan, true),
     (Buf::Args, true),
     (Buf::Boxes, true),
