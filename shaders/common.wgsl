@@ -102,11 +102,12 @@ const STATUS_FALLBACK: u32 = 18u;     // slaves whose tree walk hit its cap (the
 const STATUS_BOX: u32 = 20u;          // 6 words: order-preserving bits of the master box, min then max
 const STATUS_COLLAPSED: u32 = 19u;    // master facets collapsed at the global search's positions (skipped)
 const STATUS_NONFINITE: u32 = 26u;    // lowest node with a non-finite coordinate, NO_NODE if none
+const STATUS_MASTER_MOTION: u32 = 28u; // bits of the largest master motion since the global search
 // After the status words (STATUS_WORDS of them, reset each increment), the same buffer keeps the
 // active slaves from one global search to the next: their count, then their slave indices
 // (active.wgsl; Rust twin: ACTIVE_LIST). They share the status buffer because the penalty pass
 // already binds the eight storage buffers WebGPU's default limits allow.
-const ACTIVE_LIST: u32 = 28u;
+const ACTIVE_LIST: u32 = 29u;
 
 // The plan of a device-resident increment: one buffer per search, u32 words (Rust twins:
 // PLAN_* in src/abi/search.rs). Words 0..16 the schedule's state, 64..88 the SearchParams

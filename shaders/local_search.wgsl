@@ -35,20 +35,21 @@
 //             every step.
 //
 // The skin: a settled walk that ends on facet F keeps, in the slave's skin, the least distance
-// from the slave to the hull of the nodes of any other facet that step examined (a lower bound
-// of that facet's distance, whatever the projection does) less how far the master nodes had
-// moved since the last global search (STATUS_MOTION: relative to the reference node), and the
-// slave's position relative to the reference node. A distance moves no more than its ends: in a
-// later increment every other facet is still at least that bound less the slave's motion since
-// the walk and the master's since the global search. While F's distance now, plus those
-// motions and the round-off (SKIN_ROUNDOFF of the coordinates), stays below it, and F's nearest
-// node is still the tracked one, the walk from that node would take F again and stay: the slave
-// is projected on F alone, with the same bits as the walk (the same projection of the same
-// positions), the facets counted carried from the walk's last step. The walk's result does not
-// depend on the skin: a skin that does not hold only costs the walk. A step that passed over a
-// collapsed facet, or whose wider search (FLAG_WIDE_LOCAL) started from another facet than F,
-// leaves no skin (HIT_WALKED clear); so do the global search's hits.
-
+// from the slave to the box of the nodes of any other facet that step examined (a lower bound
+// of that facet's distance whatever the projection's round-off: a facet lies within its
+// nodes' box) less how far the master nodes had moved since the last global search
+// (STATUS_MASTER_MOTION, relative to the reference node), and the slave's position relative to
+// the reference node. A distance moves no more than its ends: in a later increment every other
+// facet is still at least that bound less the slave's motion since the walk and the master's
+// since the global search. While F's distance now, plus those motions and the round-off
+// (SKIN_ROUNDOFF of the coordinates), stays below it, and F's nearest node is still the
+// tracked one, the walk from that node would take F again and stay: the slave is projected on
+// F alone (the walk's own first projection), with the walk's bits, the facets counted carried
+// from the walk's last step. The walk's result does not depend on the skin: a skin that does
+// not hold only costs the walk. A step that passed over a collapsed facet, or whose wider
+// search (FLAG_WIDE_LOCAL) started from another facet than F, leaves no skin (HIT_WALKED
+// clear), nor does one that would not hold even without motion (a slave far above several
+// facets at nearly its distance); the global search's hits leave none either.
 
 @group(0) @binding(0) var<uniform> params: SearchParams;
 @group(0) @binding(1) var<storage, read> nodes: array<vec4<f32>>;
@@ -69,43 +70,17 @@ struct Best {
     d2: f32,
     pr: Projection,
     candidates: u32,
-    lb2: f32,        // the best's hull distance² (a lower bound of its distance)
+    lb2: f32,        // the best's box distance² (a lower bound of its distance)
     second: f32,     // the least lower bound² of the other facets this step examined
     collapsed: bool, // this step passed over a collapsed facet
-}
-
-// Whether p lies inside the tetrahedron (a, b, c, d) (false when it is flat: its faces are its
-// hull). Rust twin: cpu::local_search::tet_contains.
-fn tet_contains(p: vec3<f32>, a: vec3<f32>, b: vec3<f32>, c: vec3<f32>, d: vec3<f32>) -> bool {
-    let v = dot(cross(b - a, c - a), d - a);
-    if (!(abs(v) > 0.0)) { return false; }
-    let g = sign(v);
-    let s0 = dot(cross(b - p, c - p), d - p) * g;
-    let s1 = dot(cross(p - a, c - a), d - a) * g;
-    let s2 = dot(cross(b - a, p - a), d - a) * g;
-    let s3 = dot(cross(b - a, c - a), p - a) * g;
-    return s0 >= 0.0 && s1 >= 0.0 && s2 >= 0.0 && s3 >= 0.0;
-}
-
-// Distance² from p to the hull of facet pts' nodes, whose projection is pr: no point of the
-// facet is nearer. A segment's or a triangle's is its projection's; a bilinear quad lies within
-// the tetrahedron of its nodes: 0 inside, else the nearest of its four faces.
-fn hull_d2(p: vec3<f32>, pts: FacetPoints, pr: Projection) -> f32 {
-    if (pts.n < 4u) { return pr.dist2; }
-    if (tet_contains(p, pts.x0, pts.x1, pts.x2, pts.x3)) { return 0.0; }
-    let a = closest_on_triangle(p, pts.x0, pts.x1, pts.x2).dist2;
-    let b = closest_on_triangle(p, pts.x0, pts.x2, pts.x3).dist2;
-    let c = closest_on_triangle(p, pts.x0, pts.x1, pts.x3).dist2;
-    let d = closest_on_triangle(p, pts.x1, pts.x2, pts.x3).dist2;
-    return min(min(a, b), min(c, d));
 }
 
 // Facet f around the slave at p: counted as examined unless excluded or collapsed; projected
 // unless its nodes' box is farther than the best by more than round-off (PRUNE_SLACK: such a
 // facet cannot be nearer, nor tie, so skipping it changes nothing but the time); kept when
 // nearer than the best (ties: lowest id). The best facet itself is counted and not projected
-// again: the same positions give the same projection. Every other facet's lower bound (its
-// box's distance², or its hull's when projected) lowers the step's second.
+// again: the same positions give the same projection. Every other facet's box distance² (a
+// lower bound of its distance, whatever the projection's round-off) lowers the step's second.
 fn consider(b: ptr<function, Best>, s: u32, p: vec3<f32>, f: u32) {
     let fac = facets[f];
     if (excluded(s, fac)) { return; }
@@ -115,24 +90,21 @@ fn consider(b: ptr<function, Best>, s: u32, p: vec3<f32>, f: u32) {
         return;
     }
     (*b).candidates += 1u;
-    if ((*b).facet != NO_FACET) {
-        if (f == (*b).facet) { return; }
-        let box_d2 = points_box_d2(p, pts);
-        if (box_d2 > (*b).d2 * PRUNE_SLACK) {
-            (*b).second = min((*b).second, box_d2);
-            return;
-        }
+    if (f == (*b).facet) { return; }
+    let box_d2 = points_box_d2(p, pts);
+    if ((*b).facet != NO_FACET && box_d2 > (*b).d2 * PRUNE_SLACK) {
+        (*b).second = min((*b).second, box_d2);
+        return;
     }
     let pr = project_points(p, pts);
-    let lb2 = hull_d2(p, pts, pr);
     if ((*b).facet == NO_FACET || pr.dist2 < (*b).d2 || (pr.dist2 == (*b).d2 && f < (*b).facet)) {
         if ((*b).facet != NO_FACET) { (*b).second = min((*b).second, (*b).lb2); }
         (*b).facet = f;
         (*b).d2 = pr.dist2;
         (*b).pr = pr;
-        (*b).lb2 = lb2;
+        (*b).lb2 = box_d2;
     } else {
-        (*b).second = min((*b).second, lb2);
+        (*b).second = min((*b).second, box_d2);
     }
 }
 
@@ -218,23 +190,8 @@ fn local_search(@builtin(workgroup_id) wg: vec3<u32>,
     let p = nodes[s].xyz;
     let r = nodes[params.ref_node].xyz;
     // how far the master nodes moved since the global search, relative to the reference node
-    let masters = bitcast<f32>(atomicLoad(&status[STATUS_MOTION]));
+    let masters = bitcast<f32>(atomicLoad(&status[STATUS_MASTER_MOTION]));
     let roundoff = SKIN_ROUNDOFF * (max(max_abs(p), max_abs(r)) + params.radius);
-    if ((counted & HIT_WALKED) != 0u && has_node(last, tracked)) {
-        // within the skin: the walk would take the same facet and stay (see the header)
-        let fac = facets[last];
-        let pts = facet_points(fac);
-        if (!facet_collapsed(pts.x0, pts.x1, pts.x2, pts.x3, pts.n)) {
-            let pr = project_points(p, pts);
-            let skin = skins[i];
-            let moved = length((p - r) - skin.xyz) + masters;
-            if (sqrt(pr.dist2) + moved + roundoff < skin.w && nearest_node(fac, p) == tracked) {
-                atomicMax(&status[STATUS_LOCAL_ITERATIONS], 1u);
-                write_hit(i, s, p, tracked, last, pr, counted & (HIT_COUNT | HIT_WALKED), last);
-                return;
-            }
-        }
-    }
     var b: Best;
     b.facet = NO_FACET;
     b.d2 = 0.0;
@@ -242,12 +199,23 @@ fn local_search(@builtin(workgroup_id) wg: vec3<u32>,
     // the first projection: the facet the last search found, when it is one around the tracked
     // node (examined and counted there), so that the box test can skip the others from the start
     if (has_node(last, tracked)) {
-        let pts = facet_points(facets[last]);
-        if (!excluded(s, facets[last]) && !facet_collapsed(pts.x0, pts.x1, pts.x2, pts.x3, pts.n)) {
+        let fac = facets[last];
+        let pts = facet_points(fac);
+        if (!excluded(s, fac) && !facet_collapsed(pts.x0, pts.x1, pts.x2, pts.x3, pts.n)) {
             b.facet = last;
             b.pr = project_points(p, pts);
             b.d2 = b.pr.dist2;
-            b.lb2 = hull_d2(p, pts, b.pr);
+            b.lb2 = points_box_d2(p, pts);
+            if ((counted & HIT_WALKED) != 0u) {
+                // within the skin: the walk would take the same facet and stay (see the header)
+                let skin = skins[i];
+                let moved = length((p - r) - skin.xyz) + masters;
+                if (sqrt(b.d2) + moved + roundoff < skin.w && nearest_node(fac, p) == tracked) {
+                    atomicMax(&status[STATUS_LOCAL_ITERATIONS], 1u);
+                    write_hit(i, s, p, tracked, last, b.pr, counted & (HIT_COUNT | HIT_WALKED), last);
+                    return;
+                }
+            }
         }
     }
     var it = 0u;
@@ -287,9 +255,12 @@ fn local_search(@builtin(workgroup_id) wg: vec3<u32>,
     atomicAdd(&status[STATUS_LOCAL_WALKS], 1u);
     if (!settled) { atomicAdd(&status[STATUS_LOCAL_CAPPED], 1u); }
     var candidates = b.candidates;
+    // a skin that would not hold even without motion is not left (its read would be wasted)
+    let margin = sqrt(b.second) - masters;
     let within = b.d2 <= params.radius * params.radius;
-    if (settled && b.facet != NO_FACET && within && !b.collapsed && wide_from == b.facet) {
-        skins[i] = vec4<f32>(p - r, sqrt(b.second) - masters);
+    if (settled && b.facet != NO_FACET && within && !b.collapsed && wide_from == b.facet
+        && sqrt(b.d2) + roundoff < margin) {
+        skins[i] = vec4<f32>(p - r, margin);
         candidates |= HIT_WALKED;
     }
     write_hit(i, s, p, tracked, b.facet, b.pr, candidates, last);

@@ -161,6 +161,7 @@ fn motion(@builtin(workgroup_id) wg: vec3<u32>,
             let base = in_frame(r) - reference[r].xyz;
             let d = length((x - reference[id].xyz) - base);
             atomicMax(&status[STATUS_MOTION], bitcast<u32>(d));
+            if (master) { atomicMax(&status[STATUS_MASTER_MOTION], bitcast<u32>(d)); }
             if (2.0 * d >= params.budget) {
                 atomicStore(&status[STATUS_BUDGET_EXCEEDED], 1u);
             }

@@ -65,8 +65,12 @@ pub const STATUS_NONFINITE: usize = 26;
 /// Status word: bits of the largest relative motion over the search radius of those slaves, a
 /// positive f32 (WGSL: `STATUS_FAST_RATIO`).
 pub const STATUS_FAST_RATIO: usize = 27;
+/// Status word: bits of the largest motion of a master node since the last global search,
+/// relative to the pair's reference node, a positive f32 (WGSL: `STATUS_MASTER_MOTION`; the
+/// local search's skins read it).
+pub const STATUS_MASTER_MOTION: usize = 28;
 /// Number of status words.
-pub const STATUS_WORDS: usize = 28;
+pub const STATUS_WORDS: usize = 29;
 
 /// Which part of an increment resets a status word.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -252,6 +256,12 @@ pub const STATUS_TABLE: [StatusWord; STATUS_WORDS] = [
         STATUS_FAST_RATIO,
         "largest relative motion over the radius (f32 bits)",
         Owner::Penalty,
+        0,
+    ),
+    w(
+        STATUS_MASTER_MOTION,
+        "largest master motion since the global search (f32 bits)",
+        Owner::Search,
         0,
     ),
 ];

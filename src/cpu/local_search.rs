@@ -9,9 +9,9 @@ use super::nearest_facet::{project, PRUNE_SLACK};
 use crate::abi::search::*;
 use crate::abi::status::{
     STATUS_BUDGET_EXCEEDED, STATUS_LOCAL_CAPPED, STATUS_LOCAL_ITERATIONS, STATUS_LOCAL_WALKS,
-    STATUS_MOTION,
+    STATUS_MASTER_MOTION,
 };
-use crate::geometry::{closest_on_triangle, Projection, V3};
+use crate::geometry::{Projection, V3};
 use crate::model::NO_NODE;
 
 struct Best {
@@ -19,7 +19,7 @@ struct Best {
     d2: f32,
     pr: Option<Projection<f32>>,
     candidates: u32,
-    /// The best's hull distance² (a lower bound of its distance).
+    /// The best's box distance² (a lower bound of its distance).
     lb2: f32,
     /// The least lower bound² of the other facets this step examined.
     second: f32,
@@ -27,42 +27,11 @@ struct Best {
     collapsed: bool,
 }
 
-/// Whether `p` lies inside the tetrahedron `(a, b, c, d)`, false when it is flat (WGSL:
-/// `tet_contains`).
-fn tet_contains(p: V3<f32>, a: V3<f32>, b: V3<f32>, c: V3<f32>, d: V3<f32>) -> bool {
-    let v = (b - a).cross(c - a).dot(d - a);
-    if !(v.abs() > 0.0) {
-        return false;
-    }
-    let g = v.signum();
-    let s0 = (b - p).cross(c - p).dot(d - p) * g;
-    let s1 = (p - a).cross(c - a).dot(d - a) * g;
-    let s2 = (b - a).cross(p - a).dot(d - a) * g;
-    let s3 = (b - a).cross(c - a).dot(p - a) * g;
-    s0 >= 0.0 && s1 >= 0.0 && s2 >= 0.0 && s3 >= 0.0
-}
-
-/// Distance² from `p` to the hull of facet `fac`'s nodes, whose projection is `pr`: no point of
-/// the facet is nearer (WGSL: `hull_d2`).
-fn hull_d2(nodes: &[[f32; 4]], p: V3<f32>, fac: [u32; 4], pr: &Projection<f32>) -> f32 {
-    if facet_node_count(fac) < 4 {
-        return pr.dist2;
-    }
-    let x: [V3<f32>; 4] = std::array::from_fn(|j| node(nodes, fac[j]));
-    if tet_contains(p, x[0], x[1], x[2], x[3]) {
-        return 0.0;
-    }
-    let a = closest_on_triangle(p, x[0], x[1], x[2]).dist2;
-    let b = closest_on_triangle(p, x[0], x[2], x[3]).dist2;
-    let c = closest_on_triangle(p, x[0], x[1], x[3]).dist2;
-    let d = closest_on_triangle(p, x[1], x[2], x[3]).dist2;
-    a.min(b).min(c.min(d))
-}
-
 /// Facet `f` around the slave at `p` (WGSL: `consider`): counted unless excluded or collapsed,
 /// projected unless its nodes' box is farther than the best by more than round-off
 /// ([`PRUNE_SLACK`]), kept when nearer (ties: lowest id); the best itself is counted, not
-/// projected again; every other facet's lower bound lowers the step's second.
+/// projected again; every other facet's box distance² (a lower bound of its distance) lowers
+/// the step's second.
 #[allow(clippy::too_many_arguments)]
 fn consider(
     b: &mut Best,
@@ -83,18 +52,15 @@ fn consider(
         return;
     }
     b.candidates += 1;
-    if b.facet != NO_FACET {
-        if f == b.facet {
-            return;
-        }
-        let box_d2 = facet_box_d2(nodes, fac, p);
-        if box_d2 > b.d2 * PRUNE_SLACK {
-            b.second = b.second.min(box_d2);
-            return;
-        }
+    if f == b.facet {
+        return;
+    }
+    let box_d2 = facet_box_d2(nodes, fac, p);
+    if b.facet != NO_FACET && box_d2 > b.d2 * PRUNE_SLACK {
+        b.second = b.second.min(box_d2);
+        return;
     }
     let pr = project(nodes, p, fac);
-    let lb2 = hull_d2(nodes, p, fac, &pr);
     if b.facet == NO_FACET || pr.dist2 < b.d2 || (pr.dist2 == b.d2 && f < b.facet) {
         if b.facet != NO_FACET {
             b.second = b.second.min(b.lb2);
@@ -102,9 +68,9 @@ fn consider(
         b.facet = f;
         b.d2 = pr.dist2;
         b.pr = Some(pr);
-        b.lb2 = lb2;
+        b.lb2 = box_d2;
     } else {
-        b.second = b.second.min(lb2);
+        b.second = b.second.min(box_d2);
     }
 }
 
@@ -156,7 +122,7 @@ pub fn local_search(
     }
     let n = active.first().map_or(0, |&c| c as usize);
     let list = active.get(1..1 + n).unwrap_or(&[]);
-    let masters = f32::from_bits(status[STATUS_MOTION]);
+    let masters = f32::from_bits(status[STATUS_MASTER_MOTION]);
     let (hits_in, skins_in): (&[GpuHit], &[[f32; 4]]) = (hits, skins);
     // per slave: its new hit, its new skin and (iterations, 1 when its walk hit the cap),
     // reduced as the GPU's atomics are
@@ -244,7 +210,7 @@ fn hit_of(
 
 /// Slave `s`'s walk from the tracked node of its last hit `last`, or its projection on that
 /// hit's facet alone while within its `skin` (`masters`: how far the master nodes moved since
-/// the global search, `STATUS_MOTION`): its hit, its new skin when the walk left one,
+/// the global search, `STATUS_MASTER_MOTION`): its hit, its new skin when the walk left one,
 /// (iterations, 1 when the walk hit the cap), and whether it walked.
 #[allow(clippy::too_many_arguments)]
 fn track(
@@ -266,28 +232,6 @@ fn track(
             params, nodes, facets, adjacency, s, p, tracked, f, pr, candidates,
         )
     };
-    if last.candidates & HIT_WALKED != 0 && has_node(facets, last.facet, tracked) {
-        // within the skin: the walk would take the same facet and stay
-        let fac = facets[last.facet as usize];
-        if !facet_collapsed(nodes, fac) {
-            let pr = project(nodes, p, fac);
-            let moved = ((p - r) - V3::new(skin[0], skin[1], skin[2]))
-                .length2()
-                .sqrt()
-                + masters;
-            if pr.dist2.sqrt() + moved + roundoff < skin[3]
-                && nearest_node(nodes, fac, p) == tracked
-            {
-                let counted = last.candidates & (HIT_COUNT | HIT_WALKED);
-                return (
-                    hit(tracked, last.facet, Some(pr), counted),
-                    None,
-                    (1, 0),
-                    false,
-                );
-            }
-        }
-    }
     let mut b = Best {
         facet: NO_FACET,
         d2: 0.0,
@@ -304,8 +248,21 @@ fn track(
             let pr = project(nodes, p, fac);
             b.facet = last.facet;
             b.d2 = pr.dist2;
-            b.lb2 = hull_d2(nodes, p, fac, &pr);
+            b.lb2 = facet_box_d2(nodes, fac, p);
             b.pr = Some(pr);
+            if last.candidates & HIT_WALKED != 0 {
+                // within the skin: the walk would take the same facet and stay
+                let moved = ((p - r) - V3::new(skin[0], skin[1], skin[2]))
+                    .length2()
+                    .sqrt()
+                    + masters;
+                if b.d2.sqrt() + moved + roundoff < skin[3]
+                    && nearest_node(nodes, fac, p) == tracked
+                {
+                    let counted = last.candidates & (HIT_COUNT | HIT_WALKED);
+                    return (hit(tracked, last.facet, b.pr, counted), None, (1, 0), false);
+                }
+            }
         }
     }
     let mut it = 0;
@@ -352,10 +309,18 @@ fn track(
     let outcome = (it, u32::from(!settled));
     let mut candidates = b.candidates;
     let mut new_skin = None;
+    // a skin that would not hold even without motion is not left (its read would be wasted)
+    let margin = b.second.sqrt() - masters;
     let within = b.d2 <= params.radius * params.radius;
-    if settled && b.facet != NO_FACET && within && !b.collapsed && wide_from == b.facet {
+    if settled
+        && b.facet != NO_FACET
+        && within
+        && !b.collapsed
+        && wide_from == b.facet
+        && b.d2.sqrt() + roundoff < margin
+    {
         let q = p - r;
-        new_skin = Some([q.x, q.y, q.z, b.second.sqrt() - masters]);
+        new_skin = Some([q.x, q.y, q.z, margin]);
         candidates |= HIT_WALKED;
     }
     (

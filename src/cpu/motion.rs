@@ -6,7 +6,7 @@ use super::to_local::check_node;
 use crate::abi::search::{
     FrameParams, SearchParams, FLAG_EVERY_SLAVE, FLAG_SLAVES_APART, SLAVE_TRACKED, SLAVE_WITHIN,
 };
-use crate::abi::status::{STATUS_BUDGET_EXCEEDED, STATUS_MOTION};
+use crate::abi::status::{STATUS_BUDGET_EXCEEDED, STATUS_MASTER_MOTION, STATUS_MOTION};
 use crate::geometry::V3;
 
 /// Model node `id`'s position in the frame (WGSL: `in_frame`).
@@ -65,6 +65,9 @@ pub fn motion(
             let base = in_frame(frame, positions, r) - node(reference, r);
             let d = ((x - node(reference, id)) - base).length2().sqrt();
             status[STATUS_MOTION] = status[STATUS_MOTION].max(d.to_bits());
+            if master {
+                status[STATUS_MASTER_MOTION] = status[STATUS_MASTER_MOTION].max(d.to_bits());
+            }
             if 2.0 * d >= params.budget {
                 status[STATUS_BUDGET_EXCEEDED] = 1;
             }
