@@ -45,34 +45,31 @@ pub struct BenchArgs {
     /// Leave out the CPU path (it dominates the run time at 10^6 slaves).
     #[arg(long)]
     pub gpu_only: bool,
-    /// Only the device-resident increment beside the host-array one (10^4–10^6 slaves, every
-    /// GPU adapter): submits, readbacks and waits, host time, GPU time per pass against the copy
-    /// kernel's bandwidth, and an H100 estimate. Writes resident.md to --out.
+    /// Only the device-resident increment beside the host-array one (10^4–10^6 slaves): submits,
+    /// readbacks, waits, host and GPU time per pass, an H100 estimate. Writes resident.md.
     #[arg(long)]
     pub resident: bool,
     /// Only --resident's second table: a local increment as the share of slaves within the
-    /// search radius falls (100, 20, 5, 1 %), with the active-slave compaction and visiting
-    /// every slave, beside one global search of the same pair, on the CPU path and every
-    /// adapter at 10^5 and 10^6 slaves (--quick: 10^4); medians over three rounds. Writes
-    /// share.md to --out.
+    /// search radius falls (100, 20, 5, 1 %), with and without the active-slave compaction,
+    /// beside one global search, at 10^5 and 10^6 slaves (--quick: 10^4). Writes share.md.
     #[arg(long)]
     pub share: bool,
     /// --share at these slave counts only (comma-separated; default 10^5 and 10^6).
     #[arg(long, value_delimiter = ',')]
     pub sizes: Vec<usize>,
-    /// --share at these shares within the radius only, percent (comma-separated; default 100,
-    /// 20, 5, 1): 100 % runs first whatever is given, the reference of the ratio against 100 %.
+    /// --share at these shares within the radius only, percent (default 100,20,5,1; 100 first).
     #[arg(long, value_delimiter = ',')]
     pub shares: Vec<f64>,
-    /// Only the slave order's effect: a local increment with every slave within the radius,
-    /// its slaves kept in the caller's order (the bench places them at random) and in Morton
-    /// order, on the CPU path and every adapter at 10^5 and 10^6 slaves (--quick: 10^4), the GPU
-    /// time of each group of passes; medians over three rounds. Writes order.md to --out.
+    /// --share with the masses resting on the plate and sliding 1 % of a facet per increment.
+    #[arg(long)]
+    pub slow: bool,
+    /// Only the slave order's effect: a local increment with the slaves in the caller's order
+    /// (at random) and in Morton order, per group of passes, at 10^5 and 10^6 slaves (--quick:
+    /// 10^4). Writes order.md.
     #[arg(long)]
     pub order: bool,
-    /// Only the global search against parry3d (one thread and rayon), every device, 10^6
-    /// slaves on 10^5 triangles within 0.5, 1 and 3 facet sizes, and the floor at 10^6 facets.
-    /// Writes search.md and search.json to --out.
+    /// Only the global search against parry3d (one thread and rayon), 10^6 slaves on 10^5
+    /// triangles within 0.5, 1 and 3 facet sizes, the floor at 10^6 facets. Writes search.md.
     #[arg(long)]
     pub search: bool,
     /// Only the penalty scale's trade on the §1 truss impact (20 and 40 elements, scales
@@ -104,8 +101,7 @@ pub(crate) struct Config {
     small: bool,
     interval: Interval,
     scale: f64,
-    /// The share of the masses that fall onto the plate (0 to 1); the others hang still far
-    /// above it, beyond the search radius.
+    /// The share of the masses that fall onto the plate (0 to 1); the others hang far above.
     pub(crate) near: f64,
     /// Local increments visit every slave instead of the active ones
     /// (`Schedule::visit_every_slave`: the baseline of the compaction).
@@ -114,6 +110,9 @@ pub(crate) struct Config {
     /// only `--order` changes it).
     #[serde(skip)]
     pub(crate) slave_order: SlaveOrder,
+    /// The masses rest on the plate and slide (`--share --slow`).
+    #[serde(skip)]
+    pub(crate) slow: bool,
 }
 
 impl Config {
@@ -127,6 +126,7 @@ impl Config {
             near: 1.0,
             every_slave: false,
             slave_order: SlaveOrder::Morton,
+            slow: false,
         }
     }
     fn label(&self) -> String {

@@ -416,6 +416,7 @@ pub fn run(a: &BenchArgs) -> abut::Result<()> {
         share_sizes,
         &crate::resident_share::SHARES,
         true,
+        false,
     )?);
     let _ = writeln!(
         md,

@@ -272,10 +272,11 @@ pub(crate) fn run(a: &crate::bench::BenchArgs) -> abut::Result<()> {
         }
     }
     let md = format!(
-        "# abut bench --share{} on {}\n\n{}",
+        "# abut bench --share{}{} on {}\n\n{}",
         if a.quick { " --quick" } else { "" },
+        if a.slow { " --slow" } else { "" },
         crate::bench::machine(),
-        section(&devices, sizes, &shares, !a.gpu_only)?
+        section(&devices, sizes, &shares, !a.gpu_only, a.slow)?
     );
     let io_err = crate::bench::io_err;
     std::fs::create_dir_all(&a.out).map_err(|e| io_err(&a.out, e))?;
@@ -307,12 +308,14 @@ pub(crate) fn time_of(device: &Device, sc: &BenchScene) -> abut::Result<GpuTimes
 
 /// The section of resident.md: per device (the CPU path first, with `cpu`) and size, a local
 /// increment at each of `shares` (the first is the ratios' reference), with the active-slave
-/// compaction and visiting every slave.
+/// compaction and visiting every slave; with `slow`, the masses rest on the plate and slide
+/// (`--slow`).
 pub(crate) fn section(
     devices: &[Device],
     sizes: &[usize],
     shares: &[f64],
     cpu: bool,
+    slow: bool,
 ) -> abut::Result<String> {
     let mut md = String::new();
     let (near, far) = (contact_bytes(1.0)?, contact_bytes(0.0)?);
@@ -333,9 +336,15 @@ pub(crate) fn section(
          *Global search*: one global search of the same pair on the same device — on an adapter \
          the GPU time of the `global search` group in {GLOBALS} increments that search \
          globally after the local ones, on the CPU path `GlobalSearch::run` (median of \
-         {GLOBALS}). *Walked*: the slaves the local search walked per local increment \
+         {GLOBALS}).{} *Walked*: the slaves the local search walked per local increment \
          (`IncrementStats::local_walks`), against those within the radius: the others were \
-         within their skin and projected on their facet alone.\n"
+         within their skin and projected on their facet alone.\n",
+        if slow {
+            " *Slow* (`--slow`): the masses rest on the plate instead, 0.1 % of a facet into it, \
+             and slide 1 % of a facet per increment."
+        } else {
+            ""
+        }
     );
     let _ = writeln!(
         md,
@@ -356,6 +365,7 @@ pub(crate) fn section(
                     );
                     let mut config = Config::base(n);
                     config.near = *share;
+                    config.slow = slow;
                     let t = time_of(device, &scene(&config)?)?;
                     config.every_slave = true;
                     let e = time_of(device, &scene(&config)?)?;

@@ -7,9 +7,14 @@ pub(crate) fn scene(c: &Config) -> abut::Result<BenchScene> {
     let side = ((c.slaves as f64 / 4.0).sqrt().round() as usize).max(4);
     let h = 1.0 / side as f64;
     let dt = 1e-3;
-    // each mass falls a quarter of a facet per increment and lands between increments 2 and 10
-    let v0 = 0.25 * h / dt;
-    let u = (0.25 * h).min(0.4 / INCREMENTS as f64) / dt;
+    // each mass falls a quarter of a facet per increment and lands between increments 2 and 10;
+    // slow: rests on the plate, 0.1 % of a facet into it, and slides 1 % of a facet per increment
+    let v0 = if c.slow { 0.0 } else { 0.25 * h / dt };
+    let u = if c.slow {
+        0.01 * h
+    } else {
+        (0.25 * h).min(0.4 / INCREMENTS as f64)
+    } / dt;
     let plate = plate_quads(side, side, 1.0, 1.0, 0.0, 0, &|_, _| 0.0);
     let mut model = Model::new_3d();
     model.add_nodes(&plate.positions, &vec![1e12; plate.positions.len()])?;
@@ -20,7 +25,8 @@ pub(crate) fn scene(c: &Config) -> abut::Result<BenchScene> {
     let mut z0 = Vec::with_capacity(c.slaves);
     let mut near = Vec::with_capacity(c.slaves);
     for k in 0..c.slaves {
-        let z = v0 * dt * rng.range(2.0, 10.0);
+        let fall = rng.range(2.0, 10.0);
+        let z = if c.slow { -1e-3 * h } else { v0 * dt * fall };
         pos.push([rng.range(0.02, 0.98 - travel), rng.range(0.02, 0.98), z]);
         // the share c.near falls, spread evenly over the masses; the others hang at 1 + z,
         // hundreds of facets above the plate
