@@ -297,6 +297,15 @@ fn resident_twins_match_rust() {
             "STATUS_FAST_RATIO",
             abut::testing::abi::status::STATUS_FAST_RATIO,
         ),
+        ("STATUS_MOTION", abut::testing::abi::status::STATUS_MOTION),
+        (
+            "STATUS_LOCAL_WALKS",
+            abut::testing::abi::status::STATUS_LOCAL_WALKS,
+        ),
+        (
+            "STATUS_MASTER_MOTION",
+            abut::testing::abi::status::STATUS_MASTER_MOTION,
+        ),
         // the active slaves follow the status words
         ("ACTIVE_LIST", abut::testing::abi::status::STATUS_WORDS),
     ] {
