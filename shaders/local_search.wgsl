@@ -19,7 +19,8 @@
 //             (ties: lowest id), moves the tracked node to that facet's node nearest the slave
 //             (ties: lowest id), and repeats until the tracked node stays, at most
 //             max_local_iterations times; the most iterations taken and the number of slaves
-//             that hit the cap are reduced into the status words. A slave beyond the radius
+//             that hit the cap are reduced into the status words (in the workgroup first, then
+//             one global atomic per word and workgroup). A slave beyond the radius
 //             keeps its tracked node (facet = NO_FACET) so tracking resumes when it comes back;
 //             a slave with no tracked node (every slave is visited with FLAG_EVERY_SLAVE) keeps
 //             the global search's hit: it is beyond radius + budget, and the motion budget
@@ -173,11 +174,40 @@ fn write_hit(i: u32, s: u32, p: vec3<f32>, tracked: u32, f: u32, pr: Projection,
     }
 }
 
+// The walk's status words, reduced in the workgroup first, then raised with one global atomic
+// per word and workgroup: the most steps of a walk (max), the slaves walked and those stopped
+// at the cap (added). Integer operations: the words do not depend on the order.
+const WG_ITERATIONS: u32 = 0u; // STATUS_LOCAL_ITERATIONS
+const WG_WALKS: u32 = 1u;      // STATUS_LOCAL_WALKS
+const WG_CAPPED: u32 = 2u;     // STATUS_LOCAL_CAPPED
+var<workgroup> wg_words: array<atomic<u32>, 3>;
+
 @compute @workgroup_size(64)
 fn local_search(@builtin(workgroup_id) wg: vec3<u32>,
                 @builtin(num_workgroups) nwg: vec3<u32>,
                 @builtin(local_invocation_index) li: u32) {
     let k = folded_id(wg, nwg, li, ITEM_WORKGROUP);
+    if (li < 3u) { atomicStore(&wg_words[li], 0u); }
+    // every invocation reaches both barriers (uniform control flow)
+    workgroupBarrier();
+    track_slave(k);
+    workgroupBarrier();
+    if (li < 3u) {
+        let v = atomicLoad(&wg_words[li]);
+        if (v != 0u) {
+            if (li == WG_ITERATIONS) {
+                atomicMax(&status[STATUS_LOCAL_ITERATIONS], v);
+            } else if (li == WG_WALKS) {
+                atomicAdd(&status[STATUS_LOCAL_WALKS], v);
+            } else {
+                atomicAdd(&status[STATUS_LOCAL_CAPPED], v);
+            }
+        }
+    }
+}
+
+// Active slave k's hit: from its skin, or by the walk from its tracked node.
+fn track_slave(k: u32) {
     if (k >= atomicLoad(&status[ACTIVE_LIST])) { return; }
     if (atomicLoad(&status[STATUS_BUDGET_EXCEEDED]) != 0u) { return; }
     let i = atomicLoad(&status[ACTIVE_LIST + 1u + k]);
@@ -211,7 +241,7 @@ fn local_search(@builtin(workgroup_id) wg: vec3<u32>,
                 let skin = skins[i];
                 let moved = length((p - r) - skin.xyz) + masters;
                 if (sqrt(b.d2) + moved + roundoff < skin.w && nearest_node(fac, p) == tracked) {
-                    atomicMax(&status[STATUS_LOCAL_ITERATIONS], 1u);
+                    atomicMax(&wg_words[WG_ITERATIONS], 1u);
                     write_hit(i, s, p, tracked, last, b.pr, counted & (HIT_COUNT | HIT_WALKED), last);
                     return;
                 }
@@ -251,9 +281,9 @@ fn local_search(@builtin(workgroup_id) wg: vec3<u32>,
         tracked = next;
         if (it >= params.max_local_iterations) { break; }
     }
-    atomicMax(&status[STATUS_LOCAL_ITERATIONS], it);
-    atomicAdd(&status[STATUS_LOCAL_WALKS], 1u);
-    if (!settled) { atomicAdd(&status[STATUS_LOCAL_CAPPED], 1u); }
+    atomicMax(&wg_words[WG_ITERATIONS], it);
+    atomicAdd(&wg_words[WG_WALKS], 1u);
+    if (!settled) { atomicAdd(&wg_words[WG_CAPPED], 1u); }
     var candidates = b.candidates;
     // a skin that would not hold even without motion is not left (its read would be wasted)
     let margin = sqrt(b.second) - masters;

@@ -34,7 +34,7 @@
 // uses none of the budget. If twice one of them reaches the budget — an untracked slave and the
 // master could together have closed it — STATUS_BUDGET_EXCEEDED is set and the increment runs
 // again with a global search. The largest such displacement is reduced with atomicMax on its bits
-// (positive floats order as their bits).
+// (positive floats order as their bits), in the workgroup first, then once per workgroup.
 //
 // What motion writes: the node of every master node and of every slave the local increments visit
 // (tracked, or every slave with FLAG_EVERY_SLAVE) — the nodes the local search and the penalty
@@ -71,6 +71,11 @@ struct FrameParams {
 // atomics so that one invocation per workgroup, not every master node, raises STATUS_BOX: 6
 // global atomics per 64 nodes instead of 6 per master node, which all go to the same six words.
 var<workgroup> wg_box: array<atomic<u32>, 6>;
+
+// The workgroup's largest motion counted by the budget (bits of non-negative f32, integer max):
+// of every node the budget counts (STATUS_MOTION, slot 0) and of the master nodes alone
+// (STATUS_MASTER_MOTION, slot 1), raised once per workgroup like the box.
+var<workgroup> wg_motion: array<atomic<u32>, 2>;
 
 // Model node id's position in the frame.
 fn in_frame(id: u32) -> vec3<f32> {
@@ -137,6 +142,7 @@ fn motion(@builtin(workgroup_id) wg: vec3<u32>,
           @builtin(local_invocation_index) li: u32) {
     let k = folded_id(wg, nwg, li, ITEM_WORKGROUP);
     box_start(li);
+    if (li < 2u) { atomicStore(&wg_motion[li], 0u); }
     workgroupBarrier();
     if (k < params.n_motion_nodes) {
         let id = motion_nodes[k];
@@ -160,8 +166,8 @@ fn motion(@builtin(workgroup_id) wg: vec3<u32>,
             let r = params.ref_node;
             let base = in_frame(r) - reference[r].xyz;
             let d = length((x - reference[id].xyz) - base);
-            atomicMax(&status[STATUS_MOTION], bitcast<u32>(d));
-            if (master) { atomicMax(&status[STATUS_MASTER_MOTION], bitcast<u32>(d)); }
+            atomicMax(&wg_motion[0], bitcast<u32>(d));
+            if (master) { atomicMax(&wg_motion[1], bitcast<u32>(d)); }
             if (2.0 * d >= params.budget) {
                 atomicStore(&status[STATUS_BUDGET_EXCEEDED], 1u);
             }
@@ -169,6 +175,12 @@ fn motion(@builtin(workgroup_id) wg: vec3<u32>,
     }
     workgroupBarrier();
     box_finish(li);
+    if (li < 2u) {
+        let d = atomicLoad(&wg_motion[li]);
+        if (d != 0u) {
+            atomicMax(&status[select(STATUS_MOTION, STATUS_MASTER_MOTION, li == 1u)], d);
+        }
+    }
 }
 
 // Global increments: each motion node's position becomes the budget's reference, a slave's state

@@ -30,6 +30,10 @@
 //             them per node; the derivation is in contact.rs). A spring in contact raises
 //             STATUS_FORCE_SCALE and STATUS_ROW_SCALE to its largest force component and bound
 //             share (integer max of non-negative f32 bits): the gather's fixed-point scales.
+//             Those status words are reduced in the workgroup first (wg_words: workgroup
+//             atomics), then raised with one global atomic per word and workgroup, not one per
+//             spring: integer sums, maxima and minima, so the words do not depend on the order.
+//             Every invocation reaches the entry points' two barriers.
 
 override FRICTION: bool = true;
 
@@ -42,6 +46,61 @@ override FRICTION: bool = true;
 @group(0) @binding(6) var<storage, read_write> state: array<SlaveState>;
 @group(0) @binding(7) var<storage, read_write> out: array<ContactOut>;
 @group(0) @binding(8) var<storage, read_write> status: array<atomic<u32>>;
+
+// The status words a spring raises, by slot of `wg_words`: three counts (added), four largest
+// values (non-negative f32 bits, integer max) and two increments (positive f32 bits, integer
+// min). Each slot starts at its operation's identity and is raised into its status word by one
+// invocation, once per workgroup.
+const WG_FAST: u32 = 0u;        // STATUS_FAST
+const WG_ACTIVE: u32 = 1u;      // STATUS_ACTIVE
+const WG_SLIPPING: u32 = 2u;    // STATUS_SLIPPING
+const WG_FAST_RATIO: u32 = 3u;  // STATUS_FAST_RATIO
+const WG_OVERCLOSURE: u32 = 4u; // STATUS_MAX_OVERCLOSURE
+const WG_FORCE_SCALE: u32 = 5u; // STATUS_FORCE_SCALE
+const WG_ROW_SCALE: u32 = 6u;   // STATUS_ROW_SCALE
+const WG_DT_STABLE: u32 = 7u;   // STATUS_DT_STABLE
+const WG_DT_APPROACH: u32 = 8u; // STATUS_DT_APPROACH
+const WG_WORDS: u32 = 9u;
+const WG_FIRST_MAX: u32 = 3u;
+const WG_FIRST_MIN: u32 = 7u;
+const WG_MIN_IDENTITY: u32 = 0xffffffffu;
+var<workgroup> wg_words: array<atomic<u32>, 9>;
+
+// The status word of slot w of `wg_words`.
+fn wg_status_word(w: u32) -> u32 {
+    switch (w) {
+        case 0u: { return STATUS_FAST; }
+        case 1u: { return STATUS_ACTIVE; }
+        case 2u: { return STATUS_SLIPPING; }
+        case 3u: { return STATUS_FAST_RATIO; }
+        case 4u: { return STATUS_MAX_OVERCLOSURE; }
+        case 5u: { return STATUS_FORCE_SCALE; }
+        case 6u: { return STATUS_ROW_SCALE; }
+        case 7u: { return STATUS_DT_STABLE; }
+        default: { return STATUS_DT_APPROACH; }
+    }
+}
+
+// Each slot at its operation's identity (before the first barrier).
+fn words_start(li: u32) {
+    if (li < WG_WORDS) {
+        atomicStore(&wg_words[li], select(0u, WG_MIN_IDENTITY, li >= WG_FIRST_MIN));
+    }
+}
+
+// Each slot raised into its status word (after the second barrier), where a spring moved it.
+fn words_finish(li: u32) {
+    if (li >= WG_WORDS) { return; }
+    let v = atomicLoad(&wg_words[li]);
+    let word = wg_status_word(li);
+    if (li < WG_FIRST_MAX) {
+        if (v != 0u) { atomicAdd(&status[word], v); }
+    } else if (li < WG_FIRST_MIN) {
+        if (v != 0u) { atomicMax(&status[word], v); }
+    } else if (v != WG_MIN_IDENTITY) {
+        atomicMin(&status[word], v);
+    }
+}
 
 const E_MINUS_1: f32 = 1.7182818;
 
@@ -127,8 +186,8 @@ fn facet_velocity(fac: vec4<u32>, w: vec4<f32>) -> vec3<f32> {
 fn count_fast(s: u32, v_master: vec3<f32>) {
     let reach = length(vel[s].xyz - v_master) * pp.dt;
     if (reach > pp.search_radius) {
-        atomicAdd(&status[STATUS_FAST], 1u);
-        atomicMax(&status[STATUS_FAST_RATIO], bitcast<u32>(reach / pp.search_radius));
+        atomicAdd(&wg_words[WG_FAST], 1u);
+        atomicMax(&wg_words[WG_FAST_RATIO], bitcast<u32>(reach / pp.search_radius));
     }
 }
 
@@ -137,9 +196,13 @@ fn penalty(@builtin(workgroup_id) wg: vec3<u32>,
            @builtin(num_workgroups) nwg: vec3<u32>,
            @builtin(local_invocation_index) li: u32) {
     let i = folded_id(wg, nwg, li, ITEM_WORKGROUP);
-    if (i >= pp.n_slaves) { return; }
-    if (atomicLoad(&status[STATUS_BUDGET_EXCEEDED]) != 0u) { return; }
-    spring(i, hits[i]);
+    words_start(li);
+    workgroupBarrier();
+    if (i < pp.n_slaves && atomicLoad(&status[STATUS_BUDGET_EXCEEDED]) == 0u) {
+        spring(i, hits[i]);
+    }
+    workgroupBarrier();
+    words_finish(li);
 }
 
 // Local increments: the active slaves only. An untracked one (visited with FLAG_EVERY_SLAVE)
@@ -151,6 +214,15 @@ fn penalty_active(@builtin(workgroup_id) wg: vec3<u32>,
                   @builtin(num_workgroups) nwg: vec3<u32>,
                   @builtin(local_invocation_index) li: u32) {
     let k = folded_id(wg, nwg, li, ITEM_WORKGROUP);
+    words_start(li);
+    workgroupBarrier();
+    active_spring(k);
+    workgroupBarrier();
+    words_finish(li);
+}
+
+// Active slave k's spring, if it is one and tracked.
+fn active_spring(k: u32) {
     if (k >= atomicLoad(&status[ACTIVE_LIST])) { return; }
     if (atomicLoad(&status[STATUS_BUDGET_EXCEEDED]) != 0u) { return; }
     let i = atomicLoad(&status[ACTIVE_LIST + 1u + k]);
@@ -313,21 +385,21 @@ fn spring(i: u32, hit: Hit) {
         let w = pp.weight;
         o.force = vec4<f32>(w * (f_n * nrm + f_t), w * f_n);
         o.tangential = vec4<f32>(w * f_t, w * (o.tangential.w + lv.energy));
-        atomicAdd(&status[STATUS_ACTIVE], 1u);
-        if (o.status == CSTATUS_SLIP) { atomicAdd(&status[STATUS_SLIPPING], 1u); }
+        atomicAdd(&wg_words[WG_ACTIVE], 1u);
+        if (o.status == CSTATUS_SLIP) { atomicAdd(&wg_words[WG_SLIPPING], 1u); }
         // non-negative f32 bits order as the values: an integer max is the float max
-        atomicMax(&status[STATUS_MAX_OVERCLOSURE], bitcast<u32>(max(-gap, 0.0)));
+        atomicMax(&wg_words[WG_OVERCLOSURE], bitcast<u32>(max(-gap, 0.0)));
     }
     state[i].tangential_area = vec4<f32>(f_t, area);
     state[i].history = vec4<f32>(o.dissipation, 0.0, 0.0, 0.0);
-    atomicMin(&status[STATUS_DT_STABLE], bitcast<u32>(dt_stable));
-    atomicMin(&status[STATUS_DT_APPROACH], bitcast<u32>(dt_approach));
+    atomicMin(&wg_words[WG_DT_STABLE], bitcast<u32>(dt_stable));
+    atomicMin(&wg_words[WG_DT_APPROACH], bitcast<u32>(dt_approach));
     o.status |= mask;
     if ((o.status & CSTATUS_MASK) != CSTATUS_OPEN) {
         // the fixed-point scales of the gather: the largest magnitudes it will sum
         let a = abs(o.force.xyz);
-        atomicMax(&status[STATUS_FORCE_SCALE], bitcast<u32>(max(a.x, max(a.y, a.z))));
-        atomicMax(&status[STATUS_ROW_SCALE], bitcast<u32>(max(o.bound_light, o.bound_heavy)));
+        atomicMax(&wg_words[WG_FORCE_SCALE], bitcast<u32>(max(a.x, max(a.y, a.z))));
+        atomicMax(&wg_words[WG_ROW_SCALE], bitcast<u32>(max(o.bound_light, o.bound_heavy)));
     }
     out[i] = o;
 }

@@ -443,6 +443,90 @@ fn results_with_and_without_the_compaction_are_the_same_bits() {
     }
 }
 
+/// The statistics that the slave passes reduce in each workgroup before one global atomic per
+/// word (the counts in contact, slipping and walked, the largest overclosure and motion, the
+/// smallest increments) are the CPU path's on every device, in every increment of scenes with
+/// several workgroups of slaves in 3D and 2D and with self-contact: the counts exactly, the
+/// f32 extremes to 10⁻⁵ (the devices' own arithmetic), the first increment's motion (since the
+/// positions the contact was made with) included. Each kind of reduction moves: slaves come
+/// into contact, slip (the sliding scenes), walk, and the increments and motions change.
+#[test]
+fn reduced_statistics_are_the_cpu_paths_on_every_device() {
+    use abut::testing::abi::stats::STATS_BYTES;
+    let dt = 1.0e-3;
+    let mut slipping = 0;
+    let mut overclosed = false;
+    for s in scenes(true, false) {
+        let runs: Vec<(String, Vec<IncrementStats>)> = devices()
+            .into_iter()
+            .map(|d| {
+                let mut c = Contact::new(&d, &s.model).unwrap();
+                let state = |k: usize| ((s.at)(k), velocities(&s, k, dt));
+                let run = resident_run(&d, &mut c, s.model.positions().len(), s.steps, &state, dt);
+                let stats = run
+                    .iter()
+                    .map(|(_, st)| {
+                        assert_eq!(st.len() as u64, STATS_BYTES);
+                        bytemuck::pod_read_unaligned(st)
+                    })
+                    .collect();
+                (d.to_string(), stats)
+            })
+            .collect();
+        // devices() lists the CPU path first
+        let reference = &runs[0].1;
+        let sum =
+            |f: fn(&IncrementStats) -> u32| reference.iter().map(|x| f(x) as u64).sum::<u64>();
+        assert!(sum(|x| x.active) > 0, "{}: no contact", s.what);
+        slipping += sum(|x| x.slipping);
+        assert!(sum(|x| x.local_walks) > 0, "{}: no walk", s.what);
+        assert!(
+            reference.iter().any(|x| x.motion > 0.0),
+            "{}: no motion",
+            s.what
+        );
+        overclosed |= reference.iter().any(|x| x.max_overclosure > 0.0);
+        let close = |a: f32, b: f32| (a - b).abs() <= 1e-5 * a.abs().max(b.abs());
+        for (d, stats) in &runs[1..] {
+            for (k, (a, b)) in reference.iter().zip(stats).enumerate() {
+                let counts = |x: &IncrementStats| {
+                    [
+                        x.active,
+                        x.slipping,
+                        x.local_walks,
+                        x.local_capped,
+                        x.fast_nodes,
+                        x.global_searches,
+                        x.budget_searches,
+                        x.increment,
+                    ]
+                };
+                assert_eq!(
+                    counts(a),
+                    counts(b),
+                    "{} on {d}, increment {k}: counts",
+                    s.what
+                );
+                for (what, x, y) in [
+                    ("stable_dt", a.stable_dt, b.stable_dt),
+                    ("approach_dt", a.approach_dt, b.approach_dt),
+                    ("max_overclosure", a.max_overclosure, b.max_overclosure),
+                    ("motion", a.motion, b.motion),
+                    ("omega2", a.omega2, b.omega2),
+                ] {
+                    assert!(
+                        close(x, y),
+                        "{} on {d}, increment {k}: {what} {x} against {y}",
+                        s.what
+                    );
+                }
+            }
+        }
+    }
+    assert!(slipping > 0, "no slave slipped in any scene");
+    assert!(overclosed, "no overclosure in any scene");
+}
+
 /// Past 65,536 active slaves (69,696 of 139,392; the others hang beyond the tracking radius),
 /// and with a cap of 3 workgroups per dispatch dimension, so that the schedule folds the active
 /// slaves' dispatch into 2D: the local increments give the same bytes folded and not, on every

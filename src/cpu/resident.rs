@@ -74,7 +74,7 @@ impl CpuSearch {
             let words = crate::abi::buckets::BucketLayout::new(prep.params.n_facets).words;
             self.ws.grid.resize(words as usize, 0);
         }
-        self.ws.reference = prep.nodes.clone();
+        self.ws.reference = prep.start_reference();
         // no active slave until the first global search
         self.ws.active.clear();
         self.ws.active.resize(prep.slaves.len() + 1, 0);

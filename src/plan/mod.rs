@@ -42,6 +42,16 @@ pub struct Prepared {
     pub n_nodes: usize,
 }
 
+impl Prepared {
+    /// The motion budget's reference before the first global search: every node at its
+    /// prepared position, w = 0 (a slave untracked). The first increment searches globally
+    /// whatever it holds; its motion statistic is then the motion since these positions, the
+    /// same on every executor.
+    pub fn start_reference(&self) -> Vec<[f32; 4]> {
+        self.nodes.iter().map(|n| [n[0], n[1], n[2], 0.0]).collect()
+    }
+}
+
 /// Where a search's plan reads the positions of its nodes.
 #[derive(Clone, Copy)]
 pub(crate) enum PlanPositions<'a> {

@@ -94,8 +94,8 @@ impl GpuSearch {
     /// Readies this search for device-resident increments: `prep` is a host preparation whose
     /// params carry the device's cell capacity and base cell size and whose nodes are in the
     /// kernels' frame; buffers are sized for the capacities (not for positions), the pair's
-    /// constants and the nodes' masses uploaded, `frame_origin` subtracted by to_local from the
-    /// positions it reads, and a fresh plan written.
+    /// constants, the nodes' masses and the budget's start reference uploaded, `frame_origin`
+    /// subtracted by to_local from the positions it reads, and a fresh plan written.
     /// `anchored`: small sliding (anchors already set; increments evaluate them).
     pub(crate) fn make_resident(
         &mut self,
@@ -128,6 +128,12 @@ impl GpuSearch {
             &self.buffers.nodes.buffer,
             0,
             bytemuck::cast_slice(&prep.nodes),
+        );
+        super::super::upload(
+            &self.ctx,
+            &self.buffers.reference.buffer,
+            0,
+            bytemuck::cast_slice(&prep.start_reference()),
         );
         let frame = FrameParams {
             origin: [frame_origin[0], frame_origin[1], frame_origin[2], 0.0],
