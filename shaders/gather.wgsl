@@ -109,8 +109,21 @@ fn add_fixed(w: u32, a: vec2<u32>) {
     atomicAdd(&acc[2u * w + 1u], a.y + carry);
 }
 
+// What scatter and gather read of a spring's output: its force, status and shares of the bound
+// (the first 32 bytes of its ContactOut, one memory sector; field by field, so no more is read).
+struct OutForce {
+    force: vec3<f32>,
+    status: u32,
+    bound_light: f32,
+    bound_heavy: f32,
+}
+
+fn out_force(i: u32) -> OutForce {
+    return OutForce(out[i].force.xyz, out[i].status, out[i].bound_light, out[i].bound_heavy);
+}
+
 // A spring's share of the bound at one of its nodes: heavy if its status has `bit`.
-fn row_share(o: ContactOut, bit: u32) -> f32 {
+fn row_share(o: OutForce, bit: u32) -> f32 {
     return select(o.bound_light, o.bound_heavy, (o.status & bit) != 0u);
 }
 
@@ -137,7 +150,7 @@ fn scatter_forces_active(@builtin(workgroup_id) wg: vec3<u32>,
 fn scatter(i: u32) {
     // the penalty pass did not run (the increment will run again): its outputs are stale
     if (status[STATUS_BUDGET_EXCEEDED] != 0u) { return; }
-    let o = out[i];
+    let o = out_force(i);
     // of the hit, its facet, and for a spring its weights (20 of its 64 bytes)
     let facet = hits[i].facet;
     if ((o.status & CSTATUS_MASK) == CSTATUS_OPEN || facet >= pp.n_facets) { return; }
@@ -222,9 +235,10 @@ fn gather_node(i: u32) {
     var f = vec3<f32>(0.0);
     var row = 0.0;
     if (pn.y != NO_SLAVE) {
-        f = out[pn.y].force.xyz;
+        let o = out_force(pn.y);
+        f = o.force;
         // a rigid slave part's springs add up in its slot (scatter_forces)
-        if (pp.body_slots.y == NO_SLAVE) { row = row_share(out[pn.y], HEAVY_SLAVE); }
+        if (pp.body_slots.y == NO_SLAVE) { row = row_share(o, HEAVY_SLAVE); }
     }
     let inv_f = pow2(-fixed_exponent(status[STATUS_FORCE_SCALE], pp.n_slaves));
     let inv_r = pow2(-fixed_exponent(status[STATUS_ROW_SCALE], pp.n_slaves));

@@ -76,13 +76,14 @@ struct SlaveState {
     history: vec4<f32>,           // accumulated frictional dissipation (x), behind a free edge (y)
 }
 
-// Rust twin: ContactOut, 64 bytes.
+// Rust twin: ContactOut, 64 bytes; what scatter_forces and gather read is its first 32 bytes
+// (one memory sector): force, status and the bound's shares.
 struct ContactOut {
     force: vec4<f32>,
-    tangential: vec4<f32>,
-    normal_gap: vec4<f32>,
     status: u32,          // CSTATUS_* (low byte), heavy-node bits above
     dissipation: f32,
     bound_light: f32,     // ω² share of the spring at its light nodes
     bound_heavy: f32,     // and at its heavy ones
+    tangential: vec4<f32>,
+    normal_gap: vec4<f32>,
 }

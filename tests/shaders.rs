@@ -124,6 +124,23 @@ fn struct_size(m: &naga::Module, name: &str) -> u32 {
     layouter[h].size
 }
 
+/// The members of WGSL struct `name`: name and byte offset, in order.
+fn member_offsets(m: &naga::Module, name: &str) -> Vec<(String, u32)> {
+    let t = m
+        .types
+        .iter()
+        .find(|(_, t)| t.name.as_deref() == Some(name))
+        .unwrap_or_else(|| panic!("no WGSL struct {name}"))
+        .1;
+    match &t.inner {
+        naga::TypeInner::Struct { members, .. } => members
+            .iter()
+            .map(|x| (x.name.clone().unwrap_or_default(), x.offset))
+            .collect(),
+        _ => panic!("{name} is no struct"),
+    }
+}
+
 #[test]
 fn wgsl_twins_match_rust() {
     let m = parse("nearest_facet");
@@ -392,6 +409,19 @@ fn penalty_twins_match_rust() {
         struct_size(&m, "ContactOut") as usize,
         std::mem::size_of::<ContactOut>()
     );
+    // member by member: the scatter and the gather read the first 32 bytes alone
+    let rust = [
+        ("force", std::mem::offset_of!(ContactOut, force)),
+        ("status", std::mem::offset_of!(ContactOut, status)),
+        ("dissipation", std::mem::offset_of!(ContactOut, dissipation)),
+        ("bound_light", std::mem::offset_of!(ContactOut, bound_light)),
+        ("bound_heavy", std::mem::offset_of!(ContactOut, bound_heavy)),
+        ("tangential", std::mem::offset_of!(ContactOut, tangential)),
+        ("normal_gap", std::mem::offset_of!(ContactOut, normal_gap)),
+    ]
+    .map(|(n, o)| (n.to_string(), o as u32));
+    assert_eq!(member_offsets(&m, "ContactOut"), rust.to_vec());
+    assert!(std::mem::offset_of!(ContactOut, bound_heavy) + 4 <= 32);
     for (name, v) in [
         ("NO_SLAVE", NO_SLAVE),
         ("CSTATUS_OPEN", CSTATUS_OPEN),

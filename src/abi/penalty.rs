@@ -143,16 +143,14 @@ pub struct SlaveState {
 }
 const _: () = assert!(std::mem::size_of::<SlaveState>() == 32);
 
-/// Per-slave result of the penalty kernel. WGSL twin: `ContactOut`.
+/// Per-slave result of the penalty kernel. WGSL twin: `ContactOut`. What the scatter and the
+/// gather read (the force, the status and the bound's shares) is its first 32 bytes, one
+/// 32-byte memory sector; the rest is read by the host's outputs.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, PartialEq, Pod, Zeroable)]
 pub struct ContactOut {
     /// Total contact force on the slave node (xyz) and the normal force magnitude (w).
     pub force: [f32; 4],
-    /// Friction force (xyz) and the elastic energy stored in the contact springs (w).
-    pub tangential: [f32; 4],
-    /// Contact normal used (xyz, smoothed) and the signed gap along it, COPEN (w).
-    pub normal_gap: [f32; 4],
     /// `CSTATUS_*` in the low byte ([`CSTATUS_MASK`]); above it, the heavy nodes of the
     /// spring ([`HEAVY_SHIFT`], [`HEAVY_SLAVE`]).
     pub status: u32,
@@ -163,6 +161,10 @@ pub struct ContactOut {
     pub bound_light: f32,
     /// Its share at each of its heavy nodes (at most `bound_light`).
     pub bound_heavy: f32,
+    /// Friction force (xyz) and the elastic energy stored in the contact springs (w).
+    pub tangential: [f32; 4],
+    /// Contact normal used (xyz, smoothed) and the signed gap along it, COPEN (w).
+    pub normal_gap: [f32; 4],
 }
 const _: () = assert!(std::mem::size_of::<ContactOut>() == 64);
 

@@ -25,7 +25,8 @@ const HIT: u32 = std::mem::size_of::<GpuHit>() as u32;
 const OUT: u32 = std::mem::size_of::<ContactOut>() as u32;
 /// A slave's penalty state (friction force and area, history), bytes.
 const STATE: u32 = 2 * VEC4;
-/// The part of a contact output the gather reads (force and bound shares), bytes.
+/// The part of a contact output the scatter and the gather read (force xyz, status and the
+/// bound's shares: 28 of its first 32 bytes, one memory sector), bytes.
 const OUT_FORCE: u32 = 28;
 /// A pair node's fixed-point sums (four 64-bit words), bytes.
 const SUMS: u32 = 32;
@@ -228,15 +229,15 @@ pub fn touches(pass: &Pass) -> Option<&'static [Touch]> {
                 ]
             }
         }
-        // the active slave's index (scatter_forces_active; counted for both), the output and
-        // the hit's facet; in contact, the hit's weights, the facet's pair nodes, and each
+        // the active slave's index (scatter_forces_active; counted for both), the output's
+        // force, status and bound shares, and the hit's facet; in contact, the hit's weights, the facet's pair nodes, and each
         // master node's sums read and written (once per node: the slaves sharing it meet in
         // cache)
         "scatter_forces" | "scatter_forces_active" => {
             const {
                 &[
                     t(Status, R, WORD, One, Each),
-                    t(Out, R, OUT, One, Slave),
+                    t(Out, R, OUT_FORCE, One, Slave),
                     t(Hits, R, WORD, One, Slave),
                     t(Hits, R, VEC4, One, NearSlave),
                     t(FacetNodes, R, VEC4, One, NearSlave),
