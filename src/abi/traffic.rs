@@ -396,6 +396,30 @@ pub fn bytes_per_slave(pass: &Pass, topology: &Topology, near: f64) -> Option<f6
     )
 }
 
+/// Of [`bytes_per_slave`], the records that are the slave's own: one per slave item (its id,
+/// position, velocity, hit, skin, reference, penalty state, output, pair node, sums and
+/// forces) — not its facet's, the facet's nodes' or the master nodes' records, which the slaves
+/// near a master node share. `None` where `pass` declares no traffic.
+pub fn own_bytes_per_slave(pass: &Pass, topology: &Topology, near: f64) -> Option<f64> {
+    let touches = touches(pass)?;
+    // with no master node per slave, a pass's items are its slave items alone
+    let slaves_only = Topology {
+        masters_per_slave: 0.0,
+        ..*topology
+    };
+    Some(
+        touches
+            .iter()
+            .filter(|t| t.per == Per::One && !MASTER_RECORDS.contains(&t.buf))
+            .map(|t| slaves_only.items(pass.items, t.of, near) * t.bytes as f64)
+            .sum(),
+    )
+}
+
+/// Buffers whose records are the master's whichever item reads them: the facets, their pair
+/// nodes and the master's adjacency.
+const MASTER_RECORDS: [Buf; 4] = [Facets, FacetNodes, Adjacency, PairAdjacency];
+
 /// The passes whose traffic is declared: a local increment's (the slave passes over the active
 /// slaves) and the integrator.
 pub const DECLARED: [&Pass; 12] = [
@@ -511,6 +535,43 @@ mod tests {
             assert!(near > 4.0 * VEC4 as f64);
         }
         assert_eq!(bytes_per_slave(&passes::TREE_REFIT, &topo, 1.0), None);
+    }
+
+    /// A slave's own records are part of what a pass declares, all of it for a slave beyond
+    /// the radius in a pair whose slaves are no master nodes; the penalty's own records of a
+    /// slave in contact are its active index, hit, state in and out, output, velocity and
+    /// position, the master's its facet and the facet's nodes' positions, velocities and
+    /// normals.
+    #[test]
+    fn a_slaves_own_records_are_those_one_per_slave() {
+        let topo = Topology {
+            masters_per_slave: 0.25,
+            facets_per_node: 4.0,
+            nodes_per_facet: 4.0,
+        };
+        for pass in DECLARED {
+            for near in [0.0, 0.3, 1.0] {
+                let all = bytes_per_slave(pass, &topo, near).unwrap();
+                let own = own_bytes_per_slave(pass, &topo, near).unwrap();
+                assert!(own >= 0.0 && own <= all, "{}: {own} of {all}", pass.entry);
+            }
+        }
+        let own = own_bytes_per_slave(&passes::PENALTY_ACTIVE, &topo, 1.0).unwrap();
+        assert_eq!(own, (WORD + HIT + 2 * STATE + OUT + 2 * VEC4) as f64);
+        let all = bytes_per_slave(&passes::PENALTY_ACTIVE, &topo, 1.0).unwrap();
+        assert_eq!(all - own, (VEC4 + 3 * 4 * VEC4) as f64);
+        let no_master = Topology {
+            masters_per_slave: 0.0,
+            ..topo
+        };
+        for pass in DECLARED {
+            assert_eq!(
+                own_bytes_per_slave(pass, &no_master, 0.0),
+                bytes_per_slave(pass, &no_master, 0.0),
+                "{}",
+                pass.entry
+            );
+        }
     }
 
     /// A slave beyond the radius, in a pair whose slaves are no master nodes, costs the motion

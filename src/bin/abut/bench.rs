@@ -28,7 +28,7 @@ pub(crate) use report::{io_err, machine};
 mod runs;
 
 use bandwidth::PASSES;
-pub(crate) use bandwidth::{copy_bandwidth, group_bytes, kernel_bytes};
+pub(crate) use bandwidth::{copy_bandwidth, group_bytes, kernel_bytes, PLATE};
 use report::{exponent, pareto, plot};
 pub(crate) use runs::scene;
 use runs::{measure, search_rows};

@@ -416,5 +416,35 @@ pub(crate) fn section(
          figure is the median over {ROUNDS} rounds (each round runs every share and mode once), \
          and every ratio the median of the ratios within a round.\n"
     );
+    md.push_str(&own_and_master_bytes());
     Ok(md)
+}
+
+/// The declared bytes per slave within the radius of each pass of a local increment, split
+/// into the slave's own records and the master's (its facet, the facet's nodes, the master
+/// nodes'), which the slaves near a master node share (`abi::traffic::own_bytes_per_slave`).
+fn own_and_master_bytes() -> String {
+    use abut::testing::abi::traffic::{bytes_per_slave, own_bytes_per_slave, DECLARED, NOT_LOCAL};
+    let mut md = String::from(
+        "Declared bytes per slave within the radius, by pass of a local increment (the \
+         integrator and the one-invocation passes left out): the slave's own records (one per \
+         slave: its position, hit, skin, state, output, pair node, sums, forces) and the \
+         master's (its facet, the facet's nodes, the master nodes' own records), which the \
+         slaves near a master node share.\n\n\
+         | pass | declared | the slave's own | the master's |\n|---|---|---|---|\n",
+    );
+    let (mut all, mut own) = (0.0, 0.0);
+    for p in DECLARED
+        .iter()
+        .filter(|p| p.entry != "integrate" && !NOT_LOCAL.contains(p))
+    {
+        let a = bytes_per_slave(p, &crate::bench::PLATE, 1.0).unwrap_or(0.0);
+        let o = own_bytes_per_slave(p, &crate::bench::PLATE, 1.0).unwrap_or(0.0);
+        if a > 0.0 {
+            let _ = writeln!(md, "| `{}` | {a:.0} | {o:.0} | {:.0} |", p.entry, a - o);
+            (all, own) = (all + a, own + o);
+        }
+    }
+    let _ = writeln!(md, "| all | {all:.0} | {own:.0} | {:.0} |\n", all - own);
+    md
 }
