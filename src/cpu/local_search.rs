@@ -2,8 +2,6 @@
 //! within which a slave is projected on its last facet alone (the shader's header says why that
 //! is the walk's result).
 
-use rayon::prelude::*;
-
 use super::common::{excluded, facet_box_d2, facet_collapsed, facet_node_count, node};
 use super::nearest_facet::{project, PRUNE_SLACK};
 use crate::abi::search::*;
@@ -123,41 +121,43 @@ pub fn local_search(
     let n = active.first().map_or(0, |&c| c as usize);
     let list = active.get(1..1 + n).unwrap_or(&[]);
     let masters = f32::from_bits(status[STATUS_MASTER_MOTION]);
-    let (hits_in, skins_in): (&[GpuHit], &[[f32; 4]]) = (hits, skins);
-    // per slave: its new hit, its new skin and (iterations, 1 when its walk hit the cap),
-    // reduced as the GPU's atomics are
-    type Walked = (u32, GpuHit, Option<[f32; 4]>, (u32, u32), bool);
-    let walked: Vec<Walked> = list
-        .par_iter()
-        .with_min_len(super::PAR_MIN)
-        .filter(|&&i| hits_in[i as usize].node != NO_NODE)
-        .map(|&i| {
-            let (hit, skin, outcome, walked) = track(
-                params,
-                nodes,
-                facets,
-                adjacency,
-                slaves[i as usize],
-                hits_in[i as usize],
-                skins_in[i as usize],
-                masters,
-            );
-            (i, hit, skin, outcome, walked)
-        })
-        .collect();
-    let (mut most, mut capped, mut walks) = (0, 0, 0);
-    for (i, hit, skin, (it, cap), walked_slave) in walked {
-        // written where the slave crossed the radius alone (WGSL: the same)
-        if (hit.facet != NO_FACET) != (hits[i as usize].facet != NO_FACET) {
-            reference[slaves[i as usize] as usize][3] = slave_state(&hit);
-        }
-        hits[i as usize] = hit;
-        if let Some(skin) = skin {
-            skins[i as usize] = skin;
-        }
-        walks += u32::from(walked_slave);
-        most = most.max(it);
-        capped += cap;
+    // per chunk of slaves: the most steps of a walk, the walks stopped at the cap, the slaves
+    // walked, and the tracking states to write (where a slave crossed the radius: few), reduced
+    // as the shader reduces them per workgroup
+    type Walks = (u32, u32, u32, Vec<(u32, f32)>);
+    let join = |a: Walks, b: Walks| {
+        let mut crossed = a.3;
+        crossed.extend(b.3);
+        (a.0.max(b.0), a.1 + b.1, a.2 + b.2, crossed)
+    };
+    let (most, capped, walks, crossed) = super::for_listed(
+        list,
+        hits,
+        skins,
+        || (0, 0, 0, Vec::new()),
+        join,
+        |i, hit, skin, w: &mut Walks| {
+            if hit.node == NO_NODE {
+                return;
+            }
+            let s = slaves[i];
+            let (new, new_skin, (it, cap), walked) =
+                track(params, nodes, facets, adjacency, s, *hit, *skin, masters);
+            // written where the slave crossed the radius alone (WGSL: the same)
+            if (new.facet != NO_FACET) != (hit.facet != NO_FACET) {
+                w.3.push((s, slave_state(&new)));
+            }
+            *hit = new;
+            if let Some(k) = new_skin {
+                *skin = k;
+            }
+            w.0 = w.0.max(it);
+            w.1 += cap;
+            w.2 += u32::from(walked);
+        },
+    );
+    for (s, state) in crossed {
+        reference[s as usize][3] = state;
     }
     status[STATUS_LOCAL_ITERATIONS] = status[STATUS_LOCAL_ITERATIONS].max(most);
     status[STATUS_LOCAL_CAPPED] += capped;

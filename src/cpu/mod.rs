@@ -28,6 +28,7 @@ pub mod stats;
 pub mod to_local;
 pub mod tree;
 
+#[cfg(debug_assertions)]
 use std::sync::atomic::AtomicU32;
 use std::sync::Arc;
 
@@ -39,15 +40,59 @@ use crate::abi::status::STATUS_WORDS;
 /// than it gains).
 pub(crate) const PAR_MIN: usize = 256;
 
-// an AtomicU32 is a u32 in memory (same size and bit validity; alignment checked here)
-const _: () = assert!(std::mem::align_of::<AtomicU32>() == std::mem::align_of::<u32>());
-
-/// `words` as atomics, for a mirror whose invocations run on several threads and combine through
-/// atomics whose result does not depend on their order, as on the GPU.
-pub(crate) fn as_atomic(words: &mut [u32]) -> &[AtomicU32] {
-    // SAFETY: AtomicU32 has the size and bit validity of u32 and (asserted above) its
-    // alignment, and the exclusive borrow keeps every other access out while the result lives.
-    unsafe { &*(words as *mut [u32] as *const [AtomicU32]) }
+/// Runs `f` on each index of `list` with that index's rows of `a` and `b`, in parallel chunks
+/// of at least [`PAR_MIN`] indices, each chunk folding into its own `R` (from `identity`), the
+/// chunks' joined by `join`: the mirror of a pass over the active slaves that writes their rows
+/// in place, its status words reduced per chunk as the shader reduces them per workgroup (so
+/// the result does not depend on the chunks where `join` is an integer sum, minimum or
+/// maximum). The active list is increasing (its compaction keeps slave order), so its chunks'
+/// rows are disjoint runs of `a` and `b`; a list that is not (an index repeated, out of order
+/// or past the rows) is taken sorted, once each, within the rows.
+pub(crate) fn for_listed<A: Send, B: Send, R: Send>(
+    list: &[u32],
+    a: &mut [A],
+    b: &mut [B],
+    identity: impl Fn() -> R + Sync + Send,
+    join: impl Fn(R, R) -> R + Sync + Send,
+    f: impl Fn(usize, &mut A, &mut B, &mut R) + Sync + Send,
+) -> R {
+    use rayon::prelude::*;
+    let len = a.len().min(b.len());
+    let sorted: Vec<u32>;
+    let increasing = list.windows(2).all(|w| w[0] < w[1]);
+    let list = if increasing && list.last().is_none_or(|&l| (l as usize) < len) {
+        list
+    } else {
+        let mut v: Vec<u32> = list
+            .iter()
+            .copied()
+            .filter(|&i| (i as usize) < len)
+            .collect();
+        v.sort_unstable();
+        v.dedup();
+        sorted = v;
+        &sorted
+    };
+    let mut chunks = Vec::with_capacity(list.len() / PAR_MIN + 1);
+    let (mut a, mut b, mut offset) = (&mut a[..len], &mut b[..len], 0usize);
+    for ids in list.chunks(PAR_MIN) {
+        let end = ids[ids.len() - 1] as usize + 1;
+        let (ra, rest_a) = std::mem::take(&mut a).split_at_mut(end - offset);
+        let (rb, rest_b) = std::mem::take(&mut b).split_at_mut(end - offset);
+        chunks.push((ids, offset, ra, rb));
+        (a, b, offset) = (rest_a, rest_b, end);
+    }
+    chunks
+        .into_par_iter()
+        .map(|(ids, start, ra, rb)| {
+            let mut r = identity();
+            for &i in ids {
+                let k = i as usize - start;
+                f(i as usize, &mut ra[k], &mut rb[k], &mut r);
+            }
+            r
+        })
+        .reduce(&identity, &join)
 }
 
 /// Writes to distinct elements of a slice from several threads: a mirror's invocations that
@@ -241,5 +286,60 @@ impl CpuPenalty {
             Buf::Need => bytemuck::cast_slice_mut(&mut self.need),
             _ => return None,
         })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// `for_listed` visits each listed row once, in place, with its own index, and joins the
+    /// chunks' results to what one pass over the list gives, for lists of one to many chunks;
+    /// a list repeated, out of order or past the rows is taken sorted, once each, within them.
+    #[test]
+    fn listed_rows_are_visited_once_in_place() {
+        for n in [0usize, 1, 5, PAR_MIN, PAR_MIN + 1, 10 * PAR_MIN + 7] {
+            let list: Vec<u32> = (0..n as u32).filter(|i| i % 3 != 1).collect();
+            let mut a = vec![0u32; n];
+            let mut b = vec![0u64; n];
+            let (count, sum, most) = for_listed(
+                &list,
+                &mut a,
+                &mut b,
+                || (0u32, 0u64, 0u32),
+                |x, y| (x.0 + y.0, x.1 + y.1, x.2.max(y.2)),
+                |i, ra, rb, r| {
+                    *ra += 1;
+                    *rb = 2 * i as u64;
+                    *r = (r.0 + 1, r.1 + i as u64, r.2.max(i as u32));
+                },
+            );
+            assert_eq!(count as usize, list.len());
+            assert_eq!(sum, list.iter().map(|&i| i as u64).sum::<u64>());
+            assert_eq!(most, list.last().copied().unwrap_or(0));
+            for i in 0..n {
+                let listed = list.contains(&(i as u32));
+                assert_eq!(a[i], u32::from(listed), "row {i}");
+                assert_eq!(b[i], if listed { 2 * i as u64 } else { 0 });
+            }
+        }
+        let mut a = vec![0u32; 10];
+        let mut b = vec![0u32; 10];
+        let seen = for_listed(
+            &[7, 3, 3, 42, 0, 9],
+            &mut a,
+            &mut b,
+            Vec::new,
+            |mut x, y| {
+                x.extend(y);
+                x
+            },
+            |i, ra, _, r| {
+                *ra += 1;
+                r.push(i);
+            },
+        );
+        assert_eq!(seen, vec![0, 3, 7, 9]);
+        assert_eq!(a, vec![1, 0, 0, 1, 0, 0, 0, 1, 0, 1]);
     }
 }

@@ -1,7 +1,5 @@
 //! CPU mirror of `shaders/penalty.wgsl`: penalty force, friction and outputs of each slave.
 
-use std::sync::atomic::Ordering;
-
 use rayon::prelude::*;
 
 use super::common::{facet_node_count, node};
@@ -139,6 +137,79 @@ fn facet_velocity(vel: &[[f32; 4]], fac: [u32; 4], w: [f32; 4]) -> V3<f32> {
     vm
 }
 
+/// The status words the springs raise, reduced per chunk of slaves before they reach the
+/// status (WGSL: `wg_words`, per workgroup): counts added, largest values and smallest
+/// increments on their bits (non-negative and positive f32 order as their bits).
+#[derive(Clone, Copy)]
+struct Raised {
+    fast: u32,
+    active: u32,
+    slipping: u32,
+    fast_ratio: u32,
+    overclosure: u32,
+    force_scale: u32,
+    row_scale: u32,
+    dt_stable: u32,
+    dt_approach: u32,
+}
+
+impl Raised {
+    /// Nothing raised: each word at its operation's identity.
+    fn none() -> Self {
+        Self {
+            fast: 0,
+            active: 0,
+            slipping: 0,
+            fast_ratio: 0,
+            overclosure: 0,
+            force_scale: 0,
+            row_scale: 0,
+            dt_stable: u32::MAX,
+            dt_approach: u32::MAX,
+        }
+    }
+
+    /// Two chunks' words together.
+    fn join(self, o: Self) -> Self {
+        Self {
+            fast: self.fast.wrapping_add(o.fast),
+            active: self.active.wrapping_add(o.active),
+            slipping: self.slipping.wrapping_add(o.slipping),
+            fast_ratio: self.fast_ratio.max(o.fast_ratio),
+            overclosure: self.overclosure.max(o.overclosure),
+            force_scale: self.force_scale.max(o.force_scale),
+            row_scale: self.row_scale.max(o.row_scale),
+            dt_stable: self.dt_stable.min(o.dt_stable),
+            dt_approach: self.dt_approach.min(o.dt_approach),
+        }
+    }
+
+    /// Raised into the status words (WGSL: `words_finish`).
+    fn into_status(self, status: &mut [u32]) {
+        for (k, v) in [
+            (STATUS_FAST, self.fast),
+            (STATUS_ACTIVE, self.active),
+            (STATUS_SLIPPING, self.slipping),
+        ] {
+            status[k] = status[k].wrapping_add(v);
+        }
+        for (k, v) in [
+            (STATUS_FAST_RATIO, self.fast_ratio),
+            (STATUS_MAX_OVERCLOSURE, self.overclosure),
+            (STATUS_FORCE_SCALE, self.force_scale),
+            (STATUS_ROW_SCALE, self.row_scale),
+        ] {
+            status[k] = status[k].max(v);
+        }
+        for (k, v) in [
+            (STATUS_DT_STABLE, self.dt_stable),
+            (STATUS_DT_APPROACH, self.dt_approach),
+        ] {
+            status[k] = status[k].min(v);
+        }
+    }
+}
+
 /// One "invocation" per slave node (WGSL: `penalty`), or with `active` (the count, then the
 /// slave indices: `cpu::active`) one per active slave (WGSL: `penalty_active`); `friction` is
 /// the FRICTION override.
@@ -160,23 +231,15 @@ pub fn penalty(
         return;
     }
     let n = pp.n_slaves as usize;
-    let status = super::as_atomic(status);
-    let max_word = |k: usize, v: u32| {
-        status[k].fetch_max(v, Ordering::Relaxed);
-    };
-    let min_word = |k: usize, v: f32| {
-        status[k].fetch_min(v.to_bits(), Ordering::Relaxed);
-    };
     // the fast-node test (WGSL: `count_fast`)
-    let count_fast = |s: u32, v_master: V3<f32>| {
+    let count_fast = |r: &mut Raised, s: u32, v_master: V3<f32>| {
         let reach = (node(vel, s) - v_master).length2().sqrt() * pp.dt;
         if reach > pp.search_radius {
-            status[STATUS_FAST].fetch_add(1, Ordering::Relaxed);
-            status[STATUS_FAST_RATIO]
-                .fetch_max((reach / pp.search_radius).to_bits(), Ordering::Relaxed);
+            r.fast += 1;
+            r.fast_ratio = r.fast_ratio.max((reach / pp.search_radius).to_bits());
         }
     };
-    let spring = |i: usize, slave_state: &mut SlaveState, slot: &mut ContactOut| {
+    let spring = |i: usize, slave_state: &mut SlaveState, slot: &mut ContactOut, r: &mut Raised| {
         let hit = hits[i];
         let mut o = ContactOut {
             force: [0.0; 4],
@@ -194,9 +257,9 @@ pub fn penalty(
         if hit.facet == NO_FACET || beside {
             if hit.facet != NO_FACET {
                 let fac = facets[hit.facet as usize];
-                count_fast(hit.slave, facet_velocity(vel, fac, hit.weights));
+                count_fast(r, hit.slave, facet_velocity(vel, fac, hit.weights));
             } else if pp.ref_node != NO_NODE {
-                count_fast(hit.slave, node(vel, pp.ref_node));
+                count_fast(r, hit.slave, node(vel, pp.ref_node));
             }
             slave_state.tangential_area = [0.0, 0.0, 0.0, area];
             let behind = if beside && hit.point_gap[3] < 0.0 {
@@ -229,7 +292,7 @@ pub fn penalty(
                     .sqrt(),
             );
         }
-        count_fast(s, vm);
+        count_fast(r, s, vm);
         let mut nrm = nsum.normalize_or_zero();
         if nrm.length2() == 0.0 {
             nrm = V3::new(hit.normal_dist[0], hit.normal_dist[1], hit.normal_dist[2]);
@@ -319,52 +382,53 @@ pub fn penalty(
             o.force = [f.x, f.y, f.z, w * f_n];
             let ft = f_t * w;
             o.tangential = [ft.x, ft.y, ft.z, w * (o.tangential[3] + lv.energy)];
-            status[STATUS_ACTIVE].fetch_add(1, Ordering::Relaxed);
+            r.active += 1;
             if o.status == CSTATUS_SLIP {
-                status[STATUS_SLIPPING].fetch_add(1, Ordering::Relaxed);
+                r.slipping += 1;
             }
-            max_word(STATUS_MAX_OVERCLOSURE, (-gap).max(0.0).to_bits());
+            r.overclosure = r.overclosure.max((-gap).max(0.0).to_bits());
         }
         slave_state.tangential_area = [f_t.x, f_t.y, f_t.z, area];
         slave_state.history = [o.dissipation, 0.0, 0.0, 0.0];
-        min_word(STATUS_DT_STABLE, dt_stable);
-        min_word(STATUS_DT_APPROACH, dt_approach);
+        r.dt_stable = r.dt_stable.min(dt_stable.to_bits());
+        r.dt_approach = r.dt_approach.min(dt_approach.to_bits());
         o.status |= mask;
         if o.status & CSTATUS_MASK != CSTATUS_OPEN {
             // the fixed-point scales of the gather: the largest magnitudes it will sum
             let a = o.force[0].abs().max(o.force[1].abs().max(o.force[2].abs()));
-            max_word(STATUS_FORCE_SCALE, a.to_bits());
-            max_word(STATUS_ROW_SCALE, o.bound_light.max(o.bound_heavy).to_bits());
+            r.force_scale = r.force_scale.max(a.to_bits());
+            r.row_scale = r.row_scale.max(o.bound_light.max(o.bound_heavy).to_bits());
         }
         *slot = o;
     };
-    match active {
+    let raised = match active {
         None => state[..n]
             .par_iter_mut()
             .zip(out[..n].par_iter_mut())
             .enumerate()
             .with_min_len(super::PAR_MIN)
-            .for_each(|(i, (slave_state, slot))| spring(i, slave_state, slot)),
+            .fold(Raised::none, |mut r, (i, (slave_state, slot))| {
+                spring(i, slave_state, slot, &mut r);
+                r
+            })
+            .reduce(Raised::none, Raised::join),
         Some(active) => {
             // the active slaves (WGSL: `penalty_active`): an untracked one is left as it is
             let count = active.first().map_or(0, |&c| c as usize);
             let list = active.get(1..1 + count).unwrap_or(&[]);
-            let (state_in, out_in): (&[SlaveState], &[ContactOut]) = (state, out);
-            let done: Vec<(usize, SlaveState, ContactOut)> = list
-                .par_iter()
-                .with_min_len(super::PAR_MIN)
-                .filter(|&&i| hits[i as usize].node != NO_NODE)
-                .map(|&i| {
-                    let i = i as usize;
-                    let (mut st, mut o) = (state_in[i], out_in[i]);
-                    spring(i, &mut st, &mut o);
-                    (i, st, o)
-                })
-                .collect();
-            for (i, st, o) in done {
-                state[i] = st;
-                out[i] = o;
-            }
+            super::for_listed(
+                list,
+                &mut state[..n],
+                &mut out[..n],
+                Raised::none,
+                Raised::join,
+                |i, slave_state, slot, r| {
+                    if hits[i].node != NO_NODE {
+                        spring(i, slave_state, slot, r);
+                    }
+                },
+            )
         }
-    }
+    };
+    raised.into_status(status);
 }
