@@ -69,9 +69,9 @@ struct Hit {
     node: u32,           // tracked master node (nearest node of that facet), NO_NODE when none
     candidates: u32,     // facets examined
     slave: u32,          // the slave node (model node id)
+    weights: vec4<f32>,     // load-transfer weights of the facet's nodes
     point_gap: vec4<f32>,   // xyz closest point (in the frame), w signed gap along the normal
     normal_dist: vec4<f32>, // xyz unit facet normal at the point, w distance
-    weights: vec4<f32>,     // load-transfer weights of the facet's nodes
 }
 
 // The tracking state hit h leaves its slave in (Rust twin: abi::search::slave_state).

@@ -151,7 +151,7 @@ fn scatter(i: u32) {
     // the penalty pass did not run (the increment will run again): its outputs are stale
     if (status[STATUS_BUDGET_EXCEEDED] != 0u) { return; }
     let o = out_force(i);
-    // of the hit, its facet, and for a spring its weights (20 of its 64 bytes)
+    // of the hit, its facet, and for a spring its weights (20 of its first 32 bytes)
     let facet = hits[i].facet;
     if ((o.status & CSTATUS_MASK) == CSTATUS_OPEN || facet >= pp.n_facets) { return; }
     let weights = hits[i].weights;

@@ -254,6 +254,19 @@ fn wgsl_twins_match_rust() {
         struct_size(&m, "Hit") as usize,
         std::mem::size_of::<GpuHit>()
     );
+    // member by member: the scatter reads the facet and the weights, the first 32 bytes
+    let rust = [
+        ("facet", std::mem::offset_of!(GpuHit, facet)),
+        ("node", std::mem::offset_of!(GpuHit, node)),
+        ("candidates", std::mem::offset_of!(GpuHit, candidates)),
+        ("slave", std::mem::offset_of!(GpuHit, slave)),
+        ("weights", std::mem::offset_of!(GpuHit, weights)),
+        ("point_gap", std::mem::offset_of!(GpuHit, point_gap)),
+        ("normal_dist", std::mem::offset_of!(GpuHit, normal_dist)),
+    ]
+    .map(|(n, o)| (n.to_string(), o as u32));
+    assert_eq!(member_offsets(&m, "Hit"), rust.to_vec());
+    assert!(std::mem::offset_of!(GpuHit, weights) + 16 <= 32);
     let s = parse("scan");
     assert_eq!(constant_u32(&s, "SCAN_BLOCK"), SCAN_BLOCK);
     assert_eq!(

@@ -232,12 +232,13 @@ pub struct GpuHit {
     pub candidates: u32,
     /// The slave node (model node id).
     pub slave: u32,
+    /// Load-transfer weights of the facet's nodes (shape functions at the closest point): in
+    /// the first 32 bytes with the facet, one memory sector, all the scatter reads.
+    pub weights: [f32; 4],
     /// Closest point (xyz, in the frame) and signed gap along the normal (w).
     pub point_gap: [f32; 4],
     /// Unit facet normal at the closest point (xyz) and distance (w).
     pub normal_dist: [f32; 4],
-    /// Load-transfer weights of the facet's nodes (shape functions at the closest point).
-    pub weights: [f32; 4],
 }
 const _: () = assert!(std::mem::size_of::<GpuHit>() == 64);
 
